@@ -1,0 +1,1 @@
+"""Missions -> plans -> intentions (python -m agents.executive)."""

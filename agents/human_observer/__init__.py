@@ -1,0 +1,1 @@
+"""Perceives and tracks people (python -m agents.human_observer)."""

@@ -1,0 +1,1 @@
+"""Recognises objects and their interaction spaces (python -m agents.object_recognition)."""

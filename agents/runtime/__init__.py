@@ -1,0 +1,1 @@
+"""What every chronav agent process shares: configuration, the run loop, clock and recording."""

@@ -1,0 +1,92 @@
+"""The agent base class and the loop that runs it as an OS process.
+
+Why the split (after py_trees' Behaviour): an Agent holds the behaviour (``setup``/``step``/
+``teardown``) and never opens sessions itself; ``run_agent`` owns the middleware, the loop, the
+signals and the cleanup.  That makes every agent constructible offline in a unit test, and makes
+shutdown uniform: SIGINT/SIGTERM end the loop, the recording gets its footer, the Zenoh session is
+closed (an unclosed session hangs the interpreter at exit).
+"""
+
+from __future__ import annotations
+
+import logging
+import signal
+import sys
+import threading
+import time
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+from agents.runtime.config import AgentConfig, parse_agent_args
+from agents.runtime.recording import Recorder
+from scenes.loader import load_scene
+from scenes.model import Scene
+
+log = logging.getLogger("chronav.agent")
+
+
+class Agent(ABC):
+    """One CORTEX agent: reacts to DSR signals and runs ``step`` every loop period."""
+
+    kind: ClassVar[str]
+
+    def __init__(self, config: AgentConfig) -> None:
+        self.config = config
+        self.scene: Scene = load_scene(config.scene).scene
+        self.log = logging.getLogger(f"chronav.{config.name}")
+
+    @abstractmethod
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
+        """Called once the replica has joined: declare signal handlers, write initial nodes."""
+
+    @abstractmethod
+    def step(self) -> None:
+        """One iteration of the agent loop (wall period ``config.period_s``)."""
+
+    def teardown(self) -> None:
+        """Called once on the way out, still connected."""
+
+
+def configure_logging(name: str) -> None:
+    logging.basicConfig(level=logging.INFO, stream=sys.stderr,
+                        format=f"%(asctime)s {name:>17} %(levelname)-7s %(message)s", datefmt="%H:%M:%S")
+
+
+def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
+    from dsr import join
+    from dsr.config import ZenohSettings
+
+    config = parse_agent_args(agent_cls.kind, argv)
+    configure_logging(config.name)
+    stop = threading.Event()
+
+    def request_stop(signum: int, _frame: object) -> None:
+        log.info("%s received signal %d, stopping", config.name, signum)
+        stop.set()
+
+    signal.signal(signal.SIGTERM, request_stop)
+    signal.signal(signal.SIGINT, request_stop)
+
+    agent = agent_cls(config)
+    recorder = Recorder(config.name, config.run_dir, config.recording_id)
+    settings = ZenohSettings.from_env()
+    try:
+        with join(agent=config.name, graph=config.graph, settings=settings) as graph:
+            agent.setup(graph, recorder)
+            log.info("%s joined graph %r", config.name, config.graph)
+            try:
+                while not stop.is_set():
+                    started = time.monotonic()
+                    graph.dispatch(timeout=0.0)
+                    agent.step()
+                    remaining = config.period_s - (time.monotonic() - started)
+                    if remaining > 0:
+                        # Wait for signals (DSR changes) rather than sleeping blind.
+                        graph.dispatch(timeout=remaining)
+            finally:
+                agent.teardown()
+    finally:
+        recorder.close()
+    log.info("%s stopped", config.name)
+    return 0

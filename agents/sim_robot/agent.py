@@ -1,0 +1,272 @@
+"""The simulated robot agent: owns the simulated world, the robot's body and the sim clock.
+
+Clock policy (why): a 09:00-14:00 day must finish in minutes, yet control must see small, even
+time steps. So the clock runs in three modes, decided every loop from the DSR:
+- **driving**: a navigation is active (robot attr ``nav_active``): lockstep. The robot publishes
+  its pose stamped ``pose_stamp``; it integrates the next ``control_dt`` only once the controller
+  answered with ``cmd_stamp >= pose_stamp`` (or a wall-clock watchdog expires: the base then
+  brakes, like a real motor driver with stale commands). Never faster than ``clock.rate``.
+- **busy**: a mission is active but nothing drives (the executive is planning): real time.
+- **idle**: nothing to do: jump to the next mission / wait deadline when ``skip_idle``,
+  otherwise run at ``clock.rate``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from agents.runtime.base import Agent
+from agents.runtime.recording import Recorder
+from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
+from agents.sim_robot.laser import Laser, polygon_segments, polyline_segments
+from agents.world_model import footprint_polygons
+from scenes.motion import people_at
+
+CONTROL_DT_S = 0.1
+WATCHDOG_WALL_S = 1.0
+BUSY_RATE = 1.0
+
+
+@dataclass
+class RobotState:
+    x: float
+    y: float
+    theta: float
+    velocity: Velocity
+
+
+class SimRobotAgent(Agent):
+    kind = "sim_robot"
+
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+        self.graph = graph
+        self.rec = recorder
+        scene = self.scene
+        robot = scene.robot
+        self.omni = robot.kinematics == "omnidirectional"
+        self.limits = Limits(robot.max_speed, robot.max_angular_speed, robot.max_acceleration)
+        segments = np.vstack([polyline_segments(scene.walls), polygon_segments(footprint_polygons(scene))])
+        self.laser = Laser(segments, robot.laser_rays, robot.laser_range)
+        self.rate = float(self.config.option("rate", str(scene.clock.rate)))
+        self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
+        self._write_static_world()
+        self.state, self.now_s = self._resume_or_start()
+        self._wall_anchor = time.monotonic()
+        self._sim_anchor = self.now_s
+        self._waiting_since: float | None = None
+        self._trajectory_file = self._open_trajectory()
+        self._last_mode: str | None = None
+        self._trail: list[list[float]] = []
+        self._publish()
+
+    # ----------------------------------------------------------------- world setup
+    def _write_static_world(self) -> None:
+        """World root, rooms, doors, the clock and the robot: what the simulated building is."""
+        g, scene = self.graph, self.scene
+        with g.transaction():
+            world = g.get_node_by_name("world") or g.insert_node(type="world", name="world", attrs={})
+            for room in scene.rooms:
+                if g.get_node_by_name(room.name) is None:
+                    xs, ys = zip(*room.polygon, strict=True)
+                    node = g.insert_node(type="room", name=room.name,
+                                         attrs={"polygon_x": list(map(float, xs)), "polygon_y": list(map(float, ys))})
+                    g.insert_or_assign_edge(world.id, node.id, "RT", attrs={"x": 0.0, "y": 0.0, "theta": 0.0})
+            for door in scene.doors:
+                a, b = (g.get_node_by_name(name) for name in door.between)
+                if g.get_node_by_name(f"door/{door.name}") is None:
+                    g.insert_node(type="door", name=f"door/{door.name}",
+                                  attrs={"x": door.position[0], "y": door.position[1], "width": door.width,
+                                         "rooms": list(door.between), "open": True})
+                g.insert_or_assign_edge(a.id, b.id, "connected", attrs={"door": door.name})
+                g.insert_or_assign_edge(b.id, a.id, "connected", attrs={"door": door.name})
+            if g.get_node_by_name("clock") is None:
+                g.insert_node(type="clock", name="clock",
+                              attrs={"now_s": scene.clock.start_s, "start_s": scene.clock.start_s,
+                                     "end_s": scene.clock.end_s, "rate": self.rate, "mode": "idle",
+                                     "finished": False})
+
+    def _resume_or_start(self) -> tuple[RobotState, float]:
+        """A restarted simulator continues from the replicated pose and clock, not from the scene."""
+        g, spec = self.graph, self.scene.robot
+        clock = g.get_node_by_name("clock")
+        now_s = float(clock.attrs.get("now_s", self.scene.clock.start_s))
+        node = g.get_node_by_name(spec.name)
+        world = g.get_node_by_name("world")
+        if node is not None:
+            edge = g.get_edge(world.id, node.id, "RT")
+            if edge is not None:
+                self.log.info("resuming robot at (%.2f, %.2f) t=%.1f", edge.attrs["x"], edge.attrs["y"], now_s)
+                return RobotState(edge.attrs["x"], edge.attrs["y"], edge.attrs["theta"], Velocity()), now_s
+        with g.transaction():
+            if node is None:
+                node = g.insert_node(type="robot", name=spec.name,
+                                     attrs={"radius": spec.radius, "kinematics": spec.kinematics,
+                                            "max_speed": spec.max_speed, "nav_active": False,
+                                            "laser_angles": self.laser.angles.tolist()})
+            room = self.scene.room_at(spec.pose.x, spec.pose.y)
+            if room is not None:
+                g.insert_or_assign_edge(node.id, g.get_node_by_name(room).id, "in", attrs={})
+        return RobotState(spec.pose.x, spec.pose.y, spec.pose.theta, Velocity()), now_s
+
+    # ----------------------------------------------------------------- loop
+    def step(self) -> None:
+        mode = self._mode()
+        if mode != self._last_mode:
+            self._last_mode = mode
+            self._reanchor()
+            self._set_clock(mode=mode)
+        wall_now = time.monotonic()
+        end_s = self.scene.clock.end_s
+        if self.now_s >= end_s:
+            self._set_clock(mode="finished", finished=True)
+            return
+        if mode == "driving":
+            robot = self.graph.get_node_by_name(self.scene.robot.name)
+            fresh = float(robot.attrs.get("cmd_stamp", -1.0)) >= float(robot.attrs.get("pose_stamp", 0.0))
+            if not self._rate_allows(wall_now, self.control_dt):
+                return
+            if fresh:
+                self._waiting_since = None
+                cmd = Velocity(float(robot.attrs.get("cmd_vx", 0.0)), float(robot.attrs.get("cmd_vy", 0.0)),
+                               float(robot.attrs.get("cmd_omega", 0.0)))
+            else:
+                self._waiting_since = self._waiting_since or wall_now
+                if wall_now - self._waiting_since < WATCHDOG_WALL_S:
+                    return
+                cmd = Velocity()  # stale command: brake, keep time flowing
+            self._advance(self.control_dt, cmd)
+        elif mode == "busy":
+            dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * BUSY_RATE - (self.now_s - self._sim_anchor)))
+            if dt > 0:
+                self._advance(dt, Velocity())
+        else:
+            target = self._next_deadline()
+            if self.scene.clock.skip_idle and target is not None and target > self.now_s:
+                self.now_s = min(target, end_s)
+                self._reanchor()
+                self._publish()
+                self.rec.event(f"idle: clock skipped to {target:.0f} s")
+            else:
+                dt = (wall_now - self._wall_anchor) * self.rate - (self.now_s - self._sim_anchor)
+                if dt > 0:
+                    self._advance(min(dt, 5.0), Velocity())
+
+    def _rate_allows(self, wall_now: float, dt: float) -> bool:
+        return (self.now_s + dt - self._sim_anchor) <= (wall_now - self._wall_anchor) * self.rate + dt
+
+    def _reanchor(self) -> None:
+        self._wall_anchor = time.monotonic()
+        self._sim_anchor = self.now_s
+
+    def _mode(self) -> str:
+        g = self.graph
+        robot = g.get_node_by_name(self.scene.robot.name)
+        if robot is not None and robot.attrs.get("nav_active"):
+            return "driving"
+        if any(n.attrs.get("state") == "active" and n.attrs.get("kind", "navigate") != "wait"
+               for n in g.nodes_of_type("intention")):
+            return "busy"
+        if any(n.attrs.get("state") == "active" for n in g.nodes_of_type("mission")) and not any(
+                n.attrs.get("state") == "active" for n in g.nodes_of_type("intention")):
+            return "busy"
+        return "idle"
+
+    def _next_deadline(self) -> float | None:
+        """Earliest future time something is due: a pending mission, the end of a wait."""
+        times = [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
+                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
+        times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type("intention")
+                  if n.attrs.get("state") == "active" and n.attrs.get("kind") == "wait" and "until_s" in n.attrs]
+        future = [t for t in times if t > self.now_s]
+        due_now = [t for t in times if t <= self.now_s]
+        if due_now:
+            return None  # something is due already: let the executive act at this time
+        return min(future) if future else None
+
+    def _advance(self, dt: float, cmd: Velocity) -> None:
+        state = self.state
+        vel = limit_command(cmd, state.velocity, dt, self.limits, self.omni)
+        x, y, theta = integrate(state.x, state.y, state.theta, vel, dt)
+        if self._collides(x, y):
+            vel = Velocity()
+            x, y, theta = state.x, state.y, state.theta
+            self.rec.event("bumper: motion blocked by an obstacle", level="WARN")
+        self.state = RobotState(x, y, theta, vel)
+        self.now_s += dt
+        if self._trajectory_file is not None and self._last_mode == "driving":
+            self._trajectory_file.write(f"{self.now_s:.3f},{x:.4f},{y:.4f},{theta:.5f}\n")
+            self._trail.append([x, y])
+        self._publish()
+
+    def _collides(self, x: float, y: float) -> bool:
+        ranges_ok = True
+        people = people_at(self.scene, self.now_s)
+        radius = self.scene.robot.radius
+        for p in people:
+            if math.hypot(p.x - x, p.y - y) < radius + 0.2:
+                ranges_ok = False
+        segs = self.laser.segments
+        if len(segs):
+            a, b = segs[:, :2], segs[:, 2:]
+            ab = b - a
+            t = np.clip(((np.array([x, y]) - a) * ab).sum(axis=1) / np.maximum((ab**2).sum(axis=1), 1e-12), 0, 1)
+            closest = a + t[:, None] * ab
+            if np.min(np.hypot(closest[:, 0] - x, closest[:, 1] - y)) < radius * 0.9:
+                ranges_ok = False
+        return not ranges_ok
+
+    def _open_trajectory(self):  # noqa: ANN202 - text file or None
+        """Ground-truth poses while driving, appended (a restarted simulator continues the file)."""
+        if self.config.run_dir is None:
+            return None
+        path = self.config.run_dir / "trajectory.csv"
+        new = not path.exists()
+        handle = path.open("a", encoding="utf-8", buffering=1)
+        if new:
+            handle.write("t,x,y,theta\n")
+        return handle
+
+    def teardown(self) -> None:
+        if self._trajectory_file is not None:
+            self._trajectory_file.close()
+
+    def _publish(self) -> None:
+        """Pose, laser and clock in ONE delta, so readers never see a pose from another time."""
+        g, s = self.graph, self.state
+        people = people_at(self.scene, self.now_s)
+        people_xy = np.array([[p.x, p.y] for p in people]).reshape(-1, 2)
+        ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
+        robot = g.get_node_by_name(self.scene.robot.name)
+        world = g.get_node_by_name("world")
+        with g.transaction():
+            g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
+            g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
+                                            "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
+            g.update_node(g.get_node_by_name("clock").id, attrs={"now_s": self.now_s})
+        self.rec.set_time(self.now_s)
+        self._log_frame(ranges)
+
+    def _set_clock(self, **attrs: object) -> None:
+        clock = self.graph.get_node_by_name("clock")
+        if any(clock.attrs.get(k) != v for k, v in attrs.items()):
+            self.graph.update_node(clock.id, attrs=dict(attrs))
+
+    def _log_frame(self, ranges: np.ndarray) -> None:
+        if not self.rec.enabled:
+            return
+        import rerun as rr
+
+        s = self.state
+        self.rec.log("world/robot/pose", rr.Points2D([[s.x, s.y]], radii=self.scene.robot.radius,
+                                                    colors=[[30, 120, 255]], labels=[self.scene.robot.name]))
+        heading = [[s.x, s.y], [s.x + 0.5 * math.cos(s.theta), s.y + 0.5 * math.sin(s.theta)]]
+        self.rec.log("world/robot/heading", rr.LineStrips2D([heading], colors=[[30, 120, 255]], radii=0.03))
+        self.rec.log("world/robot/laser", rr.Points2D(self.laser.points(s.x, s.y, s.theta, ranges),
+                                                      radii=0.03, colors=[[255, 60, 60]]))
+        self.rec.scalar("metrics/robot/speed_m_s", math.hypot(s.velocity.vx, s.velocity.vy))
+        if self._trail and len(self._trail) % 10 == 0:
+            self.rec.line_strip("world/robot/trajectory", self._trail, color=[30, 120, 255], radius=0.02)

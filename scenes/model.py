@@ -1,0 +1,313 @@
+"""The scene file schema: the world a chronav run starts from.
+
+Why pydantic models with ``extra="forbid"``: a typo such as ``radiuss:`` in a scene must be an
+error naming the key and line, never a silently ignored value that changes a robot's clearance.
+All lengths are metres, angles radians (theta measured from +x, counter-clockwise), clock times
+``"HH:MM"`` (or ``"HH:MM:SS"``) local to the scene's time zone.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import datetime as dt
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+_CLOCK = re.compile(r"^(\d{1,2}):(\d{2})(?::(\d{2}))?$")
+
+
+def parse_clock(text: str) -> float:
+    """``"HH:MM[:SS]"`` -> seconds since local midnight."""
+    match = _CLOCK.match(text.strip())
+    if not match:
+        raise ValueError(f"expected a clock time HH:MM or HH:MM:SS, got {text!r}")
+    hours, minutes, seconds = int(match[1]), int(match[2]), int(match[3] or 0)
+    if hours > 23 or minutes > 59 or seconds > 59:
+        raise ValueError(f"clock time out of range: {text!r}")
+    return float(hours * 3600 + minutes * 60 + seconds)
+
+
+def format_clock(seconds: float) -> str:
+    whole = int(round(seconds))
+    return f"{whole // 3600:02d}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
+
+
+ClockTime = Annotated[str, Field(description="local clock time HH:MM[:SS]")]
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+Point = tuple[float, float]
+
+
+class Pose(Strict):
+    x: float
+    y: float
+    theta: float = 0.0
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_list(cls, value: Any) -> Any:
+        """Accept the compact ``[x, y, theta]`` / ``[x, y]`` form used in scene files."""
+        if isinstance(value, (list, tuple)):
+            if len(value) not in (2, 3):
+                raise ValueError("a pose is [x, y] or [x, y, theta]")
+            return dict(zip(("x", "y", "theta"), value, strict=False))
+        return value
+
+    @field_validator("x", "y", "theta")
+    @classmethod
+    def _finite(cls, value: float) -> float:
+        if not math.isfinite(value):
+            raise ValueError("must be a finite number")
+        return value
+
+
+class Clock(Strict):
+    date: dt.date = dt.date(2026, 11, 25)
+    timezone: str = "Europe/Madrid"
+    start: ClockTime = "09:00"
+    end: ClockTime = "14:00"
+    rate: float = Field(60.0, gt=0, description="sim seconds per wall second")
+    skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
+
+    @field_validator("start", "end")
+    @classmethod
+    def _clock(cls, value: str) -> str:
+        parse_clock(value)
+        return value
+
+    @field_validator("timezone")
+    @classmethod
+    def _tz(cls, value: str) -> str:
+        from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+
+        try:
+            ZoneInfo(value)
+        except (ZoneInfoNotFoundError, ValueError):
+            raise ValueError(f"unknown time zone {value!r}") from None
+        return value
+
+    @model_validator(mode="after")
+    def _order(self) -> Clock:
+        if parse_clock(self.end) <= parse_clock(self.start):
+            raise ValueError("clock.end must be after clock.start")
+        return self
+
+    @property
+    def start_s(self) -> float:
+        return parse_clock(self.start)
+
+    @property
+    def end_s(self) -> float:
+        return parse_clock(self.end)
+
+
+class Room(Strict):
+    name: str
+    polygon: list[Point] = Field(min_length=3)
+
+
+class Door(Strict):
+    name: str
+    between: tuple[str, str]
+    position: Point
+    width: float = Field(1.0, gt=0)
+
+
+class RectangleShape(Strict):
+    """Axis-aligned in the object's frame: ``length`` along its +x (facing), ``width`` along +y."""
+
+    shape: Literal["rectangle"]
+    length: float = Field(gt=0)
+    width: float = Field(gt=0)
+    offset: float = Field(0.0, description="shift of the centre along the object's +x axis")
+
+
+class CircleShape(Strict):
+    shape: Literal["circle"]
+    radius: float = Field(gt=0)
+
+
+class TrapezoidShape(Strict):
+    """Isosceles trapezoid in front of the object (+x): near edge at the object, far edge ``height`` away."""
+
+    shape: Literal["trapezoid"]
+    height: float = Field(gt=0)
+    near_width: float = Field(gt=0)
+    far_width: float = Field(gt=0)
+
+
+Shape = Annotated[RectangleShape | CircleShape | TrapezoidShape, Field(discriminator="shape")]
+
+
+class SceneObject(Strict):
+    name: str
+    kind: str = Field(description="tv, table, round_table, stretcher, bed, poster, ...")
+    pose: Pose
+    footprint: Shape
+    interaction: Shape
+    forbidden_while_active: bool = False
+
+
+class Waypoint(Strict):
+    time: ClockTime
+    pose: Pose
+
+    @field_validator("time")
+    @classmethod
+    def _clock(cls, value: str) -> str:
+        parse_clock(value)
+        return value
+
+
+class PersonSpec(Strict):
+    name: str
+    role: Literal["resident", "new_resident", "staff", "therapist", "visitor"] = "resident"
+    pose: Pose
+    waypoints: list[Waypoint] = []
+    interacting_with: list[str] = Field(default_factory=list, description="people or objects")
+
+    @model_validator(mode="after")
+    def _waypoints_in_order(self) -> PersonSpec:
+        times = [parse_clock(w.time) for w in self.waypoints]
+        if any(b <= a for a, b in zip(times, times[1:], strict=False)):
+            raise ValueError("waypoints must be in strictly increasing time order")
+        return self
+
+
+class RobotSpec(Strict):
+    name: str = "robot"
+    pose: Pose
+    radius: float = Field(0.3, gt=0)
+    kinematics: Literal["differential", "omnidirectional"] = "differential"
+    max_speed: float = Field(0.6, gt=0, description="m/s")
+    max_angular_speed: float = Field(1.2, gt=0, description="rad/s")
+    max_acceleration: float = Field(0.8, gt=0, description="m/s^2")
+    laser_range: float = Field(5.0, gt=0)
+    laser_rays: int = Field(91, ge=3)
+
+
+class PoseGoal(Strict):
+    pose: Pose
+
+
+class RoomGoal(Strict):
+    room: str
+
+
+class ObjectGoal(Strict):
+    object: str
+
+
+class PersonGoal(Strict):
+    person: str
+
+
+Goal = PoseGoal | RoomGoal | ObjectGoal | PersonGoal
+
+
+class Mission(Strict):
+    id: str
+    time: ClockTime
+    goal: Goal
+    description: str = ""
+
+    @field_validator("time")
+    @classmethod
+    def _clock(cls, value: str) -> str:
+        parse_clock(value)
+        return value
+
+    def goal_text(self) -> str:
+        """The mission string of the executive (`room:X`, `object:X`, `person:X`, `pose:x,y,theta`)."""
+        goal = self.goal
+        if isinstance(goal, PoseGoal):
+            return f"pose:{goal.pose.x},{goal.pose.y},{goal.pose.theta}"
+        if isinstance(goal, RoomGoal):
+            return f"room:{goal.room}"
+        if isinstance(goal, ObjectGoal):
+            return f"object:{goal.object}"
+        return f"person:{goal.person}"
+
+
+class AgendaChange(Strict):
+    """A staff edit scripted at a sim time (as if typed with `chronav agenda` during the run)."""
+
+    at: ClockTime
+    op: Literal["add", "cancel", "move"]
+    activity: dict[str, Any] | None = None
+    id: str | None = None
+    start: ClockTime | None = None
+    end: ClockTime | None = None
+
+
+class Scene(Strict):
+    name: str
+    description: str = ""
+    resolution: float = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
+    clock: Clock = Clock()
+    walls: list[list[Point]] = Field(min_length=1, description="polylines")
+    rooms: list[Room] = Field(min_length=1)
+    doors: list[Door] = []
+    objects: list[SceneObject] = []
+    people: list[PersonSpec] = []
+    robot: RobotSpec
+    agenda: list[dict[str, Any]] = Field(default_factory=list, description="activities, see docs/agenda.md")
+    agenda_file: str | None = Field(None, description=".yaml or .ics, relative to the scene file")
+    agenda_changes: list[AgendaChange] = []
+    missions: list[Mission] = []
+
+    @model_validator(mode="after")
+    def _references(self) -> Scene:
+        """Cross-references by name, so a misspelt room or object fails here and not mid-run."""
+        for kind, items in (("room", self.rooms), ("object", self.objects), ("person", self.people),
+                            ("door", self.doors)):
+            seen: set[str] = set()
+            for item in items:
+                if item.name in seen:
+                    raise ValueError(f"duplicate {kind} name {item.name!r}")
+                seen.add(item.name)
+        rooms = {r.name for r in self.rooms}
+        objects = {o.name for o in self.objects}
+        people = {p.name for p in self.people}
+        for door in self.doors:
+            for room in door.between:
+                if room not in rooms:
+                    raise ValueError(f"door {door.name!r} names unknown room {room!r}")
+        for person in self.people:
+            for other in person.interacting_with:
+                if other not in objects | people or other == person.name:
+                    raise ValueError(f"person {person.name!r} interacts with unknown {other!r}")
+        for mission in self.missions:
+            goal = mission.goal
+            if isinstance(goal, RoomGoal) and goal.room not in rooms:
+                raise ValueError(f"mission {mission.id!r} targets unknown room {goal.room!r}")
+            if isinstance(goal, ObjectGoal) and goal.object not in objects:
+                raise ValueError(f"mission {mission.id!r} targets unknown object {goal.object!r}")
+            if isinstance(goal, PersonGoal) and goal.person not in people:
+                raise ValueError(f"mission {mission.id!r} targets unknown person {goal.person!r}")
+        ids = [m.id for m in self.missions]
+        if len(ids) != len(set(ids)):
+            raise ValueError("mission ids must be unique")
+        return self
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of walls and rooms."""
+        xs = [p[0] for wall in self.walls for p in wall] + [p[0] for r in self.rooms for p in r.polygon]
+        ys = [p[1] for wall in self.walls for p in wall] + [p[1] for r in self.rooms for p in r.polygon]
+        return (min(xs), min(ys), max(xs), max(ys))
+
+    def room_at(self, x: float, y: float) -> str | None:
+        """Name of the room containing (x, y) (first match), or None."""
+        import shapely
+
+        for room in self.rooms:
+            if shapely.Polygon(room.polygon).covers(shapely.Point(x, y)):
+                return room.name
+        return None

@@ -1,0 +1,94 @@
+"""Shared test helpers: free ports, polling waits and process groups that are always cleaned up.
+
+Why: multi-process tests must never use fixed ports or fixed sleeps (flaky on a 2-core CI box),
+and every spawned process must die even when an assertion fails mid-test.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that was free a moment ago (bind to port 0, read it, release)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def wait_until(predicate: Callable[[], bool], timeout: float, interval: float = 0.02,
+               message: str = "condition") -> None:
+    """Poll ``predicate`` until it is true; raise AssertionError naming ``message`` on timeout."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(interval)
+    if predicate():
+        return
+    raise AssertionError(f"timed out after {timeout:.1f} s waiting for {message}")
+
+
+class ProcessGroup:
+    """Starts Python subprocesses in their own process groups and kills them all on exit."""
+
+    def __init__(self) -> None:
+        self.procs: list[subprocess.Popen[bytes]] = []
+
+    def spawn(self, args: Sequence[str], env: dict[str, str] | None = None,
+              log_path: Path | None = None) -> subprocess.Popen[bytes]:
+        """Run ``python args...`` from the repo root; output goes to ``log_path`` (or is discarded)."""
+        full_env = dict(os.environ)
+        full_env.setdefault("RERUN", "off")
+        full_env.update(env or {})
+        out = open(log_path, "wb") if log_path else subprocess.DEVNULL  # noqa: SIM115
+        proc = subprocess.Popen([sys.executable, *args], cwd=REPO_ROOT, env=full_env,
+                                stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
+        self.procs.append(proc)
+        return proc
+
+    def kill(self, proc: subprocess.Popen[bytes], sig: int = signal.SIGKILL) -> None:
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            pass
+        if sig == signal.SIGKILL:
+            proc.wait(timeout=10)
+
+    def close(self) -> None:
+        for proc in self.procs:
+            if proc.poll() is None:
+                try:
+                    os.killpg(proc.pid, signal.SIGTERM)
+                except ProcessLookupError:
+                    continue
+        deadline = time.monotonic() + 5
+        for proc in self.procs:
+            remaining = max(0.1, deadline - time.monotonic())
+            try:
+                proc.wait(timeout=remaining)
+            except subprocess.TimeoutExpired:
+                try:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                proc.wait(timeout=10)
+
+
+@contextmanager
+def process_group() -> Iterator[ProcessGroup]:
+    group = ProcessGroup()
+    try:
+        yield group
+    finally:
+        group.close()

@@ -1,0 +1,100 @@
+"""What a person watching `chronav launch` / `chronav demo` sees: live progress, then a summary.
+
+Why rich Live only on a terminal: in CI logs and pipes a redrawing display turns into thousands
+of lines, so there we print one plain status line every few seconds instead.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from typing import Any
+
+from rich.console import Console
+from rich.live import Live
+from rich.table import Table
+
+from scenes.model import format_clock
+
+
+def _status_table(status: dict[str, Any]) -> Table:
+    table = Table(title="chronav", show_header=True, expand=False)
+    table.add_column("sim time")
+    table.add_column("clock")
+    table.add_column("missions")
+    table.add_column("agents")
+    now = status.get("now_s")
+    missions = status.get("missions", {})
+    mission_text = " ".join(f"{mid}:{m.get('state', '?')}" for mid, m in sorted(missions.items())) or "-"
+    agents = " ".join(f"{name}{'' if up == 'up' else '!'}{'' if not r else f'(r{r})'}"
+                      for name, (up, r) in status.get("agents", {}).items())
+    table.add_row(format_clock(now) if now is not None else "-", str(status.get("clock_mode") or "-"),
+                  mission_text, agents)
+    return table
+
+
+def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
+                      as_json: bool, with_report: bool) -> int:
+    """Run the system with a progress display; print the result (and the metrics report); exit code."""
+    from scenes.yamlio import SourceError
+    from tools.launch import run_system
+
+    err = Console(stderr=True)
+    interactive = sys.stderr.isatty() and not as_json
+    last_print = {"t": 0.0}
+
+    def plain_tick(status: dict[str, Any]) -> None:
+        if time.monotonic() - last_print["t"] >= 5.0:
+            last_print["t"] = time.monotonic()
+            now = status.get("now_s")
+            missions = status.get("missions", {})
+            done = sum(1 for m in missions.values() if m.get("state") == "done")
+            err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
+                      f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False)
+
+    try:
+        if interactive:
+            with Live(_status_table({}), console=err, refresh_per_second=4) as live:
+                result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
+                                    restart_limit=restart_limit, on_tick=lambda s: live.update(_status_table(s)))
+        else:
+            result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
+                                restart_limit=restart_limit, on_tick=None if as_json else plain_tick)
+    except SourceError as exc:
+        err.print(f"error: {exc}", highlight=False, markup=False)
+        return 2
+
+    report: dict[str, Any] | None = None
+    if with_report:
+        from tools.report import build_report, render_report
+
+        report = build_report(result)
+        if not as_json:
+            render_report(report, Console())
+    if as_json:
+        print(json.dumps({"scene": result.scene, "ok": result.ok, "missions": result.missions,
+                          "events": result.events, "restarts": result.restarts, "wall_s": round(result.wall_s, 2),
+                          "run_dir": str(result.run_dir), "rrd": str(result.rrd_path) if result.rrd_path else None,
+                          **({"report": report} if report is not None else {})}))
+    else:
+        out = Console()
+        table = Table(title=f"Missions of {result.scene}")
+        for column in ("mission", "state", "started", "finished", "reason"):
+            table.add_column(column)
+        for mid, m in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
+            table.add_row(mid, str(m.get("state")),
+                          format_clock(float(m["started_s"])) if "started_s" in m else "-",
+                          format_clock(float(m["finished_s"])) if "finished_s" in m else "-",
+                          str(m.get("reason", "")))
+        out.print(table)
+        for event in result.events:
+            out.print(f"[supervisor] {event}", highlight=False, markup=False)
+        out.print(f"run directory: {result.run_dir}", highlight=False)
+        if result.rrd_path:
+            out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", highlight=False)
+        out.print(f"{'OK' if result.ok else 'FAILED'}: {sum(m.get('state') == 'done' for m in result.missions.values())}"
+                  f"/{len(result.missions)} missions done in {result.wall_s:.1f} s wall", highlight=False)
+    if result.interrupted:
+        return 130
+    return 0 if result.ok else 1

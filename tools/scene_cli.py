@@ -1,0 +1,40 @@
+"""`chronav scene check FILE...`: validate scene files the way the launcher will read them."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    scene_app = typer.Typer(help="Scene files (YAML worlds).", no_args_is_help=True)
+
+    @scene_app.command("check")
+    def check(files: list[Path] = typer.Argument(..., help="scene YAML files"),
+              as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+        """Validate scenes: schema, names, geometry and agenda. Exit 1 on the first error of any file."""
+        from scenes.loader import load_scene
+        from scenes.yamlio import SourceError
+
+        results: dict[str, str] = {}
+        failed = False
+        for file in files:
+            try:
+                loaded = load_scene(file)
+            except SourceError as exc:
+                typer.echo(str(exc), err=True)
+                results[str(file)] = str(exc)
+                failed = True
+                continue
+            scene = loaded.scene
+            results[str(file)] = "ok"
+            if not as_json:
+                typer.echo(f"{file}: ok ({len(scene.rooms)} rooms, {len(scene.objects)} objects, "
+                           f"{len(scene.people)} people, {len(scene.missions)} missions)")
+        if as_json:
+            typer.echo(json.dumps({"files": results, "ok": not failed}))
+        raise typer.Exit(1 if failed else 0)
+
+    app.add_typer(scene_app, name="scene")

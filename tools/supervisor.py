@@ -1,0 +1,123 @@
+"""Start, watch and restart the agent processes of one run.
+
+Why process groups: each agent is started in its own session so that stopping it (or SIGKILL in
+a fault test) also stops anything it spawned, and so that a Ctrl-C in the launcher's terminal
+reaches only the launcher, which then stops the agents in order and still merges the recording.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass
+class ManagedProcess:
+    name: str
+    args: list[str]
+    log_path: Path
+    env: dict[str, str]
+    proc: subprocess.Popen[bytes] | None = None
+    restarts: int = 0
+    exit_codes: list[int] = field(default_factory=list)
+    gave_up: bool = False
+
+    @property
+    def alive(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    @property
+    def pid(self) -> int | None:
+        return None if self.proc is None else self.proc.pid
+
+
+class Supervisor:
+    """Keeps a set of Python module processes running, restarting crashes up to a limit."""
+
+    def __init__(self, log_dir: Path, base_env: dict[str, str], restart_limit: int = 3) -> None:
+        self.log_dir = log_dir
+        self.base_env = base_env
+        self.restart_limit = restart_limit
+        self.processes: dict[str, ManagedProcess] = {}
+        self.events: list[str] = []
+        self.stopping = False
+        log_dir.mkdir(parents=True, exist_ok=True)
+
+    def add(self, name: str, module: str, extra_args: list[str] | None = None,
+            env: dict[str, str] | None = None) -> ManagedProcess:
+        managed = ManagedProcess(name=name, args=["-m", module, *(extra_args or [])],
+                                 log_path=self.log_dir / f"{name}.log", env={**self.base_env, **(env or {})})
+        self.processes[name] = managed
+        return managed
+
+    def start(self, name: str) -> None:
+        managed = self.processes[name]
+        log = managed.log_path.open("ab")
+        try:
+            managed.proc = subprocess.Popen([sys.executable, *managed.args], cwd=REPO_ROOT, env=managed.env,
+                                            stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                            start_new_session=True)
+        finally:
+            log.close()
+
+    def start_all(self) -> None:
+        for name in self.processes:
+            self.start(name)
+
+    def poll(self) -> list[str]:
+        """Restart what died (unless stopping); return the names restarted in this call."""
+        restarted: list[str] = []
+        for name, managed in self.processes.items():
+            if managed.proc is None or managed.gave_up or managed.proc.poll() is None or self.stopping:
+                continue
+            code = managed.proc.returncode
+            managed.exit_codes.append(code)
+            if managed.restarts >= self.restart_limit:
+                managed.gave_up = True
+                self.events.append(f"{name} exited with {code}; restart limit {self.restart_limit} reached")
+                continue
+            managed.restarts += 1
+            self.events.append(f"{name} exited with {code}; restart {managed.restarts}/{self.restart_limit}")
+            self.start(name)
+            restarted.append(name)
+        return restarted
+
+    def given_up(self) -> list[str]:
+        return [name for name, managed in self.processes.items() if managed.gave_up]
+
+    def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
+        managed = self.processes[name]
+        if managed.proc is not None and managed.proc.poll() is None:
+            os.killpg(managed.proc.pid, sig)
+
+    def stop_all(self, timeout_s: float = 8.0, order: list[str] | None = None) -> None:
+        """SIGTERM in ``order`` (default: reverse start order), then SIGKILL what is left."""
+        self.stopping = True
+        names = order or list(reversed(self.processes))
+        for name in names:
+            self._signal(name, signal.SIGTERM)
+        deadline = time.monotonic() + timeout_s
+        for name in names:
+            proc = self.processes[name].proc
+            if proc is None:
+                continue
+            try:
+                proc.wait(timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                self._signal(name, signal.SIGKILL)
+                proc.wait(timeout=5)
+
+    def _signal(self, name: str, sig: int) -> None:
+        proc = self.processes[name].proc
+        if proc is not None and proc.poll() is None:
+            try:
+                os.killpg(proc.pid, sig)
+            except ProcessLookupError:
+                pass
