@@ -22,7 +22,7 @@ from agents.social_navigation.types import (
     Wall,
     shape_from_spec,
 )
-from scenes.model import Scene, parse_clock
+from scenes.model import Scene
 from scenes.motion import people_at
 
 SHAPE_DIMS: dict[str, tuple[str, ...]] = {
@@ -53,13 +53,6 @@ def scene_people(scene: Scene, t_s: float) -> list[Person]:
     declared = {p.name: tuple(p.interacting_with) for p in scene.people}
     return [Person(name=p.name, x=p.x, y=p.y, theta=p.theta, role=p.role, interacting_with=declared[p.name])
             for p in people_at(scene, t_s)]
-
-
-def scene_activity_windows(scene: Scene) -> list[ActivityWindow]:
-    """The scene's inline agenda as windows (HH:MM times); .ics files go through agents.agenda."""
-    return [ActivityWindow(object=str(a["object"]), start_s=parse_clock(str(a["start"])),
-                           end_s=parse_clock(str(a["end"])), cancelled=bool(a.get("cancelled", False)))
-            for a in scene.agenda]
 
 
 def footprint_polygons(scene: Scene) -> list[Polygon]:
@@ -134,5 +127,5 @@ def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
 
 
 __all__ = ["dsr_activity_windows", "dsr_objects", "dsr_people",
-           "footprint_polygons", "object_attrs", "scene_activity_windows", "scene_objects", "scene_people",
+           "footprint_polygons", "object_attrs", "scene_objects", "scene_people",
            "scene_rooms", "scene_walls", "shape_attrs", "shape_from_attrs"]

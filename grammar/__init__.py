@@ -1,0 +1,20 @@
+"""AGGL-style graph grammars for chronav: parse rule files, match patterns, plan missions.
+
+Pipeline (one module per step): ``parser`` (text -> ``model``, via ``aggl.lark``, ``transform``,
+``validate``) -> ``world`` (indexed graph + search states) -> ``matcher`` / ``formulas`` ->
+``rewrite`` -> ``planner`` (A*, with ``heuristics`` and ``relevance``) ; ``missions`` turns mission
+strings into targets. See docs/grammar.md.
+"""
+
+from grammar.errors import GrammarError, MissionError, PlanningError, SourcePos
+from grammar.missions import Mission, parse_mission, plan_mission, with_mission_node
+from grammar.model import Grammar, Pattern, PatternLink, PatternNode, Rule, Target
+from grammar.parser import default_grammar_path, load_grammar, load_target, parse_grammar, parse_target
+from grammar.planner import NoPlan, Plan, Planner, PlanStep, plan
+
+__all__ = [
+    "Grammar", "GrammarError", "Mission", "MissionError", "NoPlan", "Pattern", "PatternLink", "PatternNode",
+    "Plan", "PlanStep", "Planner", "PlanningError", "Rule", "SourcePos", "Target", "default_grammar_path",
+    "load_grammar", "load_target", "parse_grammar", "parse_mission", "parse_target", "plan", "plan_mission",
+    "with_mission_node",
+]

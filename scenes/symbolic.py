@@ -7,9 +7,12 @@ so this builder emits exactly the node/edge types the agents write into the DSR.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any
+
 import networkx as nx
 
-from scenes.model import Scene, parse_clock
+from scenes.model import Scene
 
 
 def activity_state(start_s: float, end_s: float, now_s: float, upcoming_window_s: float = 45 * 60) -> str:
@@ -23,12 +26,13 @@ def activity_state(start_s: float, end_s: float, now_s: float, upcoming_window_s
     return "scheduled"
 
 
-def symbolic_graph(scene: Scene, at_s: float | None = None) -> nx.MultiDiGraph:
+def symbolic_graph(scene: Scene, at_s: float | None = None, activities: Iterable[Any] = ()) -> nx.MultiDiGraph:
     """Rooms, doors, robot, people, objects and today's activities as a typed MultiDiGraph.
 
     Node keys are the scene names; every node has ``type`` and ``name``; edges are keyed by their
     type and also carry it as the ``type`` attribute.  ``at_s`` (seconds since midnight) sets
-    each activity's ``state``; by default the scene clock's start.
+    each activity's ``state``; by default the scene clock's start.  ``activities`` are the day's
+    ``agents.agenda.Activity`` items (``LoadedScene.agenda_day.activities``).
     """
     now_s = scene.clock.start_s if at_s is None else at_s
     graph = nx.MultiDiGraph()
@@ -61,17 +65,16 @@ def symbolic_graph(scene: Scene, at_s: float | None = None) -> nx.MultiDiGraph:
         for other in person.interacting_with:
             add_edge(person.name, other, "interacting")
 
-    for index, spec in enumerate(scene.agenda):
-        activity_id = str(spec.get("id") or f"activity_{index}")
-        start_s, end_s = parse_clock(str(spec["start"])), parse_clock(str(spec["end"]))
-        graph.add_node(activity_id, type="activity", name=activity_id, start_s=start_s, end_s=end_s,
-                       state=activity_state(start_s, end_s, now_s))
-        obj_name = str(spec["object"])
-        add_edge(activity_id, obj_name, "has")
-        room = next((d for _, d, k in graph.out_edges(obj_name, keys=True) if k == "in"), None)
+    for activity in activities:
+        name = f"activity/{activity.id}"
+        state = "cancelled" if activity.cancelled else activity_state(activity.start_s, activity.end_s, now_s)
+        graph.add_node(name, type="activity", name=name, activity_id=activity.id, object=activity.object,
+                       start_s=activity.start_s, end_s=activity.end_s, state=state)
+        add_edge(name, activity.object, "has")
+        room = next((d for _, d, k in graph.out_edges(activity.object, keys=True) if k == "in"), None)
         if room is not None:
-            add_edge(activity_id, room, "in")
-        for participant in spec.get("participants", []):
+            add_edge(name, room, "in")
+        for participant in activity.participants:
             if participant in graph:
-                add_edge(str(participant), activity_id, "participant")
+                add_edge(str(participant), name, "participant")
     return graph

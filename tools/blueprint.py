@@ -16,7 +16,8 @@ def blueprint() -> Any:
 
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Spatial2DView(origin="world", name="Social map"),
+            # Origin "/" so that the y-up transform logged at "world" applies (see world_frame()).
+            rrb.Spatial2DView(origin="/", contents=["/world/**"], name="Social map"),
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="metrics/objects", name="R(t) per object"),
                 rrb.TimeSeriesView(origin="metrics/robot", name="Robot"),
@@ -28,3 +29,10 @@ def blueprint() -> Any:
         ),
         collapse_panels=True,
     )
+
+
+def world_frame(recorder: Any) -> None:
+    """Maps are y-up; Rerun's 2-D views are y-down (image convention): flip once at ``world``."""
+    import rerun as rr
+
+    recorder.log("world", rr.Transform3D(mat3x3=[[1, 0, 0], [0, -1, 0], [0, 0, 1]]), static=True)

@@ -101,7 +101,8 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     from dsr import join
     from dsr.config import ZenohSettings
     from scenes.loader import load_scene
-    from tools.blueprint import blueprint
+    from agents.social_navigation.view import log_walls
+    from tools.blueprint import blueprint, world_frame
     from tools.dsr_view import GraphLogger
 
     loaded = load_scene(scene)
@@ -137,6 +138,8 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     missions: dict[str, dict[str, object]] = {}
     recorder = Recorder("launcher", run_dir if record else None, run_id)
     recorder.send_blueprint(blueprint())
+    world_frame(recorder)
+    log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
     try:
         supervisor.start("router")
         if not wait_for_port(port, 15):

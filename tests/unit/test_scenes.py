@@ -103,10 +103,17 @@ def test_people_follow_waypoints_and_face_their_way() -> None:
 
 
 def test_symbolic_graph_has_the_shared_vocabulary() -> None:
-    scene = load_scene("center_a").scene
-    graph = symbolic_graph(scene, at_s=parse_clock("11:30"))
+    loaded = load_scene("center_a")
+    graph = symbolic_graph(loaded.scene, at_s=parse_clock("11:30"), activities=loaded.agenda_day.activities)
     assert graph.nodes["corridor"]["type"] == "room"
     assert graph.has_edge("corridor", "occupational_therapy", key="connected")
     assert graph.has_edge("robot", "corridor", key="in")
-    assert graph.nodes["tv_therapy"]["state"] == "running"
-    assert graph.has_edge("tv_therapy", "ot_tv", key="has")
+    assert graph.nodes["activity/tv_therapy"]["state"] == "running"
+    assert graph.has_edge("activity/tv_therapy", "ot_tv", key="has")
+
+
+def test_agenda_errors_fail_the_scene_with_the_line(tmp_path: Path) -> None:
+    text = BASE + "agenda:\n  - {name: Game, object: piano, start: '11:00', end: '12:00'}\n"
+    with pytest.raises(SourceError) as info:
+        load_scene(_write(tmp_path, text))
+    assert info.value.line == 8 and "piano" in info.value.message

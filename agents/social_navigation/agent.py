@@ -1,0 +1,275 @@
+"""The social navigation agent: social map -> global path -> elastic band -> velocity commands.
+
+It executes ``navigate`` intentions written by the executive.  Why lockstep with the simulator:
+it answers every published pose (``pose_stamp``) with one command (``cmd_stamp``), so control runs
+at a fixed 0.1 s of sim time whatever the speed-up, and a slow replan simply pauses sim time
+instead of letting the robot drive blind.
+
+Replanning (why not on every change): people jitter and R(t) creeps every second.  The map is
+rebuilt every ``replan_period_s`` of sim time; a new global path is adopted when the current one
+is blocked (intimate zone, forbidden space, a body) or costs at least ``REPLAN_GAIN`` more than
+the new one on the current map.  Every adoption is logged to the recording.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from agents.runtime.base import Agent
+from agents.runtime.recording import Recorder
+from agents.social_navigation import elastic_band as eb
+from agents.social_navigation.control import BandFollower, ControlParams, DiffCommand
+from agents.social_navigation.grid import GridParams
+from agents.social_navigation.search import PlanningError, SearchWorkspace, StartOccupied
+from agents.social_navigation.social_map import SocialMap, SocialMapParams, build_social_map, build_static_map, plan
+from agents.social_navigation.view import log_social_map
+from agents.world_model import dsr_activity_windows, dsr_objects, dsr_people, scene_rooms, scene_walls
+from scenes.model import format_clock
+
+REPLAN_PERIOD_S = 1.0
+REPLAN_GAIN = 1.15
+STALL_TIMEOUT_S = 60.0
+
+
+def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
+    """Cost of a polyline on a grid with the planner's semantics (L * mean of the two cells)."""
+    if len(points) < 2:
+        return 0.0
+    seg = np.diff(points, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    samples = [points[:1]]
+    for start, delta, length in zip(points[:-1], seg, lengths, strict=True):
+        n = max(1, int(math.ceil(length / (spec.resolution / 2))))
+        samples.append(start + delta * (np.arange(1, n + 1)[:, None] / n))
+    dense = np.vstack(samples)
+    rows = np.clip(((dense[:, 1] - spec.y0) / spec.resolution).astype(int), 0, grid.shape[0] - 1)
+    cols = np.clip(((dense[:, 0] - spec.x0) / spec.resolution).astype(int), 0, grid.shape[1] - 1)
+    costs = grid[rows, cols]
+    if not np.all(np.isfinite(costs)):
+        return math.inf
+    step = np.hypot(*np.diff(dense, axis=0).T)
+    return float(np.sum(step * (costs[:-1] + costs[1:]) / 2))
+
+
+def nearest_free(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: float = 1.0) -> tuple[float, float]:
+    """The centre of the nearest traversable cell: the way out when someone stepped up to the robot
+    (its start lies in their intimate zone) or the robot was pushed against an inflated wall."""
+    col = int((xy[0] - spec.x0) / spec.resolution)
+    row = int((xy[1] - spec.y0) / spec.resolution)
+    reach = int(max_m / spec.resolution)
+    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
+    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
+    rows, cols = np.nonzero(np.isfinite(grid[r0:r1, c0:c1]))
+    if len(rows) == 0:
+        raise StartOccupied(f"no free cell within {max_m} m of ({xy[0]:.2f}, {xy[1]:.2f})")
+    best = np.argmin((rows + r0 - row) ** 2 + (cols + c0 - col) ** 2)
+    return (spec.x0 + (cols[best] + c0 + 0.5) * spec.resolution, spec.y0 + (rows[best] + r0 + 0.5) * spec.resolution)
+
+
+class SocialNavigationAgent(Agent):
+    kind = "social_navigation"
+
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+        self.graph = graph
+        self.rec = recorder
+        scene, robot = self.scene, self.scene.robot
+        self.params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius))
+        self.walls, self.rooms = scene_walls(scene), scene_rooms(scene)
+        self.bounds = scene.bounds
+        self.static = build_static_map(self.bounds, self.walls, self.rooms, self.params)
+        self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
+        self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
+                                     max_accel_mps2=robot.max_acceleration)
+        self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
+        self.cruise = 0.7 * robot.max_speed
+        self.control_dt = float(self.config.option("control_dt", "0.1"))
+        self.intention_id: int | None = None
+        self.band: eb.ElasticBand | None = None
+        self.goal: tuple[float, float, float | None] | None = None
+        self.last_answered = -1.0
+        self.last_replan_s = -math.inf
+        self.started_s = 0.0
+        self.follower = BandFollower(self.drive, self.control)
+        self.map: SocialMap | None = None
+        self.workspace = SearchWorkspace()
+        self._last_map_log_s = -math.inf
+
+    # ----------------------------------------------------------------- helpers
+    def _robot(self) -> Any:
+        return self.graph.get_node_by_name(self.scene.robot.name)
+
+    def _now(self) -> float | None:
+        clock = self.graph.get_node_by_name("clock")
+        return None if clock is None else float(clock.attrs["now_s"])
+
+    def _build_map(self, now_s: float) -> SocialMap:
+        g = self.graph
+        return build_social_map(self.bounds, self.walls, dsr_people(g), dsr_objects(g), dsr_activity_windows(g),
+                                now_s, self.params, rooms=self.rooms, static=self.static)
+
+    def _active_intention(self) -> Any:
+        for node in self.graph.nodes_of_type("intention"):
+            if node.attrs.get("state") == "active" and node.attrs.get("kind") == "navigate":
+                return node
+        return None
+
+    def _laser_points(self, robot: Any, pose: tuple[float, float, float]) -> np.ndarray:
+        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
+        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        if len(ranges) == 0 or len(ranges) != len(angles):
+            return np.empty((0, 2))
+        hit = ranges < np.max(ranges) - 1e-6 if len(ranges) else ranges
+        x, y, theta = pose
+        a = angles[hit] + theta
+        return np.stack([x + ranges[hit] * np.cos(a), y + ranges[hit] * np.sin(a)], axis=1)
+
+    # ----------------------------------------------------------------- loop
+    def step(self) -> None:
+        now_s = self._now()
+        robot = self._robot()
+        if now_s is None or robot is None:
+            return
+        self.rec.set_time(now_s)
+        intention = self._active_intention()
+        if intention is None:
+            if self.intention_id is not None or robot.attrs.get("nav_active"):
+                self._stop(robot, None, None)
+            self._maybe_log_map(now_s)
+            return
+        if intention.id != self.intention_id:
+            self._start(intention, robot, now_s)
+            return
+        if now_s - self.last_replan_s >= REPLAN_PERIOD_S:
+            self._replan(intention, robot, now_s)
+        pose_stamp = float(robot.attrs.get("pose_stamp", -1.0))
+        if pose_stamp > self.last_answered:
+            self._control(intention, robot, now_s, pose_stamp)
+
+    def _start(self, intention: Any, robot: Any, now_s: float) -> None:
+        self.intention_id = intention.id
+        attrs = intention.attrs
+        theta = float(attrs["goal_theta"]) if attrs.get("goal_has_theta", True) else None
+        self.goal = (float(attrs["goal_x"]), float(attrs["goal_y"]), theta)
+        self.started_s = now_s
+        self.follower.reset()
+        pose = self.graph.world_pose(robot.id)
+        if not self._plan(pose, now_s, reason=f"intention {intention.name}"):
+            return
+        self.graph.update_node(robot.id, attrs={"nav_active": True})
+
+    def _plan(self, pose: tuple[float, float, float], now_s: float, reason: str) -> bool:
+        assert self.goal is not None
+        try:
+            self.map = self._build_map(now_s)
+            path = self._plan_from(self.map, pose)
+        except PlanningError as exc:
+            self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
+            return False
+        points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+        self.band = eb.band_from_path(points, (), self.band_params)
+        self.last_replan_s = now_s
+        self._publish_path(points, now_s, reason, path.cost)
+        return True
+
+    def _plan_from(self, smap: SocialMap, pose: tuple[float, float, float]) -> Any:
+        assert self.goal is not None
+        goal = (self.goal[0], self.goal[1])
+        try:
+            return plan(smap, (pose[0], pose[1]), goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
+        except StartOccupied:
+            escape = nearest_free(smap.cost, smap.spec, (pose[0], pose[1]))
+            return plan(smap, escape, goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
+
+    def _replan(self, intention: Any, robot: Any, now_s: float) -> None:
+        del intention
+        if self.band is None or self.goal is None:
+            return
+        self.last_replan_s = now_s
+        pose = self.graph.world_pose(robot.id)
+        try:
+            new_map = self._build_map(now_s)
+            new_path = self._plan_from(new_map, pose)
+        except PlanningError:
+            return  # keep the current band; the goal may be momentarily blocked by a passer-by
+        self.map = new_map
+        remaining = np.vstack([[pose[0], pose[1]], self.band.points])
+        old_cost = path_cost(new_map.cost, new_map.spec, remaining)
+        new_cost = path_cost(new_map.cost, new_map.spec, new_path.points_m)
+        self._maybe_log_map(now_s)
+        if math.isinf(old_cost) or old_cost > REPLAN_GAIN * new_cost:
+            why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"
+            points = np.vstack([[pose[0], pose[1]], new_path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+            self.band = eb.band_from_path(points, (), self.band_params)
+            self._publish_path(points, now_s, f"replanned ({why})", new_path.cost)
+
+    def _control(self, intention: Any, robot: Any, now_s: float, pose_stamp: float) -> None:
+        assert self.band is not None and self.goal is not None
+        pose = self.graph.world_pose(robot.id)
+        obstacles = self._laser_points(robot, pose)
+        try:
+            self.band = eb.step(self.band, obstacles, robot_pose=pose, params=self.band_params)
+        except eb.BandInputError:
+            pass
+        out = self.follower.command(pose, self.band.points, self.control_dt, goal_theta=self.goal[2])
+        cmd = out.command
+        vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
+        omega = float(cmd.omega)
+        self.last_answered = pose_stamp
+        if out.reached:
+            self._stop(robot, intention, "done")
+            self.rec.event(f"{format_clock(now_s)} reached goal of {intention.name} "
+                           f"({now_s - self.started_s:.0f} s)")
+            return
+        if now_s - self.started_s > STALL_TIMEOUT_S + 4 * self.band.length_m / max(self.cruise, 0.05):
+            self._fail("timed out before reaching the goal")
+            return
+        self.graph.update_node(robot.id, attrs={"cmd_vx": vx, "cmd_vy": vy, "cmd_omega": omega,
+                                                "cmd_stamp": pose_stamp})
+        if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:
+            self.rec.line_strip("world/navigation/band", self.band.points.tolist(), color=[0, 200, 120], radius=0.025)
+
+    def _stop(self, robot: Any, intention: Any, state: str | None, reason: str = "") -> None:
+        g = self.graph
+        with g.transaction():
+            g.update_node(robot.id, attrs={"nav_active": False, "cmd_vx": 0.0, "cmd_vy": 0.0, "cmd_omega": 0.0,
+                                           "cmd_stamp": float(robot.attrs.get("pose_stamp", 0.0))})
+            if intention is not None and state is not None:
+                g.update_node(intention.id, attrs={"state": state, "reason": reason})
+        self.intention_id = None
+        self.band = None
+        self.goal = None
+
+    def _fail(self, reason: str) -> None:
+        robot = self._robot()
+        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
+        self.log.warning("navigation failed: %s", reason)
+        self.rec.event(f"navigation failed: {reason}", level="ERROR")
+        self._stop(robot, intention, "failed", reason)
+
+    # ----------------------------------------------------------------- outputs
+    def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+        robot = self._robot()
+        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
+        with self.graph.transaction():
+            attrs = {"path_x": points[:, 0].tolist(), "path_y": points[:, 1].tolist(), "path_cost": float(cost),
+                     "planned_s": now_s}
+            self.graph.update_node(robot.id, attrs=attrs)
+            if intention is not None:
+                self.graph.update_node(intention.id, attrs={**attrs, "replans": int(intention.attrs.get("replans", 0))
+                                                            + (0 if reason.startswith("intention") else 1)})
+        self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
+        self.rec.line_strip("world/navigation/global_path", points.tolist(), color=[255, 255, 255], radius=0.03)
+        self._maybe_log_map(now_s, force=True)
+
+    def _maybe_log_map(self, now_s: float, force: bool = False) -> None:
+        if not self.rec.enabled:
+            return
+        if not force and now_s - self._last_map_log_s < 30.0:
+            return
+        if self.map is None or (not force and abs(self.map.t_s - now_s) > REPLAN_PERIOD_S):
+            self.map = self._build_map(now_s)
+        self._last_map_log_s = now_s
+        log_social_map(self.rec, self.map)

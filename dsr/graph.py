@@ -1,0 +1,724 @@
+"""DSRGraph: the local replica of the shared graph and the API agents call.
+
+Why this structure: the replicated truth is the CRDT state (`crdt.ElementState` per node and
+edge); everything an agent queries (visible nodes, names, types, adjacency) is an index derived
+from it and kept in sync element by element, so queries are O(1)/O(degree) and signals are
+computed exactly where the state changed.  Local writes are built as deltas and go through the
+same merge code as remote deltas, so a replica cannot diverge from what it publishes.
+
+Threading: one re-entrant lock guards the state.  A transaction holds it for its whole body
+(remote merges wait, which gives the transaction isolation and makes rollback safe); signals are
+queued and delivered by `dispatch()` on the caller's thread with no lock held.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import secrets
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import orjson
+
+from dsr import crdt, poses, wire
+from dsr.crdt import ElementState
+from dsr.errors import (DSRError, EdgeNotFoundError, InvalidIdentifierError, NameTakenError,
+                        NodeNotFoundError, PoseError, ReadOnlyGraphError, TransactionError)
+from dsr.hlc import HybridLogicalClock
+from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
+                       check_node_id, check_type_name)
+from dsr.names import NameIndex
+from dsr.outbox import Outbox
+from dsr.signals import Event, SignalHub
+
+if TYPE_CHECKING:
+    import networkx
+
+EdgeKey = tuple[int, int, str]
+Publisher = Callable[[bytes], None]
+RT = "RT"
+
+
+@dataclass(slots=True)
+class _NodeView:
+    type: str
+    name: str
+    created: int
+
+
+@dataclass
+class _Transaction:
+    owner: int
+    rollback: bool
+    undo_nodes: dict[int, ElementState | None] = field(default_factory=dict)
+    undo_edges: dict[EdgeKey, ElementState | None] = field(default_factory=dict)
+    out_nodes: dict[int, ElementState] = field(default_factory=dict)
+    out_edges: dict[EdgeKey, ElementState] = field(default_factory=dict)
+    events: list[Event] = field(default_factory=list)
+
+
+class IdAllocator:
+    """64-bit node ids: a random nonzero 31-bit prefix per replica incarnation + a counter.
+
+    Why random per incarnation: a restarted agent (same name) must never reuse the ids of its
+    previous life; collisions between replicas are checked against the local state and skipped.
+    """
+
+    def __init__(self, prefix: int | None = None) -> None:
+        self.prefix = prefix if prefix is not None else secrets.randbelow(2**31 - 1) + 1
+        self._counter = 0
+
+    def next(self, taken: Callable[[int], bool]) -> int:
+        while True:
+            self._counter += 1
+            if self._counter >= 2**32:
+                self.prefix = secrets.randbelow(2**31 - 1) + 1
+                self._counter = 1
+            node_id = (self.prefix << 32) | self._counter
+            if not taken(node_id):
+                return node_id
+
+
+class DSRGraph:
+    """A full replica of a DSR graph.  Offline until a transport (dsr.transport.join) attaches."""
+
+    def __init__(self, agent: str, *, replica_id: int | None = None, read_only: bool = False,
+                 graph: str = "chronav", clock: HybridLogicalClock | None = None) -> None:
+        self.agent = check_agent_name(agent)
+        self.graph_name = check_agent_name(graph, "graph")
+        self.replica_id = replica_id if replica_id is not None else secrets.randbits(63) | 1
+        self.read_only = read_only
+        self.clock = clock or HybridLogicalClock()
+        self.ids = IdAllocator()
+        #: the transport that replicates this graph (dsr.transport.Replica), if any
+        self.replica: Any = None
+        self._publish: Publisher | None = None
+        self._outbox: Outbox | None = None
+        self._lock = threading.RLock()
+        self._nodes: dict[int, ElementState] = {}
+        self._edges: dict[EdgeKey, ElementState] = {}
+        self._out: dict[int, set[EdgeKey]] = {}
+        self._in: dict[int, set[EdgeKey]] = {}
+        self._view: dict[int, _NodeView] = {}
+        self._visible_edges: set[EdgeKey] = set()
+        self._types: dict[str, set[int]] = {}
+        self._edge_types: dict[str, set[EdgeKey]] = {}
+        self._names = NameIndex()
+        self._signals = SignalHub()
+        self._tx: _Transaction | None = None
+        self._tx_depth = 0
+        self._version = 0
+        self._snapshot_cache: tuple[int, bytes] | None = None
+        self._writers: dict[int, str] = {self.replica_id: self.agent}
+        self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
+
+    # ------------------------------------------------------------------ reads
+    def __len__(self) -> int:
+        return len(self._view)
+
+    def __contains__(self, node_id: object) -> bool:
+        return node_id in self._view
+
+    @property
+    def version(self) -> int:
+        """Increases on every state change (local or remote)."""
+        return self._version
+
+    def _node(self, node_id: int) -> Node:
+        view = self._view[node_id]
+        return Node(id=node_id, type=view.type, name=self._names.shown(view.name, node_id),
+                    attrs=self._nodes[node_id].visible_attrs())
+
+    def _edge(self, key: EdgeKey) -> Edge:
+        return Edge(src=key[0], dst=key[1], type=key[2], attrs=self._edges[key].visible_attrs())
+
+    def get_node(self, node_id: int) -> Node | None:
+        with self._lock:
+            return self._node(node_id) if node_id in self._view else None
+
+    def get_node_by_name(self, name: str) -> Node | None:
+        with self._lock:
+            node_id = self._names.lookup(name)
+            return self._node(node_id) if node_id is not None else None
+
+    def require_node(self, node: int | str) -> Node:
+        """Node by id or shown name, or NodeNotFoundError (for agents that expect it)."""
+        found = self.get_node(node) if isinstance(node, int) else self.get_node_by_name(node)
+        if found is None:
+            raise NodeNotFoundError(f"no node {node!r} in graph {self.graph_name!r}")
+        return found
+
+    def get_attr(self, node_id: int, key: str, default: Any = None) -> Any:
+        """One attribute of a visible node without building a Node snapshot."""
+        with self._lock:
+            if node_id not in self._view:
+                raise NodeNotFoundError(f"no node {node_id}")
+            value = self._nodes[node_id].visible_value(key)
+            return default if value is crdt._MISSING else value
+
+    def nodes(self) -> list[Node]:
+        with self._lock:
+            return [self._node(i) for i in sorted(self._view)]
+
+    def nodes_of_type(self, type: str) -> list[Node]:  # noqa: A002 - DSR vocabulary
+        with self._lock:
+            return [self._node(i) for i in sorted(self._types.get(type, ()))]
+
+    def get_edge(self, src: int, dst: int, type: str) -> Edge | None:  # noqa: A002
+        with self._lock:
+            key = (src, dst, type)
+            return self._edge(key) if key in self._visible_edges else None
+
+    def edges(self) -> list[Edge]:
+        with self._lock:
+            return [self._edge(k) for k in sorted(self._visible_edges)]
+
+    def edges_from(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
+        with self._lock:
+            return [self._edge(k) for k in sorted(self._out.get(node_id, ()))
+                    if k in self._visible_edges and (type is None or k[2] == type)]
+
+    def edges_to(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
+        with self._lock:
+            return [self._edge(k) for k in sorted(self._in.get(node_id, ()))
+                    if k in self._visible_edges and (type is None or k[2] == type)]
+
+    def edges_of_type(self, type: str) -> list[Edge]:  # noqa: A002
+        with self._lock:
+            return [self._edge(k) for k in sorted(self._edge_types.get(type, ()))]
+
+    # ------------------------------------------------------------------ signals
+    def connect(self, signal: str, callback: Callable[..., Any]) -> None:
+        """Register a callback for one of dsr.signals.SIGNALS; it runs inside dispatch()."""
+        self._signals.connect(signal, callback)
+
+    def disconnect(self, signal: str, callback: Callable[..., Any]) -> None:
+        self._signals.disconnect(signal, callback)
+
+    def dispatch(self, timeout: float | None = 0.0) -> int:
+        """Deliver queued signals on the calling thread (see SignalHub.dispatch)."""
+        if self._tx is not None and self._tx.owner == threading.get_ident():
+            raise TransactionError("dispatch() called inside a transaction; call it after")
+        return self._signals.dispatch(timeout)
+
+    @property
+    def callback_errors(self) -> int:
+        return self._signals.callback_errors
+
+    # ------------------------------------------------------------------ transactions
+    @contextmanager
+    def transaction(self) -> Iterator[DSRGraph]:
+        """Group changes into one delta; on exception every change of the block is undone.
+
+        Nested blocks join the outermost one.  The graph lock is held for the whole block, so
+        keep it short (remote merges wait meanwhile).
+        """
+        with self._write(rollback=True):
+            yield self
+
+    @contextmanager
+    def _write(self, rollback: bool) -> Iterator[_Transaction]:
+        if self.read_only:
+            raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
+        self._lock.acquire()
+        try:
+            outer = self._tx is None
+            if outer:
+                self._tx = _Transaction(owner=threading.get_ident(), rollback=rollback)
+            elif rollback and not self._tx.rollback:
+                raise TransactionError("transaction opened inside a single write")
+            self._tx_depth += 1
+            tx = self._tx
+            try:
+                yield tx
+            except BaseException:
+                self._tx_depth -= 1
+                if outer:
+                    self._tx = None
+                    self._tx_depth = 0
+                    self._undo(tx)
+                raise
+            self._tx_depth -= 1
+            payload = None
+            if outer:
+                self._tx = None
+                payload = self._commit(tx)
+        finally:
+            self._lock.release()
+        publish = self._publish
+        if payload is not None and publish is not None:
+            publish(payload)
+
+    def _commit(self, tx: _Transaction) -> bytes | None:
+        self._signals.post(tx.events)
+        if not tx.out_nodes and not tx.out_edges:
+            return None
+        self._version += 1
+        outbox = self._outbox
+        return outbox.add(tx.out_nodes, tx.out_edges) if outbox is not None else None
+
+    def _undo(self, tx: _Transaction) -> None:
+        for node_id, before in tx.undo_nodes.items():
+            if before is None:
+                self._nodes.pop(node_id, None)
+            else:
+                self._nodes[node_id] = before
+        for key, before_edge in tx.undo_edges.items():
+            if before_edge is None:
+                self._edges.pop(key, None)
+                self._unlink_edge(key)
+            else:
+                self._edges[key] = before_edge
+        for node_id in tx.undo_nodes:
+            self._sync_node(node_id, [], None)
+        for key in tx.undo_edges:
+            self._sync_edge(key, [], None)
+        self._version += 1
+
+    # ------------------------------------------------------------------ local writes
+    def insert_node(self, type: str, name: str, attrs: Attrs | None = None,  # noqa: A002
+                    *, id: int | None = None) -> Node:  # noqa: A002
+        """Create a node; `id` is generated unless given (e.g. by a world file)."""
+        check_type_name(type)
+        check_name(name)
+        values = check_attrs(attrs) if attrs else {}
+        if id is not None:
+            check_node_id(id)
+        with self._write(rollback=False) as tx:
+            return self._insert_node(tx, type, name, values, id)
+
+    def _insert_node(self, tx: _Transaction, type_: str, name: str, values: Attrs,
+                     node_id: int | None) -> Node:
+        holder = self._names.lookup(name)
+        if holder is not None and holder != node_id:
+            raise NameTakenError(f"node name {name!r} is already taken by node {holder}")
+        if node_id is None:
+            node_id = self.ids.next(lambda i: i in self._nodes)
+        elif node_id in self._view:
+            raise InvalidIdentifierError(f"node id {node_id} already exists; use update_node")
+        hlc = self.clock.tick()
+        me = self.replica_id
+        self._local_node(tx, node_id, add=((me, hlc),), meta=(hlc, me, (type_, name)),
+                         attrs={k: (hlc, me, v) for k, v in values.items()})
+        return self._node(node_id)
+
+    def update_node(self, node_id: int, attrs: Attrs) -> None:
+        """Set attributes of a visible node (last writer wins per attribute).
+
+        Outside a transaction this is the hot path of every agent (poses, sensor values), so
+        it bypasses the transaction machinery: merge, encode one small delta, publish."""
+        values = check_attrs(attrs)
+        if self.read_only:
+            raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
+        payload = None
+        with self._lock:
+            if self._tx is None:
+                if node_id not in self._view:
+                    raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+                hlc = self.clock.tick()
+                me = self.replica_id
+                regs = {k: (hlc, me, v) for k, v in values.items()}
+                events: list[Event] = []
+                self._merge_node(node_id, {"attrs": regs}, events)
+                self._version += 1
+                outbox = self._outbox
+                if outbox is not None:
+                    payload = outbox.add({node_id: ElementState(attrs=regs)}, {})
+            else:
+                self._update_node_tx(node_id, values)
+                return
+        self._signals.post(events)
+        publish = self._publish
+        if payload is not None and publish is not None:
+            publish(payload)
+
+    def _update_node_tx(self, node_id: int, values: Attrs) -> None:
+        with self._write(rollback=False) as tx:
+            if node_id not in self._view:
+                raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+            hlc = self.clock.tick()
+            me = self.replica_id
+            self._local_node(tx, node_id, attrs={k: (hlc, me, v) for k, v in values.items()})
+
+    def delete_node(self, node_id: int) -> None:
+        """Delete a node and every edge from or to it."""
+        with self._write(rollback=False) as tx:
+            if node_id not in self._view:
+                raise NodeNotFoundError(f"cannot delete node {node_id}: not in the graph")
+            hlc = self.clock.tick()
+            for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
+                edge = self._edges[key]
+                if edge.present():
+                    self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc)
+            node = self._nodes[node_id]
+            self._local_node(tx, node_id, rem=tuple(node.add.items()), cleared=hlc)
+
+    def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
+                              attrs: Attrs | None = None) -> Edge:
+        """Create the edge (src, dst, type) or, if it exists, set the given attributes."""
+        check_type_name(type, "edge type")
+        values = check_attrs(attrs) if attrs else {}
+        with self._write(rollback=False) as tx:
+            for end in (src, dst):
+                if end not in self._view:
+                    raise NodeNotFoundError(f"cannot link {src}->{dst} ({type}): no node {end}")
+            key = (src, dst, type)
+            hlc = self.clock.tick()
+            me = self.replica_id
+            regs = {k: (hlc, me, v) for k, v in values.items()}
+            if key in self._visible_edges:
+                if regs:
+                    self._local_edge(tx, key, attrs=regs)
+            else:
+                self._local_edge(tx, key, add=((me, hlc),), attrs=regs)
+            return self._edge(key)
+
+    def delete_edge(self, src: int, dst: int, type: str) -> None:  # noqa: A002
+        with self._write(rollback=False) as tx:
+            key = (src, dst, type)
+            if key not in self._visible_edges:
+                raise EdgeNotFoundError(f"cannot delete edge {src}->{dst} ({type}): not found")
+            self._local_edge(tx, key, rem=tuple(self._edges[key].add.items()),
+                             cleared=self.clock.tick())
+
+    def _local_node(self, tx: _Transaction, node_id: int, **delta: Any) -> None:
+        if tx.rollback and node_id not in tx.undo_nodes:
+            before = self._nodes.get(node_id)
+            tx.undo_nodes[node_id] = before.copy() if before is not None else None
+        self._merge_node(node_id, delta, tx.events)
+        out = tx.out_nodes.get(node_id)
+        if out is None:
+            out = tx.out_nodes[node_id] = ElementState()
+        crdt.merge_into(out, **delta)
+
+    def _local_edge(self, tx: _Transaction, key: EdgeKey, **delta: Any) -> None:
+        if tx.rollback and key not in tx.undo_edges:
+            before = self._edges.get(key)
+            tx.undo_edges[key] = before.copy() if before is not None else None
+        self._merge_edge(key, delta, tx.events)
+        out = tx.out_edges.get(key)
+        if out is None:
+            out = tx.out_edges[key] = ElementState()
+        crdt.merge_into(out, **delta)
+
+    # ------------------------------------------------------------------ merge + derived view
+    def _merge_node(self, node_id: int, delta: dict[str, Any], events: list[Event] | None) -> bool:
+        state = self._nodes.get(node_id)
+        if state is None:
+            state = self._nodes[node_id] = ElementState()
+        if len(delta) == 1 and "attrs" in delta:   # attribute-only: visibility cannot change
+            changed, keys = crdt.merge_attrs(state, delta["attrs"])
+            if keys and events is not None and node_id in self._view \
+                    and self._signals.wants("node_updated"):
+                events.append(("node_updated", (self._node(node_id), keys)))
+            return changed
+        changed, keys = crdt.merge_into(state, **delta)
+        if changed:
+            self._sync_node(node_id, keys, events)
+        return changed
+
+    def _merge_edge(self, key: EdgeKey, delta: dict[str, Any], events: list[Event] | None) -> bool:
+        state = self._edges.get(key)
+        if state is None:
+            state = self._edges[key] = ElementState()
+            self._out.setdefault(key[0], set()).add(key)
+            self._in.setdefault(key[1], set()).add(key)
+        changed, keys = crdt.merge_into(state, **delta)
+        if changed:
+            self._sync_edge(key, keys, events)
+        return changed
+
+    def _unlink_edge(self, key: EdgeKey) -> None:
+        for index, end in ((self._out, key[0]), (self._in, key[1])):
+            keys = index.get(end)
+            if keys is not None:
+                keys.discard(key)
+                if not keys:
+                    del index[end]
+        self._sync_edge(key, [], None)
+
+    def _sync_node(self, node_id: int, keys: list[str], events: list[Event] | None) -> None:
+        """Bring the derived view of one node in line with its state; queue signals."""
+        state = self._nodes.get(node_id)
+        old = self._view.get(node_id)
+        new = None
+        if state is not None and state.meta is not None and state.present():
+            hlc, _, (type_, name) = state.meta
+            new = _NodeView(type_, name, hlc)
+        renamed: list[int] = []
+        if old is not None and (new is None or new != old):
+            self._types[old.type].discard(node_id)
+            if not self._types[old.type]:
+                del self._types[old.type]
+            renamed += self._names.remove(old.name, node_id)
+            del self._view[node_id]
+        if new is not None and (old is None or new != old):
+            self._types.setdefault(new.type, set()).add(node_id)
+            renamed += self._names.add(new.name, node_id, new.created)
+            self._view[node_id] = new
+        want = events is not None
+        signals = self._signals
+        if old is None and new is not None:
+            if want and signals.wants("node_added"):
+                events.append(("node_added", (self._node(node_id),)))
+            self._sync_incident(node_id, events)
+        elif old is not None and new is None:
+            self._sync_incident(node_id, events)
+            if want and signals.wants("node_deleted"):
+                events.append(("node_deleted", (node_id,)))
+        elif old is not None and new is not None and want and signals.wants("node_updated"):
+            changed = list(keys)
+            if old.type != new.type:
+                changed.append("type")
+            if old.name != new.name:
+                changed.append("name")
+            if changed:
+                events.append(("node_updated", (self._node(node_id), changed)))
+        if renamed and want and signals.wants("node_updated"):
+            for other in dict.fromkeys(renamed):
+                if other in self._view:
+                    events.append(("node_updated", (self._node(other), ["name"])))
+
+    def _sync_incident(self, node_id: int, events: list[Event] | None) -> None:
+        for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
+            self._sync_edge(key, [], events)
+
+    def _sync_edge(self, key: EdgeKey, keys: list[str], events: list[Event] | None) -> None:
+        state = self._edges.get(key)
+        was = key in self._visible_edges
+        now = (state is not None and key[0] in self._view and key[1] in self._view
+               and state.present())
+        if was and not now:
+            self._visible_edges.discard(key)
+            self._edge_types[key[2]].discard(key)
+            if not self._edge_types[key[2]]:
+                del self._edge_types[key[2]]
+            if events is not None and self._signals.wants("edge_deleted"):
+                events.append(("edge_deleted", key))
+        elif now and not was:
+            self._visible_edges.add(key)
+            self._edge_types.setdefault(key[2], set()).add(key)
+            if events is not None and self._signals.wants("edge_added"):
+                events.append(("edge_added", (self._edge(key),)))
+        elif now and keys and events is not None and self._signals.wants("edge_updated"):
+            events.append(("edge_updated", (self._edge(key), list(keys))))
+
+    # ------------------------------------------------------------------ replication hooks
+    def attach(self, publish: Publisher | None, *, linger_s: float = 0.0) -> None:
+        """Called by the transport: where encoded local deltas go (None = offline).
+
+        Deltas written in quick succession are coalesced (see outbox.py); `linger_s=0`
+        publishes every delta on its own.  Detaching flushes what is pending."""
+        with self._lock:
+            old, self._outbox = self._outbox, None
+            self._publish = publish
+            if publish is not None:
+                self._outbox = Outbox(self._encoder, publish, linger_s=linger_s)
+        if old is not None:
+            old.close()
+
+    def flush(self) -> None:
+        """Publish coalesced deltas now instead of within the linger time."""
+        outbox = self._outbox
+        if outbox is not None:
+            outbox.flush()
+
+    def apply_message(self, message: wire.Decoded) -> int:
+        """Merge a validated remote delta or state; returns how many elements changed."""
+        if self._tx is not None and self._tx.owner == threading.get_ident():
+            raise TransactionError("apply_message() inside a local transaction")
+        with self._lock:
+            top = message.top_hlc
+            if top:
+                self.clock.observe(top)
+            for replica, agent in message.writers.items():
+                self._writers.setdefault(int(replica), agent)
+            if message.kind == "delta":
+                self._writers.setdefault(message.replica, message.agent)
+            events: list[Event] = []
+            changed = 0
+            nodes, edges = self._nodes, self._edges
+            for node_id, state in message.nodes:
+                current = nodes.get(node_id)
+                if current is None:        # unknown element: the decoded state is installed
+                    nodes[node_id] = state
+                    self._sync_node(node_id, [], events)
+                    changed += 1
+                elif state.meta is None and not state.add and not state.rem \
+                        and not state.cleared:
+                    changed += self._merge_node(node_id, {"attrs": state.attrs}, events)
+                else:
+                    changed += self._merge_node(node_id, {
+                        "add": state.add.items(), "rem": state.rem.items(),
+                        "cleared": state.cleared, "meta": state.meta, "attrs": state.attrs},
+                        events)
+            for key, state in message.edges:
+                if key not in edges:
+                    edges[key] = state
+                    self._out.setdefault(key[0], set()).add(key)
+                    self._in.setdefault(key[1], set()).add(key)
+                    self._sync_edge(key, [], events)
+                    changed += 1
+                else:
+                    changed += self._merge_edge(key, {
+                        "add": state.add.items(), "rem": state.rem.items(),
+                        "cleared": state.cleared, "attrs": state.attrs}, events)
+            if changed:
+                self._version += 1
+            self._signals.post(events)
+            return changed
+
+    def node_type_of(self, node_id: int) -> str | None:
+        """Type from the replicated state, even for a node not visible (for write policies)."""
+        state = self._nodes.get(node_id)
+        return state.meta[2][0] if state is not None and state.meta is not None else None
+
+    def writer_agent(self, replica: int) -> str | None:
+        return self._writers.get(replica)
+
+    def state_message(self) -> bytes:
+        """Full CRDT state (tombstones included) as a "state" message; cached per version."""
+        with self._lock:
+            cache = self._snapshot_cache
+            if cache is not None and cache[0] == self._version:
+                return cache[1]
+            payload = wire.encode(kind="state", graph=self.graph_name, agent=self.agent,
+                                  replica=self.replica_id, nodes=self._nodes.items(),
+                                  edges=self._edges.items(), writers=self._writers)
+            self._snapshot_cache = (self._version, payload)
+            return payload
+
+    def state_equals(self, other: DSRGraph) -> bool:
+        """True if both replicas hold the same CRDT state (tests)."""
+        with self._lock:
+            return self._nodes == other._nodes and self._edges == other._edges
+
+    # ------------------------------------------------------------------ derived outputs
+    def rt_parent(self, node_id: int) -> Edge | None:
+        """The RT edge placing `node_id` in its parent.  If concurrent re-parenting left
+        several, the most recently added one wins (same choice on every replica)."""
+        with self._lock:
+            keys = [k for k in self._in.get(node_id, ()) if k[2] == RT and k in self._visible_edges]
+            if not keys:
+                return None
+            best = max(keys, key=lambda k: (max(self._edges[k].add.values()), k))
+            return self._edge(best)
+
+    def world_pose(self, node_id: int) -> poses.Pose:
+        """(x, y, theta) of a node in the root frame, composing RT edges up to a node without
+        an RT parent (the `world` node)."""
+        with self._lock:
+            if node_id not in self._view:
+                raise NodeNotFoundError(f"world_pose: no node {node_id}")
+            chain: list[poses.Pose] = []
+            seen = {node_id}
+            current = node_id
+            while True:
+                edge = self.rt_parent(current)
+                if edge is None:
+                    break
+                try:
+                    chain.append((float(edge.attrs["x"]), float(edge.attrs["y"]),
+                                  float(edge.attrs["theta"])))
+                except (KeyError, TypeError, ValueError):
+                    raise PoseError(f"RT edge {edge.src}->{edge.dst} needs float x, y, theta; "
+                                    f"has {sorted(edge.attrs)}") from None
+                if edge.src in seen:
+                    raise PoseError(f"RT cycle through node {edge.src}")
+                seen.add(edge.src)
+                current = edge.src
+            return poses.compose_chain(reversed(chain))
+
+    def to_networkx(self) -> networkx.MultiDiGraph:
+        """Copy of the visible graph: nodes keyed by id with data {**attrs, type, name}
+        (type/name win over attributes of the same key); edges keyed by edge type."""
+        import networkx as nx
+        graph = nx.MultiDiGraph(name=self.graph_name)
+        with self._lock:
+            for node in (self._node(i) for i in self._view):
+                graph.add_node(node.id, **{**node.attrs, "type": node.type, "name": node.name})
+            for key in self._visible_edges:
+                graph.add_edge(key[0], key[1], key=key[2],
+                               **{**self._edges[key].visible_attrs(), "type": key[2]})
+        return graph
+
+    def to_document(self) -> dict[str, Any]:
+        """The visible graph as a plain dict in the graph-file format (files.py)."""
+        from dsr.files import FORMAT
+        with self._lock:
+            return {"format": FORMAT,
+                    "nodes": [{"id": n.id, "type": n.type, "name": n.name, "attrs": n.attrs}
+                              for n in self.nodes()],
+                    "edges": [{"src": e.src, "dst": e.dst, "type": e.type, "attrs": e.attrs}
+                              for e in self.edges()]}
+
+    def to_json(self, indent: bool = False) -> str:
+        option = orjson.OPT_SORT_KEYS | (orjson.OPT_INDENT_2 if indent else 0)
+        return orjson.dumps(self.to_document(), option=option).decode()
+
+    def digest(self) -> str:
+        """SHA-256 of the canonical visible graph: equal digests = identical graphs."""
+        return hashlib.sha256(self.to_json().encode()).hexdigest()
+
+    @classmethod
+    def from_json(cls, text: str | bytes, agent: str, source: str = "<json>",
+                  **kwargs: Any) -> DSRGraph:
+        """New offline graph holding the nodes and edges of a graph document."""
+        graph = cls(agent, **kwargs)
+        graph.load_json(text, source=source)
+        return graph
+
+    def load_json(self, text: str | bytes, source: str = "<json>") -> list[int]:
+        """Insert a graph document into this graph in one transaction; returns node ids."""
+        from dsr.files import parse_document
+        document = parse_document(text, source)
+        with self.transaction() as tx_graph:
+            return tx_graph._load_document(document, source)
+
+    def _load_document(self, document: Any, source: str) -> list[int]:
+        from dsr.errors import GraphFileError
+        tx = self._tx
+        assert tx is not None
+        ids: list[int] = []
+        by_name: dict[str, int] = {}
+        for index, node in enumerate(document.nodes):
+            try:
+                check_name(node.name, allow_hash=True)
+                created = self._insert_node(tx, node.type, node.name, dict(node.attrs), node.id)
+            except DSRError as exc:
+                raise GraphFileError(f"{source}: nodes[{index}] ({node.name!r}): {exc}") from None
+            ids.append(created.id)
+            by_name[node.name] = created.id
+        for index, edge in enumerate(document.edges):
+            ends = []
+            for end in (edge.src, edge.dst):
+                if isinstance(end, str):
+                    found = by_name.get(end) or self._names.lookup(end)
+                    if found is None:
+                        raise GraphFileError(f"{source}: edges[{index}]: unknown node name {end!r}")
+                    ends.append(found)
+                else:
+                    ends.append(end)
+            try:
+                self.insert_or_assign_edge(ends[0], ends[1], edge.type, dict(edge.attrs))
+            except DSRError as exc:
+                raise GraphFileError(f"{source}: edges[{index}]: {exc}") from None
+        return ids
+
+    def save(self, path: str) -> None:
+        from pathlib import Path
+        Path(path).write_text(self.to_json(indent=True) + "\n", encoding="utf-8")
+
+    @classmethod
+    def load(cls, path: str, agent: str, **kwargs: Any) -> DSRGraph:
+        from pathlib import Path
+
+        from dsr.errors import GraphFileError
+        try:
+            text = Path(path).read_bytes()
+        except OSError as exc:
+            raise GraphFileError(f"{path}: cannot read: {exc.strerror}") from None
+        return cls.from_json(text, agent, source=str(path), **kwargs)

@@ -1,0 +1,80 @@
+"""Change signals queued by any thread and delivered on the agent's own thread.
+
+Why a queue: replication merges remote deltas on Zenoh's callback thread while holding the
+graph lock; running agent callbacks there would let agent code block replication or re-enter
+the graph under the lock.  Instead events are queued and `dispatch()` (called from the agent's
+loop) runs the callbacks with no lock held.  Events are only queued for signals that have at
+least one callback, so a replica nobody listens to does not accumulate memory.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+SIGNALS: tuple[str, ...] = ("node_added", "node_updated", "node_deleted",
+                            "edge_added", "edge_updated", "edge_deleted")
+Event = tuple[str, tuple[Any, ...]]
+log = logging.getLogger(__name__)
+
+
+class SignalHub:
+    def __init__(self) -> None:
+        self._callbacks: dict[str, tuple[Callable[..., Any], ...]] = {s: () for s in SIGNALS}
+        self._queue: deque[Event] = deque()
+        self._cond = threading.Condition(threading.Lock())
+        self.callback_errors = 0
+
+    def connect(self, signal: str, callback: Callable[..., Any]) -> None:
+        if signal not in self._callbacks:
+            raise ValueError(f"unknown signal {signal!r}; expected one of {', '.join(SIGNALS)}")
+        if not callable(callback):
+            raise TypeError(f"callback for {signal!r} is not callable: {callback!r}")
+        self._callbacks[signal] = (*self._callbacks[signal], callback)
+
+    def disconnect(self, signal: str, callback: Callable[..., Any]) -> None:
+        if signal not in self._callbacks:
+            raise ValueError(f"unknown signal {signal!r}; expected one of {', '.join(SIGNALS)}")
+        self._callbacks[signal] = tuple(c for c in self._callbacks[signal] if c != callback)
+
+    def wants(self, signal: str) -> bool:
+        return bool(self._callbacks[signal])
+
+    def post(self, events: list[Event]) -> None:
+        if not events:
+            return
+        with self._cond:
+            self._queue.extend(events)
+            self._cond.notify_all()
+
+    def pending(self) -> int:
+        return len(self._queue)
+
+    def dispatch(self, timeout: float | None = 0.0) -> int:
+        """Run callbacks for queued events; wait up to `timeout` s for the first one.
+
+        timeout=0 never blocks, None blocks until something arrives.  Returns the number of
+        events delivered.  A callback that raises is logged and counted, and delivery goes on.
+        """
+        with self._cond:
+            if not self._queue and timeout != 0:
+                deadline = None if timeout is None else time.monotonic() + timeout
+                while not self._queue:
+                    remaining = None if deadline is None else deadline - time.monotonic()
+                    if remaining is not None and remaining <= 0:
+                        break
+                    self._cond.wait(remaining)
+            events = list(self._queue)
+            self._queue.clear()
+        for signal, args in events:
+            for callback in self._callbacks[signal]:
+                try:
+                    callback(*args)
+                except Exception:  # noqa: BLE001 - one bad callback must not stop the agent
+                    self.callback_errors += 1
+                    log.exception("DSR %s callback %r raised", signal, callback)
+        return len(events)

@@ -1,0 +1,408 @@
+"""The JSON wire format of DSR messages and the Zenoh key space (spec: docs/dsr_wire_format.md).
+
+Why JSON + pydantic: any Zenoh client in any language can read and write the graph with a
+JSON library, and one pydantic schema gives exact, field-naming errors for whatever arrives.
+Messages are encoded with orjson (fast path) and validated with pydantic's Rust core.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from typing import Annotated, Any, Literal
+
+import orjson
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from dsr.crdt import ElementState
+from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
+                       AttrKey, AttrValueSchema, NodeId, NodeName, TypeName, UInt63)
+
+FORMAT = "chronav-dsr/1"
+ENCODING = "application/json;chronav-dsr/1"
+KEY_PREFIX = "chronav"
+
+EdgeKey = tuple[int, int, str]
+ReplicaId = Annotated[int, Field(strict=True, ge=1, le=2**63 - 1)]
+Dot = tuple[ReplicaId, UInt63]
+WireRegister = tuple[UInt63, ReplicaId, AttrValueSchema]
+
+
+class _Entry(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    add: list[Dot] = []
+    rem: list[Dot] = []
+    cleared: UInt63 = 0
+    attrs: dict[AttrKey, WireRegister] = {}
+
+
+class NodeEntry(_Entry):
+    id: NodeId
+    meta: tuple[UInt63, ReplicaId, TypeName, NodeName] | None = None
+
+
+class EdgeEntry(_Entry):
+    src: NodeId
+    dst: NodeId
+    type: TypeName
+
+
+class Message(BaseModel):
+    """One delta (kind "delta", published on the delta key) or a full state (query reply)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    format: Literal["chronav-dsr/1"]
+    kind: Literal["delta", "state"]
+    graph: AgentName
+    agent: AgentName
+    replica: ReplicaId
+    #: state replies only: which agent wrote with which replica id (decimal string keys)
+    writers: dict[str, AgentName] = {}
+    nodes: list[NodeEntry] = []
+    edges: list[EdgeEntry] = []
+
+
+_TYPE_RE = re.compile(TYPE_PATTERN)
+_NAME_RE = re.compile(NAME_PATTERN)
+_AGENT_RE = re.compile(AGENT_PATTERN)
+_ATTR_KEY_RE = re.compile(ATTR_KEY_PATTERN)
+
+
+# ---- key space --------------------------------------------------------------------------------
+
+def delta_key(graph: str, agent: str) -> str:
+    return f"{KEY_PREFIX}/{graph}/delta/{agent}"
+
+
+def state_key(graph: str, agent: str) -> str:
+    return f"{KEY_PREFIX}/{graph}/state/{agent}"
+
+
+def member_key(graph: str, agent: str) -> str:
+    return f"{KEY_PREFIX}/{graph}/members/{agent}"
+
+
+def last_chunk(key: str) -> str:
+    """The agent name a key claims (its last chunk)."""
+    return key.rsplit("/", 1)[-1]
+
+
+# ---- encode -----------------------------------------------------------------------------------
+
+def _entry_fields(entry: dict[str, object], state: ElementState) -> dict[str, object]:
+    if state.add:
+        entry["add"] = list(state.add.items())
+    if state.rem:
+        entry["rem"] = list(state.rem.items())
+    if state.cleared:
+        entry["cleared"] = state.cleared
+    if state.attrs:
+        entry["attrs"] = state.attrs
+    return entry
+
+
+def node_entry(node_id: int, state: ElementState) -> dict[str, object]:
+    entry: dict[str, object] = {"id": node_id}
+    if state.meta is not None:
+        hlc, replica, (type_, name) = state.meta
+        entry["meta"] = (hlc, replica, type_, name)
+    return _entry_fields(entry, state)
+
+
+def edge_entry(key: EdgeKey, state: ElementState) -> dict[str, object]:
+    return _entry_fields({"src": key[0], "dst": key[1], "type": key[2]}, state)
+
+
+class DeltaEncoder:
+    """Encodes this replica's deltas with a pre-serialised header (hot path of every write)."""
+
+    def __init__(self, graph: str, agent: str, replica: int) -> None:
+        self._prefix = (b'{"format":"' + FORMAT.encode() + b'","kind":"delta","graph":'
+                        + orjson.dumps(graph) + b',"agent":' + orjson.dumps(agent)
+                        + b',"replica":' + str(replica).encode() + b',"nodes":')
+
+    def encode(self, nodes: list[dict[str, object]], edges: list[dict[str, object]]) -> bytes:
+        return self._prefix + orjson.dumps(nodes) + b',"edges":' + orjson.dumps(edges) + b"}"
+
+    def node_attrs(self, node_id: int, attrs: dict[str, tuple[int, int, object]]) -> bytes:
+        return (self._prefix + b'[{"id":' + str(node_id).encode() + b',"attrs":'
+                + orjson.dumps(attrs) + b'}],"edges":[]}')
+
+
+def encode(*, kind: str, graph: str, agent: str, replica: int,
+           nodes: Iterable[tuple[int, ElementState]], edges: Iterable[tuple[EdgeKey, ElementState]],
+           writers: dict[int, str] | None = None) -> bytes:
+    message: dict[str, object] = {"format": FORMAT, "kind": kind, "graph": graph,
+                                  "agent": agent, "replica": replica}
+    if writers:
+        message["writers"] = {str(r): a for r, a in writers.items()}
+    message["nodes"] = [node_entry(i, s) for i, s in nodes]
+    message["edges"] = [edge_entry(k, s) for k, s in edges]
+    return orjson.dumps(message)
+
+
+# ---- decode + checks --------------------------------------------------------------------------
+
+def _describe(error: ValidationError, limit: int = 3) -> str:
+    parts = []
+    for item in error.errors()[:limit]:
+        loc = ".".join(str(p) for p in item["loc"]) or "<root>"
+        parts.append(f"{loc}: {item['msg']}")
+    more = error.error_count() - limit
+    return "; ".join(parts) + (f" (+{more} more)" if more > 0 else "")
+
+
+class Decoded:
+    """A validated message, already in the replica's internal form: (id, ElementState) and
+    ((src, dst, type), ElementState) pairs, so that merging a state into an empty graph is
+    just installing the decoded elements.  `top_hlc` is the largest timestamp it mentions."""
+
+    __slots__ = ("agent", "edges", "graph", "kind", "nodes", "replica", "top_hlc", "writers")
+
+    def __init__(self, kind: str, graph: str, agent: str, replica: int, writers: dict[str, str],
+                 nodes: list[tuple[int, ElementState]],
+                 edges: list[tuple[EdgeKey, ElementState]], top_hlc: int) -> None:
+        self.kind, self.graph, self.agent, self.replica = kind, graph, agent, replica
+        self.writers, self.nodes, self.edges, self.top_hlc = writers, nodes, edges, top_hlc
+
+
+def _state_of(entry: _Entry, meta: tuple[int, int, str, str] | None) -> ElementState:
+    state = ElementState(cleared=entry.cleared, attrs=dict(entry.attrs))
+    for replica, hlc in entry.add:
+        if hlc > state.add.get(replica, -1):
+            state.add[replica] = hlc
+    for replica, hlc in entry.rem:
+        if hlc > state.rem.get(replica, -1):
+            state.rem[replica] = hlc
+    if meta is not None:
+        state.meta = (meta[0], meta[1], (meta[2], meta[3]))
+    return state
+
+
+def _from_model(message: Message) -> Decoded:
+    nodes = [(n.id, _state_of(n, n.meta)) for n in message.nodes]
+    edges = [((e.src, e.dst, e.type), _state_of(e, None)) for e in message.edges]
+    return Decoded(message.kind, message.graph, message.agent, message.replica,
+                   dict(message.writers), nodes, edges, _top_hlc(nodes, edges))
+
+
+def _top_hlc(nodes: list[tuple[int, ElementState]],
+             edges: list[tuple[EdgeKey, ElementState]]) -> int:
+    best = 0
+    for entries in (nodes, edges):
+        for _, state in entries:
+            top = state.max_hlc()
+            if top > best:
+                best = top
+    return best
+
+
+def decode(payload: bytes) -> Decoded:
+    """Parse and validate one message, or raise WireError naming the offending field.
+
+    The pydantic `Message` schema is the definition.  A hand-written fast validator accepts a
+    subset of what the schema accepts and builds the same result; anything else goes through
+    pydantic, which either accepts it or produces the error (a differential property test,
+    tests/unit/test_dsr_wire.py, checks that the two agree).
+    """
+    from dsr.errors import WireError
+    try:
+        fast = fast_decode(orjson.loads(payload))
+    except orjson.JSONDecodeError:
+        fast = None
+    if fast is not None:
+        return fast
+    try:
+        return _from_model(Message.model_validate_json(payload))
+    except ValidationError as exc:
+        raise WireError(f"invalid DSR message: {_describe(exc)}") from None
+
+
+def foreign_writer(message: Decoded) -> str | None:
+    """In a delta every add, meta and attribute must be written by the sending replica.
+
+    Returns a description of the first violation, or None.  (`rem` legitimately names other
+    replicas: it lists the adds the remover observed.)
+    """
+    own = message.replica
+    for entries in (message.nodes, message.edges):
+        for _, state in entries:
+            for replica in state.add:
+                if replica != own:
+                    return f"add dot of replica {replica}"
+            for key, reg in state.attrs.items():
+                if reg[1] != own:
+                    return f"attribute {key!r} written by replica {reg[1]}"
+            if state.meta is not None and state.meta[1] != own:
+                return f"meta written by replica {state.meta[1]}"
+    return None
+
+
+def max_hlc(message: Decoded) -> int:
+    return message.top_hlc
+
+
+# ---- fast validator -------------------------------------------------------------------------
+
+_U63 = 2**63 - 1
+_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges"})
+_NODE_KEYS = frozenset({"id", "add", "rem", "cleared", "meta", "attrs"})
+_EDGE_KEYS = frozenset({"src", "dst", "type", "add", "rem", "cleared", "attrs"})
+_BIG = float(2**63)
+_INT64_MIN = -(2**63)
+
+
+class _Reject(Exception):
+    """Internal: the fast validator declines; pydantic decides."""
+
+
+class _Checked:
+    """Bounded memo of strings already matched against a pattern (names repeat endlessly)."""
+
+    def __init__(self, pattern: re.Pattern[str], size: int = 4096) -> None:
+        self._pattern = pattern
+        self._ok: set[str] = set()
+        self._size = size
+
+    def __call__(self, value: object) -> str:
+        if type(value) is not str:
+            raise _Reject
+        if value in self._ok:
+            return value
+        if not self._pattern.fullmatch(value):
+            raise _Reject
+        if len(self._ok) >= self._size:
+            self._ok.clear()
+        self._ok.add(value)
+        return value
+
+
+_type_name = _Checked(_TYPE_RE)
+_node_name = _Checked(_NAME_RE, size=65536)
+_agent_name = _Checked(_AGENT_RE)
+_attr_key = _Checked(_ATTR_KEY_RE)
+
+
+def _dots(value: object) -> dict[int, int]:
+    if type(value) is not list:
+        raise _Reject
+    out: dict[int, int] = {}
+    for dot in value:
+        if type(dot) is not list or len(dot) != 2:
+            raise _Reject
+        replica, hlc = dot
+        if type(replica) is not int or type(hlc) is not int or not 1 <= replica <= _U63 \
+                or not 0 <= hlc <= _U63:
+            raise _Reject
+        if hlc >= out.get(replica, -1):
+            out[replica] = hlc
+    return out
+
+
+def _list_value(value: list[object]) -> list[object]:
+    if value and all(type(item) is str for item in value):
+        return value
+    out: list[object] = []
+    for item in value:
+        item_kind = type(item)
+        if item_kind is int and _INT64_MIN <= item <= _U63:  # type: ignore[operator]
+            out.append(float(item))  # type: ignore[arg-type]
+        elif item_kind is float and -_BIG < item < _BIG:  # type: ignore[operator]
+            out.append(item)
+        else:
+            raise _Reject
+    return out
+
+
+def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
+    if type(value) is not dict:
+        raise _Reject
+    out = {}
+    for key, reg in value.items():
+        if type(reg) is not list or len(reg) != 3:
+            raise _Reject
+        hlc, replica, item = reg
+        if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
+                or not 1 <= replica <= _U63:
+            raise _Reject
+        kind = type(item)
+        if kind is float:
+            if not -_BIG < item < _BIG:  # orjson turns integers beyond 64 bits into floats
+                raise _Reject
+        elif kind is int:
+            if not _INT64_MIN <= item <= _U63:
+                raise _Reject
+        elif kind is list:
+            item = _list_value(item)
+        elif kind is not str and kind is not bool:
+            raise _Reject
+        out[_attr_key(key)] = (hlc, replica, item)
+    return out
+
+
+def _entry(raw: dict[str, Any]) -> ElementState:
+    state = ElementState()
+    if "add" in raw:
+        state.add = _dots(raw["add"])
+    if "rem" in raw:
+        state.rem = _dots(raw["rem"])
+    if "cleared" in raw:
+        cleared = raw["cleared"]
+        if type(cleared) is not int or not 0 <= cleared <= _U63:
+            raise _Reject
+        state.cleared = cleared
+    if "attrs" in raw:
+        state.attrs = _attrs(raw["attrs"])
+    return state
+
+
+def _node_id(value: object) -> int:
+    if type(value) is not int or not 1 <= value <= _U63:  # type: ignore[operator]
+        raise _Reject
+    return value  # type: ignore[return-value]
+
+
+def fast_decode(data: object) -> Decoded | None:
+    """Validated message for the common well-formed cases, None to defer to pydantic."""
+    try:
+        if type(data) is not dict or not _MSG_KEYS.issuperset(data) \
+                or data.get("format") != FORMAT or data.get("kind") not in ("delta", "state"):
+            return None
+        raw_nodes = data.get("nodes", [])
+        raw_edges = data.get("edges", [])
+        writers = data.get("writers", {})
+        if type(raw_nodes) is not list or type(raw_edges) is not list or type(writers) is not dict:
+            return None
+        nodes = []
+        for raw in raw_nodes:
+            if type(raw) is not dict or "id" not in raw or not _NODE_KEYS.issuperset(raw):
+                return None
+            meta = raw.get("meta")
+            if meta is not None:
+                if type(meta) is not list or len(meta) != 4:
+                    return None
+                hlc, replica, type_, name = meta
+                if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
+                        or not 1 <= replica <= _U63:
+                    return None
+                meta = (hlc, replica, (_type_name(type_), _node_name(name)))
+            state = _entry(raw)
+            state.meta = meta
+            nodes.append((_node_id(raw["id"]), state))
+        edges = []
+        for raw in raw_edges:
+            if type(raw) is not dict or not _EDGE_KEYS.issuperset(raw) \
+                    or "src" not in raw or "dst" not in raw or "type" not in raw:
+                return None
+            key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
+            edges.append((key, _entry(raw)))
+        for agent in writers.values():
+            _agent_name(agent)
+        replica = data.get("replica")
+        if type(replica) is not int or not 1 <= replica <= _U63:
+            return None
+        return Decoded(data["kind"], _agent_name(data.get("graph")),
+                       _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
+                       _top_hlc(nodes, edges))
+    except _Reject:
+        return None

@@ -1,0 +1,52 @@
+"""Typed errors of the grammar package.
+
+Why a position on every error: grammar files are written by hand by the people who run the centre;
+an error they can act on must say which file, which line and column, and what was expected there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class SourcePos:
+    """Where something was written: 1-based line and column in ``file``."""
+
+    file: str
+    line: int
+    column: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+class GrammarError(Exception):
+    """A grammar, target or mission text that cannot be used, with the place of the first problem.
+
+    ``str(err)`` is ``file:line:col: message`` so that editors and CI logs can jump to it.
+    """
+
+    def __init__(self, message: str, file: str = "<string>", line: int = 0, column: int = 0) -> None:
+        self.message = message
+        self.file = file
+        self.line = line
+        self.column = column
+        super().__init__(str(self))
+
+    @classmethod
+    def at(cls, pos: SourcePos | None, message: str) -> GrammarError:
+        if pos is None:
+            return cls(message)
+        return cls(message, pos.file, pos.line, pos.column)
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}: {self.message}"
+
+
+class MissionError(ValueError):
+    """A mission string that does not name a known kind of mission or is malformed."""
+
+
+class PlanningError(Exception):
+    """A grammar/world combination the planner cannot work on (e.g. a rule that needs an unsupported feature)."""

@@ -1,0 +1,170 @@
+"""Meaning of AGM's prefix formulas: as conditions (``precondition``) and as effects (``effect``).
+
+Semantics follow AGM's ``generateAGGLPlannerCode.py``:
+- condition: a link atom ``(label a b)`` is true if that link exists; ``(= a b)`` if both names are
+  bound to the same node; ``forall``/``exists`` range over every world node whose type is valid for
+  the declared type (bound nodes included, not injective: write ``(not (= p q))`` to exclude);
+  ``(when A B)`` is ``A`` implies ``B``.
+- effect: a link atom adds the link, ``(not (label a b))`` removes it, ``and`` applies all,
+  ``forall`` applies to every node, ``(when A B)`` applies ``B`` where ``A`` holds,
+  ``create``/``delete``/``retype`` edit nodes.
+Conditions inside effects are evaluated on the graph *before* the rule; the rule's own rewrite and
+its effects are then applied together, every removal before every addition (PDDL semantics).
+
+Why the "guarded forall" shortcut: effects such as ``(forall x:object (when (near robot x) ...))``
+only act on nodes linked to a bound one; walking that link (or those links, for a ``when`` on an
+``or`` of links) instead of every object keeps rule application cheap in large centres. The
+result is the same as the plain loop, except for the order of iteration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from itertools import product
+
+from grammar.errors import PlanningError
+from grammar.matcher import Bindings, Matcher
+from grammar.model import (
+    FAnd,
+    FCreate,
+    FDelete,
+    FExists,
+    FForall,
+    FLink,
+    FNot,
+    FOr,
+    Formula,
+    FRetype,
+    FSame,
+    FWhen,
+    VarDecl,
+)
+from grammar.world import Edge, State, StateEditor
+
+
+@dataclass
+class Changes:
+    """Changes a rule makes, applied together: removals before additions (as in PDDL), so an
+    effect that clears every ``near`` link does not undo the ``near`` link the rule adds."""
+
+    remove_edges: list[Edge] = field(default_factory=list)
+    add_edges: list[Edge] = field(default_factory=list)
+    delete_nodes: list[int] = field(default_factory=list)
+    retype: list[tuple[int, str]] = field(default_factory=list)
+
+
+class FormulaEvaluator:
+    def __init__(self, matcher: Matcher) -> None:
+        self.matcher = matcher
+
+    # ------------------------------------------------------------------ quantifiers
+    def _domain(self, decl: VarDecl, body: Formula, state: State, b: Bindings) -> Iterable[int]:
+        guards = _guard_links(body, decl.name)
+        if guards is not None and all((link.dst if forward else link.src) in b for link, forward in guards):
+            nodes: dict[int, None] = {}
+            for link, forward in guards:
+                other = b[link.dst if forward else link.src]
+                linked = state.inn(other, link.label) if forward else state.out(other, link.label)
+                nodes.update((n, None) for n in linked)
+            return [n for n in nodes if self.matcher.type_ok(state.type_of(n), decl.type)]
+        return list(self.matcher.candidates_of_type(state, decl.type))
+
+    def _assignments(self, decls: tuple[VarDecl, ...], body: Formula, state: State, b: Bindings
+                     ) -> Iterator[Bindings]:
+        if len(decls) == 1:
+            for n in self._domain(decls[0], body, state, b):
+                yield {**b, decls[0].name: n}
+            return
+        domains = [list(self.matcher.candidates_of_type(state, d.type)) for d in decls]
+        for combo in product(*domains):
+            inner = dict(b)
+            inner.update({d.name: n for d, n in zip(decls, combo)})
+            yield inner
+
+    # ------------------------------------------------------------------ conditions
+    def holds(self, formula: Formula, state: State, b: Bindings) -> bool:
+        if isinstance(formula, FLink):
+            s, d = b.get(formula.src), b.get(formula.dst)
+            return s is not None and d is not None and state.has_edge(s, d, formula.label)
+        if isinstance(formula, FSame):
+            return b.get(formula.a) is not None and b.get(formula.a) == b.get(formula.b)
+        if isinstance(formula, FNot):
+            return not self.holds(formula.body, state, b)
+        if isinstance(formula, FAnd):
+            return all(self.holds(f, state, b) for f in formula.items)
+        if isinstance(formula, FOr):
+            return any(self.holds(f, state, b) for f in formula.items)
+        if isinstance(formula, FWhen):
+            return not self.holds(formula.condition, state, b) or self.holds(formula.then, state, b)
+        if isinstance(formula, FForall):  # the guard shortcut is exact here: unlinked nodes satisfy (when ...)
+            return all(self.holds(formula.body, state, inner)
+                       for inner in self._assignments(formula.vars, formula.body, state, b))
+        if isinstance(formula, FExists):
+            return any(self.holds(formula.body, state, inner)
+                       for inner in self._assignments(formula.vars, _NO_GUARD, state, b))
+        raise PlanningError(f"{type(formula).__name__} cannot be used as a condition")
+
+    # ------------------------------------------------------------------ effects
+    def collect(self, formula: Formula, state: State, b: Bindings, changes: Changes,
+                editor: StateEditor) -> None:
+        """Record an effect's changes; its conditions read ``state`` (the graph before the rule).
+        ``create`` allocates the node at once (through ``editor``) so later atoms can use it."""
+        if isinstance(formula, FLink):
+            changes.add_edges.append((self._node(b, formula.src), self._node(b, formula.dst), formula.label))
+        elif isinstance(formula, FNot):
+            body = formula.body
+            if not isinstance(body, FLink):
+                raise PlanningError("(not ...) in an effect must wrap a link atom")
+            changes.remove_edges.append((self._node(b, body.src), self._node(b, body.dst), body.label))
+        elif isinstance(formula, FAnd):
+            for item in formula.items:
+                self.collect(item, state, b, changes, editor)
+        elif isinstance(formula, FWhen):
+            if self.holds(formula.condition, state, b):
+                self.collect(formula.then, state, b, changes, editor)
+        elif isinstance(formula, FForall):
+            for inner in list(self._assignments(formula.vars, formula.body, state, b)):
+                self.collect(formula.body, state, inner, changes, editor)
+        elif isinstance(formula, FCreate):
+            b[formula.var] = editor.create_node(formula.type, formula.var)
+        elif isinstance(formula, FDelete):
+            changes.delete_nodes.append(self._node(b, formula.var))
+        elif isinstance(formula, FRetype):
+            changes.retype.append((self._node(b, formula.var), formula.type))
+        else:
+            raise PlanningError(f"{type(formula).__name__} has no meaning in an effect")
+
+    @staticmethod
+    def _node(b: Bindings, name: str) -> int:
+        try:
+            return b[name]
+        except KeyError:
+            raise PlanningError(f"effect uses unbound variable {name!r}") from None
+
+
+_NO_GUARD: Formula = FAnd(())  # a body that never enables the guard shortcut (exists needs every node)
+
+
+def _link_of(atom: Formula, var: str) -> tuple[FLink, bool] | None:
+    if isinstance(atom, FLink) and (atom.src == var) != (atom.dst == var):
+        return atom, atom.src == var
+    return None
+
+
+def _guard_links(body: Formula, var: str) -> list[tuple[FLink, bool]] | None:
+    """If ``body`` only does something where a link between ``var`` and another variable exists,
+    those links (any one suffices): ``(when (label a var) ...)``, ``(when (and (label a var) ...)
+    ...)``, ``(when (or (l1 a var) (l2 var b)) ...)``. Each item is (link, var is its source)."""
+    if not isinstance(body, FWhen):
+        return None
+    condition = body.condition
+    if isinstance(condition, FOr):
+        links = [_link_of(atom, var) for atom in condition.items]
+        return None if any(link is None for link in links) else links  # type: ignore[return-value]
+    atoms = condition.items if isinstance(condition, FAnd) else (condition,)
+    for atom in atoms:
+        link = _link_of(atom, var)
+        if link is not None:
+            return [link]
+    return None

@@ -1,0 +1,454 @@
+"""Typed subgraph matching of patterns against a world state, with an index-driven search order.
+
+Why not ``networkx.isomorphism``: the planner matches every rule on every search state, and most
+pattern variables are reachable from an already bound one through a labelled edge (the room the
+robot is ``in``, the rooms ``connected`` to it). Walking those edges through the world's
+``(node, label)`` indexes touches a few candidates per variable instead of all nodes of a type.
+
+Semantics (those of AGM's planner):
+- distinct pattern variables bind distinct world nodes (injective matching), including the
+  variables already bound by an enclosing pattern;
+- a pattern node of type T matches a world node whose type is T or a subtype of T (``types``
+  section); type ``auto`` matches any type; a *constant* node matches only the world node with
+  that name (or graph key);
+- a positive link must exist, a negated link (``*`` / ``not``) must not exist (with its ``[...]``
+  conditions, if any, no edge may satisfy them); an undirected link (``--``) may exist either way;
+- ``[...]`` conditions on nodes and links must hold; they may read other variables' attributes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+from grammar.model import (
+    ANY_TYPE,
+    And,
+    AttrRef,
+    Compare,
+    Exists,
+    Expr,
+    ListLit,
+    Literal,
+    Not,
+    Or,
+    Pattern,
+    PatternLink,
+    TypeTable,
+    Value,
+    VarRef,
+)
+from grammar.world import State, World
+
+Bindings = dict[str, int]
+
+
+@dataclass(frozen=True)
+class NodeRef:
+    """Value of a bare variable in an expression: compares equal only to the same world node."""
+
+    node: int
+
+
+# ---------------------------------------------------------------------------- compiled patterns
+@dataclass
+class _LinkCheck:
+    link: PatternLink
+
+
+@dataclass
+class _CondCheck:
+    expr: Expr
+    link: PatternLink | None  # conditions of a link are evaluated on its edge(s)
+
+
+@dataclass
+class _Step:
+    var: str
+    type: str
+    source: tuple[Any, ...]  # how candidates are found: const / name / out / in / both / scan
+    links: list[_LinkCheck] = field(default_factory=list)
+    conds: list[_CondCheck] = field(default_factory=list)
+
+
+@dataclass
+class CompiledPattern:
+    pattern: Pattern
+    prebound: frozenset[str]
+    pre_checks: _Step | None  # checks among prebound variables (types, links, conditions)
+    steps: list[_Step]
+    prebound_types: list[tuple[str, str]]
+
+
+def _expr_refs(expr: Expr, own: str | None, link: PatternLink | None) -> set[str]:
+    """Variables an expression reads (``own`` = the node a ``[...]`` block is written on)."""
+    if isinstance(expr, AttrRef):
+        if expr.var is None:
+            if link is not None:
+                return {link.src, link.dst}
+            return {own} if own else set()
+        return {expr.var}
+    if isinstance(expr, VarRef):
+        return {expr.var}
+    if isinstance(expr, Compare):
+        return _expr_refs(expr.left, own, link) | _expr_refs(expr.right, own, link)
+    if isinstance(expr, Not):
+        return _expr_refs(expr.expr, own, link)
+    if isinstance(expr, (And, Or, ListLit)):
+        out: set[str] = set()
+        for item in expr.items:
+            out |= _expr_refs(item, own, link)
+        return out
+    if isinstance(expr, Exists):
+        return pattern_free_vars(expr.pattern)
+    return set()
+
+
+def pattern_free_vars(pattern: Pattern) -> set[str]:
+    """Names a nested pattern uses without declaring them (they come from the enclosing scope)."""
+    declared = {n.name for n in pattern.nodes}
+    used: set[str] = set()
+    for link in pattern.links:
+        used |= {link.src, link.dst}
+        for cond in link.conditions:
+            used |= _expr_refs(cond, None, link)
+    for node in pattern.nodes:
+        for cond in node.conditions:
+            used |= _expr_refs(cond, node.name, None)
+    return used - declared
+
+
+def _own_to_var(expr: Expr, var: str) -> Expr:
+    if isinstance(expr, AttrRef) and expr.var is None:
+        return AttrRef(var, expr.attr, expr.pos)
+    if isinstance(expr, Compare):
+        return Compare(expr.op, _own_to_var(expr.left, var), _own_to_var(expr.right, var))
+    if isinstance(expr, Not):
+        return Not(_own_to_var(expr.expr, var))
+    if isinstance(expr, And):
+        return And(tuple(_own_to_var(e, var) for e in expr.items))
+    if isinstance(expr, Or):
+        return Or(tuple(_own_to_var(e, var) for e in expr.items))
+    if isinstance(expr, ListLit):
+        return ListLit(tuple(_own_to_var(e, var) for e in expr.items))
+    return expr
+
+
+class Matcher:
+    """Matches patterns of one grammar (its type table) on states of one world."""
+
+    def __init__(self, types: TypeTable, world: World) -> None:
+        self.types = types
+        self.world = world
+        self._compiled: dict[tuple[int, frozenset[str]], CompiledPattern] = {}
+        self._ancestors = lru_cache(maxsize=None)(types.ancestors)
+        self._free: dict[int, tuple[Pattern, frozenset[str], tuple[str, ...]]] = {}
+
+    # ------------------------------------------------------------------ typing
+    def type_ok(self, world_type: str, pattern_type: str) -> bool:
+        return pattern_type == ANY_TYPE or pattern_type == world_type or \
+            pattern_type in self._ancestors(world_type)
+
+    def _type_count(self, pattern_type: str) -> int:
+        return sum(len(ids) for t, ids in self.world.by_type.items() if self.type_ok(t, pattern_type))
+
+    def candidates_of_type(self, state: State, pattern_type: str) -> Iterator[int]:
+        if pattern_type == ANY_TYPE:
+            yield from state.nodes()
+            return
+        seen: set[str] = set()
+        for t in state.present_types():
+            if t not in seen and self.type_ok(t, pattern_type):
+                seen.add(t)
+                yield from state.nodes_of_type(t)
+
+    # ------------------------------------------------------------------ compilation
+    def compile(self, pattern: Pattern, prebound: Iterable[str] = ()) -> CompiledPattern:
+        pre = frozenset(prebound)
+        key = (id(pattern), pre)
+        found = self._compiled.get(key)
+        if found is not None and found.pattern is pattern:
+            return found
+        compiled = self._compile(pattern, pre)
+        self._compiled[key] = compiled
+        return compiled
+
+    def _compile(self, pattern: Pattern, prebound: frozenset[str]) -> CompiledPattern:
+        decl = [n for n in pattern.nodes if n.name not in prebound]
+        # conditions: (expr, link-or-None, vars it needs)
+        conds: list[tuple[Expr, PatternLink | None, frozenset[str]]] = []
+        for node in pattern.nodes:
+            for cond in node.conditions:
+                expr = _own_to_var(cond, node.name)
+                conds.append((expr, None, frozenset(_expr_refs(expr, None, None) | {node.name})))
+        for link in pattern.links:
+            if link.conditions:  # all of them must hold on one and the same edge
+                expr = link.conditions[0] if len(link.conditions) == 1 else And(link.conditions)
+                conds.append((expr, link, frozenset(_expr_refs(expr, None, link))))
+        bound: set[str] = set(prebound)
+        order: list[str] = []
+        remaining = list(decl)
+        while remaining:
+            best_key: tuple[int, int, int] | None = None
+            best = None
+            for index, node in enumerate(remaining):
+                if node.constant is not None:
+                    key = (0, 0, index)
+                elif self._name_join(node.name, conds, bound) is not None:
+                    key = (1, 0, index)
+                else:
+                    via = self._link_source(node.name, pattern.links, bound)
+                    if via is not None:
+                        key = (2, 0 if via[0] == "out" else 1, index)
+                    else:
+                        key = (3, self._type_count(node.type), index)
+                if best_key is None or key < best_key:
+                    best_key, best = key, node
+            assert best is not None
+            remaining.remove(best)
+            order.append(best.name)
+            bound.add(best.name)
+
+        steps: list[_Step] = []
+        done: set[str] = set(prebound)
+        placed_links: set[int] = set()
+        placed_conds: set[int] = set()
+        pre_step = _Step("", ANY_TYPE, ("pre",))
+        self._attach_checks(pre_step, pattern, conds, done, placed_links, placed_conds)
+        for var in order:
+            node = pattern.by_name[var]
+            if node.constant is not None:
+                source: tuple[Any, ...] = ("const", node.constant)
+            else:
+                join = self._name_join(var, conds, done)
+                if join is not None:
+                    source = ("name",) + join
+                else:
+                    via = self._link_source(var, pattern.links, done)
+                    source = via if via is not None else ("scan",)
+            step = _Step(var, node.type, source)
+            done.add(var)
+            self._attach_checks(step, pattern, conds, done, placed_links, placed_conds)
+            steps.append(step)
+        prebound_types = [(n.name, n.type) for n in pattern.nodes if n.name in prebound]
+        has_pre = bool(pre_step.links or pre_step.conds)
+        return CompiledPattern(pattern, prebound, pre_step if has_pre else None, steps, prebound_types)
+
+    @staticmethod
+    def _attach_checks(step: _Step, pattern: Pattern,
+                       conds: list[tuple[Expr, PatternLink | None, frozenset[str]]],
+                       done: set[str], placed_links: set[int], placed_conds: set[int]) -> None:
+        """Attach every link and condition whose variables are all bound once ``step`` is done."""
+        for i, link in enumerate(pattern.links):
+            if i in placed_links or not {link.src, link.dst} <= done:
+                continue
+            placed_links.add(i)
+            if not link.conditions:  # links with conditions are checked with them (see conds)
+                step.links.append(_LinkCheck(link))
+        for i, (expr, link, needs) in enumerate(conds):
+            if i in placed_conds or not needs <= done:
+                continue
+            placed_conds.add(i)
+            step.conds.append(_CondCheck(expr, link))
+
+    @staticmethod
+    def _link_source(var: str, links: Iterable[PatternLink], bound: set[str]) -> tuple[Any, ...] | None:
+        """The first positive link from a bound variable to ``var``: walk it to get candidates."""
+        best: tuple[Any, ...] | None = None
+        for link in links:
+            if link.negated:
+                continue
+            if link.undirected:
+                if link.src == var and link.dst in bound:
+                    cand: tuple[Any, ...] = ("both", link.dst, link.label)
+                elif link.dst == var and link.src in bound:
+                    cand = ("both", link.src, link.label)
+                else:
+                    continue
+            elif link.dst == var and link.src in bound:
+                cand = ("out", link.src, link.label)
+            elif link.src == var and link.dst in bound:
+                cand = ("in", link.dst, link.label)
+            else:
+                continue
+            if best is None or (cand[0] == "out" and best[0] != "out"):
+                best = cand
+        return best
+
+    @staticmethod
+    def _name_join(var: str, conds: list[tuple[Expr, PatternLink | None, frozenset[str]]],
+                   bound: set[str]) -> tuple[Expr, PatternLink | None] | None:
+        """A condition ``X == var.name`` whose X is computable from bound variables: look ``var``
+        up by name instead of scanning (e.g. the door named by a ``connected`` edge)."""
+        for expr, link, _needs in conds:
+            if not (isinstance(expr, Compare) and expr.op == "==") or (link is not None and link.negated):
+                continue
+            for mine, other in ((expr.left, expr.right), (expr.right, expr.left)):
+                if isinstance(mine, AttrRef) and mine.var == var and mine.attr == "name":
+                    if _expr_refs(other, None, link) <= bound and not isinstance(other, Exists):
+                        return (other, link)
+        return None
+
+    # ------------------------------------------------------------------ matching
+    def matches(self, compiled: CompiledPattern, state: State, bindings: Bindings | None = None
+                ) -> Iterator[Bindings]:
+        """Every injective binding of the pattern's variables extending ``bindings``."""
+        b: Bindings = dict(bindings or {})
+        for var, ptype in compiled.prebound_types:
+            if var not in b or not self.type_ok(state.type_of(b[var]), ptype):
+                return
+        if compiled.pre_checks is not None and not self._checks_pass(compiled.pre_checks, state, b):
+            return
+        used = set(b.values())
+        yield from self._search(compiled.steps, 0, state, b, used)
+
+    def _compile_exists(self, pattern: Pattern, b: Bindings) -> CompiledPattern:
+        """A nested pattern's enclosing variables are bound; names it redeclares refer to them."""
+        key = id(pattern)
+        cached = self._free.get(key)
+        if cached is None or cached[0] is not pattern:
+            cached = (pattern, frozenset(pattern_free_vars(pattern)), tuple(n.name for n in pattern.nodes))
+            self._free[key] = cached
+        prebound = cached[1] | {name for name in cached[2] if name in b}
+        return self.compile(pattern, prebound)
+
+    def first_match(self, compiled: CompiledPattern, state: State, bindings: Bindings | None = None
+                    ) -> Bindings | None:
+        return next(self.matches(compiled, state, bindings), None)
+
+    def _search(self, steps: list[_Step], depth: int, state: State, b: Bindings, used: set[int]
+                ) -> Iterator[Bindings]:
+        if depth == len(steps):
+            yield dict(b)
+            return
+        step = steps[depth]
+        for cand in self._candidates(step, state, b):
+            if cand in used or not self.type_ok(state.type_of(cand), step.type):
+                continue
+            b[step.var] = cand
+            if self._checks_pass(step, state, b):
+                used.add(cand)
+                yield from self._search(steps, depth + 1, state, b, used)
+                used.discard(cand)
+            del b[step.var]
+
+    def _candidates(self, step: _Step, state: State, b: Bindings) -> Iterable[int]:
+        kind = step.source[0]
+        if kind == "out":
+            return state.out(b[step.source[1]], step.source[2])
+        if kind == "in":
+            return state.inn(b[step.source[1]], step.source[2])
+        if kind == "both":
+            anchor, label = b[step.source[1]], step.source[2]
+            out = list(state.out(anchor, label))
+            seen = set(out)
+            out.extend(n for n in state.inn(anchor, label) if n not in seen)
+            return out
+        if kind == "const":
+            found = state.node_by_constant(step.source[1])
+            return () if found is None else (found,)
+        if kind == "name":
+            expr, link = step.source[1], step.source[2]
+            names: list[Value] = []
+            if link is None:
+                names.append(self.eval(expr, state, b))
+            else:
+                for edge in self._edges_of(link, state, b):
+                    names.append(self.eval(expr, state, b, edge))
+            out_ids: list[int] = []
+            for name in names:
+                if isinstance(name, str):
+                    found = state.node_by_name(name)
+                    if found is not None and found not in out_ids:
+                        out_ids.append(found)
+            return out_ids
+        return self.candidates_of_type(state, step.type)
+
+    @staticmethod
+    def _edges_of(link: PatternLink, state: State, b: Bindings) -> list[tuple[int, int, str]]:
+        s, d = b[link.src], b[link.dst]
+        edges = []
+        if state.has_edge(s, d, link.label):
+            edges.append((s, d, link.label))
+        if link.undirected and state.has_edge(d, s, link.label):
+            edges.append((d, s, link.label))
+        return edges
+
+    def _checks_pass(self, step: _Step, state: State, b: Bindings) -> bool:
+        for check in step.links:
+            link = check.link
+            s, d = b[link.src], b[link.dst]
+            present = state.has_edge(s, d, link.label) or \
+                (link.undirected and state.has_edge(d, s, link.label))
+            if present == link.negated:
+                return False
+        for cond in step.conds:
+            if cond.link is None:
+                if not self.truth(cond.expr, state, b):
+                    return False
+                continue
+            link = cond.link
+            ok = any(self.truth(cond.expr, state, b, edge) for edge in self._edges_of(link, state, b))
+            if ok == link.negated:
+                return False
+        return True
+
+    # ------------------------------------------------------------------ expressions
+    def truth(self, expr: Expr, state: State, b: Bindings, edge: tuple[int, int, str] | None = None) -> bool:
+        if isinstance(expr, And):
+            return all(self.truth(e, state, b, edge) for e in expr.items)
+        if isinstance(expr, Or):
+            return any(self.truth(e, state, b, edge) for e in expr.items)
+        if isinstance(expr, Not):
+            return not self.truth(expr.expr, state, b, edge)
+        if isinstance(expr, Exists):
+            return self.first_match(self._compile_exists(expr.pattern, b), state, b) is not None
+        if isinstance(expr, Compare):
+            return _compare(expr.op, self.eval(expr.left, state, b, edge), self.eval(expr.right, state, b, edge))
+        return bool(self.eval(expr, state, b, edge))
+
+    def eval(self, expr: Expr, state: State, b: Bindings, edge: tuple[int, int, str] | None = None) -> Any:
+        if isinstance(expr, Literal):
+            return expr.value
+        if isinstance(expr, AttrRef):
+            if expr.var is None:
+                if edge is None:
+                    return None
+                if expr.attr == "type":
+                    return edge[2]
+                return state.edge_attr(edge[0], edge[1], edge[2], expr.attr)
+            node = b.get(expr.var)
+            return None if node is None else state.attr(node, expr.attr)
+        if isinstance(expr, VarRef):
+            node = b.get(expr.var)
+            return None if node is None else NodeRef(node)
+        if isinstance(expr, ListLit):
+            return tuple(self.eval(e, state, b, edge) for e in expr.items)
+        return self.truth(expr, state, b, edge)
+
+
+def _compare(op: str, left: Any, right: Any) -> bool:
+    """Comparisons never raise: a missing attribute (None) or mismatched types compare false
+    (except ``!=``), so that bad data in the world makes a rule inapplicable, not the agent crash."""
+    try:
+        if op == "==":
+            return bool(left == right)
+        if op == "!=":
+            return bool(left != right)
+        if op == "in":
+            return right is not None and left in right
+        if left is None or right is None:
+            return False
+        if op == "<":
+            return bool(left < right)
+        if op == "<=":
+            return bool(left <= right)
+        if op == ">":
+            return bool(left > right)
+        if op == ">=":
+            return bool(left >= right)
+    except TypeError:
+        return False
+    raise ValueError(f"unknown comparison {op!r}")

@@ -1,0 +1,439 @@
+"""Lark parse tree -> typed model (grammar/model.py), for both dialects.
+
+Why a separate module from parser.py: this is the only place that knows the shape of the lark
+tree (rule and terminal names of aggl.lark); parser.py deals with files, includes and errors.
+Only local, syntactic decisions are made here; cross-references are checked in validate.py.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from lark import Token, Transformer, v_args
+
+from grammar.errors import GrammarError, SourcePos
+from grammar.model import (
+    And,
+    Assignment,
+    AttrRef,
+    ComboAtom,
+    ComboRule,
+    Compare,
+    Exists,
+    Expr,
+    FAnd,
+    FCreate,
+    FDelete,
+    FExists,
+    FForall,
+    FLink,
+    FNot,
+    FOr,
+    Formula,
+    FRetype,
+    FSame,
+    FWhen,
+    ListLit,
+    Literal,
+    Not,
+    Or,
+    Pattern,
+    PatternLink,
+    PatternNode,
+    Rule,
+    Target,
+    VarDecl,
+    VarRef,
+)
+from grammar.validate import formula_pos
+
+_AGM_DIGITS = re.compile(r"^[0-9]+$")
+
+
+class _Section:
+    """A tagged piece of a rule body, collected by ``n_rule``/``agm_rule``."""
+
+    def __init__(self, kind: str, value: Any, pos: SourcePos | None) -> None:
+        self.kind = kind
+        self.value = value
+        self.pos = pos
+
+
+class _Include:
+    def __init__(self, path: str, pos: SourcePos) -> None:
+        self.path = path
+        self.pos = pos
+
+
+class _Types:
+    def __init__(self, entries: list[tuple[list[str], list[str], SourcePos]]) -> None:
+        self.entries = entries
+
+
+def _unquote(token: str) -> str:
+    body = token[1:-1]
+    return re.sub(r"\\(.)", lambda m: {"n": "\n", "t": "\t"}.get(m.group(1), m.group(1)), body)
+
+
+def _number(text: str) -> int | float:
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
+def _own_attrs(expr: Expr) -> Expr:
+    """Inside ``[...]`` a bare name is an attribute of the node/link the block is written on."""
+    if isinstance(expr, VarRef):
+        return AttrRef(None, expr.var, expr.pos)
+    if isinstance(expr, Compare):
+        return Compare(expr.op, _own_attrs(expr.left), _own_attrs(expr.right))
+    if isinstance(expr, Not):
+        return Not(_own_attrs(expr.expr))
+    if isinstance(expr, And):
+        return And(tuple(_own_attrs(e) for e in expr.items))
+    if isinstance(expr, Or):
+        return Or(tuple(_own_attrs(e) for e in expr.items))
+    if isinstance(expr, ListLit):
+        return ListLit(tuple(_own_attrs(e) for e in expr.items))
+    return expr  # Literal, AttrRef, Exists (its own blocks were converted where written)
+
+
+@v_args(meta=True)
+class ModelBuilder(Transformer):
+    """Builds model objects; ``file`` is put into every SourcePos."""
+
+    def __init__(self, file: str) -> None:
+        super().__init__()
+        self.file = file
+
+    # ------------------------------------------------------------------ helpers
+    def _pos(self, meta: Any) -> SourcePos | None:
+        if getattr(meta, "empty", True):
+            return None
+        return SourcePos(self.file, meta.line, meta.column)
+
+    def _tpos(self, token: Token) -> SourcePos:
+        return SourcePos(self.file, token.line or 0, token.column or 0)
+
+    def _error(self, token_or_pos: Token | SourcePos | None, message: str) -> GrammarError:
+        pos = self._tpos(token_or_pos) if isinstance(token_or_pos, Token) else token_or_pos
+        return GrammarError.at(pos or SourcePos(self.file, 0, 0), message)
+
+    # ------------------------------------------------------------------ formulas
+    def precondition(self, meta: Any, items: list[Formula]) -> _Section:
+        return _Section("precondition", self._single(items, "precondition", meta), self._pos(meta))
+
+    def effect(self, meta: Any, items: list[Formula]) -> _Section:
+        return _Section("effect", self._single(items, "effect", meta), self._pos(meta))
+
+    def _single(self, items: list[Formula], what: str, meta: Any) -> Formula | None:
+        if len(items) > 1:
+            pos = formula_pos(items[1]) or self._pos(meta)
+            raise self._error(pos, f"{what} holds {len(items)} formulas; AGM would silently read only "
+                                   f"the first: wrap them in (and ...)")
+        return items[0] if items else None
+
+    def f_not(self, meta: Any, c: list[Any]) -> FNot:
+        return FNot(c[0])
+
+    def f_and(self, meta: Any, c: list[Any]) -> FAnd:
+        return FAnd(tuple(c))
+
+    def f_or(self, meta: Any, c: list[Any]) -> FOr:
+        return FOr(tuple(c))
+
+    def f_exists(self, meta: Any, c: list[Any]) -> FExists:
+        return FExists(tuple(c[:-1]), c[-1])
+
+    def f_forall(self, meta: Any, c: list[Any]) -> FForall:
+        return FForall(tuple(c[:-1]), c[-1])
+
+    def f_when(self, meta: Any, c: list[Any]) -> FWhen:
+        return FWhen(c[0], c[1])
+
+    def f_create(self, meta: Any, c: list[Token]) -> FCreate:
+        return FCreate(str(c[0]), str(c[1]), self._tpos(c[0]))
+
+    def f_delete(self, meta: Any, c: list[Token]) -> FDelete:
+        return FDelete(str(c[0]), self._tpos(c[0]))
+
+    def f_retype(self, meta: Any, c: list[Token]) -> FRetype:
+        return FRetype(str(c[0]), str(c[1]), self._tpos(c[0]))
+
+    def f_same(self, meta: Any, c: list[Token]) -> FSame:
+        names = [t for t in c if t.type != "EQ"]
+        return FSame(str(names[0]), str(names[1]), self._tpos(names[0]))
+
+    def f_link(self, meta: Any, c: list[Token]) -> FLink:
+        return FLink(str(c[0]), str(c[1]), str(c[2]), self._tpos(c[0]))
+
+    def f_call(self, meta: Any, c: list[Token]) -> Formula:
+        raise self._error(c[0], f"function call <{c[0]} ...> is not supported (AGM parses it but "
+                                "never gives it a meaning)")
+
+    def vardecl(self, meta: Any, c: list[Token]) -> VarDecl:
+        return VarDecl(str(c[0]), str(c[1]), self._tpos(c[0]))
+
+    # ------------------------------------------------------------------ AGM files
+    def agm_prop(self, meta: Any, c: list[Token]) -> tuple[str, str]:
+        return (str(c[0]), str(c[1]))
+
+    def type_names(self, meta: Any, c: list[Token]) -> list[str]:
+        return [str(t) for t in c]
+
+    def type_list(self, meta: Any, c: list[Token]) -> list[str]:
+        return [str(t) for t in c]
+
+    def agm_typedef(self, meta: Any, c: list[Any]) -> tuple[list[str], list[str], SourcePos]:
+        return _typedef(c, self._pos(meta) or SourcePos(self.file, 0, 0))
+
+    def agm_types(self, meta: Any, c: list[Any]) -> _Types:
+        return _Types(list(c))
+
+    def agm_include(self, meta: Any, c: list[Token]) -> _Include:
+        return _Include(str(c[0]).strip(), self._tpos(c[0]))
+
+    def agm_success(self, meta: Any, c: list[Token]) -> _Section:
+        try:
+            value = float(str(c[1]))
+        except ValueError:
+            raise self._error(c[1], f"success({c[1]}) must be a number (a probability)") from None
+        return _Section("success", value, self._tpos(c[1]))
+
+    def agm_activates(self, meta: Any, c: list[Token]) -> _Section:
+        return _Section("activates", tuple(str(t) for t in c[1:]), self._tpos(c[0]))
+
+    def agm_parameters(self, meta: Any, c: list[VarDecl]) -> _Section:
+        return _Section("parameters", tuple(c), self._pos(meta))
+
+    def agm_node(self, meta: Any, c: list[Any]) -> PatternNode:
+        name, type_ = str(c[0]), str(c[1])
+        return PatternNode(name, type_, pos=self._tpos(c[0]))
+
+    def agm_link(self, meta: Any, c: list[Any]) -> PatternLink:
+        src, dst, _bang, label, star = c
+        return PatternLink(str(src), str(dst), str(label), negated=star is not None, pos=self._tpos(src))
+
+    def agm_graph(self, meta: Any, c: list[Any]) -> Pattern:
+        return Pattern(tuple(x for x in c if isinstance(x, PatternNode)),
+                       tuple(x for x in c if isinstance(x, PatternLink)))
+
+    def agm_rule(self, meta: Any, c: list[Any]) -> Rule:
+        flags = [t for t in c if isinstance(t, Token) and t.type in ("DORMANT", "HIERARCHICAL")]
+        rest = [x for x in c if not (isinstance(x, Token) and x.type in ("DORMANT", "HIERARCHICAL"))]
+        name, mode, cost = rest[0], rest[1], rest[2]
+        for keyword in ("dormant", "hierarchical"):
+            if str(name).startswith(keyword) and len(str(name)) > len(keyword):
+                raise self._error(name, f"rule name {str(name)!r} starts with the keyword {keyword!r}; "
+                                        f"AGM would read it as '{keyword} {str(name)[len(keyword):]}': "
+                                        "add a space or rename the rule")
+        if str(mode) not in ("active", "passive"):
+            raise self._error(mode, f"expected 'active' or 'passive' after ':' in rule {str(name)!r}, "
+                                    f"got {str(mode)!r}")
+        sections = [x for x in rest[3:] if isinstance(x, _Section)]
+        graphs = [x for x in rest[3:] if isinstance(x, Pattern)]
+        by_kind = {s.kind: s.value for s in sections}
+        return Rule(
+            name=str(name), lhs=graphs[0], rhs=graphs[1], cost=float(int(str(cost))),
+            active=str(mode) == "active",
+            precondition=by_kind.get("precondition"), effect=by_kind.get("effect"),
+            parameters=by_kind.get("parameters", ()),
+            hierarchical=any(t.type == "HIERARCHICAL" for t in flags),
+            dormant=any(t.type == "DORMANT" for t in flags),
+            activates=by_kind.get("activates", ()), success=by_kind.get("success"),
+            pos=self._tpos(flags[0] if flags else name),
+        )
+
+    def combo_atom(self, meta: Any, c: list[Any]) -> ComboAtom:
+        return ComboAtom(str(c[0]), str(c[1]), optional=c[2] is not None)
+
+    def combo_equiv(self, meta: Any, c: list[Token]) -> tuple[tuple[str, str], ...]:
+        names = [str(t) for t in c]
+        return tuple((names[i], names[i + 1]) for i in range(0, len(names), 2))
+
+    def agm_combo(self, meta: Any, c: list[Any]) -> ComboRule:
+        name, mode, cost = c[0], c[1], c[2]
+        if str(mode) not in ("active", "passive"):
+            raise self._error(mode, f"expected 'active' or 'passive', got {str(mode)!r}")
+        atoms = tuple(x for x in c[3:] if isinstance(x, ComboAtom))
+        equivs = tuple(x for x in c[3:] if isinstance(x, tuple))
+        return ComboRule(str(name), float(int(str(cost))), atoms, equivs, str(mode) == "active",
+                         self._tpos(name))
+
+    def agm_file(self, meta: Any, c: list[Any]) -> dict[str, Any]:
+        props = dict(x for x in c if isinstance(x, tuple))
+        types = next((x for x in c if isinstance(x, _Types)), None)
+        items = [x for x in c if isinstance(x, (Rule, ComboRule, _Include))]
+        return {"dialect": "agm", "properties": props, "name": props.get("name"),
+                "types": types.entries if types else [], "items": items}
+
+    def agm_target(self, meta: Any, c: list[Any]) -> Target:
+        pattern = next((x for x in c if isinstance(x, Pattern)), Pattern())
+        nodes = tuple(PatternNode(n.name, n.type, constant=n.name if _AGM_DIGITS.match(n.name) else None,
+                                  pos=n.pos) for n in pattern.nodes)
+        pre = next((x.value for x in c if isinstance(x, _Section)), None)
+        return Target(Pattern(nodes, pattern.links), precondition=pre, file=self.file)
+
+    # ------------------------------------------------------------------ native files
+    def n_name(self, meta: Any, c: list[Token]) -> _Section:
+        return _Section("name", str(c[0]), self._tpos(c[0]))
+
+    def n_typedef(self, meta: Any, c: list[Any]) -> tuple[list[str], list[str], SourcePos]:
+        return _typedef(c, self._pos(meta) or SourcePos(self.file, 0, 0))
+
+    def n_types(self, meta: Any, c: list[Any]) -> _Types:
+        return _Types(list(c))
+
+    def n_include(self, meta: Any, c: list[Token]) -> _Include:
+        return _Include(_unquote(str(c[0])), self._tpos(c[0]))
+
+    def flag_cost(self, meta: Any, c: list[Token]) -> _Section:
+        return _Section("cost", float(str(c[0])), self._tpos(c[0]))
+
+    def flag_passive(self, meta: Any, c: list[Any]) -> _Section:
+        return _Section("active", False, self._pos(meta))
+
+    def flag_active(self, meta: Any, c: list[Any]) -> _Section:
+        return _Section("active", True, self._pos(meta))
+
+    def flag_dormant(self, meta: Any, c: list[Any]) -> _Section:
+        return _Section("dormant", True, self._pos(meta))
+
+    def flag_hierarchical(self, meta: Any, c: list[Any]) -> _Section:
+        return _Section("hierarchical", True, self._pos(meta))
+
+    def flag_activates(self, meta: Any, c: list[Token]) -> _Section:
+        return _Section("activates", tuple(str(t) for t in c), self._tpos(c[0]))
+
+    def flag_success(self, meta: Any, c: list[Token]) -> _Section:
+        return _Section("success", float(str(c[0])), self._tpos(c[0]))
+
+    def sec_lhs(self, meta: Any, c: list[Pattern]) -> _Section:
+        return _Section("lhs", c[0], self._pos(meta))
+
+    def sec_rhs(self, meta: Any, c: list[Pattern]) -> _Section:
+        return _Section("rhs", c[0], self._pos(meta))
+
+    def sec_where(self, meta: Any, c: list[Expr]) -> _Section:
+        return _Section("where", c[0], self._pos(meta))
+
+    def sec_unless(self, meta: Any, c: list[Pattern]) -> _Section:
+        return _Section("where", Not(Exists(c[0], self._pos(meta))), self._pos(meta))
+
+    def sec_set(self, meta: Any, c: list[Any]) -> _Section:
+        return _Section("set", Assignment(str(c[0]), str(c[1]), c[2], self._tpos(c[0])), self._tpos(c[0]))
+
+    def sec_parameters(self, meta: Any, c: list[VarDecl]) -> _Section:
+        return _Section("parameters", tuple(c), self._pos(meta))
+
+    def cond_block(self, meta: Any, c: list[Expr]) -> tuple[Expr, ...]:
+        return tuple(_own_attrs(e) for e in c)
+
+    def n_node(self, meta: Any, c: list[Any]) -> PatternNode:
+        name_tok, type_tok, conds = c
+        constant = _unquote(str(name_tok)) if name_tok.type == "STRING" else None
+        name = constant if constant is not None else str(name_tok)
+        return PatternNode(name, str(type_tok), constant=constant, conditions=conds or (),
+                           pos=self._tpos(name_tok))
+
+    def n_link(self, meta: Any, c: list[Any]) -> PatternLink:
+        not_tok, src, op, dst, label, star, conds = c
+        negated = not_tok is not None or star is not None
+        return PatternLink(str(src), str(dst), str(label), negated=negated,
+                           undirected=str(op) == "--", conditions=conds or (),
+                           pos=self._tpos(not_tok or src))
+
+    def n_pattern(self, meta: Any, c: list[Any]) -> Pattern:
+        return Pattern(tuple(x for x in c if isinstance(x, PatternNode)),
+                       tuple(x for x in c if isinstance(x, PatternLink)))
+
+    def n_rule(self, meta: Any, c: list[Any]) -> Rule:
+        name = c[0]
+        sections: list[_Section] = list(c[1:])
+        single: dict[str, _Section] = {}
+        for sec in sections:
+            if sec.kind in ("where", "set"):
+                continue
+            if sec.kind in single:
+                raise self._error(sec.pos, f"rule {str(name)!r} has two '{sec.kind}' sections")
+            single[sec.kind] = sec
+        for required in ("lhs", "rhs"):
+            if required not in single:
+                raise self._error(name, f"rule {str(name)!r} has no '{required}' section")
+
+        def value(kind: str, default: Any) -> Any:
+            return single[kind].value if kind in single else default
+
+        return Rule(
+            name=str(name), lhs=value("lhs", Pattern()), rhs=value("rhs", Pattern()),
+            cost=value("cost", 1.0), active=value("active", True),
+            where=tuple(s.value for s in sections if s.kind == "where"),
+            precondition=value("precondition", None), effect=value("effect", None),
+            assignments=tuple(s.value for s in sections if s.kind == "set"),
+            parameters=value("parameters", ()), hierarchical=value("hierarchical", False),
+            dormant=value("dormant", False), activates=value("activates", ()),
+            success=value("success", None), pos=self._tpos(name),
+        )
+
+    def native_file(self, meta: Any, c: list[Any]) -> dict[str, Any]:
+        name = next((x.value for x in c if isinstance(x, _Section) and x.kind == "name"), None)
+        types = [entry for x in c if isinstance(x, _Types) for entry in x.entries]
+        items = [x for x in c if isinstance(x, (Rule, _Include))]
+        return {"dialect": "native", "properties": {}, "name": name, "types": types, "items": items}
+
+    def native_target(self, meta: Any, c: list[Any]) -> Target:
+        return Target(c[0], where=tuple(c[1:]), file=self.file)
+
+    # ------------------------------------------------------------------ expressions
+    def e_or(self, meta: Any, c: list[Expr]) -> Expr:
+        return c[0] if len(c) == 1 else Or(tuple(c))
+
+    def e_and(self, meta: Any, c: list[Expr]) -> Expr:
+        return c[0] if len(c) == 1 else And(tuple(c))
+
+    def e_not(self, meta: Any, c: list[Any]) -> Expr:
+        return Not(c[-1])
+
+    def e_exists(self, meta: Any, c: list[Pattern]) -> Expr:
+        return Exists(c[0], self._pos(meta))
+
+    def e_truthy(self, meta: Any, c: list[Expr]) -> Expr:
+        return c[0]  # a bare value in a boolean place is tested for truthiness
+
+    def e_compare(self, meta: Any, c: list[Any]) -> Expr:
+        return Compare(str(c[1]), c[0], c[2])
+
+    def o_attr(self, meta: Any, c: list[Token]) -> Expr:
+        return AttrRef(str(c[0]), str(c[1]), self._tpos(c[0]))
+
+    def o_name(self, meta: Any, c: list[Token]) -> Expr:
+        return VarRef(str(c[0]), self._tpos(c[0]))
+
+    def o_string(self, meta: Any, c: list[Token]) -> Expr:
+        return Literal(_unquote(str(c[0])))
+
+    def o_number(self, meta: Any, c: list[Token]) -> Expr:
+        return Literal(_number(str(c[0])))
+
+    def o_true(self, meta: Any, c: list[Any]) -> Expr:
+        return Literal(True)
+
+    def o_false(self, meta: Any, c: list[Any]) -> Expr:
+        return Literal(False)
+
+    def o_none(self, meta: Any, c: list[Any]) -> Expr:
+        return Literal(None)
+
+    def o_list(self, meta: Any, c: list[Any]) -> Expr:
+        return ListLit(tuple(x for x in c if x is not None))
+
+
+def _typedef(c: list[Any], pos: SourcePos) -> tuple[list[str], list[str], SourcePos]:
+    """``(a b : p q)`` / ``a, b : p, q``: every name before the colon inherits from every parent."""
+    names, parents = c[0], c[1]
+    return list(names), list(parents or []), pos
+
+
+__all__ = ["ModelBuilder"]

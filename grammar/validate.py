@@ -1,0 +1,223 @@
+"""Checks that need more than one token: names declared before use, sections used where they mean
+something, formulas that AGM would silently misread.
+
+Why here and not in the planner: a mistake in a grammar file must be reported when the file is
+loaded, with its line and column, not as a wrong plan an hour later.
+"""
+
+from __future__ import annotations
+
+from grammar.errors import GrammarError, SourcePos
+from grammar.model import (
+    And,
+    AttrRef,
+    Compare,
+    Exists,
+    Expr,
+    FAnd,
+    FCreate,
+    FDelete,
+    FExists,
+    FForall,
+    FLink,
+    FNot,
+    FOr,
+    Formula,
+    FRetype,
+    FSame,
+    FWhen,
+    Grammar,
+    ListLit,
+    Not,
+    Or,
+    Pattern,
+    Rule,
+    Target,
+    VarRef,
+)
+
+
+def check_pattern(pattern: Pattern, scope: frozenset[str], where: str, *, allow_conditions: bool,
+                  fallback: SourcePos | None) -> frozenset[str]:
+    """Check one pattern; returns the names it declares plus ``scope`` (enclosing variables)."""
+    seen: dict[str, SourcePos | None] = {}
+    for node in pattern.nodes:
+        if node.name in seen:
+            raise GrammarError.at(node.pos or fallback,
+                                  f"{where}: node {node.name!r} is declared twice")
+        seen[node.name] = node.pos
+    names = scope | frozenset(seen)
+    for node in pattern.nodes:
+        if node.conditions and not allow_conditions:
+            raise GrammarError.at(node.pos or fallback,
+                                  f"{where}: conditions [...] are only allowed on the left-hand side "
+                                  "and in targets; change attributes with 'set'")
+        for cond in node.conditions:
+            check_expr(cond, names, fallback=node.pos or fallback, own=True)
+    for link in pattern.links:
+        for end in (link.src, link.dst):
+            if end not in names:
+                raise GrammarError.at(link.pos or fallback,
+                                      f"{where}: link {link.src}->{link.dst}({link.label}) uses "
+                                      f"undeclared node {end!r}")
+        if link.conditions and not allow_conditions:
+            raise GrammarError.at(link.pos or fallback,
+                                  f"{where}: conditions [...] are only allowed on the left-hand side")
+        for cond in link.conditions:
+            check_expr(cond, names, fallback=link.pos or fallback, own=True)
+    return names
+
+
+def check_expr(expr: Expr, scope: frozenset[str], *, fallback: SourcePos | None, own: bool = False) -> None:
+    """Every variable an expression reads must be in scope; ``own`` allows bare attribute names."""
+    if isinstance(expr, AttrRef):
+        if expr.var is None:
+            if not own:
+                raise GrammarError.at(expr.pos or fallback, f"attribute {expr.attr!r} of what? write VAR.{expr.attr}")
+        elif expr.var not in scope:
+            raise GrammarError.at(expr.pos or fallback, f"unknown variable {expr.var!r} in {expr.var}.{expr.attr}")
+    elif isinstance(expr, VarRef):
+        if expr.var not in scope:
+            raise GrammarError.at(expr.pos or fallback, f"unknown variable {expr.var!r}")
+    elif isinstance(expr, Compare):
+        check_expr(expr.left, scope, fallback=fallback, own=own)
+        check_expr(expr.right, scope, fallback=fallback, own=own)
+    elif isinstance(expr, Not):
+        check_expr(expr.expr, scope, fallback=fallback, own=own)
+    elif isinstance(expr, (And, Or, ListLit)):
+        for item in expr.items:
+            check_expr(item, scope, fallback=fallback, own=own)
+    elif isinstance(expr, Exists):
+        check_pattern(expr.pattern, scope, "exists", allow_conditions=True, fallback=expr.pos or fallback)
+
+
+def check_formula(formula: Formula, scope: frozenset[str], *, effect: bool, in_condition: bool,
+                  fallback: SourcePos | None) -> None:
+    """Variables in scope; connectives used where AGM gives them a meaning."""
+    what = "effect" if effect and not in_condition else "condition"
+
+    def names(*items: str) -> None:
+        for name in items:
+            if name not in scope:
+                raise GrammarError.at(getattr(formula, "pos", None) or fallback,
+                                      f"unknown variable {name!r} in {what} formula")
+
+    if isinstance(formula, FLink):
+        names(formula.src, formula.dst)
+    elif isinstance(formula, FSame):
+        if effect and not in_condition:
+            raise GrammarError.at(formula.pos or fallback, "(= a b) is a test: in an effect it may only "
+                                  "appear inside the condition of a (when ...)")
+        names(formula.a, formula.b)
+    elif isinstance(formula, FNot):
+        if effect and not in_condition and not isinstance(formula.body, FLink):
+            raise GrammarError.at(formula_pos(formula) or fallback, "(not ...) in an effect removes a link: "
+                                  "it must wrap a link atom such as (not (in a b))")
+        check_formula(formula.body, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+    elif isinstance(formula, (FAnd, FOr)):
+        if isinstance(formula, FOr) and effect and not in_condition:
+            raise GrammarError.at(formula_pos(formula) or fallback, "(or ...) has no meaning in an effect "
+                                  "(outside the condition of a (when ...))")
+        for item in formula.items:
+            check_formula(item, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+    elif isinstance(formula, (FExists, FForall)):
+        if isinstance(formula, FExists) and effect and not in_condition:
+            raise GrammarError.at(formula_pos(formula) or fallback, "(exists ...) has no meaning in an effect")
+        inner = scope | frozenset(v.name for v in formula.vars)
+        check_formula(formula.body, inner, effect=effect, in_condition=in_condition, fallback=fallback)
+    elif isinstance(formula, FWhen):
+        check_formula(formula.condition, scope, effect=effect, in_condition=True, fallback=fallback)
+        check_formula(formula.then, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+    elif isinstance(formula, (FCreate, FDelete, FRetype)):
+        if not effect or in_condition:
+            raise GrammarError.at(formula.pos or fallback, f"({type(formula).__name__[1:].lower()} ...) "
+                                  "changes the graph: it is only allowed in an effect")
+        if not isinstance(formula, FCreate):
+            names(formula.var)
+
+
+def formula_pos(formula: Formula) -> SourcePos | None:
+    """Where a formula was written: the position of its first atom that has one."""
+    pos = getattr(formula, "pos", None)
+    if pos is not None:
+        return pos
+    for attr in ("body", "condition", "then"):
+        inner = getattr(formula, attr, None)
+        if inner is not None:
+            return formula_pos(inner)
+    items = getattr(formula, "items", None)
+    return formula_pos(items[0]) if items else None
+
+
+def _created_in(formula: Formula | None) -> set[str]:
+    """Variables that ``(create v T)`` introduces, usable elsewhere in the same effect."""
+    if formula is None:
+        return set()
+    if isinstance(formula, FCreate):
+        return {formula.var}
+    out: set[str] = set()
+    for attr in ("body", "condition", "then"):
+        inner = getattr(formula, attr, None)
+        if inner is not None:
+            out |= _created_in(inner)
+    for item in getattr(formula, "items", ()):
+        out |= _created_in(item)
+    return out
+
+
+def check_rule(rule: Rule) -> None:
+    where = f"rule {rule.name!r}"
+    if rule.cost < 0:
+        raise GrammarError.at(rule.pos, f"{where}: cost {rule.cost:g} is negative; the planner needs "
+                                        "costs >= 0 to find the cheapest plan")
+    params = frozenset(p.name for p in rule.parameters)
+    lhs_names = check_pattern(rule.lhs, params, f"{where}, left-hand side", allow_conditions=True,
+                              fallback=rule.pos)
+    rhs_names = check_pattern(rule.rhs, params, f"{where}, right-hand side", allow_conditions=False,
+                              fallback=rule.pos)
+    lhs_keys = {link.key for link in rule.lhs.links if link.undirected and not link.negated}
+    rhs_keys = {link.key for link in rule.rhs.links if link.undirected and not link.negated}
+    for link in (*rule.lhs.links, *rule.rhs.links):
+        if link.undirected and not link.negated and (link.key in lhs_keys) != (link.key in rhs_keys):
+            raise GrammarError.at(link.pos or rule.pos,
+                                  f"{where}: undirected link {link.src}--{link.dst}({link.label}) must "
+                                  "appear on both sides (it can be tested, not added or removed)")
+    for cond in rule.where:
+        check_expr(cond, lhs_names, fallback=rule.pos)
+    both = lhs_names | rhs_names
+    for assignment in rule.assignments:
+        if assignment.var not in rhs_names:
+            raise GrammarError.at(assignment.pos or rule.pos,
+                                  f"{where}: 'set {assignment.var}.{assignment.attr}' needs "
+                                  f"{assignment.var!r} on the right-hand side")
+        if assignment.attr in ("name", "type"):
+            raise GrammarError.at(assignment.pos or rule.pos,
+                                  f"{where}: 'set' cannot change a node's {assignment.attr}")
+        check_expr(assignment.value, both, fallback=assignment.pos or rule.pos)
+    if rule.precondition is not None:
+        check_formula(rule.precondition, lhs_names, effect=False, in_condition=False, fallback=rule.pos)
+    if rule.effect is not None:
+        scope = both | frozenset(_created_in(rule.effect))
+        check_formula(rule.effect, scope, effect=True, in_condition=False, fallback=rule.pos)
+
+
+def check_target(target: Target) -> None:
+    names = check_pattern(target.pattern, frozenset(), "target", allow_conditions=True, fallback=None)
+    for cond in target.where:
+        check_expr(cond, names, fallback=None)
+    if target.precondition is not None:
+        check_formula(target.precondition, names, effect=False, in_condition=False, fallback=None)
+
+
+def check_grammar(grammar: Grammar) -> None:
+    """Whole-grammar checks, after includes are merged: unique rule names, known activations."""
+    seen: dict[str, Rule] = {}
+    for rule in grammar.rules:
+        if rule.name in seen:
+            first = seen[rule.name].pos
+            raise GrammarError.at(rule.pos, f"rule {rule.name!r} is defined twice (first at {first})")
+        seen[rule.name] = rule
+    for rule in grammar.rules:
+        for name in rule.activates:
+            if name not in seen:
+                raise GrammarError.at(rule.pos, f"rule {rule.name!r} activates unknown rule {name!r}")

@@ -1,0 +1,328 @@
+"""DSR benchmark: prints ONE flat JSON object.
+
+Measures, between two separate OS processes connected through a Python Zenoh router started
+here on a free loopback port:
+- zenoh_p50_ms / zenoh_p99_ms: bare Zenoh put -> subscriber -> put back round trip;
+- dsr_p50_ms / dsr_p99_ms: DSR round trip: driver updates node "ping"; the echo replica gets the
+  node_updated signal in its dispatch() loop and updates node "pong"; the driver waits for that
+  signal in its own dispatch() loop.  Both numbers are ROUND trips (two propagations);
+- updates_per_s: sustained single-attribute update_node() calls, round robin over 1,000 nodes
+  (so coalescing cannot merge them away), until the echo replica has applied the last one and
+  delivered its signals (outside transactions; the outbox coalesces bursts into fewer samples);
+- join_10k_s: a new process's join() of a graph of 10,000 nodes + 10,000 RT edges (session open,
+  state query answered by both replicas, validation and merge).
+
+Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 50000] [--join-nodes 10000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def _wait(predicate: Any, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.01)
+    raise TimeoutError(f"bench: timed out waiting for {what}")
+
+
+def _port_open(port: int) -> bool:
+    with socket.socket() as sock:
+        sock.settimeout(0.2)
+        return sock.connect_ex(("127.0.0.1", port)) == 0
+
+
+def _percentile(samples: list[float], q: float) -> float:
+    ordered = sorted(samples)
+    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
+
+
+# ---------------------------------------------------------------- echo process
+def run_echo(endpoint: str, graph_name: str) -> None:
+    import zenoh
+
+    from dsr import ZenohSettings, join
+    from dsr.process import exit_on_sigterm
+    exit_on_sigterm()
+    settings = ZenohSettings(connect=[endpoint])
+    raw = zenoh.open(settings.to_zenoh_config())
+    try:
+        pong_pub = raw.declare_publisher(f"bench/{graph_name}/pong",
+                                         congestion_control=zenoh.CongestionControl.BLOCK)
+        raw.declare_subscriber(f"bench/{graph_name}/ping",
+                               lambda sample: pong_pub.put(sample.payload))
+        # the same echo with an agent-like hand-off: callback -> queue -> main thread replies
+        handoff: queue.SimpleQueue[bytes] = queue.SimpleQueue()
+        tpong_pub = raw.declare_publisher(f"bench/{graph_name}/tpong",
+                                          congestion_control=zenoh.CongestionControl.BLOCK)
+        raw.declare_subscriber(f"bench/{graph_name}/tping",
+                               lambda sample: handoff.put(sample.payload.to_bytes()))
+
+        def handoff_loop() -> None:
+            while True:
+                tpong_pub.put(handoff.get())
+        threading.Thread(target=handoff_loop, daemon=True).start()
+        with join("echo", graph=graph_name, settings=settings) as graph:
+            pong = graph.insert_node("object", "pong", {"seq": -1})
+
+            def on_updated(node: Any, keys: list[str]) -> None:
+                if node.name == "ping" and "seq" in keys:
+                    graph.update_node(pong.id, {"seq": node.attrs["seq"]})
+                elif node.name == "load_end" and node.attrs.get("last"):
+                    graph.update_node(pong.id, {"load_done": node.attrs["i"]})
+
+            def on_added(node: Any) -> None:
+                if node.name == "marker":
+                    graph.update_node(pong.id, {"synced": len(graph)})
+
+            graph.connect("node_updated", on_updated)
+            graph.connect("node_added", on_added)
+            while True:
+                graph.dispatch(timeout=0.5)
+    except (KeyboardInterrupt, SystemExit):
+        pass
+    finally:
+        raw.close()
+
+
+# ---------------------------------------------------------------- joiner process
+def run_join(endpoint: str, graph_name: str) -> None:
+    from dsr import ZenohSettings, join
+    settings = ZenohSettings(connect=[endpoint])
+    start = time.perf_counter()
+    with join("joiner", graph=graph_name, settings=settings, read_only=True) as graph:
+        elapsed = time.perf_counter() - start
+        print(json.dumps({"join_s": elapsed, "nodes": len(graph), "edges": len(graph.edges()),
+                          "state_replies": graph.replica.stats.state_merged}), flush=True)
+
+
+# ---------------------------------------------------------------- driver
+class Procs:
+    def __init__(self) -> None:
+        self.procs: list[subprocess.Popen[bytes]] = []
+
+    def spawn(self, args: list[str], stdout: Any = subprocess.DEVNULL) -> subprocess.Popen[bytes]:
+        proc = subprocess.Popen([sys.executable, *args], cwd=REPO, stdout=stdout,
+                                stderr=subprocess.DEVNULL, start_new_session=True)
+        self.procs.append(proc)
+        return proc
+
+    def close(self) -> None:
+        for proc in self.procs:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGTERM)
+        for proc in self.procs:
+            try:
+                proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait(timeout=5)
+
+
+class BareZenoh:
+    """Bare Zenoh round trips: `direct` (echo replies inside its callback, driver blocks in
+    recv()) and `handoff` (both sides pass the sample to another Python thread, as an agent
+    loop does)."""
+
+    def __init__(self, endpoint: str, graph_name: str) -> None:
+        import zenoh
+
+        from dsr import ZenohSettings
+        self.session = zenoh.open(ZenohSettings(connect=[endpoint]).to_zenoh_config())
+        block = zenoh.CongestionControl.BLOCK
+        self.sub = self.session.declare_subscriber(f"bench/{graph_name}/pong")
+        self.pub = self.session.declare_publisher(f"bench/{graph_name}/ping",
+                                                  congestion_control=block)
+        self.handoff: queue.SimpleQueue[bytes] = queue.SimpleQueue()
+        self.tsub = self.session.declare_subscriber(
+            f"bench/{graph_name}/tpong", lambda sample: self.handoff.put(sample.payload.to_bytes()))
+        self.tpub = self.session.declare_publisher(f"bench/{graph_name}/tping",
+                                                   congestion_control=block)
+        _wait(lambda: self.pub.matching_status.matching and self.tpub.matching_status.matching,
+              10, "echo subscribers")
+
+    def direct(self, i: int) -> float:
+        start = time.perf_counter()
+        self.pub.put(str(i))
+        self.sub.recv()
+        return (time.perf_counter() - start) * 1000
+
+    def threaded(self, i: int) -> float:
+        start = time.perf_counter()
+        self.tpub.put(str(i))
+        self.handoff.get(timeout=10)
+        return (time.perf_counter() - start) * 1000
+
+    def close(self) -> None:
+        self.session.close()
+
+
+class DsrPing:
+    def __init__(self, graph: Any) -> None:
+        _wait(lambda: graph.get_node_by_name("pong") is not None, 10, "echo replica")
+        self.graph = graph
+        self.pong_id = graph.get_node_by_name("pong").id
+        self.ping = graph.insert_node("object", "ping", {"seq": -1})
+        self.got: dict[str, Any] = {}
+        graph.connect("node_updated", self._on_updated)
+
+    def _on_updated(self, node: Any, keys: list[str]) -> None:
+        if node.id == self.pong_id:
+            for key in keys:
+                self.got[key] = node.attrs[key]
+
+    def wait_for(self, key: str, value: Any, timeout: float = 30.0) -> None:
+        deadline = time.monotonic() + timeout
+        while self.got.get(key) != value:
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"bench: echo never answered {key}={value}")
+            self.graph.dispatch(timeout=0.5)
+
+    def round_trip(self, i: int) -> float:
+        start = time.perf_counter()
+        self.graph.update_node(self.ping.id, {"seq": i})
+        self.wait_for("seq", i)
+        return (time.perf_counter() - start) * 1000
+
+
+def latencies(bare: BareZenoh, ping: DsrPing, rounds: int) -> dict[str, float]:
+    """Interleave blocks of each kind so that all three see the same machine load."""
+    samples: dict[str, list[float]] = {"zenoh": [], "zenoh_handoff": [], "dsr": []}
+    block = 50
+    seq = 0
+    for blk in range(rounds // block + 1):       # the first block is a warm-up
+        for name, fn in (("zenoh", bare.direct), ("zenoh_handoff", bare.threaded),
+                         ("dsr", ping.round_trip)):
+            for _ in range(block):
+                seq += 1
+                value = fn(seq)
+                if blk > 0:
+                    samples[name].append(value)
+    out: dict[str, float] = {}
+    for name, values in samples.items():
+        out[f"{name}_p50_ms"] = _percentile(values, 0.5)
+        out[f"{name}_p99_ms"] = _percentile(values, 0.99)
+    return out
+
+
+def throughput(ping: DsrPing, updates: int) -> dict[str, float]:
+    graph = ping.graph
+    with graph.transaction():
+        load_ids = [graph.insert_node("object", f"load{k}", {"i": -1}).id for k in range(1000)]
+        load_end = graph.insert_node("object", "load_end", {"i": -1})
+    count = len(load_ids)
+    start = time.perf_counter()
+    for i in range(updates - 1):
+        graph.update_node(load_ids[i % count], {"i": i})
+    graph.update_node(load_end.id, {"i": updates - 1, "last": True})
+    local = time.perf_counter() - start
+    ping.wait_for("load_done", updates - 1, timeout=120)
+    total = time.perf_counter() - start
+    return {"updates_per_s": updates / total, "local_updates_per_s": updates / local}
+
+
+def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
+    with graph.transaction():
+        world = graph.insert_node("world", "world")
+    todo = nodes - len(graph) - 1     # exactly `nodes` nodes, marker included
+    for chunk in range(0, todo, 1000):
+        with graph.transaction():
+            for i in range(chunk, min(chunk + 1000, todo)):
+                node = graph.insert_node("object", f"obj{i}", {"x": i * 0.1, "y": 1.0,
+                                                               "label": f"thing {i}"})
+                graph.insert_or_assign_edge(world.id, node.id, "RT",
+                                            {"x": i * 0.1, "y": 1.0, "theta": 0.0})
+    graph.insert_node("object", "marker")
+    deadline = time.monotonic() + 60
+    while graph.get_attr(pong_id, "synced") is None:
+        if time.monotonic() > deadline:
+            raise TimeoutError("bench: echo replica did not receive the 10k graph")
+        graph.dispatch(timeout=0.2)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--role", choices=["driver", "echo", "join"], default="driver")
+    parser.add_argument("--connect", default="")
+    parser.add_argument("--graph", default="")
+    parser.add_argument("--rounds", type=int, default=1000)
+    parser.add_argument("--updates", type=int, default=50_000)
+    parser.add_argument("--join-nodes", type=int, default=10_000)
+    args = parser.parse_args(argv)
+    if args.role == "echo":
+        run_echo(args.connect, args.graph)
+        return 0
+    if args.role == "join":
+        run_join(args.connect, args.graph)
+        return 0
+
+    from dsr import ZenohSettings, join
+    from dsr.process import exit_on_sigterm
+    exit_on_sigterm()
+    procs = Procs()
+    port = _free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    graph_name = f"bench{os.getpid()}"
+    me = str(Path(__file__).resolve())
+    result: dict[str, Any] = {"latency_kind": "round_trip", "cpu_count": os.cpu_count()}
+    try:
+        procs.spawn(["-m", "dsr.router", "--listen", endpoint])
+        _wait(lambda: _port_open(port), 10, "router")
+        procs.spawn([me, "--role", "echo", "--connect", endpoint, "--graph", graph_name])
+        settings = ZenohSettings(connect=[endpoint])
+        bare = BareZenoh(endpoint, graph_name)
+        try:
+            with join("driver", graph=graph_name, settings=settings) as graph:
+                ping = DsrPing(graph)
+                result.update(latencies(bare, ping, args.rounds))
+                result["dsr_over_zenoh_p50"] = result["dsr_p50_ms"] / result["zenoh_p50_ms"]
+                result["dsr_over_zenoh_handoff_p50"] = (result["dsr_p50_ms"]
+                                                        / result["zenoh_handoff_p50_ms"])
+                result.update(throughput(ping, args.updates))
+                build_graph(graph, args.join_nodes, ping.pong_id)
+                joiner = procs.spawn([me, "--role", "join", "--connect", endpoint, "--graph",
+                                      graph_name], stdout=subprocess.PIPE)
+                out, _ = joiner.communicate(timeout=120)
+                joined = json.loads(out.decode().strip().splitlines()[-1])
+                result["join_10k_s"] = joined["join_s"]
+                result["join_nodes"] = joined["nodes"]
+                result["join_edges"] = joined["edges"]
+                result["join_state_replies"] = joined["state_replies"]
+                result["updates_count"] = args.updates
+                result["rounds"] = args.rounds
+        finally:
+            bare.close()
+    finally:
+        procs.close()
+    print(json.dumps({k: (round(v, 4) if isinstance(v, float) else v)
+                      for k, v in result.items()}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

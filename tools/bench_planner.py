@@ -1,0 +1,201 @@
+"""Benchmark of the social map rebuild and the global planner; prints ONE flat JSON object.
+
+One scene, 50 m x 50 m: outer walls, two inner walls with doors, 20 people and 15 objects (TVs,
+tables, round tables, beds) at seeded random poses, activities before, during and after the
+planning time; the plan goes corner to corner. Size N = cells per side, i.e. resolution 50 m / N
+(N = 1000 is the issue's 5 cm). Why a fixed world: 20 people and 15 objects in 10 m x 10 m (N = 200
+at 5 cm) leave no free path, and only the cell count should change between sizes.
+
+Keys (medians over repeated runs; ms unless the key says otherwise):
+  static_build_ms_N      walls and rooms rasterised (done once per building, not per rebuild)
+  rebuild_ms_N           build_social_map with the static map reused (people, groups, adaptive
+                         spaces, objects, R(t), three composed grids; zone polygons are lazy)
+  contour_ms_N           the lazy zone polygons (contourpy on the people's windows)
+  plan_ms_N              our A*, arrival-time chronemics (the default), table build included,
+                         reusing a SearchWorkspace as a planning agent does
+  plan_no_workspace_ms_N the same with freshly allocated search buffers (page faults included)
+  plan_departure_ms_N    our A* on the departure-time grid (the seeds' semantics), grid composed
+  rebuild_plus_plan_ms_N rebuild then plan, timed together (the goal: <= 50 ms at N = 1000)
+  dijkstra_ms_N          our Dijkstra (stops at the goal) on the departure-time grid
+  ref_csr_build_ms_N     building scipy's CSR graph of that grid (same edge rule)
+  ref_plan_ms_N          scipy.sparse.csgraph.dijkstra from the start on that CSR; the CSR build
+                         is NOT counted (ref_plan_counts_csr_build = 0)
+  pyastar2d_ms_N         pyastar2d on the same grid (other step semantics: speed reference only)
+  plan_cost_m_N / ref_cost_m_N  cost of our A* and of scipy on the departure-time grid (equal)
+  expanded_N             cells expanded by our A* (arrival-time)
+  numba_compile_s        first compilation of the search kernels in a fresh cache (subprocess)
+  numba_cache_load_s     warm-up in this process with the on-disk cache
+Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+if str(REPO_ROOT) not in sys.path:
+    sys.path.insert(0, str(REPO_ROOT))
+
+import numpy as np  # noqa: E402
+
+WORLD_M = 50.0
+N_PEOPLE = 20
+N_OBJECTS = 15
+T_S = 11 * 3600.0
+
+
+def bench_scene(seed: int = 7) -> dict[str, Any]:
+    """A seeded random WORLD_M x WORLD_M centre: walls, people, objects, activities."""
+    from agents.social_navigation.types import ActivityWindow, Circle, Person, Rectangle, SocialObject, Trapezoid, Wall
+
+    rng = np.random.default_rng(seed)
+    size = WORLD_M
+    walls = [Wall(((0.0, 0.0), (size, 0.0), (size, size), (0.0, size), (0.0, 0.0)), name="outer"),
+             Wall(((size / 3, 0.0), (size / 3, size * 0.45)), name="inner_1a"),
+             Wall(((size / 3, size * 0.45 + 1.5), (size / 3, size)), name="inner_1b"),
+             Wall(((2 * size / 3, 0.0), (2 * size / 3, size * 0.7)), name="inner_2a"),
+             Wall(((2 * size / 3, size * 0.7 + 1.5), (2 * size / 3, size)), name="inner_2b")]
+    margin = 1.5
+
+    def pose() -> tuple[float, float, float]:
+        while True:
+            x, y = rng.uniform(margin, size - margin, 2)
+            if min(abs(x - size / 3), abs(x - 2 * size / 3)) > 1.0 and math.hypot(x, y) > 3 and \
+                    math.hypot(size - x, size - y) > 3:
+                return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
+
+    people = [Person(f"p{i}", *pose(), role=("resident", "staff", "new_resident")[i % 3]) for i in range(N_PEOPLE)]
+    kinds = [("tv", Rectangle(0.2, 1.2), Trapezoid(2.8, 1.2, 3.2)),
+             ("table", Rectangle(1.6, 0.9), Rectangle(2.8, 2.4)),
+             ("round_table", Circle(0.7), Circle(1.5)),
+             ("bed", Rectangle(2.0, 0.9), Rectangle(2.8, 1.9))]
+    objects = []
+    activities = []
+    for i in range(N_OBJECTS):
+        kind, footprint, interaction = kinds[i % len(kinds)]
+        objects.append(SocialObject(f"o{i}", kind, *pose(), footprint=footprint, interaction=interaction,
+                                    forbidden_while_active=(i % 5 == 0)))
+        offset = float(rng.uniform(-3600, 3600))
+        activities.append(ActivityWindow(f"o{i}", T_S + offset, T_S + offset + 1800.0))
+    return {"bounds": (0.0, 0.0, size, size), "walls": walls, "people": people, "objects": objects,
+            "activities": activities, "start": (0.6, 0.6), "goal": (size - 0.6, size - 0.6)}
+
+
+def median_ms(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = fn()
+        times.append((time.perf_counter() - start) * 1e3)
+    return statistics.median(times), result
+
+
+def median_ms_after(setup: Callable[[], Any], fn: Callable[[Any], Any], repeats: int) -> tuple[float, Any]:
+    """Like median_ms, but ``setup()`` (untimed) prepares a fresh input for each run."""
+    times, result = [], None
+    for _ in range(repeats):
+        prepared = setup()
+        start = time.perf_counter()
+        result = fn(prepared)
+        times.append((time.perf_counter() - start) * 1e3)
+    return statistics.median(times), result
+
+
+def numba_compile_seconds() -> float:
+    """Compile the kernels in a subprocess with an empty numba cache directory."""
+    code = ("import time; t = time.perf_counter(); "
+            "from agents.social_navigation.search import warm_up; warm_up(); "
+            "print(time.perf_counter() - t)")
+    with tempfile.TemporaryDirectory() as cache_dir:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir, PYTHONPATH=str(REPO_ROOT))
+        out = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, env=env, capture_output=True,
+                             text=True, check=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
+    import pyastar2d
+    from scipy.sparse.csgraph import dijkstra
+
+    from agents.social_navigation.reference_graph import grid_graph
+    from agents.social_navigation.search import SearchWorkspace
+    from agents.social_navigation.grid import GridParams
+    from agents.social_navigation.social_map import SocialMapParams, build_social_map, build_static_map, plan
+
+    scene = bench_scene()
+    params = SocialMapParams(grid=GridParams(resolution_m=WORLD_M / n_cells))
+    args = (scene["bounds"], scene["walls"], scene["people"], scene["objects"], scene["activities"], T_S, params)
+    static_ms, static = median_ms(lambda: build_static_map(scene["bounds"], scene["walls"], (), params),
+                                  max(1, repeats // 2))
+    rebuild_ms, smap = median_ms(lambda: build_social_map(*args, static=static), repeats)
+    fresh = lambda: build_social_map(*args, static=static)  # noqa: E731  (untimed setup)
+    contour_ms, _ = median_ms_after(fresh, lambda m: m.zones(), max(1, repeats // 2))
+    start, goal = scene["start"], scene["goal"]
+    ws = SearchWorkspace()   # what a planning agent keeps between plans
+    # A fresh map per run, so that the arrival-time table is built (not cached) in every timed plan.
+    plan_ms, path = median_ms_after(fresh, lambda m: plan(m, start, goal, workspace=ws), repeats)
+    cold_ms, _ = median_ms_after(fresh, lambda m: plan(m, start, goal), max(1, repeats // 2))
+    smap.cost  # noqa: B018  (compose the departure-time grid outside the timing)
+    departure_ms, departure = median_ms(lambda: plan(smap, start, goal, arrival_time=False, workspace=ws), repeats)
+    both_ms, _ = median_ms(lambda: plan(build_social_map(*args, static=static), start, goal, workspace=ws), repeats)
+    dijkstra_ms, _ = median_ms(lambda: plan(smap, start, goal, arrival_time=False, method="dijkstra", workspace=ws),
+                               max(1, repeats // 2))
+    ref_repeats = max(1, min(3, repeats))
+    csr_ms, graph = median_ms(lambda: grid_graph(smap.cost), ref_repeats)
+    s_cell, g_cell = smap.spec.cell_of(*start), smap.spec.cell_of(*goal)
+    cols = smap.spec.cols
+    ref_ms, dist = median_ms(lambda: dijkstra(graph, directed=True, indices=s_cell[0] * cols + s_cell[1]),
+                             ref_repeats)
+    weights = smap.cost.astype(np.float32)
+    pyastar_ms, _ = median_ms(lambda: pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True), repeats)
+    n = n_cells
+    results.update({
+        f"static_build_ms_{n}": round(static_ms, 2),
+        f"rebuild_ms_{n}": round(rebuild_ms, 2),
+        f"contour_ms_{n}": round(contour_ms, 2),
+        f"plan_ms_{n}": round(plan_ms, 2),
+        f"plan_no_workspace_ms_{n}": round(cold_ms, 2),
+        f"plan_departure_ms_{n}": round(departure_ms, 2),
+        f"rebuild_plus_plan_ms_{n}": round(both_ms, 2),
+        f"dijkstra_ms_{n}": round(dijkstra_ms, 2),
+        f"ref_csr_build_ms_{n}": round(csr_ms, 2),
+        f"ref_plan_ms_{n}": round(ref_ms, 2),
+        f"pyastar2d_ms_{n}": round(pyastar_ms, 2),
+        f"plan_cost_m_{n}": round(departure.cost, 6),
+        f"ref_cost_m_{n}": round(float(dist[g_cell[0] * cols + g_cell[1]]) * smap.spec.resolution, 6),
+        f"expanded_{n}": path.expanded,
+    })
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="200,500,1000,2000", help="cells per side, comma-separated")
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--skip-compile", action="store_true", help="do not time a fresh numba compile")
+    options = parser.parse_args(argv)
+    results: dict[str, Any] = {"world_size_m": WORLD_M, "people": N_PEOPLE, "objects": N_OBJECTS,
+                               "ref_plan_counts_csr_build": 0}
+    if not options.skip_compile:
+        results["numba_compile_s"] = round(numba_compile_seconds(), 2)
+    start = time.perf_counter()
+    from agents.social_navigation.search import warm_up
+    warm_up()
+    results["numba_cache_load_s"] = round(time.perf_counter() - start, 3)
+    for size in (int(s) for s in options.sizes.split(",") if s):
+        bench_size(size, options.repeats, results)
+    print(json.dumps(results))
+
+
+if __name__ == "__main__":
+    main()
