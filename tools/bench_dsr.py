@@ -9,8 +9,9 @@ here on a free loopback port:
 - updates_per_s: sustained single-attribute update_node() calls, round robin over 1,000 nodes
   (so coalescing cannot merge them away), until the echo replica has applied the last one and
   delivered its signals (outside transactions; the outbox coalesces bursts into fewer samples);
-- join_10k_s: a new process's join() of a graph of 10,000 nodes + 10,000 RT edges (session open,
-  state query answered by both replicas, validation and merge).
+- join_10k_s: a new process's join() of a graph of 10,000 nodes (~9,000 with an RT edge and
+  3 attributes, plus the nodes of the previous phases): session open, member lookup, one full
+  state fetched, validated and merged (the other replicas' states follow in the background).
 
 Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 50000] [--join-nodes 10000]
 """

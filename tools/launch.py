@@ -114,7 +114,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     endpoint = f"tcp/127.0.0.1:{port}"
     env = {**os.environ, "CHRONAV_ZENOH_CONNECT": endpoint, "CHRONAV_ZENOH_MODE": "client",
            "CHRONAV_GRAPH": run_id.replace(".", "_"), "CHRONAV_RECORDING_ID": run_id,
-           "PYTHONUNBUFFERED": "1"}
+           "PYTHONUNBUFFERED": "1", "CHRONAV_EXIT_WITH_PARENT": "1"}
     if not record:
         env["RERUN"] = "off"
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit)
@@ -135,6 +135,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
         stop_requested["flag"] = True
 
     signal.signal(signal.SIGINT, on_sigint)
+    previous_sigterm = signal.signal(signal.SIGTERM, on_sigint)  # stopped by a supervisor: clean up too
     missions: dict[str, dict[str, object]] = {}
     recorder = Recorder("launcher", run_dir if record else None, run_id)
     recorder.send_blueprint(blueprint())
@@ -175,6 +176,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
             graph_logger.maybe_log(graph, status.get("now_s"), force=True)
     finally:
         signal.signal(signal.SIGINT, previous_sigint)
+        signal.signal(signal.SIGTERM, previous_sigterm)
         agents_first = [n for n in reversed(AGENTS)] + ["router"]
         supervisor.stop_all(order=agents_first)
         recorder.close()

@@ -10,6 +10,7 @@ closed (an unclosed session hangs the interpreter at exit).
 from __future__ import annotations
 
 import logging
+import os
 import signal
 import sys
 import threading
@@ -68,6 +69,8 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, request_stop)
     signal.signal(signal.SIGINT, request_stop)
 
+    # Started by the launcher: if it dies (even by SIGKILL) this agent must not linger as an orphan.
+    parent = os.getppid() if os.environ.get("CHRONAV_EXIT_WITH_PARENT") == "1" else None
     agent = agent_cls(config)
     recorder = Recorder(config.name, config.run_dir, config.recording_id)
     settings = ZenohSettings.from_env()
@@ -77,6 +80,9 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
             log.info("%s joined graph %r", config.name, config.graph)
             try:
                 while not stop.is_set():
+                    if parent is not None and os.getppid() != parent:
+                        log.warning("%s: launcher (pid %d) is gone, stopping", config.name, parent)
+                        break
                     started = time.monotonic()
                     graph.dispatch(timeout=0.0)
                     agent.step()

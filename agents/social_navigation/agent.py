@@ -31,6 +31,7 @@ from scenes.model import format_clock
 
 REPLAN_PERIOD_S = 1.0
 REPLAN_GAIN = 1.15
+REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
 STALL_TIMEOUT_S = 60.0
 
 
@@ -88,6 +89,7 @@ class SocialNavigationAgent(Agent):
         self.control_dt = float(self.config.option("control_dt", "0.1"))
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
+        self.global_points = np.empty((0, 2))
         self.goal: tuple[float, float, float | None] | None = None
         self.last_answered = -1.0
         self.last_replan_s = -math.inf
@@ -169,10 +171,21 @@ class SocialNavigationAgent(Agent):
             self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
             return False
         points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+        self._adopt(points, now_s, reason, path.cost)
+        return True
+
+    def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+        self.global_points = points
         self.band = eb.band_from_path(points, (), self.band_params)
         self.last_replan_s = now_s
-        self._publish_path(points, now_s, reason, path.cost)
-        return True
+        self._publish_path(points, now_s, reason, cost)
+
+    def _remaining_global(self, pose: tuple[float, float, float]) -> np.ndarray:
+        """The global path from the point nearest the robot on (the band may cut inflated corners,
+        the global path is what the map judged free)."""
+        points = self.global_points
+        nearest = int(np.argmin(np.hypot(points[:, 0] - pose[0], points[:, 1] - pose[1])))
+        return points[nearest:]
 
     def _plan_from(self, smap: SocialMap, pose: tuple[float, float, float]) -> Any:
         assert self.goal is not None
@@ -195,15 +208,13 @@ class SocialNavigationAgent(Agent):
         except PlanningError:
             return  # keep the current band; the goal may be momentarily blocked by a passer-by
         self.map = new_map
-        remaining = np.vstack([[pose[0], pose[1]], self.band.points])
-        old_cost = path_cost(new_map.cost, new_map.spec, remaining)
+        old_cost = path_cost(new_map.cost, new_map.spec, self._remaining_global(pose))
         new_cost = path_cost(new_map.cost, new_map.spec, new_path.points_m)
         self._maybe_log_map(now_s)
-        if math.isinf(old_cost) or old_cost > REPLAN_GAIN * new_cost:
+        if math.isinf(old_cost) or (old_cost > REPLAN_GAIN * new_cost and old_cost - new_cost > REPLAN_MIN_GAIN):
             why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"
             points = np.vstack([[pose[0], pose[1]], new_path.points_m[1:-1], [self.goal[0], self.goal[1]]])
-            self.band = eb.band_from_path(points, (), self.band_params)
-            self._publish_path(points, now_s, f"replanned ({why})", new_path.cost)
+            self._adopt(points, now_s, f"replanned ({why})", new_path.cost)
 
     def _control(self, intention: Any, robot: Any, now_s: float, pose_stamp: float) -> None:
         assert self.band is not None and self.goal is not None

@@ -1,0 +1,80 @@
+"""The demo's result tables: each mission as executed by the social planner vs a non-social baseline.
+
+Why the baseline is planned, not driven: the seeds compare their social paths with a classical
+planner's path between the same start and goal at the same time; we plan that baseline on the
+same map with social costs off and drive it at the robot's cruise speed, so d_t, tau, CHC, d_min
+and Psi are measured the same way for both (agents/social_navigation/metrics.py).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+
+def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -> np.ndarray:
+    mask = (trajectory[:, 0] >= started_s - 1e-6) & (trajectory[:, 0] <= finished_s + 1e-6)
+    return trajectory[mask]
+
+
+def build_report(result: Any) -> dict[str, Any]:
+    """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
+    from agents.social_navigation.metrics import read_trajectory_csv
+    from agents.social_navigation.offline import OfflineError, SceneMaps, path_as_trajectory
+    from agents.social_navigation.search import PlanningError
+    from agents.social_navigation.social_map import plan
+
+    traj_path = Path(result.run_dir) / "trajectory.csv"
+    report: dict[str, Any] = {"scene": result.scene, "missions": {}}
+    if not traj_path.exists():
+        report["error"] = "no trajectory was recorded"
+        return report
+    trajectory = read_trajectory_csv(traj_path)
+    try:
+        maps = SceneMaps.load(result.scene)
+    except OfflineError as exc:
+        report["error"] = str(exc)
+        return report
+    for mission_id, mission in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
+        if mission.get("state") != "done" or "started_s" not in mission:
+            continue
+        started, finished = float(mission["started_s"]), float(mission["finished_s"])
+        social = _mission_rows(trajectory, started, finished)
+        if len(social) < 2:
+            continue
+        entry: dict[str, Any] = {"social": maps.measure(social, started).model_dump()}
+        smap = maps.at(started)
+        try:
+            base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), baseline=True)
+            baseline_traj = path_as_trajectory(base.points_m, started, maps.cruise_speed)
+            entry["baseline"] = maps.measure(baseline_traj, started).model_dump()
+        except PlanningError as exc:
+            entry["baseline_error"] = str(exc)
+        report["missions"][mission_id] = entry
+    return report
+
+
+def _rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
+    from agents.social_navigation.metrics import MetricsReport
+
+    return MetricsReport(**metrics).to_table()
+
+
+def render_report(report: dict[str, Any], console: Console) -> None:
+    if "error" in report:
+        console.print(f"[yellow]no metrics: {report['error']}[/yellow]")
+        return
+    for mission_id, entry in report["missions"].items():
+        table = Table(title=f"{report['scene']} / {mission_id}: social planner vs non-social baseline")
+        table.add_column("metric")
+        table.add_column("social", justify="right")
+        table.add_column("non-social", justify="right")
+        social = dict(_rows(entry["social"]))
+        baseline = dict(_rows(entry["baseline"])) if "baseline" in entry else {}
+        for label, value in social.items():
+            table.add_row(label, value, baseline.get(label, "-"))
+        console.print(table)
