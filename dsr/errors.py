@@ -59,3 +59,7 @@ class WireError(DSRError, ValueError):
 
 class ConfigError(DSRError, ValueError):
     """Zenoh settings are invalid; the message names the environment variable or file."""
+
+
+class PolicyError(DSRError, ValueError):
+    """A write-policy file is invalid; the message names the file, line and key."""

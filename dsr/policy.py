@@ -1,33 +1,77 @@
-"""Write policies: which remote agent may write which node and edge types.
+"""Write policies: which agent may write which nodes, edges and attributes ("trust").
 
-Why a hook now: the later "trust" work will restrict, e.g., who may move the robot or edit the
-agenda.  The transport asks the policy about every element of every remote delta before
-merging; a refused delta is dropped whole (so a graph never holds half of one), counted in
-`ReplicaStats.rejected_policy`, and logged.
+Why on receipt, in every replica: a rogue or buggy process can put anything on the delta keys
+(Zenoh ACLs, docs/deployment.md, decide who may publish at all); each replica therefore asks its
+policy about every write of every remote delta and state before merging.  A refused message is
+dropped whole (a graph never holds half of one), counted in `ReplicaStats.rejected_policy` and
+logged; the graph is untouched.
+
+Policies:
+- `AllowAll` (library default of `join()`): tools, tests, benchmarks.
+- `RulePolicy` (dsr/policy_rules.py): the declarative table, deploy/write_policy.yaml, which
+  every chronav agent and the launcher use (`policy_from_env()`).
+- `DenyTypes`: a coarse per-type refusal, kept for simple tests.
 """
 
 from __future__ import annotations
 
-from typing import Literal, Protocol
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal, Protocol
+
+from dsr.errors import PolicyError
+
+if TYPE_CHECKING:
+    from dsr.wire import Decoded
+    from dsr.writes import GraphLookup
 
 ElementKind = Literal["node", "edge"]
+ENV_POLICY = "CHRONAV_WRITE_POLICY"
+#: the chronav table, shipped with the repository (override with CHRONAV_WRITE_POLICY)
+DEFAULT_POLICY_FILE = Path(__file__).resolve().parents[1] / "deploy" / "write_policy.yaml"
+_ALLOW_ALL_WORDS = ("allow-all", "off")
 
 
 class WritePolicy(Protocol):
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
-        """May `agent` write an element of this kind and type?  `type` is None for an
-        attribute update of a node this replica has never seen (type unknown)."""
+    def check(self, message: Decoded, graph: GraphLookup) -> str | None:
+        """None if every write of this validated remote message (delta or state) is allowed,
+        else a sentence saying which write is refused and why."""
         ...
 
 
-class AllowAll:
-    """Default policy: every agent may write everything."""
+class TypePolicy:
+    """Base of the simple policies: one yes/no per (sending agent, element kind, type) of a
+    delta.  States are not checked (their writers are many)."""
+
+    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
+        raise NotImplementedError
+
+    def check(self, message: Decoded, graph: GraphLookup) -> str | None:
+        if message.kind != "delta":
+            return None
+        agent = message.agent
+        for node_id, state in message.nodes:
+            type_ = state.meta[2][0] if state.meta is not None else graph.node_type_of(node_id)
+            if not self.allows(agent=agent, kind="node", type=type_):
+                return f"policy refuses node type {type_!r} from agent {agent!r}"
+        for (_, _, edge_type), _state in message.edges:
+            if not self.allows(agent=agent, kind="edge", type=edge_type):
+                return f"policy refuses edge type {edge_type!r} from agent {agent!r}"
+        return None
+
+
+class AllowAll(TypePolicy):
+    """Every agent may write everything."""
 
     def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
         return True
 
+    def check(self, message: Decoded, graph: GraphLookup) -> str | None:
+        return None
 
-class DenyTypes:
+
+class DenyTypes(TypePolicy):
     """Refuse writes of the given node/edge types by the given agents (or by anyone)."""
 
     def __init__(self, types: set[str], agents: set[str] | None = None) -> None:
@@ -38,3 +82,20 @@ class DenyTypes:
         if self.agents is not None and agent not in self.agents:
             return True
         return type not in self.types
+
+
+def policy_from_env(environ: Mapping[str, str] | None = None) -> WritePolicy:
+    """The policy agents run with: CHRONAV_WRITE_POLICY = a YAML file, or `allow-all`/`off`;
+    unset = deploy/write_policy.yaml.  Raises PolicyError naming the file, line and key."""
+    from dsr.policy_rules import load_policy
+
+    env = os.environ if environ is None else environ
+    value = (env.get(ENV_POLICY) or "").strip()
+    if value.lower() in _ALLOW_ALL_WORDS:
+        return AllowAll()
+    path = Path(value) if value else DEFAULT_POLICY_FILE
+    if not path.is_file():
+        where = f"{ENV_POLICY}={value!r}" if value else f"default policy {path}"
+        raise PolicyError(f"{where}: no such file (set {ENV_POLICY} to a policy YAML file, "
+                          f"or to 'allow-all')")
+    return load_policy(path)

@@ -2,31 +2,78 @@
 
 Why Python: no `zenohd` binary is packaged on the registries we use; the eclipse-zenoh wheel can
 run in router mode.  Agents connect to it in client mode.  Prints one "ready" line on stdout.
+
+Security (docs/deployment.md): `--credentials` turns on user/password authentication (every
+client must present a listed user), `--acl` loads an access-control list on the key space,
+`--tls-*` serve tls/ endpoints.  The same settings can come from CHRONAV_ZENOH_* variables or a
+json5 Zenoh config file (`--config` / CHRONAV_ZENOH_CONFIG); flags override both.  The router
+ignores CHRONAV_ZENOH_MODE and CHRONAV_ZENOH_CONNECT (those tell agents how to reach it).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import threading
+from collections.abc import Mapping
+from pathlib import Path
 
-from dsr.config import DEFAULT_ROUTER, ZenohSettings
+from dsr.config import (DEFAULT_ROUTER, ENV_CONNECT, ENV_LISTEN, ENV_MODE, ZenohSettings)
 from dsr.errors import ConfigError
 from dsr.process import exit_on_sigterm
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m dsr.router", description=__doc__)
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(prog="python -m dsr.router", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--listen", action="append", default=None,
-                        help=f"endpoint to listen on (repeatable; default {DEFAULT_ROUTER})")
-    parser.add_argument("--connect", action="append", default=[],
+                        help=f"endpoint to listen on (repeatable; default {DEFAULT_ROUTER} or "
+                             f"{ENV_LISTEN} or the config file)")
+    parser.add_argument("--connect", action="append", default=None,
                         help="another router to connect to (repeatable)")
-    parser.add_argument("--lease-ms", type=int, default=2000)
-    args = parser.parse_args(argv)
+    parser.add_argument("--lease-ms", type=int, default=None,
+                        help="link lease (default 2000, or CHRONAV_ZENOH_LEASE_MS)")
+    parser.add_argument("--config", type=Path, default=None, help="json5 Zenoh config file")
+    parser.add_argument("--credentials", type=Path, default=None,
+                        help="usrpwd dictionary, one user:password per line (enables auth)")
+    parser.add_argument("--acl", type=Path, default=None,
+                        help="json5 file with {access_control: {...}}")
+    parser.add_argument("--tls-cert", type=Path, default=None, help="server certificate (PEM)")
+    parser.add_argument("--tls-key", type=Path, default=None, help="server private key (PEM)")
+    parser.add_argument("--tls-root-ca", type=Path, default=None,
+                        help="CA that signed client certificates (mutual TLS)")
+    parser.add_argument("--mtls", action="store_true", help="require client certificates")
+    return parser.parse_args(argv)
+
+
+def router_settings(args: argparse.Namespace, environ: Mapping[str, str] | None = None
+                    ) -> ZenohSettings:
+    """Environment (minus the agents' mode/connect) < config file < command-line flags."""
+    env = dict(os.environ if environ is None else environ)
+    env.pop(ENV_MODE, None)
+    env.pop(ENV_CONNECT, None)
+    base = ZenohSettings.from_env(env)
+    fields = base.model_dump(exclude_unset=True)
+    if base.password is not None:
+        fields["password"] = base.password
+    fields["mode"] = "router"
+    overrides = {"listen": args.listen, "connect": args.connect, "lease_ms": args.lease_ms,
+                 "config_file": args.config, "credentials_file": args.credentials,
+                 "acl_file": args.acl, "tls_certificate": args.tls_cert,
+                 "tls_private_key": args.tls_key, "tls_root_ca": args.tls_root_ca,
+                 "mtls": args.mtls or None}
+    fields.update({k: v for k, v in overrides.items() if v is not None})
+    if "listen" not in fields and fields.get("config_file") is None:
+        fields["listen"] = [DEFAULT_ROUTER]
+    return ZenohSettings(**fields)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
     import zenoh
     try:
-        settings = ZenohSettings(mode="router", listen=args.listen or [DEFAULT_ROUTER],
-                                 connect=args.connect, lease_ms=args.lease_ms)
+        settings = router_settings(args)
         conf = settings.to_zenoh_config()
     except (ConfigError, ValueError) as exc:
         print(f"dsr.router: {exc}", file=sys.stderr)
@@ -35,10 +82,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         session = zenoh.open(conf)
     except zenoh.ZError as exc:
-        print(f"dsr.router: cannot open router on {settings.listen}: {exc}", file=sys.stderr)
+        print(f"dsr.router: cannot open router ({settings.describe()}): {exc}", file=sys.stderr)
         return 1
     try:
-        print(f"dsr.router ready on {','.join(settings.listen)}", flush=True)
+        print(f"dsr.router ready on {','.join(settings.listen) or '(config file endpoints)'}"
+              f" ({settings.describe()})", flush=True)
         threading.Event().wait()
     except (KeyboardInterrupt, SystemExit):
         pass

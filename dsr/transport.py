@@ -3,7 +3,8 @@
 - Local deltas are published on ``chronav/<graph>/delta/<agent>`` (reliable, BLOCK congestion
   control: a CRDT delta must never be silently dropped by a full queue).
 - Remote deltas arrive on ``chronav/<graph>/delta/*``; each is validated (schema, claimed agent
-  == key, writer ids, clock drift, write policy) before it touches the graph.  Rejected ones are
+  == key, writer ids, clock drift) and checked against the write policy (dsr/policy.py) before
+  it touches the graph; state replies too.  Rejected ones are
   logged and counted in `ReplicaStats`, and the graph is untouched.
 - State transfer: each writable replica answers ``chronav/<graph>/state/<agent>`` with its full
   CRDT state.  A replica queries ``state/*`` when it starts, and again whenever its connection
@@ -206,6 +207,12 @@ class Replica:
         owner = graph.writer_agent(message.replica)
         if owner is not None and owner != message.agent:
             return f"forged writer: replica id {message.replica} belongs to agent {owner!r}"
+        if kind == "state":
+            for replica, agent in message.writers.items():
+                known = graph.writer_agent(int(replica))
+                if known is not None and known != agent:
+                    return (f"forged writer: state says replica {replica} is {agent!r}, "
+                            f"it is {known!r}")
         if kind == "delta":
             if message.writers:
                 return "a delta must not carry 'writers'"
@@ -217,17 +224,6 @@ class Replica:
             return f"clock {top} is too far in the future"
         return None
 
-    def _policy_problem(self, message: wire.Decoded) -> str | None:
-        policy, agent, graph = self.policy, message.agent, self.graph
-        for node_id, state in message.nodes:
-            type_ = state.meta[2][0] if state.meta is not None else graph.node_type_of(node_id)
-            if not policy.allows(agent=agent, kind="node", type=type_):
-                return f"policy refuses node type {type_!r} from agent {agent!r}"
-        for (_, _, edge_type), _state in message.edges:
-            if not policy.allows(agent=agent, kind="edge", type=edge_type):
-                return f"policy refuses edge type {edge_type!r} from agent {agent!r}"
-        return None
-
     def _on_delta(self, sample: Any) -> None:
         self.stats.received += 1
         key = str(sample.key_expr)
@@ -237,7 +233,7 @@ class Replica:
             if problem is not None:
                 self._reject(key, problem)
                 return
-            problem = self._policy_problem(message)
+            problem = self.policy.check(message, self.graph)
             if problem is not None:
                 self._reject(key, problem, policy=True)
                 return
@@ -264,6 +260,8 @@ class Replica:
             self._sync_requests.put(agent)
 
     def _merge_state(self, sample: Any) -> None:
+        """Validate, check against the policy, merge.  Never raises: one bad reply must not
+        abort the anti-entropy round that carries the good ones."""
         key = str(sample.key_expr)
         try:
             with _gc_paused():
@@ -272,10 +270,17 @@ class Replica:
                 if problem is not None:
                     self._reject(key, problem)
                     return
+                problem = self.policy.check(message, self.graph)
+                if problem is not None:
+                    self._reject(key, problem, policy=True)
+                    return
                 self.graph.apply_message(message)
             self.stats.state_merged += 1
         except WireError as exc:
             self._reject(key, str(exc))
+        except Exception:  # noqa: BLE001
+            self.stats.errors += 1
+            log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
 
     # ------------------------------------------------------------------ anti-entropy
     def _initial_sync(self) -> None:

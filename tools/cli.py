@@ -18,6 +18,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.grammar_cli",   # chronav grammar check / chronav plan
     "tools.agenda",        # chronav agenda ...
     "tools.launch",        # chronav launch / chronav demo
+    "tools.chaos",         # chronav chaos (fault injection)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -92,6 +92,13 @@ def write_pids(run_dir: Path, supervisor: Supervisor, router_pid: int | None) ->
     tmp.replace(run_dir / "pids.json")
 
 
+def write_connect_file(run_dir: Path, endpoint: str, graph: str) -> None:
+    """connect.json: how tools (`chronav agenda --run ...`) join this run while it is live."""
+    tmp = run_dir / "connect.json.tmp"
+    tmp.write_text(json.dumps({"endpoint": endpoint, "graph": graph, "launcher_pid": os.getpid()}))
+    tmp.replace(run_dir / "connect.json")
+
+
 def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path = REPO_ROOT / "recordings",
                timeout_s: float = 900.0, record: bool = True, restart_limit: int = 3,
                agent_options: dict[str, list[str]] | None = None,
@@ -145,6 +152,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
         supervisor.start("router")
         if not wait_for_port(port, 15):
             raise RuntimeError(f"the Zenoh router did not listen on {endpoint}; see {router.log_path}")
+        write_connect_file(run_dir, endpoint, env["CHRONAV_GRAPH"])
         for name in AGENTS:
             supervisor.start(name)
         write_pids(run_dir, supervisor, router.pid)
@@ -156,6 +164,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
                 if supervisor.poll():
                     write_pids(run_dir, supervisor, router.pid)
                 status = _status(graph, spec, supervisor, started)
+                status["run"] = {"run_dir": str(run_dir), "endpoint": endpoint, "graph": env["CHRONAV_GRAPH"]}
                 missions = status["missions"]  # type: ignore[assignment]
                 graph_logger.maybe_log(graph, status.get("now_s"))
                 if on_tick is not None:
@@ -204,6 +213,7 @@ def _status(graph, spec, supervisor: Supervisor, started: float) -> dict[str, ob
         "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
         "missions": missions,
         "agents": {name: ("up" if m.alive else "down", m.restarts) for name, m in supervisor.processes.items()},
+        "pids": {name: m.pid for name, m in supervisor.processes.items()},  # fault injection (tools/chaos.py)
         "wall_s": time.monotonic() - started,
     }
 

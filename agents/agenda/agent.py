@@ -98,7 +98,8 @@ class AgendaAgent(Agent):
         self.day = new_day
         changed = [a for a in new_day.activities if before.get(a.id) != a]
         removed = sorted(set(before) - {a.id for a in new_day.activities})
-        summary = ", ".join(f"{a.id} {a.object} {format_clock(a.start_s)}-{format_clock(a.end_s)} {a.state.value}"
+        summary = ", ".join(f"{a.id} {a.object} {format_clock(a.start_s)}-{format_clock(a.end_s)} "
+                            f"{a.at(now_s, self.upcoming_window_s).state.value}"
                             for a in changed) or "no change"
         if removed:
             summary += f"; removed {', '.join(removed)}"

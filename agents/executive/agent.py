@@ -95,12 +95,19 @@ class ExecutiveAgent(Agent):
     def _issue(self, mission, steps: list[PlanStep], index: int, now_s: float) -> None:  # noqa: ANN001
         g = self.graph
         mission_id = str(mission.attrs["mission_id"])
+        first = index
+        while index + 1 < len(steps) and steps[index].rule == "changeRoom" and steps[index + 1].navigates:
+            index += 1  # door-to-door hops followed by a move: one intention, confined to the route's rooms
         step = steps[index]
         try:
             attrs = step.intention_attrs(g, now_s)
         except StepFailed as exc:
             self._replan_or_fail(mission, now_s, f"step {step.rule}: {exc}")
             return
+        if index > first:
+            hops = steps[first:index]
+            attrs["rooms"] = [hops[0].bindings["r1"], *(hop.bindings["r2"] for hop in hops)]
+            attrs["pass_through"] = step.rule == "changeRoom"
         replans = int(mission.attrs.get("replans", 0))
         name = f"intention/{mission_id}/{replans}.{index}"
         with g.transaction():
@@ -112,7 +119,10 @@ class ExecutiveAgent(Agent):
                                           "bindings": [f"{k}={v}" for k, v in sorted(step.bindings.items())],
                                           "state": "active", "issued_s": now_s})
             g.insert_or_assign_edge(node.id, mission.id, "step_of", attrs={})
-        self.rec.event(f"{format_clock(now_s)} {mission_id} step {index + 1}/{len(steps)}: {step.describe()}")
+        merged = " -> ".join(st.describe() for st in steps[first:index + 1])
+        self.rec.event(f"{format_clock(now_s)} {mission_id} steps {first + 1}-{index + 1}/{len(steps)}: {merged}"
+                       if index > first else f"{format_clock(now_s)} {mission_id} step {index + 1}/{len(steps)}: "
+                       f"{step.describe()}")
 
     def _monitor(self, mission, now_s: float) -> None:  # noqa: ANN001
         g = self.graph

@@ -147,3 +147,28 @@ def pose_in_room(room_name: str, scene: Scene, free: FreeSpace, people: Sequence
     x, y, _ = min(candidates, key=lambda c: math.hypot(c[0] - centre.x, c[1] - centre.y))
     del robot_xy  # the room's centre, not the nearest corner: "go to the dining room" means into it
     return GoalPose(x, y, None)
+
+
+def pose_past_door(door_name: str, room_name: str, scene: Scene, free: FreeSpace, people: Sequence[Person],
+                   past_m: float = 0.7) -> GoalPose:
+    """changeRoom: a point just inside ``room_name`` beyond the door, to pass through (no heading)."""
+    door = next((d for d in scene.doors if d.name == door_name), None)
+    room = next((r for r in scene.rooms if r.name == room_name), None)
+    if door is None or room is None:
+        raise GoalError(f"unknown door {door_name!r} or room {room_name!r}")
+    polygon = shapely.Polygon(room.polygon)
+    dx, dy = door.position
+    candidates: list[tuple[float, float, float | None]] = []
+    for distance in (past_m, past_m + 0.4, past_m + 0.8):
+        for i in range(16):
+            angle = 2 * math.pi * i / 16
+            x, y = dx + distance * math.cos(angle), dy + distance * math.sin(angle)
+            if polygon.contains(shapely.Point(x, y)) and free.ok(x, y, people):
+                candidates.append((x, y, None))
+        if candidates:
+            break
+    if not candidates:
+        raise GoalError(f"no free spot past door {door_name!r} in {room_name!r}")
+    # The spot straightest through the door: farthest from the door's own room boundary.
+    x, y, _ = max(candidates, key=lambda c: polygon.exterior.distance(shapely.Point(c[0], c[1])))
+    return GoalPose(x, y, None)

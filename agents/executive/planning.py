@@ -13,10 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import networkx as nx
 import shapely
 
-from agents.executive.goals import FreeSpace, GoalError, GoalPose, pose_facing_group, pose_facing_person, \
-    pose_in_room, pose_near_object
+from agents.executive.goals import (FreeSpace, GoalError, GoalPose, pose_facing_group, pose_facing_person,
+                                    pose_in_room, pose_near_object, pose_past_door)
 from agents.social_navigation.objects import posed_polygon
 from agents.world_model import dsr_objects, dsr_people
 from scenes.model import Scene
@@ -37,20 +38,27 @@ class PlanStep:
     scene: Scene = field(repr=False)
     issued_goal: GoalPose | None = field(default=None, repr=False)
 
+    @property
+    def navigates(self) -> bool:
+        """Does this step end with the robot driving somewhere (as opposed to waiting)?"""
+        return self.rule not in ("waitFor", "waitForPassage")
+
     def describe(self) -> str:
         args = ", ".join(f"{k}={v}" for k, v in sorted(self.bindings.items()))
         return f"{self.rule}({args})"
 
     # ------------------------------------------------------------ resolution against the live DSR
     def intention_attrs(self, graph: Any, now_s: float) -> dict[str, Any]:
-        if self.rule == "waitFor":
-            activity = graph.get_node_by_name(f"activity/{self.bindings['activity']}")
+        if self.rule in ("waitFor", "waitForPassage"):
+            name = self.bindings.get("a") or f"activity/{self.bindings.get('activity', '')}"
+            activity = graph.get_node_by_name(name)
             if activity is None:
-                raise StepFailed(f"unknown activity {self.bindings['activity']!r}")
+                raise StepFailed(f"unknown activity {name!r}")
             return {"kind": "wait", "until_s": float(activity.attrs["end_s"])}
         goal = self._goal_pose(graph, now_s)
         self.issued_goal = goal
-        return {"kind": "navigate", **goal.as_attrs(), "target": self.bindings.get("target", "")}
+        return {"kind": "navigate", **goal.as_attrs(), "target": self.bindings.get("target", ""),
+                "pass_through": self.rule == "changeRoom"}
 
     def _goal_pose(self, graph: Any, now_s: float) -> GoalPose:
         del now_s
@@ -64,20 +72,22 @@ class PlanStep:
         try:
             if self.rule == "goToPose":
                 return GoalPose(float(b["x"]), float(b["y"]), float(b["theta"]))
-            if self.rule in ("goToRoom", "changeRoom"):
-                return pose_in_room(b["room"] if "room" in b else b["to"], self.scene, free, people, busy, (rx, ry))
+            if self.rule == "goToRoom":
+                return pose_in_room(b["room"], self.scene, free, people, busy, (rx, ry))
+            if self.rule == "changeRoom":
+                return pose_past_door(b["d"], b["r2"], self.scene, free, people)
             if self.rule == "goToObject":
-                obj = next((o for o in objects if o.name == b["object"]), None)
+                obj = next((o for o in objects if o.name == b.get("object", b.get("o"))), None)
                 if obj is None:
-                    raise StepFailed(f"object {b['object']!r} is not in the DSR")
+                    raise StepFailed(f"object {b.get('object', b.get('o'))!r} is not in the DSR")
                 return pose_near_object(obj, free, people, busy, (rx, ry), self.scene.robot.radius)
             if self.rule == "approachPerson":
-                person = next((p for p in people if p.name == b["person"]), None)
+                person = next((p for p in people if p.name == b.get("person", b.get("p"))), None)
                 if person is None:
-                    raise StepFailed(f"person {b['person']!r} is not in the DSR")
+                    raise StepFailed(f"person {b.get('person', b.get('p'))!r} is not in the DSR")
                 return pose_facing_person(person, free, people, (rx, ry))
             if self.rule == "takeTheAttention":
-                names = set(b["group"].split("+"))
+                names = set(b["group"].split("+")) if "group" in b else _group_of(graph, {b["p"], b["q"]})
                 members = [p for p in people if p.name in names]
                 if len(members) != len(names):
                     raise StepFailed(f"group members not all seen: {sorted(names)}")
@@ -114,6 +124,22 @@ class PlanStep:
         return self._person_at_issue
 
 
+def _group_of(graph: Any, seeds: set[str]) -> set[str]:
+    """The seeds plus everyone linked to them by `interacting` edges (transitively)."""
+    names = set(seeds)
+    changed = True
+    while changed:
+        changed = False
+        for edge in graph.edges_of_type("interacting"):
+            src, dst = graph.get_node(edge.src), graph.get_node(edge.dst)
+            if src is None or dst is None or src.type != "person" or dst.type != "person":
+                continue
+            if (src.name in names) != (dst.name in names):
+                names |= {src.name, dst.name}
+                changed = True
+    return names
+
+
 def _busy_spaces(graph: Any, objects: list) -> list[shapely.Geometry]:
     """Interaction spaces of objects with a running activity: no goal pose inside them."""
     running = {str(n.attrs.get("object")) for n in graph.nodes_of_type("activity") if n.attrs.get("state") == "running"}
@@ -138,13 +164,54 @@ def direct_steps(goal_text: str, scene: Scene) -> list[PlanStep]:
     return [PlanStep(rule, {key: arg, "target": arg}, scene)]
 
 
+SYMBOLIC_TYPES = frozenset({"room", "door", "robot", "person", "object", "activity"})
+PASS_THROUGH_M = 0.7   # changeRoom: aim this far past the door, inside the next room
+
+
+def symbolic_view(graph: Any) -> nx.MultiDiGraph:
+    """The part of the DSR the grammar reasons about (no clock, missions, intentions, requests)."""
+    full = graph.to_networkx()
+    keep = [n for n, data in full.nodes(data=True) if data.get("type") in SYMBOLIC_TYPES]
+    return full.subgraph(keep).copy()
+
+
 class MissionPlanner:
-    """Plans missions with the grammar planner when a grammar is available, else directly."""
+    """Plans missions with the AGGL grammar on the symbolic DSR (docs/grammar.md).
+
+    Mission strings are the grammar's (``room:``, ``object:``, ``person:``, ``group:``, ``wait:``)
+    plus ``pose:x,y,theta``, planned as ``room:<room of the pose>`` followed by ``goToPose``.
+    The last ``changeRoom`` of a room mission becomes ``goToRoom`` (stop well inside the room);
+    other ``changeRoom`` steps are pass-through waypoints just past their door.
+    """
 
     def __init__(self, scene: Scene, grammar_file: str | None = None) -> None:
+        from grammar import default_grammar_path, load_grammar
+
         self.scene = scene
-        self.grammar_file = Path(grammar_file) if grammar_file else None
+        self.grammar_file = Path(grammar_file) if grammar_file else default_grammar_path()
+        self.grammar = load_grammar(self.grammar_file)
 
     def plan(self, graph: Any, goal_text: str, now_s: float) -> list[PlanStep]:
-        del graph, now_s
-        return direct_steps(goal_text, self.scene)
+        from grammar import MissionError, plan_mission
+
+        del now_s
+        kind, _, arg = goal_text.partition(":")
+        final: list[PlanStep] = []
+        target = goal_text
+        if kind == "pose":
+            final = direct_steps(goal_text, self.scene)
+            x, y = float(final[0].bindings["x"]), float(final[0].bindings["y"])
+            room = self.scene.room_at(x, y)
+            if room is None:
+                raise StepFailed(f"pose ({x:g}, {y:g}) is in no room")
+            target = f"room:{room}"
+        try:
+            result = plan_mission(self.grammar, symbolic_view(graph), target, robot=self.scene.robot.name)
+        except MissionError as exc:
+            raise StepFailed(str(exc)) from None
+        if not result.found:
+            raise StepFailed(result.reason)
+        steps = [PlanStep(step.rule, dict(step.bindings), self.scene) for step in result.steps]
+        if kind == "room" and steps and steps[-1].rule == "changeRoom":
+            steps[-1] = PlanStep("goToRoom", {"room": steps[-1].bindings["r2"], "target": arg}, self.scene)
+        return steps + final

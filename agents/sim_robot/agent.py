@@ -60,6 +60,7 @@ class SimRobotAgent(Agent):
         self._waiting_since: float | None = None
         self._trajectory_file = self._open_trajectory()
         self._last_mode: str | None = None
+        self._room_name: str | None = None
         self._trail: list[list[float]] = []
         self._publish()
 
@@ -77,8 +78,9 @@ class SimRobotAgent(Agent):
                     g.insert_or_assign_edge(world.id, node.id, "RT", attrs={"x": 0.0, "y": 0.0, "theta": 0.0})
             for door in scene.doors:
                 a, b = (g.get_node_by_name(name) for name in door.between)
-                if g.get_node_by_name(f"door/{door.name}") is None:
-                    g.insert_node(type="door", name=f"door/{door.name}",
+                if g.get_node_by_name(door.name) is None:
+                    # The `connected` edges name this node in their `door` attribute (grammar changeRoom).
+                    g.insert_node(type="door", name=door.name,
                                   attrs={"x": door.position[0], "y": door.position[1], "width": door.width,
                                          "rooms": list(door.between), "open": True})
                 g.insert_or_assign_edge(a.id, b.id, "connected", attrs={"door": door.name})
@@ -242,13 +244,26 @@ class SimRobotAgent(Agent):
         ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
         robot = g.get_node_by_name(self.scene.robot.name)
         world = g.get_node_by_name("world")
+        room = self._room_change(s.x, s.y)
         with g.transaction():
             g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
+            if room is not None:
+                for edge in g.edges_from(robot.id, "in"):
+                    g.delete_edge(robot.id, edge.dst, "in")
+                g.insert_or_assign_edge(robot.id, room.id, "in", attrs={})
             g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
                                             "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
             g.update_node(g.get_node_by_name("clock").id, attrs={"now_s": self.now_s})
         self.rec.set_time(self.now_s)
         self._log_frame(ranges)
+
+    def _room_change(self, x: float, y: float):  # noqa: ANN202 - Node | None
+        """The room node to link with `in` when the robot crossed into another room, else None."""
+        name = self.scene.room_at(x, y)
+        if name is None or name == self._room_name:
+            return None
+        self._room_name = name
+        return self.graph.get_node_by_name(name)
 
     def _set_clock(self, **attrs: object) -> None:
         clock = self.graph.get_node_by_name("clock")

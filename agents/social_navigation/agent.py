@@ -31,6 +31,7 @@ from scenes.model import format_clock
 
 REPLAN_PERIOD_S = 1.0
 REPLAN_GAIN = 1.15
+PASS_THROUGH_TOLERANCE_M = 0.5   # a waypoint past a door is reached without stopping on it
 REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
 STALL_TIMEOUT_S = 60.0
 
@@ -97,6 +98,8 @@ class SocialNavigationAgent(Agent):
         self.follower = BandFollower(self.drive, self.control)
         self.map: SocialMap | None = None
         self.workspace = SearchWorkspace()
+        self.route_rooms: tuple[str, ...] = ()
+        self._route_statics: dict[tuple[str, ...], Any] = {}
         self._last_map_log_s = -math.inf
 
     # ----------------------------------------------------------------- helpers
@@ -108,9 +111,19 @@ class SocialNavigationAgent(Agent):
         return None if clock is None else float(clock.attrs["now_s"])
 
     def _build_map(self, now_s: float) -> SocialMap:
+        """The social map; confined to the intention's ``rooms`` when the executive's symbolic plan
+        fixed the route's rooms (cells of other rooms become walls, so the metric planner picks the
+        doors and the way, but never cuts through a room the plan avoided)."""
         g = self.graph
+        rooms, static = self.rooms, self.static
+        if self.route_rooms:
+            rooms = [room for room in self.rooms if room.name in self.route_rooms]
+            key = tuple(sorted(self.route_rooms))
+            if key not in self._route_statics:
+                self._route_statics[key] = build_static_map(self.bounds, self.walls, rooms, self.params)
+            static = self._route_statics[key]
         return build_social_map(self.bounds, self.walls, dsr_people(g), dsr_objects(g), dsr_activity_windows(g),
-                                now_s, self.params, rooms=self.rooms, static=self.static)
+                                now_s, self.params, rooms=rooms, static=static)
 
     def _active_intention(self) -> Any:
         for node in self.graph.nodes_of_type("intention"):
@@ -155,6 +168,7 @@ class SocialNavigationAgent(Agent):
         attrs = intention.attrs
         theta = float(attrs["goal_theta"]) if attrs.get("goal_has_theta", True) else None
         self.goal = (float(attrs["goal_x"]), float(attrs["goal_y"]), theta)
+        self.route_rooms = tuple(str(r) for r in attrs.get("rooms", []))
         self.started_s = now_s
         self.follower.reset()
         pose = self.graph.world_pose(robot.id)
@@ -229,7 +243,8 @@ class SocialNavigationAgent(Agent):
         vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
         omega = float(cmd.omega)
         self.last_answered = pose_stamp
-        if out.reached:
+        passed = bool(intention.attrs.get("pass_through")) and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
+        if out.reached or passed:
             self._stop(robot, intention, "done")
             self.rec.event(f"{format_clock(now_s)} reached goal of {intention.name} "
                            f"({now_s - self.started_s:.0f} s)")
@@ -252,6 +267,7 @@ class SocialNavigationAgent(Agent):
         self.intention_id = None
         self.band = None
         self.goal = None
+        self.route_rooms = ()
 
     def _fail(self, reason: str) -> None:
         robot = self._robot()

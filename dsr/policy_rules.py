@@ -1,0 +1,184 @@
+"""The declarative write policy: a table of grants read from YAML (deploy/write_policy.yaml).
+
+Why a table of grants (default deny): the question an operator asks is "who may move the robot?",
+and the answer must be one place to read, not code.  Each rule grants some writers (agent names
+or fnmatch patterns such as ``agenda_tool-*``) some operations on some node or edge types:
+
+```yaml
+format: chronav-write-policy/1
+rules:
+  - writers: [sim_robot]
+    nodes: [robot]
+    ops: [create, delete]                   # create includes the initial attribute values
+    attrs: [pose_stamp, v, vy, omega, laser_ranges]
+  - writers: [social_navigation]
+    nodes: [robot]
+    attrs: [nav_active, "cmd_*", "path_*", planned_s]
+  - writers: [human_observer]
+    edges: [RT]
+    from: [world]                           # edge rules may restrict the end node types
+    to: [person]
+    ops: [create, delete]
+    attrs: ["*"]
+```
+
+A write is allowed when some rule matches its writer, element type (and end types), and grants
+its operation (`create`, `delete`) or its attribute (`attrs` patterns minus `except_attrs`).
+Deleting a node also deletes its edges: such edge deletes are allowed to whoever may delete the
+node.  Types this replica has not seen yet (a delta overtaking the node's creation) match any
+pattern: the write lands on an element nobody can see until its creator's write arrives.
+A state reply from an agent holding no grant at all is refused whole: it could relay writes
+under names it made up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from fnmatch import fnmatchcase
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
+
+from dsr.errors import PolicyError
+from dsr.writes import Write, writes_of
+
+if TYPE_CHECKING:
+    from dsr.wire import Decoded
+    from dsr.writes import GraphLookup
+
+FORMAT = "chronav-write-policy/1"
+_CACHE_LIMIT = 65536
+
+Pattern = Annotated[str, StringConstraints(min_length=1, max_length=128, pattern=r"^\S+$")]
+
+
+class Rule(BaseModel):
+    """One grant.  Exactly one of `nodes` / `edges`; at least one of `ops` / `attrs`."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    writers: list[Pattern] = Field(min_length=1)
+    nodes: list[Pattern] = []
+    edges: list[Pattern] = []
+    from_: list[Pattern] = Field(default=["*"], alias="from", min_length=1)
+    to: list[Pattern] = Field(default=["*"], min_length=1)
+    ops: list[Literal["create", "delete"]] = []
+    attrs: list[Pattern] = []
+    except_attrs: list[Pattern] = []
+    #: why the grant exists (documentation only)
+    why: str = ""
+
+    @model_validator(mode="after")
+    def _shape(self) -> Rule:
+        if bool(self.nodes) == bool(self.edges):
+            raise ValueError("a rule names either `nodes` or `edges` (exactly one)")
+        if self.nodes and ({"from_", "to"} & self.model_fields_set):
+            raise ValueError("`from`/`to` restrict edge rules only")
+        if not self.ops and not self.attrs:
+            raise ValueError("a rule grants `ops`, `attrs` or both")
+        if self.except_attrs and not self.attrs:
+            raise ValueError("`except_attrs` needs `attrs`")
+        return self
+
+    def permits(self, write: Write) -> bool:
+        if write.element == "node":
+            if not _match(write.type, self.nodes):
+                return False
+        elif not (_match(write.type, self.edges) and _match(write.src, self.from_)
+                  and _match(write.dst, self.to)):
+            return False
+        if write.op == "attr":
+            key = write.attr or ""
+            return _match(key, self.attrs) and not any(fnmatchcase(key, p)
+                                                       for p in self.except_attrs)
+        return write.op in self.ops
+
+
+class PolicyDocument(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    format: Literal["chronav-write-policy/1"]
+    rules: list[Rule]
+
+
+def _match(value: str | None, patterns: Iterable[str]) -> bool:
+    """fnmatch against any pattern; an unknown (None) type matches any non-empty list."""
+    patterns = list(patterns)
+    if value is None:
+        return bool(patterns)
+    return any(fnmatchcase(value, p) for p in patterns)
+
+
+class RulePolicy:
+    """Evaluates writes against the rules; decisions are cached (the vocabulary is small)."""
+
+    def __init__(self, rules: Sequence[Rule], source: str = "<rules>") -> None:
+        self.rules = tuple(rules)
+        self.source = source
+        self._by_writer: dict[str, tuple[Rule, ...]] = {}
+        self._decisions: dict[Write, bool] = {}
+
+    def rules_for(self, agent: str) -> tuple[Rule, ...]:
+        found = self._by_writer.get(agent)
+        if found is None:
+            found = tuple(r for r in self.rules if any(fnmatchcase(agent, p) for p in r.writers))
+            if len(self._by_writer) >= _CACHE_LIMIT:
+                self._by_writer.clear()
+            self._by_writer[agent] = found
+        return found
+
+    def has_rights(self, agent: str) -> bool:
+        return bool(self.rules_for(agent))
+
+    def allowed(self, write: Write) -> bool:
+        decision = self._decisions.get(write)
+        if decision is None:
+            decision = self._decide(write)
+            if len(self._decisions) >= _CACHE_LIMIT:
+                self._decisions.clear()
+            self._decisions[write] = decision
+        return decision
+
+    def _decide(self, write: Write) -> bool:
+        if write.writer is None:
+            return False
+        if any(rule.permits(write) for rule in self.rules_for(write.writer)):
+            return True
+        if write.op == "delete" and write.element == "edge" and write.cascade is not None:
+            return self.allowed(Write(write.writer, "node", write.cascade, "delete"))
+        return False
+
+    def check(self, message: Decoded, graph: GraphLookup) -> str | None:
+        if message.kind == "state" and not self.has_rights(message.agent):
+            return (f"agent {message.agent!r} holds no grant in {self.source}: "
+                    "its state is not trusted")
+        for write in writes_of(message, graph):
+            if not self.allowed(write):
+                return f"{explain(write)} ({self.source})"
+        return None
+
+
+def explain(write: Write) -> str:
+    """The refusal as a sentence an operator can match against the policy file."""
+    if write.writer is None:
+        return "a register stamped by a replica no agent vouches for"
+    what = f"{write.type!r} {write.element}" if write.type else f"{write.element} of unknown type"
+    if write.element == "edge":
+        what += f" ({write.src or '?'} -> {write.dst or '?'})"
+    if write.op == "attr":
+        return f"agent {write.writer!r} may not set {write.attr!r} on a {what}"
+    return f"agent {write.writer!r} may not {write.op} a {what}"
+
+
+def load_policy(path: str | Path) -> RulePolicy:
+    """Read and validate a policy file; PolicyError says `file:line:col: key: problem`."""
+    from scenes.yamlio import SourceError, load_located_file, validate_located
+
+    try:
+        located = load_located_file(path)
+        if not isinstance(located.data, dict):
+            raise SourceError(str(path), 1, 1, "", "a write-policy file is a YAML mapping "
+                              "with `format` and `rules`")
+        document = validate_located(PolicyDocument, located)
+    except SourceError as exc:
+        raise PolicyError(str(exc)) from None
+    return RulePolicy(document.rules, source=str(path))

@@ -1,0 +1,732 @@
+"""`chronav agenda`: read and change the agenda of a running chronav system from a terminal.
+
+Why the tool is just another DSR replica (and not an RPC to the agenda agent): the request, who
+made it and the agent's answer are then replicated and recorded like everything else, and the
+tool needs nothing but the router's address and the graph name.  Protocol (agents/agenda/agent.py):
+insert ``agenda_request/<uuid>`` with ``change`` (JSON, agents/agenda/changes.py) and
+``state="pending"``; the agenda agent applies the whole change or nothing and sets ``state`` to
+``accepted``/``refused`` with a ``message``; the tool prints it and deletes the request node.
+
+Finding the system, first match wins: ``--connect``/``--graph``; ``--run DIR|latest`` (the
+``connect.json`` that `chronav launch` writes in its run directory); the environment
+(``CHRONAV_ZENOH_CONNECT``, ``CHRONAV_GRAPH``), as set for the agents themselves.
+
+Exit codes, so scripts can tell "fix the change" from "fix the connection":
+0 accepted (or listed/watched); 1 refused, by the agenda agent or already here because the
+change cannot be valid (bad time, unreadable file: no round trip needed); 2 nothing was applied
+because no system could be reached, the graph is empty, the agenda agent is missing or did not
+answer in time (typer's own usage errors also exit 2); 130 interrupted while waiting.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+import uuid
+from collections.abc import Iterator, Mapping
+from contextlib import ExitStack, contextmanager, suppress
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO
+
+import typer
+
+from tools.supervisor import REPO_ROOT
+
+RUNS_DIR = REPO_ROOT / "recordings"
+CONNECT_FILE = "connect.json"
+AGENDA_AGENT = "agenda"
+TOOL_AGENT_PREFIX = "agenda_tool"
+REQUEST_TYPE = "agenda_request"
+ANSWERED = ("accepted", "refused")
+DEFAULT_TIMEOUT_S = 10.0
+POLL_S = 0.02
+HOW_TO_FIND = ("start one with `chronav launch SCENE`, then point this tool at it with --run latest, "
+               "--run recordings/<run dir>, or --connect tcp/HOST:PORT --graph <run id>")
+
+agenda_app = typer.Typer(help="List, change and watch the agenda of a running chronav system.",
+                         no_args_is_help=True)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(agenda_app, name="agenda")
+
+
+# ---------------------------------------------------------------------------------------------
+# Errors: each carries the exit code the command ends with.
+# ---------------------------------------------------------------------------------------------
+
+class AgendaToolError(Exception):
+    exit_code = 2
+
+
+class LocalRefusal(AgendaToolError):
+    """The change cannot be valid as written; refused before anything was sent."""
+
+    exit_code = 1
+
+
+class NoSystemError(AgendaToolError):
+    """No system to talk to (unreachable router, empty graph, no agenda agent, no answer)."""
+
+    exit_code = 2
+
+
+# ---------------------------------------------------------------------------------------------
+# Where the system is.
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SystemAddress:
+    """Router endpoints and graph name, plus where they came from (for messages that help)."""
+
+    connect: tuple[str, ...]
+    graph: str
+    origin: str
+    run_dir: Path | None = None
+
+    def describe(self) -> str:
+        return f"graph {self.graph!r} via {','.join(self.connect)} ({self.origin})"
+
+
+def _pid_alive(pid: object) -> bool:
+    if not isinstance(pid, int) or pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def run_is_alive(run_dir: Path) -> bool:
+    """A run is alive while it has not written result.json and its router (or launcher) runs."""
+    if (run_dir / "result.json").exists():
+        return False
+    pids = _read_json(run_dir / "pids.json") or {}
+    connect = _read_json(run_dir / CONNECT_FILE) or {}
+    return _pid_alive(pids.get("router")) or _pid_alive(connect.get("launcher_pid"))
+
+
+def latest_live_run(runs_dir: Path) -> Path:
+    """The newest run directory (by its connect.json) whose processes are alive."""
+    candidates = sorted((p.parent for p in runs_dir.glob(f"*/{CONNECT_FILE}")),
+                        key=lambda d: (d / CONNECT_FILE).stat().st_mtime, reverse=True)
+    for run_dir in candidates:
+        if run_is_alive(run_dir):
+            return run_dir
+    raise NoSystemError(f"no live run under {runs_dir} ({len(candidates)} run director"
+                        f"{'y' if len(candidates) == 1 else 'ies'} with {CONNECT_FILE}, none running); "
+                        + HOW_TO_FIND)
+
+
+def find_run_dir(run: str, runs_dir: Path = RUNS_DIR) -> Path:
+    """``latest``, a run directory path, or a run id under ``runs_dir``."""
+    if run == "latest":
+        return latest_live_run(runs_dir)
+    for candidate in (Path(run), runs_dir / run):
+        if candidate.is_dir():
+            return candidate
+    raise NoSystemError(f"--run {run!r}: no such run directory (looked at {Path(run)} and {runs_dir / run}); "
+                        "use --run latest or the directory `chronav launch` printed")
+
+
+def address_from_run(run_dir: Path) -> SystemAddress:
+    data = _read_json(run_dir / CONNECT_FILE)
+    if data is None:
+        if (run_dir / "result.json").exists():
+            raise NoSystemError(f"run {run_dir} has finished (it has result.json); nothing is running there")
+        raise NoSystemError(f"{run_dir / CONNECT_FILE} is missing or unreadable; is {run_dir} a run directory "
+                            "of `chronav launch`?")
+    endpoint, graph = data.get("endpoint"), data.get("graph")
+    if not isinstance(endpoint, str) or not isinstance(graph, str):
+        raise NoSystemError(f"{run_dir / CONNECT_FILE}: expected string keys 'endpoint' and 'graph', got {data}")
+    if (run_dir / "result.json").exists():
+        raise NoSystemError(f"run {run_dir} has finished (it has result.json); nothing is running there")
+    return SystemAddress((endpoint,), graph, f"from {run_dir / CONNECT_FILE}", run_dir)
+
+
+def resolve_address(connect: list[str] | None, graph: str | None, run: str | None, *,
+                    environ: Mapping[str, str] | None = None, runs_dir: Path = RUNS_DIR) -> SystemAddress:
+    """Explicit options beat --run, which beats the environment the agents use."""
+    from dsr.config import DEFAULT_ROUTER, ENV_CONNECT, ENV_GRAPH, graph_name_from_env
+    from dsr.errors import ConfigError
+
+    env = os.environ if environ is None else environ
+    if run:
+        base = address_from_run(find_run_dir(run, runs_dir))
+    else:
+        try:
+            env_graph = graph_name_from_env(env)
+        except ConfigError as exc:
+            raise NoSystemError(str(exc)) from None
+        env_connect = [e.strip() for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
+        origin = (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
+            f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
+        base = SystemAddress(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
+    if connect or graph:
+        base = SystemAddress(tuple(connect) if connect else base.connect, graph or base.graph,
+                             "from --connect/--graph" if connect and graph else
+                             f"{'--connect' if connect else '--graph'} over {base.origin}", base.run_dir)
+    return base
+
+
+# ---------------------------------------------------------------------------------------------
+# Changes, validated here first so that mistakes need no round trip.
+# ---------------------------------------------------------------------------------------------
+
+def _pydantic_problems(exc: Any) -> str:
+    parts = []
+    for error in exc.errors():
+        where = ".".join(str(p) for p in error["loc"])
+        message = "required" if error["type"] == "missing" else str(error["msg"]).removeprefix("Value error, ")
+        parts.append(f"{where}: {message}" if where else message)
+    return "; ".join(parts)
+
+
+def split_participants(text: str | None) -> list[str]:
+    """``"senior_1, therapist"`` -> ``["senior_1", "therapist"]`` (empty items dropped)."""
+    return [p.strip() for p in (text or "").split(",") if p.strip()]
+
+
+def add_change(object_name: str, start: str, end: str, *, name: str | None = None,
+               participants: list[str] | None = None, activity_id: str | None = None,
+               room: str | None = None, kind: str | None = None) -> dict[str, Any]:
+    """The wire form of an ``add``; bad times, end before start and bad ids are refused here."""
+    from pydantic import ValidationError
+
+    from agents.agenda.changes import AddChange
+    from agents.agenda.model import ActivitySpec
+
+    fields: dict[str, Any] = {"name": name or object_name, "object": object_name, "start": start, "end": end,
+                              "participants": tuple(participants or ()), "id": activity_id, "room": room,
+                              "kind": kind}
+    try:
+        spec = ActivitySpec(**{k: v for k, v in fields.items() if v is not None})
+    except ValidationError as exc:
+        raise LocalRefusal(_pydantic_problems(exc)) from None
+    return AddChange(activity=spec).model_dump(mode="json", exclude_none=True, exclude_defaults=False)
+
+
+def cancel_change(activity_id: str) -> dict[str, Any]:
+    if not activity_id.strip():
+        raise LocalRefusal("give the id of the activity to cancel (`chronav agenda list` shows them)")
+    return {"op": "cancel", "id": activity_id.strip()}
+
+
+def move_change(activity_id: str, start: str | None, end: str | None) -> dict[str, Any]:
+    """A ``move``: at least one new time; times are checked here, and their order when both are given."""
+    from agents.agenda.model import parse_when
+
+    if start is None and end is None:
+        raise LocalRefusal("say the new time: --start HH:MM and/or --end HH:MM (with only --start the "
+                           "activity keeps its length)")
+    values: dict[str, Any] = {}
+    for label, text in (("start", start), ("end", end)):
+        if text is not None:
+            try:
+                values[label] = parse_when(text)
+            except ValueError as exc:
+                raise LocalRefusal(f"--{label}: {exc}") from None
+    if "start" in values and "end" in values and type(values["start"]) is type(values["end"]):
+        with suppress(TypeError):  # naive vs aware datetimes: the agent decides
+            if values["end"] <= values["start"]:
+                raise LocalRefusal(f"--end {end!r} is not after --start {start!r}")
+    change: dict[str, Any] = {"op": "move", "id": activity_id.strip()}
+    if start is not None:
+        change["start"] = start
+    if end is not None:
+        change["end"] = end
+    return change
+
+
+AGENDA_FORMATS = {".ics": "ics", ".ical": "ics", ".yaml": "yaml", ".yml": "yaml"}
+
+
+def load_change(path: Path, *, replace: bool) -> dict[str, Any]:
+    """A ``load``: the file is read and parsed here, so its errors come back as file:line at once.
+
+    Checks against the scene (unknown objects...) and the expansion for the sim day are the
+    agent's: only it knows the scene and the date.
+    """
+    from agents.agenda.model import AgendaSourceError
+    from agents.agenda.yaml_source import parse_agenda_text
+
+    fmt = AGENDA_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise LocalRefusal(f"{path}: unknown agenda format {path.suffix or '(no suffix)'!r}; "
+                           "use a .ics (iCalendar) or .yaml file")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise LocalRefusal(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise LocalRefusal(f"{path}: cannot read it: {exc}") from None
+    try:
+        parse_agenda_text(text, fmt, str(path))
+    except AgendaSourceError as exc:
+        raise LocalRefusal(f"{path} has errors, nothing was sent:\n{exc}") from None
+    return {"op": "load", "mode": "replace" if replace else "merge", "format": fmt, "text": text,
+            "source": path.name}
+
+
+# ---------------------------------------------------------------------------------------------
+# Talking to the system.
+# ---------------------------------------------------------------------------------------------
+
+def tool_agent_name() -> str:
+    return f"{TOOL_AGENT_PREFIX}-{os.getpid()}"
+
+
+def requested_by() -> str:
+    """Who asked, as the agent logs it and the recording shows it."""
+    import getpass
+
+    try:
+        user = getpass.getuser()
+    except (KeyError, OSError):  # no passwd entry and no USER/LOGNAME (some containers)
+        user = f"uid {os.getuid()}"
+    return f"chronav agenda ({user}, pid {os.getpid()})"
+
+
+def members(graph: Any, timeout_s: float = 2.0) -> list[str] | None:
+    """Agents with a writable replica in the graph (liveliness tokens); None when offline."""
+    from dsr import wire
+
+    replica = getattr(graph, "replica", None)
+    session = getattr(replica, "session", None)
+    if session is None:
+        return None
+    replies = session.liveliness().get(wire.member_key(graph.graph_name, "*"), timeout=timeout_s)
+    return sorted({wire.last_chunk(str(r.ok.key_expr)) for r in replies if r.ok is not None})
+
+
+def check_system(graph: Any, address: SystemAddress, *, need_agenda_agent: bool) -> None:
+    """Refuse to go on (exit 2) when nobody is there, saying what to check."""
+    present = members(graph)
+    others = [m for m in present or [] if m != graph.agent]
+    if present is not None and not others and len(graph) == 0:
+        raise NoSystemError(f"joined {address.describe()} but nobody is there: no chronav system uses "
+                            "that graph name (it is the run id, see the run's connect.json); " + HOW_TO_FIND)
+    if need_agenda_agent and present is not None and AGENDA_AGENT not in present:
+        where = f"; see {address.run_dir / 'logs' / 'agenda.log'}" if address.run_dir else ""
+        raise NoSystemError(f"the agenda agent is not running in {address.describe()} (members: "
+                            f"{', '.join(others) or 'none'}){where}")
+
+
+@contextmanager
+def open_system(address: SystemAddress, *, read_only: bool, need_agenda_agent: bool,
+                sync_timeout_s: float = 5.0) -> Iterator[Any]:
+    """A replica of the running graph for the block; connection problems become NoSystemError."""
+    from dsr import DSRError, ZenohSettings, join
+    from dsr.transport import TransportError
+
+    try:
+        base = ZenohSettings.from_env()
+        settings = ZenohSettings(**{**base.model_dump(exclude_unset=True), "mode": "client",
+                                    "connect": list(address.connect)})
+    except (DSRError, ValueError) as exc:
+        raise NoSystemError(f"bad connection settings ({address.describe()}): {exc}") from None
+    stack = ExitStack()
+    try:
+        graph = stack.enter_context(join(tool_agent_name(), graph=address.graph, settings=settings,
+                                         read_only=read_only, sync_timeout=sync_timeout_s))
+    except TransportError:
+        raise NoSystemError(f"cannot reach a chronav system at {','.join(address.connect)} ({address.origin}); "
+                            + HOW_TO_FIND) from None
+    except DSRError as exc:
+        raise NoSystemError(f"cannot join {address.describe()}: {exc}") from None
+    with stack:
+        check_system(graph, address, need_agenda_agent=need_agenda_agent)
+        yield graph
+
+
+@dataclass(frozen=True)
+class Answer:
+    accepted: bool
+    message: str
+    request: str
+
+
+def submit_change(graph: Any, change: dict[str, Any], *, timeout_s: float,
+                  requester: str | None = None) -> Answer:
+    """Insert the request, wait for the agent's answer, delete the request (always)."""
+    name = f"{REQUEST_TYPE}/{uuid.uuid4().hex}"
+    node = graph.insert_node(type=REQUEST_TYPE, name=name,
+                             attrs={"change": json.dumps(change), "state": "pending",
+                                    "requested_by": requester or requested_by()})
+    graph.flush()
+    deadline = time.monotonic() + timeout_s
+    try:
+        while True:
+            current = graph.get_node(node.id)
+            state = None if current is None else current.attrs.get("state")
+            if current is not None and state in ANSWERED:
+                return Answer(state == "accepted", str(current.attrs.get("message", "")), name)
+            if current is None:
+                raise NoSystemError(f"request {name} was deleted by someone else before an answer came")
+            if time.monotonic() >= deadline:
+                raise NoSystemError(f"no answer from the agenda agent within {timeout_s:g} s; the request was "
+                                    "withdrawn. Is the system busy or stopping? Check with `chronav agenda "
+                                    "list` whether the change was applied, or retry with a longer --timeout")
+            time.sleep(POLL_S)
+    finally:
+        from dsr import DSRError
+
+        with suppress(DSRError):
+            graph.delete_node(node.id)
+            graph.flush()
+
+
+# ---------------------------------------------------------------------------------------------
+# What `list` and `watch` show.
+# ---------------------------------------------------------------------------------------------
+
+def _clock_text(seconds: object) -> str:
+    from agents.agenda.model import format_clock
+
+    return format_clock(float(seconds)) if isinstance(seconds, (int, float)) else "?"
+
+
+def _band_name(band: object) -> str:
+    from agents.social_navigation.chronemics import BAND_NAMES
+
+    return BAND_NAMES[band] if isinstance(band, int) and 0 <= band < len(BAND_NAMES) else "?"
+
+
+def now_s(graph: Any) -> float | None:
+    clock = graph.get_node_by_name("clock")
+    value = None if clock is None else clock.attrs.get("now_s")
+    return float(value) if isinstance(value, (int, float)) else None
+
+
+def object_row(node: Any) -> dict[str, Any]:
+    r = node.attrs.get("R")
+    return {"name": node.name, "R": float(r) if isinstance(r, (int, float)) else None,
+            "R_band": node.attrs.get("R_band"), "band": _band_name(node.attrs.get("R_band")),
+            "active": bool(node.attrs.get("active", False))}
+
+
+def activity_row(node: Any, objects: Mapping[str, dict[str, Any]]) -> dict[str, Any]:
+    a = node.attrs
+    obj = objects.get(str(a.get("object")))
+    return {"id": a.get("activity_id", node.name.removeprefix("activity/")), "name": a.get("name", ""),
+            "object": a.get("object", ""), "room": a.get("room") or None,
+            "start": _clock_text(a.get("start_s")), "end": _clock_text(a.get("end_s")),
+            "start_s": a.get("start_s"), "end_s": a.get("end_s"), "state": a.get("state", "?"),
+            "participants": list(a.get("participants", [])), "source": a.get("source", ""),
+            "object_R": None if obj is None else obj["R"]}
+
+
+def snapshot(graph: Any) -> dict[str, Any]:
+    """Today's activities (by start) and every object's current R: what `list --json` prints."""
+    objects = {n.name: object_row(n) for n in graph.nodes_of_type("object")}
+    rows = [activity_row(n, objects) for n in graph.nodes_of_type("activity")]
+    rows.sort(key=lambda r: (float(r["start_s"]) if isinstance(r["start_s"], (int, float)) else 0.0, r["id"]))
+    now = now_s(graph)
+    return {"graph": graph.graph_name, "now_s": now, "now": None if now is None else _clock_text(now),
+            "activities": rows, "objects": sorted(objects.values(), key=lambda o: o["name"])}
+
+
+def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    console = Console(file=out, highlight=False, soft_wrap=True)
+    title = f"agenda of {data['graph']} at {data['now'] or '?'}: {len(data['activities'])} activities"
+    table = Table(title=title, title_justify="left")
+    for column in ("id", "name", "object", "start", "end", "state", "participants", "R now"):
+        table.add_column(column, overflow="fold")
+    for row in data["activities"]:
+        r = row["object_R"]
+        table.add_row(row["id"], row["name"], row["object"], row["start"], row["end"], row["state"],
+                      ", ".join(row["participants"]), "-" if r is None else f"{r:.2f}")
+    console.print(table)
+    objects = ", ".join(_object_text(o) for o in data["objects"])
+    console.print(f"objects: {objects or 'none yet'}", markup=False)
+
+
+def _r_text(row: dict[str, Any]) -> str:
+    """``3.37 (dark_orange, activity running)``: R, its colour band, whether an activity runs."""
+    r = "?" if row["R"] is None else f"{row['R']:.2f}"
+    return f"{r} ({row['band']}{', activity running' if row['active'] else ''})"
+
+
+def _object_text(row: dict[str, Any]) -> str:
+    return f"{row['name']} R={_r_text(row)}"
+
+
+class ChangeWatcher:
+    """Turns DSR signals into one line per agenda change (activities, R steps, answered requests).
+
+    R creeps every sim second while an activity approaches; a line is printed when it moved by
+    ``r_step`` since the last line for that object, or when its band or running flag changed.
+    """
+
+    def __init__(self, graph: Any, *, r_step: float, as_json: bool, out: TextIO, limit: int = 0) -> None:
+        self.graph, self.r_step, self.as_json, self.out, self.limit = graph, r_step, as_json, out, limit
+        self.lines = 0
+        self.activities: dict[int, dict[str, Any]] = {n.id: dict(n.attrs) for n in graph.nodes_of_type("activity")}
+        self.objects: dict[int, dict[str, Any]] = {n.id: object_row(n) for n in graph.nodes_of_type("object")}
+        self.finished = False
+
+    def connect(self) -> None:
+        self.graph.connect("node_added", self.on_node)
+        self.graph.connect("node_updated", self.on_node)
+        self.graph.connect("node_deleted", self.on_deleted)
+
+    @property
+    def done(self) -> bool:
+        return bool(self.limit) and self.lines >= self.limit
+
+    def emit(self, kind: str, text: str, **fields: Any) -> None:
+        if self.done:
+            return
+        now = now_s(self.graph)
+        if self.as_json:
+            line = json.dumps({"t_s": now, "time": _clock_text(now), "kind": kind, **fields, "text": text})
+        else:
+            line = f"{_clock_text(now)} {text}"
+        self.out.write(line + "\n")
+        self.out.flush()
+        self.lines += 1
+
+    def on_node(self, node: Any, changed: Any = None) -> None:
+        if node.type == "activity":
+            self._activity(node)
+        elif node.type == "object":
+            self._object(node)
+        elif node.type == REQUEST_TYPE:
+            self._request(node, changed)
+        elif node.type == "clock" and node.attrs.get("finished") and not self.finished:
+            self.finished = True
+            self.emit("clock", "the sim day is over (clock finished)")
+
+    def _activity(self, node: Any) -> None:
+        new, old = dict(node.attrs), self.activities.get(node.id)
+        self.activities[node.id] = new
+        aid = new.get("activity_id", node.name)
+        times = f"{_clock_text(new.get('start_s'))}-{_clock_text(new.get('end_s'))}"
+        if old is None:
+            self.emit("activity", f"activity {aid} added: {new.get('object')} {times} {new.get('state')} "
+                      f"({new.get('name')})", event="added", activity=new)
+            return
+        if (old.get("start_s"), old.get("end_s")) != (new.get("start_s"), new.get("end_s")):
+            self.emit("activity", f"activity {aid} moved: {_clock_text(old.get('start_s'))}-"
+                      f"{_clock_text(old.get('end_s'))} -> {times}", event="moved", activity=new)
+        if old.get("state") != new.get("state"):
+            self.emit("activity", f"activity {aid} {old.get('state')} -> {new.get('state')}",
+                      event="state", activity=new)
+        other = {k for k in set(old) | set(new) if old.get(k) != new.get(k)} - {"start_s", "end_s", "state"}
+        if other:
+            self.emit("activity", f"activity {aid} changed: " + ", ".join(f"{k}={new.get(k)!r}" for k in sorted(other)),
+                      event="changed", activity=new)
+
+    def on_deleted(self, node_id: int) -> None:
+        old = self.activities.pop(node_id, None)
+        if old is not None:
+            self.emit("activity", f"activity {old.get('activity_id')} removed from the agenda", event="removed",
+                      activity=old)
+        self.objects.pop(node_id, None)
+
+    def _object(self, node: Any) -> None:
+        new, old = object_row(node), self.objects.get(node.id)
+        if new["R"] is None:
+            return
+        if old is not None and old["R"] is not None and abs(new["R"] - old["R"]) < self.r_step and (
+                old["R_band"], old["active"]) == (new["R_band"], new["active"]):
+            return
+        self.objects[node.id] = new
+        before = "?" if old is None or old["R"] is None else f"{old['R']:.2f}"
+        self.emit("object", f"object {new['name']} R {before} -> {_r_text(new)}",
+                  event="R", object=new)
+
+    def _request(self, node: Any, changed: Any) -> None:
+        state = node.attrs.get("state")
+        if state in ANSWERED and (changed is None or "state" in changed):
+            self.emit("request", f"request from {node.attrs.get('requested_by', '?')} {state}: "
+                      f"{node.attrs.get('message', '')}", event=state, request=node.name)
+
+
+# ---------------------------------------------------------------------------------------------
+# Commands.
+# ---------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Connection:
+    connect: list[str] | None
+    graph: str | None
+    run: str | None
+
+
+CONNECT_HELP = "Zenoh router endpoint, e.g. tcp/127.0.0.1:7447 (default $CHRONAV_ZENOH_CONNECT)."
+GRAPH_HELP = "Graph name = the run id (default $CHRONAV_GRAPH)."
+RUN_HELP = "A run of `chronav launch`: 'latest', a run directory, or a run id under recordings/."
+TIMEOUT_HELP = "Seconds to wait for the agenda agent's answer."
+
+
+def _fail(command: str, exc: AgendaToolError) -> None:
+    typer.echo(f"chronav agenda {command}: {exc}", err=True)
+    raise typer.Exit(exc.exit_code)
+
+
+def _change(command: str, build: Any, conn: Connection, timeout: float, as_json: bool) -> None:
+    """Build the change (local checks), send it, print the answer, exit 0/1/2."""
+    from dsr.process import exit_on_sigterm
+
+    exit_on_sigterm()
+    try:
+        change = build()
+        address = resolve_address(conn.connect, conn.graph, conn.run)
+        with open_system(address, read_only=False, need_agenda_agent=True) as graph:
+            answer = submit_change(graph, change, timeout_s=timeout)
+    except AgendaToolError as exc:
+        _fail(command, exc)
+        return
+    except KeyboardInterrupt:
+        typer.echo(f"chronav agenda {command}: interrupted; the request was withdrawn (check `chronav agenda "
+                   "list`: the agent may have applied it already)", err=True)
+        raise typer.Exit(130) from None
+    if as_json:
+        shown = {k: v for k, v in change.items() if k != "text"}
+        typer.echo(json.dumps({"accepted": answer.accepted, "message": answer.message, "request": answer.request,
+                               "graph": address.graph, "change": shown}))
+    if answer.accepted:
+        if not as_json:
+            typer.echo(f"accepted: {answer.message}")
+        return
+    typer.echo(f"chronav agenda {command}: {answer.message}", err=True)
+    raise typer.Exit(1)
+
+
+@agenda_app.command("add")
+def add_command(
+    object_name: str = typer.Argument(..., metavar="OBJECT", help="object of the scene, e.g. tv"),
+    start: str = typer.Argument(..., metavar="START", help="HH:MM (or an ISO date-time on the sim day)"),
+    end: str = typer.Argument(..., metavar="END", help="HH:MM, after START"),
+    name: str = typer.Option(None, "--name", help="what staff call it (default: the object's name)"),
+    participants: str = typer.Option(None, "--participants", help="people's names, comma-separated"),
+    activity_id: str = typer.Option(None, "--id", help="its id (default: derived, e.g. tv-1100)"),
+    room: str = typer.Option(None, "--room", help="room of the activity"),
+    kind: str = typer.Option(None, "--kind", help="free text: therapy, serious_game, meal..."),
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    timeout: float = typer.Option(DEFAULT_TIMEOUT_S, "--timeout", help=TIMEOUT_HELP),
+    as_json: bool = typer.Option(False, "--json", help="print the answer as one JSON object"),
+) -> None:
+    """Add an activity on OBJECT from START to END (today, on the sim clock)."""
+    _change("add", lambda: add_change(object_name, start, end, name=name,
+                                      participants=split_participants(participants), activity_id=activity_id,
+                                      room=room, kind=kind),
+            Connection(connect, graph, run), timeout, as_json)
+
+
+@agenda_app.command("cancel")
+def cancel_command(
+    activity_id: str = typer.Argument(..., metavar="ID", help="activity id, as `chronav agenda list` shows"),
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    timeout: float = typer.Option(DEFAULT_TIMEOUT_S, "--timeout", help=TIMEOUT_HELP),
+    as_json: bool = typer.Option(False, "--json", help="print the answer as one JSON object"),
+) -> None:
+    """Cancel an activity (it stays on the agenda, marked cancelled, and no longer raises R)."""
+    _change("cancel", lambda: cancel_change(activity_id), Connection(connect, graph, run), timeout, as_json)
+
+
+@agenda_app.command("move")
+def move_command(
+    activity_id: str = typer.Argument(..., metavar="ID", help="activity id, as `chronav agenda list` shows"),
+    start: str = typer.Option(None, "--start", help="new start HH:MM (alone: the activity keeps its length)"),
+    end: str = typer.Option(None, "--end", help="new end HH:MM (alone: the activity keeps its start)"),
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    timeout: float = typer.Option(DEFAULT_TIMEOUT_S, "--timeout", help=TIMEOUT_HELP),
+    as_json: bool = typer.Option(False, "--json", help="print the answer as one JSON object"),
+) -> None:
+    """Move an activity to a new start and/or end, on the same day."""
+    _change("move", lambda: move_change(activity_id, start, end), Connection(connect, graph, run), timeout,
+            as_json)
+
+
+@agenda_app.command("load")
+def load_command(
+    file: Path = typer.Argument(..., metavar="FILE", help="a .ics or .yaml agenda file"),
+    replace: bool = typer.Option(False, "--replace/--merge",
+                                 help="replace the whole day's agenda, or merge (same id -> replaced)"),
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    timeout: float = typer.Option(DEFAULT_TIMEOUT_S, "--timeout", help=TIMEOUT_HELP),
+    as_json: bool = typer.Option(False, "--json", help="print the answer as one JSON object"),
+) -> None:
+    """Load an agenda file into today's agenda: all of it, or nothing if any activity is wrong."""
+    _change("load", lambda: load_change(file, replace=replace), Connection(connect, graph, run), timeout, as_json)
+
+
+@agenda_app.command("list")
+def list_command(
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+) -> None:
+    """Today's activities with their state, times and object, and every object's current R."""
+    from dsr.process import exit_on_sigterm
+
+    exit_on_sigterm()
+    try:
+        address = resolve_address(connect, graph, run)
+        with open_system(address, read_only=True, need_agenda_agent=False) as replica:
+            data = snapshot(replica)
+    except AgendaToolError as exc:
+        _fail("list", exc)
+        return
+    if as_json:
+        typer.echo(json.dumps(data))
+    else:
+        print_snapshot(data, sys.stdout)
+
+
+@agenda_app.command("watch")
+def watch_command(
+    count: int = typer.Option(0, "--count", min=0, help="stop after this many lines (0: no limit)"),
+    timeout: float = typer.Option(0.0, "--timeout", min=0.0, help="stop after this many seconds (0: Ctrl-C)"),
+    r_step: float = typer.Option(0.1, "--r-step", min=0.0, help="print an object's R when it moved this much"),
+    connect: list[str] = typer.Option(None, "--connect", help=CONNECT_HELP),
+    graph: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    as_json: bool = typer.Option(False, "--json", help="one JSON object per line"),
+) -> None:
+    """Follow the agenda live: one line per activity change, R step or answered request."""
+    from dsr.process import exit_on_sigterm
+
+    exit_on_sigterm()
+    try:
+        address = resolve_address(connect, graph, run)
+        with open_system(address, read_only=True, need_agenda_agent=False) as replica:
+            watcher = ChangeWatcher(replica, r_step=r_step, as_json=as_json, out=sys.stdout, limit=count)
+            typer.echo(f"watching the agenda of {address.describe()} at {_clock_text(now_s(replica))}: "
+                       f"{len(watcher.activities)} activities (Ctrl-C to stop)", err=True)
+            watcher.connect()
+            deadline = time.monotonic() + timeout if timeout > 0 else None
+            while not watcher.done and (deadline is None or time.monotonic() < deadline):
+                replica.dispatch(timeout=0.1)
+    except AgendaToolError as exc:
+        _fail("watch", exc)
+    except KeyboardInterrupt:
+        return
