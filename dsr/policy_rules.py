@@ -24,6 +24,7 @@ rules:
 
 A write is allowed when some rule matches its writer, element type (and end types), and grants
 its operation (`create`, `delete`) or its attribute (`attrs` patterns minus `except_attrs`).
+Values given at creation come with `create`, except the keys of `except_attrs`.
 Deleting a node also deletes its edges: such edge deletes are allowed to whoever may delete the
 node.  Types this replica has not seen yet (a delta overtaking the node's creation) match any
 pattern: the write lands on an element nobody can see until its creator's write arrives.
@@ -87,10 +88,12 @@ class Rule(BaseModel):
         elif not (_match(write.type, self.edges) and _match(write.src, self.from_)
                   and _match(write.dst, self.to)):
             return False
-        if write.op == "attr":
+        if write.op in ("attr", "init"):
             key = write.attr or ""
-            return _match(key, self.attrs) and not any(fnmatchcase(key, p)
-                                                       for p in self.except_attrs)
+            if any(fnmatchcase(key, p) for p in self.except_attrs):
+                return False
+            # a value given at creation comes with the create grant
+            return _match(key, self.attrs) or (write.op == "init" and "create" in self.ops)
         return write.op in self.ops
 
 
@@ -166,6 +169,8 @@ def explain(write: Write) -> str:
         what += f" ({write.src or '?'} -> {write.dst or '?'})"
     if write.op == "attr":
         return f"agent {write.writer!r} may not set {write.attr!r} on a {what}"
+    if write.op == "init":
+        return f"agent {write.writer!r} may not create a {what} with {write.attr!r}"
     return f"agent {write.writer!r} may not {write.op} a {what}"
 
 

@@ -47,7 +47,7 @@ class ReplicaStats:
     received: int = 0           # remote delta samples received
     applied: int = 0            # remote deltas merged
     rejected: int = 0           # invalid messages dropped (schema, forged writer, clock...)
-    rejected_policy: int = 0    # valid deltas refused by the write policy
+    rejected_policy: int = 0    # valid deltas/states refused by the write policy
     published: int = 0          # local deltas published
     state_served: int = 0       # state queries answered
     state_merged: int = 0       # state replies merged

@@ -12,7 +12,7 @@ from collections.abc import Iterable
 from typing import Annotated, Any, Literal
 
 import orjson
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
 
 from dsr.crdt import ElementState
 from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
@@ -26,6 +26,9 @@ EdgeKey = tuple[int, int, str]
 ReplicaId = Annotated[int, Field(strict=True, ge=1, le=2**63 - 1)]
 Dot = tuple[ReplicaId, UInt63]
 WireRegister = tuple[UInt63, ReplicaId, AttrValueSchema]
+#: keys of a state's `writers` table: a replica id in decimal (JSON keys are strings)
+REPLICA_KEY_PATTERN = r"^[1-9][0-9]{0,18}$"
+ReplicaKey = Annotated[str, StringConstraints(pattern=REPLICA_KEY_PATTERN)]
 
 
 class _Entry(BaseModel):
@@ -57,7 +60,7 @@ class Message(BaseModel):
     agent: AgentName
     replica: ReplicaId
     #: state replies only: which agent wrote with which replica id (decimal string keys)
-    writers: dict[str, AgentName] = {}
+    writers: dict[ReplicaKey, AgentName] = {}
     nodes: list[NodeEntry] = []
     edges: list[EdgeEntry] = []
 
@@ -66,6 +69,7 @@ _TYPE_RE = re.compile(TYPE_PATTERN)
 _NAME_RE = re.compile(NAME_PATTERN)
 _AGENT_RE = re.compile(AGENT_PATTERN)
 _ATTR_KEY_RE = re.compile(ATTR_KEY_PATTERN)
+_REPLICA_KEY_RE = re.compile(REPLICA_KEY_PATTERN)
 
 
 # ---- key space --------------------------------------------------------------------------------
@@ -396,8 +400,10 @@ def fast_decode(data: object) -> Decoded | None:
                 return None
             key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
             edges.append((key, _entry(raw)))
-        for agent in writers.values():
+        for replica_key, agent in writers.items():
             _agent_name(agent)
+            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63:
+                return None
         replica = data.get("replica")
         if type(replica) is not int or not 1 <= replica <= _U63:
             return None

@@ -12,7 +12,7 @@ Attribution:
   first, then the state's `writers` table).  Removes in a state do not say who removed, so they
   are not attributable and yield no write.
 Attribute registers stamped with the same (replica, hlc) as that replica's add dot are the
-element's initial values: they are part of the create, not separate updates.
+element's initial values (op "init"): policies grant them with the create.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from dsr.wire import Decoded
 
 Element = Literal["node", "edge"]
-Op = Literal["create", "delete", "attr"]
+Op = Literal["create", "delete", "attr", "init"]
 
 
 class Write(NamedTuple):
@@ -35,7 +35,7 @@ class Write(NamedTuple):
     element: Element
     type: str | None            # node type, or edge type
     op: Op
-    attr: str | None = None     # op == "attr": the attribute key
+    attr: str | None = None     # op "attr" (update) or "init" (value given at creation): the key
     src: str | None = None      # edges: type of the source node
     dst: str | None = None      # edges: type of the destination node
     cascade: str | None = None  # edge delete caused by deleting a node of this type (same delta)
@@ -95,6 +95,5 @@ def _element_writes(state: ElementState, delta: bool, who: Callable[[int], str |
         yield Write(who(0), element, type_, "delete", None, src, dst, cascade)
     add = state.add
     for key, (hlc, replica, _value) in state.attrs.items():
-        if add.get(replica) == hlc:
-            continue        # initial value, written by the create above
-        yield Write(who(replica), element, type_, "attr", key, src, dst)
+        op: Op = "init" if add.get(replica) == hlc else "attr"
+        yield Write(who(replica), element, type_, op, key, src, dst)

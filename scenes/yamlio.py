@@ -95,9 +95,16 @@ def load_located(text: str, file: str) -> LocatedYaml:
 def load_located_file(path: str | Path) -> LocatedYaml:
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        data = path.read_bytes()
     except OSError as exc:
         raise SourceError(str(path), 1, 1, "", f"cannot read file: {exc.strerror}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise SourceError(str(path), line, column, "", f"not UTF-8 text (byte 0x{data[exc.start]:02x}); "
+                          "save the file as UTF-8") from None
     return load_located(text, str(path))
 
 

@@ -25,7 +25,7 @@ import os
 import sys
 import time
 import uuid
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
@@ -132,7 +132,7 @@ def latest_live_run(runs_dir: Path) -> Path:
                         + HOW_TO_FIND)
 
 
-def find_run_dir(run: str, runs_dir: Path = RUNS_DIR) -> Path:
+def find_run_dir(run: str, runs_dir: Path) -> Path:
     """``latest``, a run directory path, or a run id under ``runs_dir``."""
     if run == "latest":
         return latest_live_run(runs_dir)
@@ -159,14 +159,14 @@ def address_from_run(run_dir: Path) -> SystemAddress:
 
 
 def resolve_address(connect: list[str] | None, graph: str | None, run: str | None, *,
-                    environ: Mapping[str, str] | None = None, runs_dir: Path = RUNS_DIR) -> SystemAddress:
+                    environ: Mapping[str, str] | None = None, runs_dir: Path | None = None) -> SystemAddress:
     """Explicit options beat --run, which beats the environment the agents use."""
     from dsr.config import DEFAULT_ROUTER, ENV_CONNECT, ENV_GRAPH, graph_name_from_env
     from dsr.errors import ConfigError
 
     env = os.environ if environ is None else environ
     if run:
-        base = address_from_run(find_run_dir(run, runs_dir))
+        base = address_from_run(find_run_dir(run, runs_dir or RUNS_DIR))
     else:
         try:
             env_graph = graph_name_from_env(env)
@@ -217,13 +217,17 @@ def add_change(object_name: str, start: str, end: str, *, name: str | None = Non
         spec = ActivitySpec(**{k: v for k, v in fields.items() if v is not None})
     except ValidationError as exc:
         raise LocalRefusal(_pydantic_problems(exc)) from None
-    return AddChange(activity=spec).model_dump(mode="json", exclude_none=True, exclude_defaults=False)
+    return AddChange(activity=spec).model_dump(mode="json", exclude_none=True)
+
+
+def _activity_id(text: str) -> str:
+    if not text.strip():
+        raise LocalRefusal("give the id of the activity (`chronav agenda list` shows them)")
+    return text.strip()
 
 
 def cancel_change(activity_id: str) -> dict[str, Any]:
-    if not activity_id.strip():
-        raise LocalRefusal("give the id of the activity to cancel (`chronav agenda list` shows them)")
-    return {"op": "cancel", "id": activity_id.strip()}
+    return {"op": "cancel", "id": _activity_id(activity_id)}
 
 
 def move_change(activity_id: str, start: str | None, end: str | None) -> dict[str, Any]:
@@ -244,7 +248,7 @@ def move_change(activity_id: str, start: str | None, end: str | None) -> dict[st
         with suppress(TypeError):  # naive vs aware datetimes: the agent decides
             if values["end"] <= values["start"]:
                 raise LocalRefusal(f"--end {end!r} is not after --start {start!r}")
-    change: dict[str, Any] = {"op": "move", "id": activity_id.strip()}
+    change: dict[str, Any] = {"op": "move", "id": _activity_id(activity_id)}
     if start is not None:
         change["start"] = start
     if end is not None:
@@ -344,8 +348,10 @@ def open_system(address: SystemAddress, *, read_only: bool, need_agenda_agent: b
         graph = stack.enter_context(join(tool_agent_name(), graph=address.graph, settings=settings,
                                          read_only=read_only, sync_timeout=sync_timeout_s))
     except TransportError:
+        ended = (f"run {address.run_dir.name} is no longer running; "
+                 if address.run_dir is not None and not run_is_alive(address.run_dir) else "")
         raise NoSystemError(f"cannot reach a chronav system at {','.join(address.connect)} ({address.origin}); "
-                            + HOW_TO_FIND) from None
+                            + ended + HOW_TO_FIND) from None
     except DSRError as exc:
         raise NoSystemError(f"cannot join {address.describe()}: {exc}") from None
     with stack:
@@ -364,9 +370,12 @@ def submit_change(graph: Any, change: dict[str, Any], *, timeout_s: float,
                   requester: str | None = None) -> Answer:
     """Insert the request, wait for the agent's answer, delete the request (always)."""
     name = f"{REQUEST_TYPE}/{uuid.uuid4().hex}"
-    node = graph.insert_node(type=REQUEST_TYPE, name=name,
-                             attrs={"change": json.dumps(change), "state": "pending",
-                                    "requested_by": requester or requested_by()})
+    attrs: dict[str, Any] = {"change": json.dumps(change), "state": "pending",
+                             "requested_by": requester or requested_by()}
+    asked_at = now_s(graph)
+    if asked_at is not None:
+        attrs["requested_s"] = asked_at
+    node = graph.insert_node(type=REQUEST_TYPE, name=name, attrs=attrs)
     graph.flush()
     deadline = time.monotonic() + timeout_s
     try:
@@ -379,8 +388,9 @@ def submit_change(graph: Any, change: dict[str, Any], *, timeout_s: float,
                 raise NoSystemError(f"request {name} was deleted by someone else before an answer came")
             if time.monotonic() >= deadline:
                 raise NoSystemError(f"no answer from the agenda agent within {timeout_s:g} s; the request was "
-                                    "withdrawn. Is the system busy or stopping? Check with `chronav agenda "
-                                    "list` whether the change was applied, or retry with a longer --timeout")
+                                    "withdrawn. Is the system busy or stopping, or does its write policy "
+                                    f"refuse {TOOL_AGENT_PREFIX}-* writers? Check with `chronav agenda list` "
+                                    "whether the change was applied, or retry with a longer --timeout")
             time.sleep(POLL_S)
     finally:
         from dsr import DSRError
@@ -582,7 +592,8 @@ def _fail(command: str, exc: AgendaToolError) -> None:
     raise typer.Exit(exc.exit_code)
 
 
-def _change(command: str, build: Any, conn: Connection, timeout: float, as_json: bool) -> None:
+def _change(command: str, build: Callable[[], dict[str, Any]], conn: Connection, timeout: float,
+            as_json: bool) -> None:
     """Build the change (local checks), send it, print the answer, exit 0/1/2."""
     from dsr.process import exit_on_sigterm
 
@@ -596,8 +607,8 @@ def _change(command: str, build: Any, conn: Connection, timeout: float, as_json:
         _fail(command, exc)
         return
     except KeyboardInterrupt:
-        typer.echo(f"chronav agenda {command}: interrupted; the request was withdrawn (check `chronav agenda "
-                   "list`: the agent may have applied it already)", err=True)
+        typer.echo(f"chronav agenda {command}: interrupted; a request already sent was withdrawn (check "
+                   "`chronav agenda list`: the agent may have applied it)", err=True)
         raise typer.Exit(130) from None
     if as_json:
         shown = {k: v for k, v in change.items() if k != "text"}
@@ -720,9 +731,9 @@ def watch_command(
         address = resolve_address(connect, graph, run)
         with open_system(address, read_only=True, need_agenda_agent=False) as replica:
             watcher = ChangeWatcher(replica, r_step=r_step, as_json=as_json, out=sys.stdout, limit=count)
+            watcher.connect()
             typer.echo(f"watching the agenda of {address.describe()} at {_clock_text(now_s(replica))}: "
                        f"{len(watcher.activities)} activities (Ctrl-C to stop)", err=True)
-            watcher.connect()
             deadline = time.monotonic() + timeout if timeout > 0 else None
             while not watcher.done and (deadline is None or time.monotonic() < deadline):
                 replica.dispatch(timeout=0.1)

@@ -107,6 +107,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     from agents.runtime.recording import Recorder
     from dsr import join
     from dsr.config import ZenohSettings
+    from dsr.policy import policy_from_env
     from scenes.loader import load_scene
     from agents.social_navigation.view import log_walls
     from tools.blueprint import blueprint, world_frame
@@ -114,6 +115,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
 
     loaded = load_scene(scene)
     spec = loaded.scene
+    policy = policy_from_env()  # fail before any process starts if the write policy is broken
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
     run_dir = runs_dir / run_id
     run_dir.mkdir(parents=True, exist_ok=True)
@@ -157,7 +159,9 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
             supervisor.start(name)
         write_pids(run_dir, supervisor, router.pid)
         settings = ZenohSettings.from_env(env)
-        with join(agent="launcher", graph=env["CHRONAV_GRAPH"], settings=settings) as graph:
+        # Read-only: the launcher only watches; it enforces the agents' write policy too.
+        with join(agent="launcher", graph=env["CHRONAV_GRAPH"], settings=settings, read_only=True,
+                  policy=policy) as graph:
             graph_logger = GraphLogger(recorder)
             while True:
                 graph.dispatch(timeout=0.1)

@@ -30,11 +30,19 @@ class ExecutiveAgent(Agent):
         self._steps: dict[str, list[PlanStep]] = {}
         self._written_missions = False
         self._dirty = True
+        self._world_changed = False
         for signal in ("node_added", "node_updated", "node_deleted", "edge_added", "edge_deleted"):
             graph.connect(signal, self._on_change)
+        graph.connect("node_added", self._on_symbolic_change)
+        graph.connect("node_updated", self._on_symbolic_change)
 
     def _on_change(self, *_args: object) -> None:
         self._dirty = True
+
+    def _on_symbolic_change(self, node, *_rest: object) -> None:  # noqa: ANN001 - dsr.Node
+        """Activities and doors are what the grammar's preconditions read: re-check the plan."""
+        if node.type in ("activity", "door"):
+            self._world_changed = True
 
     def _write_missions(self) -> None:
         """Missions of the day, once (a restarted executive finds them already in the graph)."""
@@ -148,6 +156,23 @@ class ExecutiveAgent(Agent):
             self._replan_or_fail(mission, now_s, str(current.attrs.get("reason", "step failed")))
         elif state == "active" and steps[index].diverged(g, now_s):
             self._replan_or_fail(mission, now_s, f"world diverged during {steps[index].rule}")
+        elif state == "active" and self._world_changed:
+            self._world_changed = False
+            self._check_route(mission, steps, now_s)
+
+    def _check_route(self, mission, steps: list[PlanStep], now_s: float) -> None:  # noqa: ANN001
+        """Replan when an agenda change or a door makes the symbolic plan's remaining route differ."""
+        g = self.graph
+        robot = g.get_node_by_name(self.scene.robot.name)
+        here = next((g.get_node(e.dst).name for e in g.edges_from(robot.id, "in") if g.get_node(e.dst)), None)
+        try:
+            fresh = self.planner.plan(g, str(mission.attrs["goal"]), now_s)
+        except StepFailed as exc:
+            self._replan_or_fail(mission, now_s, f"world diverged: {exc}")
+            return
+        if _route(steps, here) != _route(fresh, here):
+            old, new = " -> ".join(_route(steps, here)) or "-", " -> ".join(_route(fresh, here)) or "-"
+            self._replan_or_fail(mission, now_s, f"world diverged: route {old} is now {new}")
 
     def _replan_or_fail(self, mission, now_s: float, reason: str) -> None:  # noqa: ANN001
         replans = int(mission.attrs.get("replans", 0))
@@ -169,3 +194,12 @@ class ExecutiveAgent(Agent):
         self.rec.event(f"{format_clock(now_s)} mission {mission.attrs['mission_id']} {state}"
                        f"{': ' + reason if reason else ''} ({took:.0f} s)", level="INFO" if state == "done" else "ERROR")
         self.log.info("mission %s %s %s", mission.attrs["mission_id"], state, reason)
+
+
+def _route(steps: list[PlanStep], here: str | None) -> list[str]:
+    """The rooms still to enter (and waits still to do), from the robot's current room on."""
+    route = [step.bindings["r2"] if step.rule == "changeRoom" else f"wait:{step.bindings.get('a', '')}"
+             for step in steps if step.rule in ("changeRoom", "waitForPassage")]
+    if here in route:
+        route = route[route.index(here) + 1:]
+    return route

@@ -57,6 +57,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.config import ZenohSettings
+    from dsr.policy import policy_from_env
 
     config = parse_agent_args(agent_cls.kind, argv)
     configure_logging(config.name)
@@ -74,8 +75,9 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     agent = agent_cls(config)
     recorder = Recorder(config.name, config.run_dir, config.recording_id)
     settings = ZenohSettings.from_env()
+    policy = policy_from_env()  # deploy/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
     try:
-        with join(agent=config.name, graph=config.graph, settings=settings) as graph:
+        with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as graph:
             agent.setup(graph, recorder)
             log.info("%s joined graph %r", config.name, config.graph)
             try:

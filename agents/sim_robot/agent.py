@@ -22,7 +22,7 @@ import numpy as np
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
-from agents.sim_robot.laser import Laser, polygon_segments, polyline_segments
+from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
 from agents.world_model import footprint_polygons
 from scenes.motion import people_at
 
@@ -53,6 +53,9 @@ class SimRobotAgent(Agent):
         self.laser = Laser(segments, robot.laser_rays, robot.laser_range)
         self.rate = float(self.config.option("rate", str(scene.clock.rate)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
+        # The bumper: a move that brings the body into contact is refused; moving away always works.
+        self._contact_m = robot.radius * 0.9
+        self._bumped = False
         self._write_static_world()
         self.state, self.now_s = self._resume_or_start()
         self._wall_anchor = time.monotonic()
@@ -193,10 +196,15 @@ class SimRobotAgent(Agent):
         state = self.state
         vel = limit_command(cmd, state.velocity, dt, self.limits, self.omni)
         x, y, theta = integrate(state.x, state.y, state.theta, vel, dt)
-        if self._collides(x, y):
-            vel = Velocity()
-            x, y, theta = state.x, state.y, state.theta
-            self.rec.event("bumper: motion blocked by an obstacle", level="WARN")
+        if self._clearance(x, y) < self._contact_m and self._clearance(x, y) < self._clearance(state.x, state.y):
+            # Bumper: the translation is refused; a round base may still turn in place.
+            vel = Velocity(0.0, 0.0, vel.omega)
+            x, y, theta = integrate(state.x, state.y, state.theta, vel, dt)
+            if not self._bumped:
+                self.rec.event("bumper: motion blocked by an obstacle", level="WARN")
+            self._bumped = True
+        else:
+            self._bumped = False
         self.state = RobotState(x, y, theta, vel)
         self.now_s += dt
         if self._trajectory_file is not None and self._last_mode == "driving":
@@ -204,22 +212,19 @@ class SimRobotAgent(Agent):
             self._trail.append([x, y])
         self._publish()
 
-    def _collides(self, x: float, y: float) -> bool:
-        ranges_ok = True
-        people = people_at(self.scene, self.now_s)
-        radius = self.scene.robot.radius
-        for p in people:
-            if math.hypot(p.x - x, p.y - y) < radius + 0.2:
-                ranges_ok = False
+    def _clearance(self, x: float, y: float) -> float:
+        """Distance from the robot's centre to the nearest wall, footprint or person body."""
+        nearest = math.inf
+        for p in people_at(self.scene, self.now_s):
+            nearest = min(nearest, math.hypot(p.x - x, p.y - y) - PERSON_RADIUS_M)
         segs = self.laser.segments
         if len(segs):
             a, b = segs[:, :2], segs[:, 2:]
             ab = b - a
             t = np.clip(((np.array([x, y]) - a) * ab).sum(axis=1) / np.maximum((ab**2).sum(axis=1), 1e-12), 0, 1)
             closest = a + t[:, None] * ab
-            if np.min(np.hypot(closest[:, 0] - x, closest[:, 1] - y)) < radius * 0.9:
-                ranges_ok = False
-        return not ranges_ok
+            nearest = min(nearest, float(np.min(np.hypot(closest[:, 0] - x, closest[:, 1] - y))))
+        return nearest
 
     def _open_trajectory(self):  # noqa: ANN202 - text file or None
         """Ground-truth poses while driving, appended (a restarted simulator continues the file)."""

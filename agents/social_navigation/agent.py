@@ -30,6 +30,10 @@ from agents.world_model import dsr_activity_windows, dsr_objects, dsr_people, sc
 from scenes.model import format_clock
 
 REPLAN_PERIOD_S = 1.0
+CLEARANCE_MARGIN_M = 0.1
+SLOW_ZONE_M = 0.5
+STALL_S = 4.0           # sim seconds without getting closer to the goal before recovering
+PROGRESS_M = 0.05       # within this much free space ahead (beyond the body) the robot slows down
 REPLAN_GAIN = 1.15
 PASS_THROUGH_TOLERANCE_M = 0.5   # a waypoint past a door is reached without stopping on it
 REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
@@ -78,7 +82,10 @@ class SocialNavigationAgent(Agent):
         self.graph = graph
         self.rec = recorder
         scene, robot = self.scene, self.scene.robot
-        self.params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius))
+        # Plan with a clearance margin beyond the body: the controller cuts corners a little.
+        margin = float(self.config.option("clearance_margin", str(CLEARANCE_MARGIN_M)))
+        self.params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution,
+                                                      robot_radius_m=robot.radius + margin))
         self.walls, self.rooms = scene_walls(scene), scene_rooms(scene)
         self.bounds = scene.bounds
         self.static = build_static_map(self.bounds, self.walls, self.rooms, self.params)
@@ -91,6 +98,7 @@ class SocialNavigationAgent(Agent):
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
         self.global_points = np.empty((0, 2))
+        self._best_distance, self._progress_s = math.inf, 0.0
         self.goal: tuple[float, float, float | None] | None = None
         self.last_answered = -1.0
         self.last_replan_s = -math.inf
@@ -190,6 +198,7 @@ class SocialNavigationAgent(Agent):
 
     def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
         self.global_points = points
+        self._best_distance, self._progress_s = math.inf, now_s  # a new path: measure progress afresh
         self.band = eb.band_from_path(points, (), self.band_params)
         self.last_replan_s = now_s
         self._publish_path(points, now_s, reason, cost)
@@ -242,6 +251,8 @@ class SocialNavigationAgent(Agent):
         cmd = out.command
         vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
         omega = float(cmd.omega)
+        scale = self._clearance_scale(robot, vx, vy)
+        vx, vy = vx * scale, vy * scale
         self.last_answered = pose_stamp
         passed = bool(intention.attrs.get("pass_through")) and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
         if out.reached or passed:
@@ -252,10 +263,44 @@ class SocialNavigationAgent(Agent):
         if now_s - self.started_s > STALL_TIMEOUT_S + 4 * self.band.length_m / max(self.cruise, 0.05):
             self._fail("timed out before reaching the goal")
             return
+        remaining = self.band.length_m  # the band is cut behind the robot: it shrinks as it advances
+        if remaining < self._best_distance - PROGRESS_M:
+            self._best_distance, self._progress_s = remaining, now_s
+        elif now_s - self._progress_s > STALL_S:
+            # Recovery (as Nav2's): no progress for a while, so plan afresh from where the robot is.
+            self._progress_s = now_s
+            self._recover(robot, now_s)
+            return
         self.graph.update_node(robot.id, attrs={"cmd_vx": vx, "cmd_vy": vy, "cmd_omega": omega,
                                                 "cmd_stamp": pose_stamp})
         if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:
             self.rec.line_strip("world/navigation/band", self.band.points.tolist(), color=[0, 200, 120], radius=0.025)
+
+    def _recover(self, robot: Any, now_s: float) -> None:
+        assert self.goal is not None
+        pose = self.graph.world_pose(robot.id)
+        self.follower.reset()
+        try:
+            smap = self._build_map(now_s)
+            path = self._plan_from(smap, pose)
+        except PlanningError as exc:
+            self.rec.event(f"{format_clock(now_s)} stalled and cannot replan: {exc}", level="WARN")
+            return
+        points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+        self._adopt(points, now_s, "replanned (no progress: recovery)", path.cost)
+
+    def _clearance_scale(self, robot: Any, vx: float, vy: float) -> float:
+        """Slow down in proportion to the free space ahead in the direction of motion (laser)."""
+        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
+        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
+            return 1.0
+        heading = math.atan2(vy, vx)
+        ahead = np.abs(np.arctan2(np.sin(angles - heading), np.cos(angles - heading))) < math.radians(50)
+        if not np.any(ahead):
+            return 1.0
+        free = float(np.min(ranges[ahead])) - self.scene.robot.radius
+        return float(np.clip(free / SLOW_ZONE_M, 0.0 if free < 0.03 else 0.15, 1.0))
 
     def _stop(self, robot: Any, intention: Any, state: str | None, reason: str = "") -> None:
         g = self.graph

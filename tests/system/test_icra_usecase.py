@@ -3,8 +3,6 @@ state (the launcher's JSON) and from the merged Rerun recording read back with R
 
 from __future__ import annotations
 
-import json
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +12,7 @@ import shapely
 from agents.social_navigation.metrics import read_trajectory_csv
 from agents.social_navigation.offline import SceneMaps
 from scenes.model import parse_clock
-from tests.support import ProcessGroup
+from tests.system.launch_helpers import launch_json
 from tests.system.recording import load_store, strips_over_time, texts
 
 pytestmark = pytest.mark.slow
@@ -23,23 +21,7 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def icra_run(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """One launch shared by the assertions below (a run costs ~30 s of the 2-core budget)."""
-    log = tmp_path_factory.mktemp("icra") / "launch.log"
-    group = ProcessGroup()
-    try:
-        proc = group.spawn(["-m", "tools.cli", "launch", "icra_usecase", "--json", "--timeout", "240"],
-                           env={"RERUN": "on"}, log_path=log)
-        try:
-            proc.wait(timeout=300)
-        except subprocess.TimeoutExpired:
-            pytest.fail(f"launch did not finish; log:\n{log.read_text()[-3000:]}")
-    finally:
-        group.close()
-    text = log.read_text()
-    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
-    assert line is not None, f"no JSON result; log:\n{text[-3000:]}"
-    result = json.loads(line)
-    result["returncode"] = proc.returncode
-    return result
+    return launch_json("icra_usecase", tmp_path_factory.mktemp("icra") / "launch.log")
 
 
 def _tv_space() -> shapely.Geometry:

@@ -1,0 +1,451 @@
+"""`chronav agenda`: argument checks, messages and exit codes, against a real agenda agent.
+
+Why a real in-process router and the real AgendaAgent (stepped on a thread) instead of a fake:
+the tool's contract is the request protocol of agents/agenda/agent.py, and the messages it must
+relay (unknown object, unknown id) are the agent's own; a fake would only test itself.  Each
+test gets its own graph name, so the tests share the router but never state.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from io import StringIO
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+from agents.agenda.agent import AgendaAgent
+from agents.runtime.config import AgentConfig
+from agents.runtime.recording import Recorder
+from agents.social_navigation.chronemics import ChronemicsParams, r_of_t
+from agents.social_navigation.types import ActivityWindow
+from agents.world_model import object_attrs
+from dsr import DSRGraph, ZenohSettings, join
+from scenes.loader import load_scene
+from tests.support import REPO_ROOT, free_port, wait_until
+from tools import agenda as tool
+from tools.cli import app
+
+SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
+NOW_S = 9 * 3600 + 5 * 60.0          # 09:05 on the sim clock
+START_S, END_S = 9 * 3600 + 8 * 60.0, 9 * 3600 + 40 * 60.0
+runner = CliRunner()
+_graph_numbers = itertools.count()
+
+
+def expected_r(start_s: float = START_S, end_s: float = END_S, now_s: float = NOW_S) -> float:
+    return r_of_t(now_s, [ActivityWindow(object="tv", start_s=start_s, end_s=end_s, cancelled=False)],
+                  ChronemicsParams())
+
+
+# ---------------------------------------------------------------------------------------------
+# A tiny live system: router + a world replica (clock, objects) + the real agenda agent.
+# ---------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def router() -> Iterator[str]:
+    import zenoh
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    session = zenoh.open(ZenohSettings(mode="router", listen=[endpoint]).to_zenoh_config())
+    try:
+        yield endpoint
+    finally:
+        session.close()
+
+
+def _client(endpoint: str) -> ZenohSettings:
+    return ZenohSettings(connect=[endpoint])
+
+
+@dataclass
+class LiveSystem:
+    endpoint: str
+    graph: str
+    world: DSRGraph
+    errors: list[BaseException] = field(default_factory=list)
+
+    @property
+    def env(self) -> dict[str, str]:
+        return {"CHRONAV_ZENOH_CONNECT": self.endpoint, "CHRONAV_GRAPH": self.graph}
+
+    def invoke(self, *args: str) -> Any:
+        return runner.invoke(app, ["agenda", *args], env=self.env)
+
+    def tv_r(self) -> float:
+        return float(self.world.get_node_by_name("tv").attrs.get("R", -1.0))
+
+    def requests(self) -> list[Any]:
+        return self.world.nodes_of_type(tool.REQUEST_TYPE)
+
+
+def _populate_world(world: DSRGraph) -> None:
+    """What sim_robot and object_recognition would have written: the clock and the TV."""
+    scene = load_scene(SCENE).scene
+    root = world.insert_node(type="world", name="world", attrs={})
+    world.insert_node(type="clock", name="clock", attrs={"now_s": NOW_S})
+    for obj in scene.objects:
+        node = world.insert_node(type="object", name=obj.name, attrs=object_attrs(obj))
+        world.insert_or_assign_edge(root.id, node.id, "RT",
+                                    attrs={"x": obj.pose.x, "y": obj.pose.y, "theta": obj.pose.theta})
+    world.flush()
+
+
+@pytest.fixture
+def world_only(router: str) -> Iterator[LiveSystem]:
+    """A graph with a clock and the TV, but no agenda agent."""
+    graph = f"agenda_cli_{os.getpid()}_{next(_graph_numbers)}"
+    with join("sim_robot", graph=graph, settings=_client(router)) as world:
+        _populate_world(world)
+        yield LiveSystem(router, graph, world)
+
+
+def _agent_loop(system: LiveSystem, ready: threading.Event, stop: threading.Event, step: bool) -> None:
+    try:
+        agent = AgendaAgent(AgentConfig(name="agenda", scene=SCENE, graph=system.graph))
+        with join("agenda", graph=system.graph, settings=_client(system.endpoint)) as graph:
+            agent.setup(graph, Recorder("agenda", None, None))
+            ready.set()
+            while not stop.wait(0.01):
+                if step:
+                    agent.step()
+                graph.dispatch(0.0)
+    except BaseException as exc:  # noqa: BLE001 - reported by the fixture
+        system.errors.append(exc)
+        ready.set()
+
+
+def _with_agent(system: LiveSystem, step: bool) -> Iterator[LiveSystem]:
+    ready, stop = threading.Event(), threading.Event()
+    thread = threading.Thread(target=_agent_loop, args=(system, ready, stop, step), daemon=True)
+    thread.start()
+    try:
+        assert ready.wait(10), "the agenda agent did not start"
+        assert not system.errors, system.errors
+        wait_until(lambda: system.world.get_node_by_name("agenda") is not None, 5, message="agenda node")
+        if step:
+            wait_until(lambda: system.tv_r() == pytest.approx(1.5), 5, message="R_min on the TV")
+        yield system
+    finally:
+        stop.set()
+        thread.join(10)
+    assert not system.errors, system.errors
+
+
+@pytest.fixture
+def live(world_only: LiveSystem) -> Iterator[LiveSystem]:
+    """The world plus the real agenda agent answering requests."""
+    yield from _with_agent(world_only, step=True)
+
+
+@pytest.fixture
+def silent(world_only: LiveSystem) -> Iterator[LiveSystem]:
+    """An 'agenda' member that never answers (a hung agent)."""
+    yield from _with_agent(world_only, step=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# Changes through the agent.
+# ---------------------------------------------------------------------------------------------
+
+def test_add_prints_the_answer_and_list_json_shows_activity_and_r(live: LiveSystem) -> None:
+    result = live.invoke("add", "tv", "09:08", "09:40", "--name", "Serious game",
+                         "--participants", "senior_1, therapist")
+    assert result.exit_code == 0, result.output
+    assert result.stdout == "accepted: add: tv-0908 tv 09:08-09:40 upcoming\n"
+    wait_until(lambda: live.tv_r() == pytest.approx(expected_r()), 5, message="R raised")
+    assert not live.requests(), "the tool deletes its request once answered"
+
+    listed = live.invoke("list", "--json")
+    assert listed.exit_code == 0, listed.output
+    data = json.loads(listed.stdout)
+    assert data["graph"] == live.graph and data["now"] == "09:05" and data["now_s"] == NOW_S
+    (row,) = data["activities"]
+    assert {k: row[k] for k in ("id", "name", "object", "start", "end", "state", "participants")} == {
+        "id": "tv-0908", "name": "Serious game", "object": "tv", "start": "09:08", "end": "09:40",
+        "state": "upcoming", "participants": ["senior_1", "therapist"]}
+    assert row["object_R"] == pytest.approx(expected_r())
+    (obj,) = data["objects"]
+    assert obj["name"] == "tv" and obj["R"] == pytest.approx(expected_r()) and obj["band"] == "dark_orange"
+    assert obj["active"] is False
+
+
+def test_list_table_shows_times_state_and_r(live: LiveSystem) -> None:
+    assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
+    wait_until(lambda: live.tv_r() > 3.0, 5, message="R raised")
+    result = live.invoke("list")
+    assert result.exit_code == 0, result.output
+    row = next(line for line in result.stdout.splitlines() if "tv-0908" in line)
+    assert ["tv-0908", "tv", "tv", "09:08", "09:40", "upcoming", f"{expected_r():.2f}"] == [
+        cell.strip() for cell in row.strip("│┃ ").split("│") if cell.strip()]
+    assert f"objects: tv R={expected_r():.2f} (dark_orange)" in result.stdout
+
+
+def test_unknown_object_is_refused_naming_it_and_the_known_ones(live: LiveSystem) -> None:
+    result = live.invoke("add", "sofa", "09:08", "09:40")
+    assert result.exit_code == 1
+    assert result.stdout == ""
+    assert "no object named 'sofa'" in result.stderr and "known objects: tv" in result.stderr
+    assert live.world.nodes_of_type("activity") == []
+    wait_until(lambda: not live.requests(), 5, message="request withdrawn")
+
+
+def test_cancel_of_an_unknown_id_is_refused_listing_the_ids(live: LiveSystem) -> None:
+    assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
+    result = live.invoke("cancel", "tv-1100")
+    assert result.exit_code == 1
+    assert "no activity with id 'tv-1100'" in result.stderr and "(ids: tv-0908)" in result.stderr
+
+
+def test_move_then_cancel(live: LiveSystem) -> None:
+    assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
+    moved = live.invoke("move", "tv-0908", "--start", "09:20", "--json")
+    assert moved.exit_code == 0, moved.output
+    answer = json.loads(moved.stdout)
+    assert answer["accepted"] is True and answer["message"] == "move: tv-0908 tv 09:20-09:52 upcoming"
+    assert answer["change"] == {"op": "move", "id": "tv-0908", "start": "09:20"}
+    wait_until(lambda: live.tv_r() == pytest.approx(expected_r(START_S + 720, END_S + 720)), 5, message="R moved")
+
+    cancelled = live.invoke("cancel", "tv-0908")
+    assert cancelled.exit_code == 0, cancelled.output
+    assert cancelled.stdout == "accepted: cancel: tv-0908 tv 09:20-09:52 cancelled\n"
+    wait_until(lambda: live.tv_r() == pytest.approx(1.5), 5, message="R back to R_min")
+    again = live.invoke("cancel", "tv-0908")
+    assert again.exit_code == 1 and "already cancelled" in again.stderr
+
+
+def test_load_merge_and_replace(live: LiveSystem, tmp_path: Path) -> None:
+    day = tmp_path / "day.yaml"
+    day.write_text('activities:\n  - {id: game, name: Game, object: tv, start: "09:30", end: "10:00"}\n')
+    assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
+    merged = live.invoke("load", str(day))
+    assert merged.exit_code == 0, merged.output
+    assert merged.stdout == "accepted: load: game tv 09:30-10:00 upcoming\n"
+    wait_until(lambda: len(live.world.nodes_of_type("activity")) == 2, 5, message="two activities")
+    replaced = live.invoke("load", str(day), "--replace")
+    assert replaced.exit_code == 0, replaced.output
+    assert "removed tv-0908" in replaced.stdout
+    wait_until(lambda: [n.attrs["activity_id"] for n in live.world.nodes_of_type("activity")] == ["game"], 5,
+               message="only the file's activity")
+
+    wrong_object = tmp_path / "sofa.yaml"
+    wrong_object.write_text('activities:\n  - {name: Bingo, object: sofa, start: "09:30", end: "10:00"}\n')
+    refused = live.invoke("load", str(wrong_object))
+    assert refused.exit_code == 1
+    assert "sofa.yaml:2" in refused.stderr and "no object named 'sofa'" in refused.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# Refused before sending: the exit code is 1 even with no system at all.
+# ---------------------------------------------------------------------------------------------
+
+@pytest.fixture
+def nobody_env() -> dict[str, str]:
+    return {"CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "nobody"}
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["add", "tv", "25:00", "26:00"], "start: '25:00' is not a valid clock time (00:00 to 24:00)"),
+    (["add", "tv", "10:00", "09:00"], "end: end '09:00' is not after start '10:00'"),
+    (["add", "tv", "10", "11:00"], "start: '10' is not a time: use HH:MM"),
+    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: String should match pattern"),
+    (["move", "tv-0908"], "say the new time: --start HH:MM and/or --end HH:MM"),
+    (["move", "tv-0908", "--start", "10:00", "--end", "09:30"], "--end '09:30' is not after --start '10:00'"),
+    (["move", "tv-0908", "--end", "half past"], "--end: 'half past' is not a time"),
+])
+def test_invalid_changes_are_refused_locally(nobody_env: dict[str, str], args: list[str], message: str) -> None:
+    result = runner.invoke(app, ["agenda", *args], env=nobody_env)
+    assert result.exit_code == 1, result.output
+    assert message in result.stderr
+    assert result.stderr.startswith(f"chronav agenda {args[0]}: ")
+
+
+def test_load_reports_file_errors_with_lines_before_sending(nobody_env: dict[str, str], tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text('activities:\n  - name: Bingo\n    object: tv\n    start: "25:00"\n    end: "12:00"\n'
+                   '  - {name: Quiz, objet: tv, start: "10:00", end: "11:00"}\n')
+    result = runner.invoke(app, ["agenda", "load", str(bad)], env=nobody_env)
+    assert result.exit_code == 1
+    assert f"{bad}:4: activities[0].start: '25:00' is not a valid clock time" in result.stderr
+    assert f"{bad}:6: activities[1].objet: unknown key; did you mean 'object'?" in result.stderr
+
+    ics = tmp_path / "bad.ics"
+    ics.write_text((REPO_ROOT / "tests" / "data" / "agenda_bad.ics").read_text())
+    result = runner.invoke(app, ["agenda", "load", str(ics)], env=nobody_env)
+    assert result.exit_code == 1 and f"{ics}:4: UID=no-object@centre.example: no object" in result.stderr
+
+    for path, message in ((tmp_path / "day.txt", "unknown agenda format '.txt'"),
+                          (tmp_path / "missing.yaml", "no such file")):
+        if path.suffix == ".txt":
+            path.write_text("x")
+        result = runner.invoke(app, ["agenda", "load", str(path)], env=nobody_env)
+        assert result.exit_code == 1 and message in result.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# No system to talk to: exit 2 and a message saying what to check.
+# ---------------------------------------------------------------------------------------------
+
+def test_unreachable_router_exits_2(nobody_env: dict[str, str]) -> None:
+    endpoint = nobody_env["CHRONAV_ZENOH_CONNECT"]
+    for args in (["add", "tv", "09:08", "09:40"], ["list"], ["watch", "--timeout", "1"]):
+        result = runner.invoke(app, ["agenda", *args], env=nobody_env)
+        assert result.exit_code == 2, result.output
+        assert f"cannot reach a chronav system at {endpoint} (from CHRONAV_ZENOH_CONNECT" in result.stderr
+        assert "chronav launch" in result.stderr and "--run latest" in result.stderr
+
+
+def test_empty_graph_exits_2(router: str) -> None:
+    result = runner.invoke(app, ["agenda", "list", "--connect", router, "--graph", "no_such_run"])
+    assert result.exit_code == 2
+    assert "graph 'no_such_run'" in result.stderr and "nobody is there" in result.stderr
+
+
+def test_missing_agenda_agent_exits_2_but_list_works(world_only: LiveSystem) -> None:
+    result = world_only.invoke("cancel", "tv-0908")
+    assert result.exit_code == 2
+    assert "the agenda agent is not running" in result.stderr and "(members: sim_robot)" in result.stderr
+    assert not world_only.requests(), "nothing is written when no agent can answer"
+    listed = world_only.invoke("list", "--json")
+    assert listed.exit_code == 0 and json.loads(listed.stdout)["activities"] == []
+
+
+def test_no_answer_times_out_exits_2_and_withdraws_the_request(silent: LiveSystem) -> None:
+    result = silent.invoke("add", "tv", "09:08", "09:40", "--timeout", "0.5")
+    assert result.exit_code == 2
+    assert "no answer from the agenda agent within 0.5 s; the request was withdrawn" in result.stderr
+    wait_until(lambda: not silent.requests(), 5, message="request deleted")
+
+
+# ---------------------------------------------------------------------------------------------
+# Finding the system: options, --run, environment.
+# ---------------------------------------------------------------------------------------------
+
+def _dead_pid() -> int:
+    """The pid of a process that has exited (and been reaped)."""
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def _make_run(runs: Path, name: str, *, pid: int, endpoint: str = "tcp/127.0.0.1:1", graph: str | None = None,
+              finished: bool = False, mtime: float | None = None) -> Path:
+    run = runs / name
+    run.mkdir(parents=True)
+    connect = run / "connect.json"
+    connect.write_text(json.dumps({"endpoint": endpoint, "graph": graph or name.replace(".", "_"),
+                                   "launcher_pid": pid}))
+    if finished:
+        (run / "result.json").write_text("{}")
+    if mtime is not None:
+        os.utime(connect, (mtime, mtime))
+    return run
+
+
+def test_run_resolution(tmp_path: Path) -> None:
+    runs = tmp_path / "recordings"
+    live = _make_run(runs, "live", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", mtime=1000)
+    _make_run(runs, "dead", pid=_dead_pid(), mtime=2000)
+    done = _make_run(runs, "done", pid=os.getpid(), finished=True, mtime=3000)
+    assert tool.find_run_dir("latest", runs) == live
+    assert tool.find_run_dir("live", runs) == live and tool.find_run_dir(str(done), runs) == done
+    address = tool.address_from_run(live)
+    assert address.connect == ("tcp/127.0.0.1:7001",) and address.graph == "live" and address.run_dir == live
+    with pytest.raises(tool.NoSystemError, match="has finished"):
+        tool.address_from_run(done)
+    with pytest.raises(tool.NoSystemError, match="no such run directory"):
+        tool.find_run_dir("nope", runs)
+    (live / "connect.json").unlink()
+    with pytest.raises(tool.NoSystemError, match=r"no live run under .*chronav launch"):
+        tool.find_run_dir("latest", runs)
+
+
+def test_address_precedence(tmp_path: Path) -> None:
+    runs = tmp_path / "recordings"
+    _make_run(runs, "run1", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", graph="run1")
+    env = {"CHRONAV_ZENOH_CONNECT": "tcp/127.0.0.1:7002", "CHRONAV_GRAPH": "envgraph"}
+    default = tool.resolve_address(None, None, None, environ={})
+    assert default.connect == ("tcp/127.0.0.1:7447",) and default.graph == "chronav"
+    assert "CHRONAV_ZENOH_CONNECT is not set" in default.origin
+    from_env = tool.resolve_address(None, None, None, environ=env)
+    assert (from_env.connect, from_env.graph) == (("tcp/127.0.0.1:7002",), "envgraph")
+    from_run = tool.resolve_address(None, None, "latest", environ=env, runs_dir=runs)
+    assert (from_run.connect, from_run.graph) == (("tcp/127.0.0.1:7001",), "run1")
+    explicit = tool.resolve_address(["tcp/127.0.0.1:7003"], "g3", "latest", environ=env, runs_dir=runs)
+    assert (explicit.connect, explicit.graph) == (("tcp/127.0.0.1:7003",), "g3")
+    assert tool.resolve_address(None, "g4", None, environ=env).connect == ("tcp/127.0.0.1:7002",)
+
+
+def test_run_latest_through_the_cli(live: LiveSystem, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    runs = tmp_path / "recordings"
+    _make_run(runs, "the_run", pid=os.getpid(), endpoint=live.endpoint, graph=live.graph)
+    monkeypatch.setattr(tool, "RUNS_DIR", runs)
+    result = runner.invoke(app, ["agenda", "add", "tv", "09:08", "09:40", "--run", "latest", "--json"], env={
+        "CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "wrong"})
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["graph"] == live.graph
+
+
+# ---------------------------------------------------------------------------------------------
+# watch.
+# ---------------------------------------------------------------------------------------------
+
+def test_watcher_lines_offline() -> None:
+    graph = DSRGraph("watch_test")
+    clock = graph.insert_node(type="clock", name="clock", attrs={"now_s": NOW_S})
+    tv = graph.insert_node(type="object", name="tv", attrs={"R": 1.5, "R_band": 0, "active": False})
+    out = StringIO()
+    watcher = tool.ChangeWatcher(graph, r_step=0.1, as_json=False, out=out)
+    watcher.connect()
+    activity = graph.insert_node(type="activity", name="activity/tv-0908", attrs={
+        "activity_id": "tv-0908", "name": "Game", "object": "tv", "start_s": START_S, "end_s": END_S,
+        "state": "upcoming", "participants": []})
+    graph.update_node(tv.id, attrs={"R": 1.55})                       # below r_step: no line
+    graph.update_node(tv.id, attrs={"R": 3.37, "R_band": 3})
+    graph.dispatch()                                                  # lines carry the clock at delivery
+    graph.update_node(clock.id, attrs={"now_s": NOW_S + 60})
+    graph.update_node(activity.id, attrs={"start_s": START_S + 600, "end_s": END_S + 600})
+    graph.update_node(activity.id, attrs={"state": "cancelled"})
+    graph.delete_node(activity.id)
+    graph.dispatch()
+    assert out.getvalue().splitlines() == [
+        "09:05 activity tv-0908 added: tv 09:08-09:40 upcoming (Game)",
+        "09:05 object tv R 1.50 -> 3.37 (dark_orange)",
+        "09:06 activity tv-0908 moved: 09:08-09:40 -> 09:18-09:50",
+        "09:06 activity tv-0908 upcoming -> cancelled",
+        "09:06 activity tv-0908 removed from the agenda",
+    ]
+
+
+def test_watch_follows_a_change_live(live: LiveSystem) -> None:
+    env = {**os.environ, **live.env, "RERUN": "off"}
+    proc = subprocess.Popen([sys.executable, "-m", "tools.cli", "agenda", "watch", "--json", "--count", "3",
+                             "--timeout", "30"], cwd=REPO_ROOT, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert proc.stderr is not None
+        header = proc.stderr.readline()
+        assert header.startswith(f"watching the agenda of graph '{live.graph}'"), header + proc.stderr.read()
+        assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, 9)
+            proc.wait(10)
+    assert proc.returncode == 0, err
+    events = [json.loads(line) for line in out.splitlines()]
+    by_kind = {e["kind"]: e for e in events}
+    assert sorted(by_kind) == ["activity", "object", "request"], events
+    assert by_kind["activity"]["event"] == "added" and by_kind["activity"]["activity"]["activity_id"] == "tv-0908"
+    assert by_kind["object"]["object"]["R"] == pytest.approx(expected_r())
+    assert by_kind["request"]["event"] == "accepted" and "add: tv-0908" in by_kind["request"]["text"]
+    assert all(e["time"] == "09:05" for e in events)

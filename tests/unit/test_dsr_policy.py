@@ -1,0 +1,366 @@
+"""The write policy (deploy/write_policy.yaml) as every replica enforces it on receipt.
+
+Offline and in-process: each agent is a DSRGraph whose deltas are captured; a "guard" replica
+runs the real transport hook (`Replica._on_delta` / `_merge_state`, no network) with the shipped
+policy.  The multi-process version with real Zenoh is tests/integration/test_trust_policy.py.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import orjson
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from dsr import DSRGraph, wire
+from dsr.errors import DSRError, PolicyError
+from dsr.policy import AllowAll, DenyTypes, policy_from_env
+from dsr.policy_rules import RulePolicy, load_policy
+from dsr.transport import Replica
+
+POLICY = policy_from_env({})
+OWNERS = ("sim_robot", "human_observer", "object_recognition", "agenda", "executive",
+          "social_navigation", "agenda_tool-ward3")
+
+
+@dataclass
+class FakeSample:
+    key_expr: str
+    data: bytes
+
+    @property
+    def payload(self) -> FakeSample:
+        return self
+
+    def to_bytes(self) -> bytes:
+        return self.data
+
+
+class Guard:
+    """A replica that receives through the real transport checks, without Zenoh."""
+
+    def __init__(self, policy: object = POLICY, agent: str = "guard") -> None:
+        self.graph = DSRGraph(agent)
+        self.replica = Replica(self.graph, policy=policy)  # type: ignore[arg-type]
+
+    def delta(self, agent: str, payload: bytes) -> None:
+        self.replica._on_delta(FakeSample(wire.delta_key("chronav", agent), payload))
+
+    def state(self, source: DSRGraph) -> None:
+        self.replica._merge_state(FakeSample(wire.state_key("chronav", source.agent),
+                                             source.state_message()))
+
+    @property
+    def stats(self):  # noqa: ANN201
+        return self.replica.stats
+
+
+class World:
+    """The agents' graphs; legit deltas reach every graph, and the guards get everything."""
+
+    def __init__(self) -> None:
+        self.graphs: dict[str, DSRGraph] = {}
+        self.guard = Guard()
+        self.reference = Guard(policy=AllowAll(), agent="reference")  # legit deltas only
+        for agent in OWNERS:
+            self.agent(agent)
+        self.ids = self._build()
+
+    def agent(self, name: str, legit: bool = True) -> DSRGraph:
+        """A graph for `name`, holding everything published so far."""
+        graph = DSRGraph(name)
+        if self.graphs:
+            graph.apply_message(wire.decode(self.guard.graph.state_message()))
+        graph.attach(lambda payload, a=name, g=graph: self._published(a, g, payload, legit))
+        if legit:
+            self.graphs[name] = graph
+        return graph
+
+    def _published(self, agent: str, source: DSRGraph, payload: bytes, legit: bool) -> None:
+        self.guard.delta(agent, payload)
+        if not legit:
+            return
+        self.reference.delta(agent, payload)
+        message = wire.decode(payload)
+        for graph in self.graphs.values():
+            if graph is not source:
+                graph.apply_message(message)
+
+    def _build(self) -> dict[str, int]:
+        g = self.graphs
+        sim = g["sim_robot"]
+        with sim.transaction():
+            world = sim.insert_node("world", "world")
+            room = sim.insert_node("room", "hall", {"polygon_x": [0.0, 5.0, 5.0],
+                                                    "polygon_y": [0.0, 0.0, 5.0]})
+            sim.insert_or_assign_edge(world.id, room.id, "RT", {"x": 0.0, "y": 0.0, "theta": 0.0})
+            clock = sim.insert_node("clock", "clock", {"now_s": 100.0, "mode": "idle"})
+            robot = sim.insert_node("robot", "robot", {"radius": 0.3, "nav_active": False})
+            sim.insert_or_assign_edge(world.id, robot.id, "RT", {"x": 1.0, "y": 1.0, "theta": 0.0})
+            sim.insert_or_assign_edge(robot.id, room.id, "in")
+        obs = g["human_observer"]
+        with obs.transaction():
+            alice = obs.insert_node("person", "alice", {"role": "resident"})
+            obs.insert_or_assign_edge(world.id, alice.id, "RT", {"x": 2.0, "y": 2.0, "theta": 0.0})
+            obs.insert_or_assign_edge(alice.id, room.id, "in")
+        rec = g["object_recognition"]
+        with rec.transaction():
+            table = rec.insert_node("object", "table", {"kind": "table"})
+            rec.insert_or_assign_edge(world.id, table.id, "RT", {"x": 3.0, "y": 3.0, "theta": 0.0})
+        agenda = g["agenda"]
+        with agenda.transaction():
+            activity = agenda.insert_node("activity", "activity/a1", {"state": "scheduled"})
+            agenda.insert_or_assign_edge(activity.id, table.id, "has")
+            agenda.insert_or_assign_edge(alice.id, activity.id, "participant")
+            agenda.update_node(table.id, {"R": 0.5, "R_band": "medium", "active": False})
+        executive = g["executive"]
+        with executive.transaction():
+            mission = executive.insert_node("mission", "mission/m1", {"state": "pending"})
+            intention = executive.insert_node("intention", "intention/m1/0", {})
+            executive.update_node(intention.id, {"state": "active", "goal_x": 1.0})
+            executive.insert_or_assign_edge(intention.id, mission.id, "step_of")
+        return {"world": world.id, "room": room.id, "clock": clock.id, "robot": robot.id,
+                "alice": alice.id, "table": table.id, "activity": activity.id,
+                "mission": mission.id, "intention": intention.id}
+
+
+Action = Callable[[DSRGraph, dict[str, int]], object]
+
+#: what each agent legitimately does during a run (read from agents/*/agent.py)
+LEGIT: list[tuple[str, str, Action]] = [
+    ("sim_robot", "move the robot", lambda g, i: g.insert_or_assign_edge(
+        i["world"], i["robot"], "RT", {"x": 1.5, "y": 1.0, "theta": 0.1})),
+    ("sim_robot", "stamp pose and laser", lambda g, i: g.update_node(
+        i["robot"], {"pose_stamp": 101.0, "laser_ranges": [1.0, 2.0]})),
+    ("sim_robot", "advance the clock", lambda g, i: g.update_node(i["clock"], {"now_s": 101.0})),
+    ("social_navigation", "command the robot", lambda g, i: g.update_node(
+        i["robot"], {"cmd_vx": 0.2, "cmd_omega": 0.0, "cmd_stamp": 101.0, "nav_active": True})),
+    ("social_navigation", "publish its path", lambda g, i: g.update_node(
+        i["robot"], {"path_x": [1.0, 2.0], "path_y": [1.0, 1.0], "planned_s": 101.0})),
+    ("social_navigation", "finish the intention", lambda g, i: g.update_node(
+        i["intention"], {"state": "done", "reason": ""})),
+    ("human_observer", "move a person", lambda g, i: g.insert_or_assign_edge(
+        i["world"], i["alice"], "RT", {"x": 2.5, "y": 2.0, "theta": 0.0})),
+    ("human_observer", "see an interaction", lambda g, i: g.insert_or_assign_edge(
+        i["alice"], i["table"], "interacting")),
+    ("object_recognition", "update an object", lambda g, i: g.update_node(
+        i["table"], {"kind": "table", "footprint_x": [0.0, 1.0, 1.0]})),
+    ("agenda", "update R(t)", lambda g, i: g.update_node(i["table"], {"R": 0.9, "active": True})),
+    ("agenda", "run an activity", lambda g, i: g.update_node(i["activity"], {"state": "running"})),
+    ("agenda", "add an activity", lambda g, i: g.insert_node(
+        "activity", f"activity/x{len(g)}", {"state": "scheduled"})),
+    ("executive", "activate a mission", lambda g, i: g.update_node(
+        i["mission"], {"state": "active", "started_s": 101.0})),
+    ("executive", "issue an intention", lambda g, i: g.insert_node(
+        "intention", f"intention/m1/{len(g)}", {"state": "active"})),
+    ("agenda_tool-ward3", "request an agenda change", lambda g, i: g.insert_node(
+        "agenda_request", f"agenda_request/{len(g)}",
+        {"change": '{"op": "cancel", "id": "a1"}', "state": "pending", "requested_by": "ward3"})),
+]
+
+#: (owner allowed to do it, what, action): every other agent must be refused
+OWNED: list[tuple[frozenset[str], str, Action]] = [
+    (frozenset({"sim_robot"}), "move the robot", LEGIT[0][2]),
+    (frozenset({"sim_robot"}), "stamp the robot pose", LEGIT[1][2]),
+    (frozenset({"sim_robot"}), "set the clock", LEGIT[2][2]),
+    (frozenset({"sim_robot"}), "delete the robot", lambda g, i: g.delete_node(i["robot"])),
+    (frozenset({"social_navigation"}), "command the robot", LEGIT[3][2]),
+    (frozenset({"human_observer"}), "move a person", LEGIT[6][2]),
+    (frozenset({"object_recognition"}), "move an object", lambda g, i: g.insert_or_assign_edge(
+        i["world"], i["table"], "RT", {"x": 9.0, "y": 9.0, "theta": 0.0})),
+    (frozenset({"agenda"}), "set an object's R", LEGIT[9][2]),
+    (frozenset({"agenda"}), "create an activity", LEGIT[11][2]),
+    (frozenset({"agenda"}), "change an activity", LEGIT[10][2]),
+    (frozenset({"agenda"}), "delete an activity", lambda g, i: g.delete_node(i["activity"])),
+    (frozenset({"executive"}), "create a mission", lambda g, i: g.insert_node(
+        "mission", f"mission/x{len(g)}", {"state": "pending"})),
+    (frozenset({"executive"}), "change a mission", LEGIT[12][2]),
+    (frozenset({"executive"}), "change an intention's goal", lambda g, i: g.update_node(
+        i["intention"], {"goal_x": 9.0})),
+    (frozenset({"executive", "social_navigation"}), "end an intention", LEGIT[5][2]),
+    (frozenset({"agenda", "agenda_tool-ward3"}), "create an agenda request", LEGIT[14][2]),
+]
+ROGUES = (*OWNERS, "rogue", "agenda_tool", "sim_robot2")
+FORBIDDEN = [(agent, what, action) for owners, what, action in OWNED for agent in ROGUES
+             if agent not in owners]
+
+
+def test_shipped_policy_loads_and_agents_hold_grants():
+    assert isinstance(POLICY, RulePolicy)
+    for agent in OWNERS:
+        assert POLICY.has_rights(agent), agent
+    assert not POLICY.has_rights("rogue") and not POLICY.has_rights("launcher")
+
+
+def test_the_whole_world_written_by_its_owners_is_accepted():
+    world = World()
+    assert world.guard.stats.rejected_policy == 0, world.guard.stats.last_reject
+    assert world.guard.stats.applied == world.reference.stats.applied > 0
+    assert world.guard.graph.state_equals(world.reference.graph)
+
+
+@pytest.mark.parametrize(("agent", "what", "action"), LEGIT, ids=[f"{a}: {w}" for a, w, _ in LEGIT])
+def test_legitimate_writes_pass(agent, what, action):
+    world = World()
+    applied = world.guard.stats.applied
+    action(world.graphs[agent], world.ids)
+    assert world.guard.stats.rejected_policy == 0, world.guard.stats.last_reject
+    assert world.guard.stats.applied == applied + 1
+    assert world.guard.graph.state_equals(world.graphs[agent])
+
+
+@pytest.mark.parametrize(("agent", "what", "action"), FORBIDDEN,
+                         ids=[f"{a}: {w}" for a, w, _ in FORBIDDEN])
+def test_forbidden_writes_are_refused_and_leave_the_graph_untouched(agent, what, action, caplog):
+    world = World()
+    before = world.guard.graph.digest()
+    rogue = world.agent(agent, legit=False)
+    action(rogue, world.ids)
+    stats = world.guard.stats
+    assert stats.rejected_policy == 1 and stats.rejected == 0, stats
+    assert f"agent {agent!r} may not" in stats.last_reject or "holds no grant" in stats.last_reject
+    assert "write_policy.yaml" in stats.last_reject
+    assert world.guard.graph.digest() == before
+    assert any("dropped message" in r.message for r in caplog.records)
+
+
+def test_deleting_an_activity_deletes_its_edges_and_is_allowed_to_the_agenda():
+    world = World()
+    world.graphs["agenda"].delete_node(world.ids["activity"])
+    assert world.guard.stats.rejected_policy == 0, world.guard.stats.last_reject
+    assert world.guard.graph.get_node(world.ids["activity"]) is None
+    assert not world.guard.graph.edges_of_type("participant")
+
+
+def test_object_recognition_cannot_smuggle_R_into_a_new_object():
+    world = World()
+    rec = world.graphs["object_recognition"]
+    rec.insert_node("object", "chair", {"kind": "chair"})
+    assert world.guard.stats.rejected_policy == 0
+    rec.insert_node("object", "sofa", {"kind": "sofa", "R": 1.0})
+    assert world.guard.stats.rejected_policy == 1
+    assert "may not create a 'object' node with 'R'" in world.guard.stats.last_reject
+
+
+def test_retyping_a_node_needs_rights_on_both_types():
+    """An agent allowed to create activities re-sends the robot's id as an activity."""
+    world = World()
+    agenda = world.graphs["agenda"]
+    hlc = agenda.clock.tick()
+    forged = orjson.dumps({
+        "format": wire.FORMAT, "kind": "delta", "graph": "chronav", "agent": "agenda",
+        "replica": agenda.replica_id,
+        "nodes": [{"id": world.ids["robot"], "add": [[agenda.replica_id, hlc]],
+                   "meta": [hlc, agenda.replica_id, "activity", "robot"]}], "edges": []})
+    before = world.guard.graph.digest()
+    world.guard.delta("agenda", forged)
+    assert world.guard.stats.rejected_policy == 1
+    assert "may not create a 'robot' node" in world.guard.stats.last_reject
+    assert world.guard.graph.digest() == before
+
+
+def test_states_are_checked_writer_by_writer():
+    world = World()
+    fresh = Guard(agent="joiner")
+    fresh.state(world.graphs["executive"])         # relays every agent's legit writes
+    assert fresh.stats.state_merged == 1 and fresh.stats.rejected_policy == 0
+    assert fresh.graph.state_equals(world.guard.graph)
+    # A human_observer that wrote the robot pose locally serves it in its state: refused whole.
+    liar = world.agent("human_observer", legit=False)
+    LEGIT[0][2](liar, world.ids)
+    fresh = Guard(agent="joiner")
+    fresh.state(liar)
+    assert fresh.stats.rejected_policy == 1 and len(fresh.graph) == 0
+    assert "'human_observer' may not set" in fresh.stats.last_reject
+    assert "'RT' edge (world -> robot)" in fresh.stats.last_reject
+    # An agent without any grant is not trusted to relay anything, even faithful copies.
+    relay = world.agent("rogue", legit=False)
+    fresh.state(relay)
+    assert fresh.stats.rejected_policy == 2 and "holds no grant" in fresh.stats.last_reject
+
+
+def test_a_state_cannot_reassign_a_known_replica_to_another_agent():
+    world = World()
+    sim = world.graphs["sim_robot"]
+    payload = world.graphs["executive"].state_message()
+    forged = payload.replace(f'"{sim.replica_id}":"sim_robot"'.encode(),
+                             f'"{sim.replica_id}":"executive"'.encode())
+    assert forged != payload
+    guard = world.guard
+    guard.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"), forged))
+    assert guard.stats.rejected == 1 and "forged writer" in guard.stats.last_reject
+
+
+def test_coarse_type_policy_still_works():
+    guard = Guard(policy=DenyTypes({"robot"}, agents={"rogue"}))
+    rogue = DSRGraph("rogue")
+    rogue.attach(lambda p: guard.delta("rogue", p))
+    rogue.insert_node("person", "p")
+    rogue.insert_node("robot", "r")
+    assert guard.stats.applied == 1 and guard.stats.rejected_policy == 1
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.one_of(st.tuples(st.just("legit"), st.integers(0, len(LEGIT) - 1)),
+                          st.tuples(st.just("forbidden"), st.integers(0, len(FORBIDDEN) - 1))),
+                min_size=1, max_size=12))
+def test_property_forbidden_writes_never_change_the_guarded_graph(script):
+    """Whatever mix of legit and forbidden writes, the guard ends exactly where a replica that
+    only ever received the legit ones ends."""
+    world = World()
+    rogues: dict[str, DSRGraph] = {}
+    forbidden = 0
+    for kind, index in script:
+        if kind == "legit":
+            agent, _what, action = LEGIT[index]
+            graph = world.graphs[agent]
+        else:
+            agent, _what, action = FORBIDDEN[index]
+            graph = rogues.get(agent) or rogues.setdefault(agent, world.agent(agent, legit=False))
+        try:
+            action(graph, world.ids)
+        except DSRError:
+            continue       # e.g. the rogue deleted that node already in its own copy
+        forbidden += kind == "forbidden"
+    assert world.guard.stats.rejected_policy >= forbidden
+    assert world.guard.graph.state_equals(world.reference.graph)
+
+
+# ---------------------------------------------------------------------------- policy files
+def write(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "policy.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(("text", "where"), [
+    ("format: chronav-write-policy/1\nrules:\n  - writers: [a]\n    nodes: [x]\n"
+     "    ops: [create, frobnicate]\n", "policy.yaml:5:"),
+    ("format: chronav-write-policy/1\nrules:\n  - writers: [a]\n    nodes: [x]\n"
+     "    edges: [y]\n    ops: [create]\n", "policy.yaml:3:"),
+    ("format: chronav-write-policy/1\nrules:\n  - writers: [a]\n    nodes: [x]\n"
+     "    from: [world]\n    ops: [create]\n", "policy.yaml:3:"),
+    ("format: chronav-write-policy/1\nrules:\n  - writers: [a]\n    nodes: [x]\n", "policy.yaml:3:"),
+    ("format: chronav-write-policy/1\nrules:\n  - writers: [a]\n    nodes: [x]\n"
+     "    attrs: [b]\n    colour: red\n", "policy.yaml:6:"),
+    ("format: other/2\nrules: []\n", "policy.yaml:1:"),
+    ("format: chronav-write-policy/1\nrules: [\n", "policy.yaml:"),
+    ("- just a list\n", "policy.yaml:1:"),
+])
+def test_bad_policy_files_name_file_and_line(tmp_path, text, where):
+    with pytest.raises(PolicyError, match=where):
+        load_policy(write(tmp_path, text))
+
+
+def test_policy_from_env(tmp_path):
+    assert isinstance(policy_from_env({"CHRONAV_WRITE_POLICY": "allow-all"}), AllowAll)
+    path = write(tmp_path, "format: chronav-write-policy/1\nrules:\n  - writers: [a*]\n"
+                           "    nodes: [x]\n    ops: [create]\n")
+    policy = policy_from_env({"CHRONAV_WRITE_POLICY": str(path)})
+    assert isinstance(policy, RulePolicy) and policy.has_rights("abc") and not policy.has_rights("b")
+    with pytest.raises(PolicyError, match="CHRONAV_WRITE_POLICY"):
+        policy_from_env({"CHRONAV_WRITE_POLICY": str(tmp_path / "missing.yaml")})
