@@ -25,6 +25,10 @@ from agents.social_navigation.types import (
 from scenes.model import Scene
 from scenes.motion import people_at
 
+# Clearance the navigation keeps beyond the robot's body when planning (it cuts corners a little
+# when following a path); goal poses chosen by the executive respect the same margin.
+PLANNING_MARGIN_M = 0.15
+
 SHAPE_DIMS: dict[str, tuple[str, ...]] = {
     "rectangle": ("length", "width", "offset"),
     "circle": ("radius",),

@@ -26,6 +26,12 @@ import orjson
 
 #: (hlc, replica, value)
 Register = tuple[int, int, Any]
+#: Attribute key of a removal receipt: a remove also writes the register (hlc, remover, True)
+#: stamped with its own `cleared` time, so it is hidden at once (registers at or before
+#: `cleared` are invisible) yet replicated in states.  Why: a state relays removals without
+#: saying who removed; the receipt (LWW, so it names the latest remover) lets write policies
+#: check that the remover was allowed to delete the element (dsr/state_review.py).
+REMOVAL_RECEIPT = "~removed"
 Dots = dict[int, int]
 _MISSING = object()
 
@@ -70,6 +76,11 @@ class ElementState:
             if reg[0] > best:
                 best = reg[0]
         return best
+
+
+def removal_receipt(hlc: int, replica: int) -> dict[str, Register]:
+    """The hidden receipt register a remove writes along with `cleared=hlc`."""
+    return {REMOVAL_RECEIPT: (hlc, replica, True)}
 
 
 def register_wins(new: Register, old: Register | None) -> bool:

@@ -349,12 +349,15 @@ class DSRGraph:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot delete node {node_id}: not in the graph")
             hlc = self.clock.tick()
+            receipt = crdt.removal_receipt(hlc, self.replica_id)
             for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
                 edge = self._edges[key]
                 if edge.present():
-                    self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc)
+                    self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc,
+                                     attrs=receipt)
             node = self._nodes[node_id]
-            self._local_node(tx, node_id, rem=tuple(node.add.items()), cleared=hlc)
+            self._local_node(tx, node_id, rem=tuple(node.add.items()), cleared=hlc,
+                             attrs=receipt)
 
     def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
                               attrs: Attrs | None = None) -> Edge:
@@ -381,8 +384,9 @@ class DSRGraph:
             key = (src, dst, type)
             if key not in self._visible_edges:
                 raise EdgeNotFoundError(f"cannot delete edge {src}->{dst} ({type}): not found")
-            self._local_edge(tx, key, rem=tuple(self._edges[key].add.items()),
-                             cleared=self.clock.tick())
+            hlc = self.clock.tick()
+            self._local_edge(tx, key, rem=tuple(self._edges[key].add.items()), cleared=hlc,
+                             attrs=crdt.removal_receipt(hlc, self.replica_id))
 
     def _local_node(self, tx: _Transaction, node_id: int, **delta: Any) -> None:
         if tx.rollback and node_id not in tx.undo_nodes:
@@ -570,6 +574,11 @@ class DSRGraph:
                 self._version += 1
             self._signals.post(events)
             return changed
+
+    def element_state(self, element: str, key: int | EdgeKey) -> ElementState | None:
+        """The replicated CRDT state of a node (key: id) or edge (key: (src, dst, type)), for
+        write policies; callers must not mutate it."""
+        return (self._nodes if element == "node" else self._edges).get(key)  # type: ignore[call-overload]
 
     def node_type_of(self, node_id: int) -> str | None:
         """Type from the replicated state, even for a node not visible (for write policies)."""

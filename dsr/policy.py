@@ -2,9 +2,10 @@
 
 Why on receipt, in every replica: a rogue or buggy process can put anything on the delta keys
 (Zenoh ACLs, docs/deployment.md, decide who may publish at all); each replica therefore asks its
-policy about every write of every remote delta and state before merging.  A refused message is
-dropped whole (a graph never holds half of one), counted in `ReplicaStats.rejected_policy` and
-logged; the graph is untouched.
+policy about every write of every remote delta and state before merging.  A refused delta is
+dropped whole (a graph never holds half of one); a state keeps only its acceptable part (it
+relays many writers, dsr/state_review.py).  Refusals are counted in
+`ReplicaStats.rejected_policy` and logged.
 
 Policies:
 - `AllowAll` (library default of `join()`): tools, tests, benchmarks.
@@ -35,14 +36,20 @@ _ALLOW_ALL_WORDS = ("allow-all", "off")
 
 class WritePolicy(Protocol):
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
-        """None if every write of this validated remote message (delta or state) is allowed,
-        else a sentence saying which write is refused and why."""
+        """For a validated remote delta: None if every write is allowed, else a sentence
+        saying which write is refused and why (the delta is then dropped whole)."""
+        ...
+
+    def review_state(self, message: Decoded, graph: GraphLookup
+                     ) -> tuple[Decoded | None, str | None]:
+        """For a validated state reply: (what to merge, or None to refuse it whole; what was
+        dropped and why, or None)."""
         ...
 
 
 class TypePolicy:
     """Base of the simple policies: one yes/no per (sending agent, element kind, type) of a
-    delta.  States are not checked (their writers are many)."""
+    delta.  States are merged as they come (their writers are many)."""
 
     def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
         raise NotImplementedError
@@ -59,6 +66,10 @@ class TypePolicy:
             if not self.allows(agent=agent, kind="edge", type=edge_type):
                 return f"policy refuses edge type {edge_type!r} from agent {agent!r}"
         return None
+
+    def review_state(self, message: Decoded, graph: GraphLookup
+                     ) -> tuple[Decoded | None, str | None]:
+        return message, None
 
 
 class AllowAll(TypePolicy):

@@ -28,8 +28,8 @@ Values given at creation come with `create`, except the keys of `except_attrs`.
 Deleting a node also deletes its edges: such edge deletes are allowed to whoever may delete the
 node.  Types this replica has not seen yet (a delta overtaking the node's creation) match any
 pattern: the write lands on an element nobody can see until its creator's write arrives.
-A state reply from an agent holding no grant at all is refused whole: it could relay writes
-under names it made up.
+Deltas and states from an agent holding no grant at all are refused whole; other states keep
+the part their writers were allowed to write (dsr/state_review.py).
 """
 
 from __future__ import annotations
@@ -42,7 +42,8 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 from dsr.errors import PolicyError
-from dsr.writes import Write, writes_of
+from dsr.state_review import review_state
+from dsr.writes import Write, delta_writes
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
@@ -150,14 +151,27 @@ class RulePolicy:
             return self.allowed(Write(write.writer, "node", write.cascade, "delete"))
         return False
 
+    def _no_grant(self, agent: str) -> str | None:
+        if self.has_rights(agent):
+            return None
+        return f"agent {agent!r} holds no grant in {self.source}"
+
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
-        if message.kind == "state" and not self.has_rights(message.agent):
-            return (f"agent {message.agent!r} holds no grant in {self.source}: "
-                    "its state is not trusted")
-        for write in writes_of(message, graph):
+        problem = self._no_grant(message.agent)
+        if problem is not None:
+            return problem
+        for write in delta_writes(message, graph):
             if not self.allowed(write):
                 return f"{explain(write)} ({self.source})"
         return None
+
+    def review_state(self, message: Decoded, graph: GraphLookup
+                     ) -> tuple[Decoded | None, str | None]:
+        problem = self._no_grant(message.agent)
+        if problem is not None:
+            return None, f"{problem}: its state is not trusted"
+        kept, dropped = review_state(message, graph, self.allowed)
+        return kept, None if dropped is None else f"{dropped} ({self.source})"
 
 
 def explain(write: Write) -> str:

@@ -270,11 +270,12 @@ class Replica:
                 if problem is not None:
                     self._reject(key, problem)
                     return
-                problem = self.policy.check(message, self.graph)
-                if problem is not None:
+                kept, problem = self.policy.review_state(message, self.graph)
+                if problem is not None:    # refused whole (kept is None), or in part
                     self._reject(key, problem, policy=True)
+                if kept is None:
                     return
-                self.graph.apply_message(message)
+                self.graph.apply_message(kept)
             self.stats.state_merged += 1
         except WireError as exc:
             self._reject(key, str(exc))

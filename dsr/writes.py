@@ -1,24 +1,22 @@
-"""What a DSR message does, as a list of attributable writes (input of write policies).
+"""What a remote delta does, as a list of attributable writes (the input of write policies).
 
 Why a separate step: a policy should answer "may agent A create a `robot` node / set `cmd_vx`
 on a `robot` node / delete an `in` edge from a `person`?" without knowing the CRDT encoding.
-This module turns a validated message into those questions.
 
-Attribution:
-- a delta is entirely the sender's (the transport has already refused deltas carrying another
-  replica's dots or registers), including its removes;
-- a state reply relays everybody's writes: each add dot, meta and attribute register is
-  attributed to the agent of the replica that stamped it (the receiver's own record of writers
-  first, then the state's `writers` table).  Removes in a state do not say who removed, so they
-  are not attributable and yield no write.
-Attribute registers stamped with the same (replica, hlc) as that replica's add dot are the
-element's initial values (op "init"): policies grant them with the create.
+A delta is entirely its sender's: the transport has already refused deltas carrying another
+replica's dots or registers, and the delta key names the sender (authenticated by the Zenoh
+ACL in a secured deployment).  Attribute registers stamped with the same hlc as the element's
+add dot are initial values (op "init", granted with the create); a removal's receipt register
+(crdt.REMOVAL_RECEIPT) is part of the delete.  States relay many writers' writes and are
+reviewed differently (dsr/state_review.py).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Literal, NamedTuple, Protocol
+
+from dsr.crdt import REMOVAL_RECEIPT
 
 if TYPE_CHECKING:
     from dsr.crdt import ElementState
@@ -38,62 +36,73 @@ class Write(NamedTuple):
     attr: str | None = None     # op "attr" (update) or "init" (value given at creation): the key
     src: str | None = None      # edges: type of the source node
     dst: str | None = None      # edges: type of the destination node
-    cascade: str | None = None  # edge delete caused by deleting a node of this type (same delta)
+    cascade: str | None = None  # edge delete caused by deleting a node of this type
 
 
 class GraphLookup(Protocol):
-    """What attribution needs from the receiving replica (dsr.DSRGraph provides it)."""
+    """What policies need from the receiving replica (dsr.DSRGraph provides it)."""
 
     def node_type_of(self, node_id: int) -> str | None: ...
 
     def writer_agent(self, replica: int) -> str | None: ...
 
+    def element_state(self, element: str, key: int | tuple[int, int, str]
+                      ) -> ElementState | None: ...
 
-def writes_of(message: Decoded, graph: GraphLookup) -> Iterator[Write]:
-    """Every attributable write of a validated message (duplicates possible)."""
-    delta = message.kind == "delta"
-    created_types = {node_id: state.meta[2][0] for node_id, state in message.nodes
-                     if state.meta is not None}
-    deleted: dict[int, str | None] = {}
-    writers: dict[int, str | None] = {}
 
-    def writer(replica: int) -> str | None:
-        if delta:
-            return message.agent
-        if replica not in writers:
-            writers[replica] = graph.writer_agent(replica) or message.writers.get(str(replica))
-        return writers[replica]
+def removes(state: ElementState) -> bool:
+    return bool(state.rem) or state.cleared > 0
 
-    def node_type(node_id: int) -> str | None:
-        return graph.node_type_of(node_id) or created_types.get(node_id)
 
-    for node_id, state in message.nodes:
+def message_node_types(message: Decoded, graph: GraphLookup) -> dict[int, str]:
+    """Node types as known here, completed by the nodes the message itself creates (an edge
+    often arrives in the same delta as its new end node)."""
+    types = {node_id: state.meta[2][0] for node_id, state in message.nodes
+             if state.meta is not None}
+    for node_id in list(types):
         known = graph.node_type_of(node_id)
-        new = state.meta[2][0] if state.meta is not None else None
-        types = {t for t in (known, new) if t is not None} or {None}
-        if delta and (state.rem or state.cleared):
-            deleted[node_id] = known or new
-        for type_ in types:
-            yield from _element_writes(state, delta, writer, "node", type_, None, None, None)
+        if known is not None:
+            types[node_id] = known
+    return types
+
+
+def node_types(node_id: int, state: ElementState, graph: GraphLookup) -> set[str | None]:
+    """A write to a node is checked against its current type and the type it would get."""
+    known = graph.node_type_of(node_id)
+    new = state.meta[2][0] if state.meta is not None else None
+    return {t for t in (known, new) if t is not None} or {None}
+
+
+def delta_writes(message: Decoded, graph: GraphLookup) -> Iterator[Write]:
+    """Every write of a validated delta, attributed to its sender (duplicates possible)."""
+    agent = message.agent
+    created = message_node_types(message, graph)
+
+    def type_of(node_id: int) -> str | None:
+        return graph.node_type_of(node_id) or created.get(node_id)
+
+    deleted: dict[int, str | None] = {}
+    for node_id, state in message.nodes:
+        if removes(state):
+            deleted[node_id] = type_of(node_id)
+        for type_ in node_types(node_id, state, graph):
+            yield from _element_writes(agent, state, "node", type_, None, None, None)
     for (src, dst, edge_type), state in message.edges:
-        cascade = None
-        if delta and (state.rem or state.cleared):
-            cascade = deleted.get(src) or deleted.get(dst)
-        yield from _element_writes(state, delta, writer, "edge", edge_type, node_type(src),
-                                   node_type(dst), cascade)
+        cascade = (deleted.get(src) or deleted.get(dst)) if removes(state) else None
+        yield from _element_writes(agent, state, "edge", edge_type, type_of(src), type_of(dst),
+                                   cascade)
 
 
-def _element_writes(state: ElementState, delta: bool, who: Callable[[int], str | None],
-                    element: Element, type_: str | None, src: str | None, dst: str | None,
-                    cascade: str | None) -> Iterator[Write]:
-    creators = set(state.add)
-    if state.meta is not None:
-        creators.add(state.meta[1])
-    for replica in creators:
-        yield Write(who(replica), element, type_, "create", None, src, dst)
-    if delta and (state.rem or state.cleared):
-        yield Write(who(0), element, type_, "delete", None, src, dst, cascade)
+def _element_writes(agent: str, state: ElementState, element: Element, type_: str | None,
+                    src: str | None, dst: str | None, cascade: str | None) -> Iterator[Write]:
+    if state.add or state.meta is not None:
+        yield Write(agent, element, type_, "create", None, src, dst)
+    removal = removes(state)
+    if removal:
+        yield Write(agent, element, type_, "delete", None, src, dst, cascade)
     add = state.add
     for key, (hlc, replica, _value) in state.attrs.items():
+        if removal and key == REMOVAL_RECEIPT:
+            continue
         op: Op = "init" if add.get(replica) == hlc else "attr"
-        yield Write(who(replica), element, type_, op, key, src, dst)
+        yield Write(agent, element, type_, op, key, src, dst)

@@ -72,10 +72,10 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
 
 
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
-    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
-    for index, room in enumerate(scene.rooms):
+    for index, room in enumerate(scene.rooms):  # before the union: GEOS fails on invalid polygons
         if not shapely.Polygon(room.polygon).is_valid:
             raise located.error(("rooms", index, "polygon"), f"room {room.name!r} polygon self-intersects")
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
 
     def inside(key: tuple[str | int, ...], x: float, y: float, what: str) -> None:
         if not building.covers(shapely.Point(x, y)):

@@ -9,29 +9,15 @@ All lengths are metres, angles radians (theta measured from +x, counter-clockwis
 from __future__ import annotations
 
 import math
-import re
 import datetime as dt
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-_CLOCK = re.compile(r"^(\d{1,2}):(\d{2})(?::(\d{2}))?$")
+# One clock-time syntax for scenes, agendas and missions ("HH:MM[:SS]" since local midnight).
+from agents.agenda.model import format_clock, parse_clock
 
-
-def parse_clock(text: str) -> float:
-    """``"HH:MM[:SS]"`` -> seconds since local midnight."""
-    match = _CLOCK.match(text.strip())
-    if not match:
-        raise ValueError(f"expected a clock time HH:MM or HH:MM:SS, got {text!r}")
-    hours, minutes, seconds = int(match[1]), int(match[2]), int(match[3] or 0)
-    if hours > 23 or minutes > 59 or seconds > 59:
-        raise ValueError(f"clock time out of range: {text!r}")
-    return float(hours * 3600 + minutes * 60 + seconds)
-
-
-def format_clock(seconds: float) -> str:
-    whole = int(round(seconds))
-    return f"{whole // 3600:02d}:{whole % 3600 // 60:02d}:{whole % 60:02d}"
+__all__ = ["format_clock", "parse_clock"]
 
 
 ClockTime = Annotated[str, Field(description="local clock time HH:MM[:SS]")]

@@ -53,7 +53,8 @@ class ChaosError(Exception):
 @dataclass(frozen=True)
 class Fault:
     """One fault. Trigger: ``at_s`` wall seconds after ``mission`` became active (or, without a
-    mission, after the first mission became active); never before the previous fault converged."""
+    mission, after the first mission became active), and with ``driving`` only while the robot
+    drives (``nav_active``); never before the previous fault converged."""
 
     action: Action
     target: str
@@ -61,6 +62,7 @@ class Fault:
     mission: str | None = None
     hold_s: float = 0.0
     change: str | None = None     # agenda change JSON (agents/agenda/changes.py wire form)
+    driving: bool = False
 
     def __post_init__(self) -> None:
         if self.action not in ACTIONS:
@@ -81,6 +83,14 @@ class Fault:
 def _hhmm(seconds: float) -> str:
     minutes = int(seconds // 60)
     return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def _clock(seconds: float | None) -> str:
+    if seconds is None:
+        return "-"
+    from scenes.model import format_clock
+
+    return format_clock(seconds)
 
 
 def random_agenda_change(rng: random.Random, scene: Any, known_ids: list[str], index: int, tag: str) -> str:
@@ -126,6 +136,29 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
     return out
 
 
+def load_schedule(path: Path) -> list[Fault]:
+    """A schedule file: a JSON list of faults (the "fault" objects of a chaos summary replay a run).
+
+    ``change`` may be given as an object; errors name the file and the fault's index."""
+    try:
+        items = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ChaosError(f"{path}: cannot read a JSON schedule: {exc}") from None
+    if not isinstance(items, list):
+        raise ChaosError(f"{path}: a schedule is a JSON list of faults")
+    faults: list[Fault] = []
+    for index, item in enumerate(items):
+        try:
+            if not isinstance(item, dict):
+                raise TypeError("a fault is an object such as {\"action\": \"kill\", \"target\": \"router\"}")
+            if isinstance(item.get("change"), dict):
+                item = {**item, "change": json.dumps(item["change"])}
+            faults.append(Fault(**item))
+        except (TypeError, ChaosError) as exc:
+            raise ChaosError(f"{path}: fault {index}: {exc}") from None
+    return faults
+
+
 # ----------------------------------------------------------------------------- probing replicas
 def probe_digests(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, str]:
     """Digest of every replica that answers one state query, by agent name."""
@@ -152,7 +185,7 @@ class FaultOutcome:
     fault: Fault
     injected: bool = False
     at_wall_s: float | None = None        # since the first mission started
-    at_sim: str | None = None             # sim clock at injection (HH:MM:SS)
+    at_sim_s: float | None = None         # sim clock at injection (s since midnight)
     mission: str | None = None            # mission active at injection
     recovered_s: float | None = None      # until the target answered again / request answered
     converged_s: float | None = None      # until every live replica had the same digest
@@ -160,7 +193,7 @@ class FaultOutcome:
 
     def as_dict(self) -> dict[str, Any]:
         out = asdict(self)
-        out["fault"] = {k: v for k, v in asdict(self.fault).items() if v not in (None, 0.0)}
+        out["fault"] = {k: v for k, v in asdict(self.fault).items() if v not in (None, 0.0, False)}
         out["what"] = self.fault.describe()
         return out
 
@@ -288,7 +321,8 @@ class ChaosRun:
     def _wait_trigger(self, fault: Fault) -> bool:
         while not self._stop.is_set():
             started = self.activated.get(fault.mission) if fault.mission else min(self.activated.values(), default=None)
-            if started is not None and time.monotonic() >= started + fault.at_s:
+            if started is not None and time.monotonic() >= started + fault.at_s and (
+                    not fault.driving or any(n.attrs.get("nav_active") for n in self.graph.nodes_of_type("robot"))):
                 return True
             self._sleep(0.05)
         return False
@@ -313,10 +347,9 @@ class ChaosRun:
         clock = self.graph.get_node_by_name("clock")
         active = [m for m, a in self.status.get("missions", {}).items() if a.get("state") == "active"]
         outcome.at_wall_s = round(time.monotonic() - first, 2)
-        outcome.at_sim = None if clock is None else _hhmm(float(clock.attrs.get("now_s", 0))) + \
-            f":{int(float(clock.attrs.get('now_s', 0))) % 60:02d}"
+        outcome.at_sim_s = None if clock is None else round(float(clock.attrs.get("now_s", 0.0)), 2)
         outcome.mission = active[0] if active else None
-        self.log(f"fault: {fault.describe()} (mission {outcome.mission}, sim {outcome.at_sim})")
+        self.log(f"fault: {fault.describe()} (mission {outcome.mission}, sim {_clock(outcome.at_sim_s)})")
         if fault.action == "agenda":
             name = self._request(fault.change or "")
             outcome.injected = True
@@ -505,7 +538,7 @@ def _table(summary: dict[str, Any]) -> Any:
     for column in ("#", "fault", "at (wall s)", "sim", "mission", "recovered s", "converged s", "note"):
         table.add_column(column)
     for index, fault in enumerate(summary["faults"]):
-        table.add_row(str(index), fault["what"], str(fault["at_wall_s"]), str(fault["at_sim"]), str(fault["mission"]),
+        table.add_row(str(index), fault["what"], str(fault["at_wall_s"]), _clock(fault["at_sim_s"]), str(fault["mission"]),
                       str(fault["recovered_s"]), str(fault["converged_s"]), fault["note"])
     return table
 
@@ -517,8 +550,10 @@ def register(app: typer.Typer) -> None:
               duration: float = typer.Option(25.0, help="faults fall within this many wall seconds "
                                              "after the first mission starts"),
               faults: int = typer.Option(6, help="number of faults"),
+              schedule: Path = typer.Option(None, help="JSON list of faults to run instead of a random schedule"),
               timeout: float = typer.Option(300.0, help="wall-clock limit of the run"),
               no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
+              runs_dir: Path = typer.Option(None, help="where the run's directory goes (default: recordings/)"),
               as_json: bool = typer.Option(False, "--json", help="print the summary as one JSON object")) -> None:
         """Launch SCENE under a randomized fault schedule; report faults, missions, convergence, lost writes."""
         from rich.console import Console
@@ -527,8 +562,9 @@ def register(app: typer.Typer) -> None:
 
         err = Console(stderr=True)
         try:
-            report = run_chaos(scene, seed=seed, faults=faults, duration_s=duration, timeout_s=timeout,
-                               record=not no_record, log=lambda text: err.print(f"[chaos] {text}", highlight=False))
+            planned = load_schedule(schedule) if schedule is not None else None
+            report = run_chaos(scene, planned, seed=seed, faults=faults, duration_s=duration, timeout_s=timeout,
+                               record=not no_record, runs_dir=runs_dir, log=lambda text: err.print(f"[chaos] {text}", highlight=False))
         except (SourceError, ChaosError) as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None

@@ -110,7 +110,7 @@ class AgendaAgent(Agent):
 
     def _scripted_changes(self, now_s: float) -> None:
         """Scene ``agenda_changes``: staff edits scripted at a sim time (applied once, restart-safe)."""
-        from scenes.model import parse_clock
+        from agents.agenda.model import parse_clock
 
         applied = set(self._agenda_node().attrs.get("applied", []))
         for index, change in enumerate(self.scene.agenda_changes):

@@ -319,15 +319,24 @@ def _duration(event: icalendar.Event, start: Moment, problems: list[str]) -> dt.
                 return end.astimezone(UTC) - start.astimezone(UTC)
         return end - start  # type: ignore[operator]
     if length is not None:
-        return length.dt  # type: ignore[no-any-return]
+        if not isinstance(length.dt, dt.timedelta):
+            problems.append(f"DURATION: {length.to_ical().decode()!r} is not a duration such as PT1H30M")
+            return None
+        return length.dt
     if not isinstance(start, dt.datetime):
         return dt.timedelta(days=1)  # RFC 5545: an all-day event without an end lasts that day
     problems.append("no DTEND or DURATION: say when the activity ends")
     return None
 
 
+_SINGLE_VALUED = ("DTSTART", "DTEND", "DURATION", "RECURRENCE-ID")
+
+
 def _parse_event(event: icalendar.Event, file: str, line: int | None) -> tuple[IcsEvent | None, list[str]]:
     problems: list[str] = [f"{prop}: {message}" for prop, message in event.errors]
+    # icalendar hands a repeated property over as a list; RFC 5545 allows these once per event.
+    problems += [f"{name} appears {len(event[name])} times; an event has at most one"
+                 for name in _SINGLE_VALUED if isinstance(event.get(name), list)]
     if problems:
         return None, problems
     start_prop = event.get("DTSTART")

@@ -114,7 +114,8 @@ class ExecutiveAgent(Agent):
             return
         if index > first:
             hops = steps[first:index]
-            attrs["rooms"] = [hops[0].bindings["r1"], *(hop.bindings["r2"] for hop in hops)]
+            attrs["rooms"] = [hops[0].bindings["r1"], *(hop.bindings["r2"] for hop in hops),
+                              *([step.bindings["room"]] if step.rule == "goToRoom" else [])]
             attrs["pass_through"] = step.rule == "changeRoom"
         replans = int(mission.attrs.get("replans", 0))
         name = f"intention/{mission_id}/{replans}.{index}"

@@ -18,6 +18,7 @@ from shapely.geometry.base import BaseGeometry
 
 from agents.social_navigation.objects import posed_polygon
 from agents.social_navigation.types import Person, SocialObject
+from agents.world_model import PLANNING_MARGIN_M
 from scenes.model import Scene
 
 SOCIAL_DISTANCE_M = 1.3      # approachPerson: in front of the person, outside the personal zone
@@ -44,11 +45,12 @@ class FreeSpace:
     """Where the robot's centre may stand: inside the building, clear of walls and footprints."""
 
     def __init__(self, scene: Scene, objects: Sequence[SocialObject]) -> None:
-        radius = scene.robot.radius
+        # The planner's inflation (body + margin) plus a cell, so a chosen goal is always traversable.
+        clearance = scene.robot.radius + PLANNING_MARGIN_M + scene.resolution
         building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
-        walls = shapely.MultiLineString([w for w in scene.walls if len(w) >= 2]).buffer(radius + 0.05)
+        walls = shapely.MultiLineString([w for w in scene.walls if len(w) >= 2]).buffer(clearance)
         footprints = shapely.union_all([posed_polygon(o.footprint, o.x, o.y, o.theta) for o in objects]
-                                       or [shapely.Polygon()]).buffer(radius + 0.05)
+                                       or [shapely.Polygon()]).buffer(clearance)
         self.region: BaseGeometry = building.difference(walls).difference(footprints)
         shapely.prepare(self.region)
 

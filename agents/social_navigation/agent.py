@@ -23,17 +23,21 @@ from agents.runtime.recording import Recorder
 from agents.social_navigation import elastic_band as eb
 from agents.social_navigation.control import BandFollower, ControlParams, DiffCommand
 from agents.social_navigation.grid import GridParams
-from agents.social_navigation.search import PlanningError, SearchWorkspace, StartOccupied
+from agents.social_navigation.search import GoalOccupied, PlanningError, SearchWorkspace, StartOccupied
 from agents.social_navigation.social_map import SocialMap, SocialMapParams, build_social_map, build_static_map, plan
 from agents.social_navigation.view import log_social_map
-from agents.world_model import dsr_activity_windows, dsr_objects, dsr_people, scene_rooms, scene_walls
+from agents.world_model import (PLANNING_MARGIN_M, dsr_activity_windows, dsr_objects, dsr_people, scene_rooms,
+                                scene_walls)
 from scenes.model import format_clock
 
 REPLAN_PERIOD_S = 1.0
-CLEARANCE_MARGIN_M = 0.1
 SLOW_ZONE_M = 0.5
 STALL_S = 4.0           # sim seconds without getting closer to the goal before recovering
-PROGRESS_M = 0.05       # within this much free space ahead (beyond the body) the robot slows down
+PROGRESS_M = 0.05
+GOAL_TOLERANCE_M = 0.5  # a goal on a blocked cell may move this far to the nearest free cell
+ESCAPE_SKIP_M = 0.5     # blocked-path checks ignore the first half metre (the robot's own cell)
+CONTACT_M = 0.04        # free space ahead below which the robot backs off instead of pushing
+BACK_OFF_MPS = 0.08       # within this much free space ahead (beyond the body) the robot slows down
 REPLAN_GAIN = 1.15
 PASS_THROUGH_TOLERANCE_M = 0.5   # a waypoint past a door is reached without stopping on it
 REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
@@ -83,7 +87,7 @@ class SocialNavigationAgent(Agent):
         self.rec = recorder
         scene, robot = self.scene, self.scene.robot
         # Plan with a clearance margin beyond the body: the controller cuts corners a little.
-        margin = float(self.config.option("clearance_margin", str(CLEARANCE_MARGIN_M)))
+        margin = float(self.config.option("clearance_margin", str(PLANNING_MARGIN_M)))
         self.params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution,
                                                       robot_radius_m=robot.radius + margin))
         self.walls, self.rooms = scene_walls(scene), scene_rooms(scene)
@@ -91,7 +95,7 @@ class SocialNavigationAgent(Agent):
         self.static = build_static_map(self.bounds, self.walls, self.rooms, self.params)
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
-                                     max_accel_mps2=robot.max_acceleration)
+                                     max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
         self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
         self.cruise = 0.7 * robot.max_speed
         self.control_dt = float(self.config.option("control_dt", "0.1"))
@@ -207,17 +211,27 @@ class SocialNavigationAgent(Agent):
         """The global path from the point nearest the robot on (the band may cut inflated corners,
         the global path is what the map judged free)."""
         points = self.global_points
-        nearest = int(np.argmin(np.hypot(points[:, 0] - pose[0], points[:, 1] - pose[1])))
-        return points[nearest:]
+        distance = np.hypot(points[:, 0] - pose[0], points[:, 1] - pose[1])
+        nearest = int(np.argmin(distance))
+        # Skip the stretch right at the robot: it may stand in an inflated cell (that is why it is
+        # escaping); what matters is whether the way ahead is still free.
+        ahead = nearest + int(np.argmax(distance[nearest:] > ESCAPE_SKIP_M)) if np.any(distance[nearest:] > ESCAPE_SKIP_M) \
+            else len(points) - 1
+        return points[ahead:]
 
     def _plan_from(self, smap: SocialMap, pose: tuple[float, float, float]) -> Any:
+        """Plan from the robot to the goal; a start or goal in a non-traversable cell (someone
+        stepped close, a goal on an inflated edge) moves to the nearest free cell (Nav2's tolerance)."""
         assert self.goal is not None
-        goal = (self.goal[0], self.goal[1])
-        try:
-            return plan(smap, (pose[0], pose[1]), goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
-        except StartOccupied:
-            escape = nearest_free(smap.cost, smap.spec, (pose[0], pose[1]))
-            return plan(smap, escape, goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
+        start, goal = (pose[0], pose[1]), (self.goal[0], self.goal[1])
+        for _ in range(3):
+            try:
+                return plan(smap, start, goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
+            except StartOccupied:
+                start = nearest_free(smap.cost, smap.spec, start)
+            except GoalOccupied:
+                goal = nearest_free(smap.cost, smap.spec, goal, max_m=GOAL_TOLERANCE_M)
+        return plan(smap, start, goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
 
     def _replan(self, intention: Any, robot: Any, now_s: float) -> None:
         del intention
@@ -251,8 +265,10 @@ class SocialNavigationAgent(Agent):
         cmd = out.command
         vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
         omega = float(cmd.omega)
-        scale = self._clearance_scale(robot, vx, vy)
+        scale, contact = self._clearance_scale(robot, vx, vy)
         vx, vy = vx * scale, vy * scale
+        if contact:  # pressed against something ahead: back off slowly while turning to the path
+            vx, vy = -BACK_OFF_MPS * math.cos(math.atan2(vy, vx)), -BACK_OFF_MPS * math.sin(math.atan2(vy, vx))
         self.last_answered = pose_stamp
         passed = bool(intention.attrs.get("pass_through")) and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
         if out.reached or passed:
@@ -289,18 +305,19 @@ class SocialNavigationAgent(Agent):
         points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
         self._adopt(points, now_s, "replanned (no progress: recovery)", path.cost)
 
-    def _clearance_scale(self, robot: Any, vx: float, vy: float) -> float:
-        """Slow down in proportion to the free space ahead in the direction of motion (laser)."""
+    def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
+        """Speed factor from the free space ahead in the direction of motion (laser), and whether
+        the robot is in contact with something ahead."""
         ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
         angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
-            return 1.0
+            return 1.0, False
         heading = math.atan2(vy, vx)
-        ahead = np.abs(np.arctan2(np.sin(angles - heading), np.cos(angles - heading))) < math.radians(50)
+        ahead = np.abs(np.arctan2(np.sin(angles - heading), np.cos(angles - heading))) < math.radians(60)
         if not np.any(ahead):
-            return 1.0
+            return 1.0, False
         free = float(np.min(ranges[ahead])) - self.scene.robot.radius
-        return float(np.clip(free / SLOW_ZONE_M, 0.0 if free < 0.03 else 0.15, 1.0))
+        return float(np.clip(free / SLOW_ZONE_M, 0.15, 1.0)), free < CONTACT_M
 
     def _stop(self, robot: Any, intention: Any, state: str | None, reason: str = "") -> None:
         g = self.graph

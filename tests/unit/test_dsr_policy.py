@@ -85,10 +85,9 @@ class World:
         if not legit:
             return
         self.reference.delta(agent, payload)
-        message = wire.decode(payload)
         for graph in self.graphs.values():
-            if graph is not source:
-                graph.apply_message(message)
+            if graph is not source:   # decode for each: a graph adopts the decoded states
+                graph.apply_message(wire.decode(payload))
 
     def _build(self) -> dict[str, int]:
         g = self.graphs
@@ -263,24 +262,61 @@ def test_retyping_a_node_needs_rights_on_both_types():
     assert world.guard.graph.digest() == before
 
 
-def test_states_are_checked_writer_by_writer():
+def test_states_keep_only_what_their_writers_were_allowed_to_write():
     world = World()
     fresh = Guard(agent="joiner")
     fresh.state(world.graphs["executive"])         # relays every agent's legit writes
     assert fresh.stats.state_merged == 1 and fresh.stats.rejected_policy == 0
     assert fresh.graph.state_equals(world.guard.graph)
-    # A human_observer that wrote the robot pose locally serves it in its state: refused whole.
+    # A human_observer that wrote the robot pose locally serves it in its state: that register
+    # is dropped, the rest of the state is merged.
     liar = world.agent("human_observer", legit=False)
     LEGIT[0][2](liar, world.ids)
     fresh = Guard(agent="joiner")
     fresh.state(liar)
-    assert fresh.stats.rejected_policy == 1 and len(fresh.graph) == 0
+    assert fresh.stats.rejected_policy == 1 and fresh.stats.state_merged == 1
     assert "'human_observer' may not set" in fresh.stats.last_reject
     assert "'RT' edge (world -> robot)" in fresh.stats.last_reject
+    rt = fresh.graph.get_edge(world.ids["world"], world.ids["robot"], "RT")
+    assert rt is not None and rt.attrs.get("x") != 1.5
+    assert fresh.graph.get_node(world.ids["mission"]) is not None
+    fresh.state(world.graphs["executive"])         # the legit pose comes with another state
+    assert fresh.graph.state_equals(world.guard.graph)
     # An agent without any grant is not trusted to relay anything, even faithful copies.
     relay = world.agent("rogue", legit=False)
     fresh.state(relay)
     assert fresh.stats.rejected_policy == 2 and "holds no grant" in fresh.stats.last_reject
+
+
+def test_relayed_removals_need_a_receipt_from_an_allowed_remover():
+    world = World()
+    laggard = Guard(agent="laggard")
+    laggard.state(world.graphs["executive"])
+    # The agenda deletes an activity; the laggard misses the delta, then gets it by a state
+    # that executive relays: the receipt names the agenda, which may delete activities.
+    state_before_delete = world.graphs["executive"].state_message()
+    world.graphs["agenda"].delete_node(world.ids["activity"])
+    relayed = world.graphs["executive"].state_message()
+    without_receipts = relayed.replace(b'"~removed"', b'"~other"')
+    assert without_receipts != relayed
+    laggard.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"),
+                                            without_receipts))
+    assert world.ids["activity"] in laggard.graph, "a removal without receipt was merged"
+    assert "without a receipt" in laggard.stats.last_reject
+    laggard.state(world.graphs["executive"])
+    assert world.ids["activity"] not in laggard.graph
+    assert laggard.graph.digest() == world.guard.graph.digest()
+    # A buggy object_recognition deletes a mission locally: refused as a delta, and its state,
+    # which carries the removal, cannot delete it either.
+    other = Guard(agent="other")
+    other.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"),
+                                          state_before_delete))
+    buggy = world.agent("object_recognition", legit=False)
+    buggy.delete_node(world.ids["mission"])
+    assert world.guard.stats.rejected_policy == 1
+    other.state(buggy)
+    assert world.ids["mission"] in other.graph
+    assert "'object_recognition' may not delete a 'mission' node" in other.stats.last_reject
 
 
 def test_a_state_cannot_reassign_a_known_replica_to_another_agent():

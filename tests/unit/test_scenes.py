@@ -97,7 +97,7 @@ def test_people_follow_waypoints_and_face_their_way() -> None:
     start = {p.name: p for p in people_at(scene, parse_clock("09:00"))}
     assert (start["senior_1"].x, start["senior_1"].y) == (1.2, 6.0)
     at_tv = {p.name: p for p in people_at(scene, parse_clock("11:30"))}
-    assert math.hypot(at_tv["senior_1"].x - 4.5, at_tv["senior_1"].y - 2.1) < 1e-9
+    assert math.hypot(at_tv["senior_1"].x - 5.0, at_tv["senior_1"].y - 2.1) < 1e-9
     walking = {p.name: p for p in people_at(scene, parse_clock("10:52:30"))}
     assert walking["senior_1"].moving
 

@@ -1,0 +1,225 @@
+"""Issue 7, faults during missions: every agent and the router SIGKILLed in turn while missions run.
+
+One run of icra_usecase (four missions) through `chronav chaos --schedule`, two kills per mission
+plus an agenda change: the launcher restarts each process, the restarted replica resumes from
+the replicated state, the missions complete, nothing acknowledged is lost, and the recording of
+every process (killed ones included) reads back with Rerun's own API.  A second, shorter run
+drives the randomized schedule of `chronav chaos`.  The pure parts of tools/chaos.py (schedules,
+the lost-write check) are tested first, offline.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from agents.social_navigation.metrics import read_trajectory_csv
+from dsr import DSRGraph
+from scenes.loader import load_scene
+from scenes.model import parse_clock
+from tests.support import ProcessGroup
+from tools.chaos import ChaosError, Fault, load_schedule, lost_writes, random_schedule
+from tools.launch import AGENTS
+
+MISSIONS = ("m0930", "m1045", "m1115", "m1315")
+EXTRA = {"op": "add", "activity": {"id": "faults_extra", "name": "Stretching", "object": "stretcher",
+                                   "start": "13:00", "end": "13:40"}}
+# Two kills per mission, each fault waits for the previous one to converge.
+KILLS: list[dict[str, Any]] = [
+    {"action": "kill", "target": "sim_robot", "mission": "m0930", "at_s": 0.5, "driving": True},
+    {"action": "kill", "target": "human_observer", "mission": "m0930", "at_s": 0.5},
+    {"action": "agenda", "target": "agenda", "mission": "m1045", "at_s": 0.3, "change": EXTRA},
+    {"action": "kill", "target": "agenda", "mission": "m1045", "at_s": 0.3},
+    {"action": "kill", "target": "object_recognition", "mission": "m1115", "at_s": 0.5},
+    {"action": "kill", "target": "social_navigation", "mission": "m1115", "at_s": 0.5, "driving": True},
+    {"action": "kill", "target": "router", "mission": "m1315", "at_s": 0.5, "driving": True},
+    {"action": "kill", "target": "executive", "mission": "m1315", "at_s": 0.5},
+]
+
+
+# ----------------------------------------------------------------------------- offline parts
+def test_random_schedules_are_reproducible_and_valid() -> None:
+    loaded = load_scene("icra_usecase")
+    first = random_schedule(loaded, seed=3, faults=12, duration_s=20)
+    assert first == random_schedule(loaded, seed=3, faults=12, duration_s=20)
+    assert first != random_schedule(loaded, seed=4, faults=12, duration_s=20)
+    assert [f.at_s for f in first] == sorted(f.at_s for f in first) and all(0 <= f.at_s <= 20 for f in first)
+    assert {f.action for f in first} == {"kill", "stop", "agenda"}
+    for fault in first:
+        if fault.action == "agenda":
+            assert json.loads(fault.change or "")["op"] in ("add", "move", "cancel")
+
+
+def test_schedule_files_round_trip_and_name_bad_faults(tmp_path: Path) -> None:
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(KILLS))
+    faults = load_schedule(good)
+    assert [f.target for f in faults] == [k["target"] for k in KILLS]
+    assert json.loads(faults[2].change or "") == EXTRA
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps([KILLS[0], {"action": "kill", "target": "kernel"}]))
+    with pytest.raises(ChaosError, match=r"bad.json: fault 1: .*kernel"):
+        load_schedule(bad)
+    bad.write_text('[{"action": "kill", "target": "router", "at": 3}]')
+    with pytest.raises(ChaosError, match="fault 0"):
+        load_schedule(bad)
+    with pytest.raises(ChaosError, match="needs a change"):
+        Fault("agenda", "agenda")
+
+
+def _final_graph(loaded: Any, changes: list[str]) -> DSRGraph:
+    """What a healthy run leaves: missions done, the agenda log replayed into activity nodes."""
+    from agents.agenda.changes import apply_change, parse_change
+
+    graph = DSRGraph("test", graph="faults")
+    day = loaded.agenda_day
+    for text in changes:
+        day = apply_change(day, parse_change(text), known_objects={o.name for o in loaded.scene.objects})
+    graph.insert_node("agenda", "agenda", {"changes": changes, "applied": []})
+    for activity in day.activities:
+        graph.insert_node("activity", f"activity/{activity.id}", {
+            "activity_id": activity.id, "object": activity.object, "start_s": activity.start_s,
+            "end_s": activity.end_s, "state": "cancelled" if activity.cancelled else "scheduled"})
+    for mission in MISSIONS:
+        graph.insert_node("mission", f"mission/{mission}", {"mission_id": mission, "state": "done"})
+    return graph
+
+
+def test_lost_writes_finds_each_kind_of_loss() -> None:
+    loaded = load_scene("icra_usecase")
+    change = json.dumps(EXTRA)
+    graph = _final_graph(loaded, [change])
+    assert lost_writes(graph, loaded, set(MISSIONS), [change]) == []
+    graph.update_node(graph.get_node_by_name("mission/m1045").id, {"state": "active"})
+    graph.update_node(graph.get_node_by_name("activity/serious_game").id, {"start_s": 0.0})
+    graph.delete_node(graph.get_node_by_name("activity/faults_extra").id)
+    cancel = json.dumps({"op": "cancel", "id": "table_therapy"})
+    lost = lost_writes(graph, loaded, set(MISSIONS), [change, cancel])
+    assert any("m1045 was done" in line for line in lost)
+    assert any("serious_game" in line and "differs" in line for line in lost)
+    assert any("faults_extra is missing" in line for line in lost)
+    assert any("table_therapy" in line and "0 times" in line for line in lost)
+    twice = _final_graph(loaded, [change])
+    twice.update_node(twice.get_node_by_name("agenda").id, {"changes": [change, change]})
+    assert any("2 times" in line for line in lost_writes(twice, loaded, set(), [change]))
+
+
+# ----------------------------------------------------------------------------- the system
+def _chaos(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
+    group = ProcessGroup()
+    try:
+        proc = group.spawn(["-m", "tools.cli", "chaos", *args, "--json", "--timeout", str(timeout_s - 30)],
+                           env={"RERUN": "on"}, log_path=log)
+        try:
+            proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"chaos did not finish; log:\n{log.read_text()[-3000:]}")
+    finally:
+        group.close()
+    text = log.read_text()
+    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
+    assert line is not None, f"no JSON summary; log:\n{text[-3000:]}"
+    summary = json.loads(line)
+    summary["returncode"] = proc.returncode
+    return summary
+
+
+@pytest.fixture(scope="module")
+def kill_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    work = tmp_path_factory.mktemp("faults")
+    schedule = work / "kills.json"
+    schedule.write_text(json.dumps(KILLS))
+    return _chaos(["icra_usecase", "--schedule", str(schedule), "--runs-dir", str(work)], work / "chaos.log", 240)
+
+
+def test_every_process_killed_during_a_mission_and_the_missions_complete(kill_run: dict[str, Any]) -> None:
+    assert kill_run["returncode"] == 0 and kill_run["ok"], json.dumps(kill_run, indent=1)[:4000]
+    assert kill_run["missions"] == dict.fromkeys(MISSIONS, "done")
+    assert kill_run["faults_injected"] == len(KILLS)
+    for fault in kill_run["faults"]:
+        assert fault["mission"] is not None, f"{fault['what']} was not during a mission"
+        assert fault["converged_s"] is not None, f"replicas did not converge after {fault['what']}"
+    assert kill_run["restarts"] == dict.fromkeys([*AGENTS, "router"], 1)
+    assert kill_run["final_converged"]
+
+
+def test_nothing_acknowledged_is_lost(kill_run: dict[str, Any]) -> None:
+    assert kill_run["writes_lost"] == 0, kill_run["lost"]
+    assert list(kill_run["agenda_requests"].values()) == ["accepted"]
+    graph = DSRGraph.load(str(Path(kill_run["run_dir"]) / "final_graph.json"), agent="test")
+    extra = graph.get_node_by_name("activity/faults_extra")  # accepted before the agenda agent died
+    assert extra is not None and (extra.attrs["start_s"], extra.attrs["end_s"]) == (parse_clock("13:00"),
+                                                                                     parse_clock("13:40"))
+    # A restarted executive resumes its missions: no second copy, no mission left behind.
+    assert sorted(n.name for n in graph.nodes_of_type("mission")) == [f"mission/{m}" for m in MISSIONS]
+    for mission in MISSIONS:
+        steps = [n for n in graph.nodes_of_type("intention") if n.attrs.get("mission_id") == mission
+                 and n.attrs.get("state") != "cancelled"]
+        assert steps and max(steps, key=lambda n: n.attrs.get("issued_s", 0)).attrs["state"] == "done"
+
+
+def test_restarted_agents_resume_from_the_replicated_state(kill_run: dict[str, Any]) -> None:
+    run_dir = Path(kill_run["run_dir"])
+    at = {f["fault"]["target"]: f["at_sim_s"] for f in kill_run["faults"] if f["fault"]["action"] == "kill"}
+    # The simulator went on from the replicated pose and clock: time never goes back (the reader
+    # checks) and the robot never jumps (a restart from the scene's start pose would).
+    scene = load_scene("icra_usecase").scene
+    track = read_trajectory_csv(run_dir / "trajectory.csv")
+    assert track[0, 0] < at["sim_robot"] < track[-1, 0]
+    steps = np.hypot(np.diff(track[:, 1]), np.diff(track[:, 2]))
+    limit = scene.robot.max_speed * np.maximum(np.diff(track[:, 0]), 0.1) * 1.5 + 0.01
+    assert np.all(steps <= limit), f"robot jumped {steps.max():.2f} m at t={track[1 + np.argmax(steps - limit), 0]:.1f}"
+    graph = DSRGraph.load(str(run_dir / "final_graph.json"), agent="test")
+    # The restarted observer republished everyone; the restarted recognition kept every object.
+    people = graph.nodes_of_type("person")
+    assert {p.name for p in people} == {p.name for p in scene.people}
+    assert all(p.attrs["seen_s"] >= at["human_observer"] for p in people)
+    assert {o.name for o in graph.nodes_of_type("object")} == {o.name for o in scene.objects}
+    assert all(graph.world_pose(o.id) for o in graph.nodes_of_type("object"))
+    clock = graph.get_node_by_name("clock")
+    assert clock.attrs["now_s"] >= max(at.values())
+
+
+def test_the_recording_of_every_process_reads_back(kill_run: dict[str, Any]) -> None:
+    from rerun.chunk import RrdReader
+
+    from tests.system.recording import load_store, texts
+
+    run_dir = Path(kill_run["run_dir"])
+    final_pids = json.loads((run_dir / "pids.json").read_text())
+    parts = sorted((run_dir / "rrd").glob("*.rrd"))
+    for agent in AGENTS:  # one file per process: the killed one and its successor
+        assert len([p for p in parts if p.name.startswith(f"{agent}-")]) == 2, [p.name for p in parts]
+    for part in parts:
+        RrdReader(str(part)).stream().collect()  # killed processes' files: readable without a footer
+    for agent in AGENTS:  # the survivors stopped cleanly: complete files, footer included
+        RrdReader(str(run_dir / "rrd" / f"{agent}-{final_pids[agent]}.rrd")).store()
+    store = load_store(Path(kill_run["rrd"]))
+    for agent in AGENTS:
+        assert texts(store, f"/events/{agent}") or agent in ("object_recognition",), f"no events of {agent}"
+    done = [text for _, text in texts(store, "/events/executive") if " done" in text]
+    assert all(any(f"mission {m} done" in text for text in done) for m in MISSIONS), done
+    poses = store.reader(index="sim_time", contents="/world/robot/pose").to_arrow_table()
+    times = [t.total_seconds() for t in poses.column("sim_time").to_pylist()]
+    assert min(times) <= parse_clock("09:30") and max(times) >= parse_clock("13:15")
+
+
+# ----------------------------------------------------------------------------- randomized
+def test_a_short_random_chaos_run_loses_nothing(tmp_path: Path) -> None:
+    """`chronav chaos` with its own random schedule on a two-mission day (a kill, an agenda
+    change, a stop and the router killed, for seed 8)."""
+    text = (Path(load_scene("icra_usecase").path)).read_text()
+    scene = tmp_path / "icra_short.yaml"
+    scene.write_text("\n".join(line for line in text.splitlines() if "{id: m1115" not in line and "{id: m1315" not in line))
+    summary = _chaos([str(scene), "--seed", "8", "--faults", "4", "--duration", "8", "--no-record",
+                      "--runs-dir", str(tmp_path)], tmp_path / "chaos.log", 200)
+    assert summary["returncode"] == 0 and summary["ok"], json.dumps(summary, indent=1)[:4000]
+    assert summary["missions_completed"] == summary["missions_total"] == 2
+    assert summary["faults_injected"] >= 3 and summary["writes_lost"] == 0
+    assert math.isfinite(summary["convergence_max_s"])

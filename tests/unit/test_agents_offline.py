@@ -1,0 +1,100 @@
+"""The agents' behaviour on one in-memory DSR graph, without processes or Zenoh.
+
+Why: py_trees-style agents build offline from a config, so their DSR contract (who writes which
+nodes, edges and attributes) and the executive's plans can be checked in milliseconds here; the
+system tests then only need to show that the same happens across processes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from agents.agenda.agent import AgendaAgent
+from agents.executive.agent import ExecutiveAgent
+from agents.human_observer.agent import HumanObserverAgent
+from agents.object_recognition.agent import ObjectRecognitionAgent
+from agents.runtime.config import AgentConfig
+from agents.runtime.recording import Recorder
+from agents.sim_robot.agent import SimRobotAgent
+from dsr import DSRGraph
+from scenes.loader import SCENES_DIR
+from scenes.model import parse_clock
+
+AGENTS = (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent, ExecutiveAgent)
+
+
+def world(scene: str, tmp_path: Path) -> tuple[DSRGraph, dict[str, object]]:
+    graph = DSRGraph(agent="offline")
+    agents = {}
+    for cls in AGENTS:
+        config = AgentConfig(name=cls.kind, scene=SCENES_DIR / f"{scene}.yaml", run_dir=tmp_path)
+        agent = cls(config)
+        agent.setup(graph, Recorder(cls.kind, None, None))
+        agents[cls.kind] = agent
+    for agent in agents.values():
+        agent.step()
+    graph.dispatch()
+    return graph, agents
+
+
+def set_clock(graph: DSRGraph, agents: dict, hhmm: str) -> None:
+    graph.update_node(graph.get_node_by_name("clock").id, attrs={"now_s": parse_clock(hhmm)})
+    agents["sim_robot"].now_s = parse_clock(hhmm)
+    for name in ("object_recognition", "human_observer", "agenda"):
+        agents[name].step()
+    graph.dispatch()
+
+
+def test_agents_write_the_shared_vocabulary(tmp_path: Path) -> None:
+    graph, agents = world("center_a", tmp_path)
+    set_clock(graph, agents, "11:30")
+    names = {n.name for n in graph.nodes()}
+    assert {"world", "clock", "corridor", "dining_room", "door_ot", "robot", "ot_tv", "senior_1"} <= names
+    corridor, dining = graph.get_node_by_name("corridor"), graph.get_node_by_name("dining_room")
+    assert graph.get_edge(corridor.id, dining.id, "connected").attrs["door"] == "door_dining"
+    tv_game = graph.get_node_by_name("activity/tv_therapy")
+    assert tv_game.attrs["state"] == "running"
+    assert graph.get_node_by_name("ot_tv").attrs["R"] == pytest.approx(3.5)
+    assert graph.get_node_by_name("stretcher").attrs["R"] == pytest.approx(1.5)
+    robot = graph.get_node_by_name("robot")
+    assert [graph.get_node(e.dst).name for e in graph.edges_from(robot.id, "in")] == ["corridor"]
+    senior = graph.get_node_by_name("senior_1")
+    assert graph.get_edge(senior.id, tv_game.id, "participant") is None  # senior_1 is in the table therapy
+    assert graph.get_edge(senior.id, graph.get_node_by_name("activity/table_therapy").id, "participant")
+
+
+def test_executive_issues_one_route_confined_intention(tmp_path: Path) -> None:
+    graph, agents = world("center_a", tmp_path)
+    set_clock(graph, agents, "11:30")
+    executive = agents["executive"]
+    executive.step()
+    graph.dispatch()
+    mission = graph.get_node_by_name("mission/m1000")
+    assert mission.attrs["state"] == "active"  # the first pending mission whose time has come
+    intentions = [n for n in graph.nodes_of_type("intention") if n.attrs["state"] == "active"]
+    assert len(intentions) == 1
+    intention = intentions[0].attrs
+    assert intention["kind"] == "navigate"
+    # corridor -> physical_therapy through its own door: never through the OT room, where a group
+    # therapy runs (the grammar's agenda rule), and the pose goal is the mission's.
+    assert intention["rooms"] == ["corridor", "physical_therapy"]
+    assert (intention["goal_x"], intention["goal_y"]) == (12.5, 6.2)
+
+
+def test_agenda_request_round_trip(tmp_path: Path) -> None:
+    graph, agents = world("icra_usecase", tmp_path)
+    set_clock(graph, agents, "09:30")
+    ok = graph.insert_node(type="agenda_request", name="agenda_request/1", attrs={
+        "state": "pending", "change": '{"op": "add", "activity": {"name": "Extra", "object": "stretcher", '
+                                      '"start": "09:40", "end": "10:00"}}'})
+    bad = graph.insert_node(type="agenda_request", name="agenda_request/2", attrs={
+        "state": "pending", "change": '{"op": "add", "activity": {"name": "x", "object": "piano", '
+                                      '"start": "09:40", "end": "10:00"}}'})
+    agents["agenda"].step()
+    assert graph.get_node(ok.id).attrs["state"] == "accepted"
+    refused = graph.get_node(bad.id).attrs
+    assert refused["state"] == "refused" and "piano" in refused["message"]
+    assert graph.get_node_by_name("activity/stretcher-0940").attrs["state"] == "upcoming"
+    assert graph.get_node_by_name("stretcher").attrs["R"] > 1.5
