@@ -40,6 +40,7 @@ class _Review:
         self.problems: list[str] = []
         self.dropped = 0
         self._writers: dict[int, str | None] = {}
+        self._memo: dict[tuple[object, ...], str | None] = {}   # question -> refusal
         self.created = message_node_types(message, graph)
 
     def writer(self, replica: int) -> str | None:
@@ -53,50 +54,57 @@ class _Review:
 
     def refuse(self, problem: str) -> None:
         self.dropped += 1
-        if len(self.problems) < _MAX_REPORTED:
+        if len(self.problems) < _MAX_REPORTED and problem not in self.problems:
             self.problems.append(problem)
 
-    def ok(self, write: Write) -> bool:
-        if self.allowed(write):
+    def ok(self, replica: int, element: Element, types: tuple[str | None, ...], op: str,
+           attr: str | None, src: str | None, dst: str | None) -> bool:
+        """Memoised per stamping replica: a 10,000-node state repeats a few dozen questions."""
+        key = (replica, element, types, op, attr, src, dst)
+        if key not in self._memo:
+            from dsr.policy_rules import explain
+            who = self.writer(replica)
+            writes = [Write(who, element, t, op, attr, src, dst) for t in types]  # type: ignore[arg-type]
+            refused = next((w for w in writes if not self.allowed(w)), None)
+            self._memo[key] = None if refused is None else explain(refused)
+        problem = self._memo[key]
+        if problem is None:
             return True
-        from dsr.policy_rules import explain
-        self.refuse(explain(write))
+        self.refuse(problem)
         return False
 
     def element(self, state: ElementState, local: ElementState | None, element: Element,
-                types: set[str | None], src: str | None, dst: str | None) -> ElementState:
-        kept = ElementState()
-
-        def writes(replica: int, op: str, attr: str | None = None) -> list[Write]:
-            who = self.writer(replica)
-            return [Write(who, element, t, op, attr, src, dst) for t in types]  # type: ignore[arg-type]
-
-        for replica, hlc in state.add.items():
-            if all(self.ok(w) for w in writes(replica, "create")):
-                kept.add[replica] = hlc
-        if state.meta is not None and all(self.ok(w) for w in writes(state.meta[1], "create")):
-            kept.meta = state.meta
-        for key, register in state.attrs.items():
-            if key == REMOVAL_RECEIPT:
-                continue
-            hlc, replica = register[0], register[1]
-            op = "init" if state.add.get(replica) == hlc else "attr"
-            if all(self.ok(w) for w in writes(replica, op, key)):
-                kept.attrs[key] = register
-        if removes(state):
-            if not _news(state, local) or self._removal_allowed(state, element, types, src, dst):
-                kept.rem, kept.cleared = dict(state.rem), state.cleared
-                receipt = state.attrs.get(REMOVAL_RECEIPT)
-                if receipt is not None:
-                    kept.attrs[REMOVAL_RECEIPT] = receipt
+                types: tuple[str | None, ...], src: str | None, dst: str | None
+                ) -> ElementState | None:
+        """None when every part is acceptable (the common case: no copy), else the kept part."""
+        ok = self.ok
+        bad_adds = [r for r in state.add if not ok(r, element, types, "create", None, src, dst)]
+        bad_meta = state.meta is not None and not ok(state.meta[1], element, types, "create",
+                                                     None, src, dst)
+        add = state.add
+        bad_attrs = [key for key, (hlc, replica, _v) in state.attrs.items()
+                     if key != REMOVAL_RECEIPT and not ok(
+                         replica, element, types, "init" if add.get(replica) == hlc else "attr",
+                         key, src, dst)]
+        bad_removal = removes(state) and _news(state, local) and not self._removal_allowed(
+            state, element, types, src, dst)
+        if not (bad_adds or bad_meta or bad_attrs or bad_removal):
+            return None
+        kept = ElementState(add={r: h for r, h in state.add.items() if r not in bad_adds},
+                            meta=None if bad_meta else state.meta,
+                            attrs={k: v for k, v in state.attrs.items() if k not in bad_attrs})
+        if bad_removal:
+            kept.attrs.pop(REMOVAL_RECEIPT, None)
+        else:
+            kept.rem, kept.cleared = dict(state.rem), state.cleared
         return kept
 
-    def _removal_allowed(self, state: ElementState, element: Element, types: set[str | None],
-                         src: str | None, dst: str | None) -> bool:
+    def _removal_allowed(self, state: ElementState, element: Element,
+                         types: tuple[str | None, ...], src: str | None, dst: str | None) -> bool:
         from dsr.policy_rules import explain
         receipt = state.attrs.get(REMOVAL_RECEIPT)
         horizon = max(state.cleared, max(state.rem.values(), default=0))
-        what = f"{next(iter(types))!r} {element}"
+        what = f"{types[0]!r} {element}"
         if receipt is None or receipt[0] < horizon:
             self.refuse(f"a removal of a {what} without a receipt naming its remover")
             return False
@@ -125,15 +133,22 @@ def review_state(message: Decoded, graph: GraphLookup, allowed: Allowed) -> tupl
     from dsr.wire import Decoded as DecodedMessage
 
     review = _Review(message, graph, allowed)
-    nodes = [(node_id, review.element(state, graph.element_state("node", node_id), "node",
-                                      node_types(node_id, state, graph), None, None))
-             for node_id, state in message.nodes]
-    edges = [(key, review.element(state, graph.element_state("edge", key), "edge", {key[2]},
-                                  review.type_of(key[0]), review.type_of(key[1])))
-             for key, state in message.edges]
+    element_state = graph.element_state
+    nodes = []
+    for node_id, state in message.nodes:
+        local = element_state("node", node_id) if removes(state) else None
+        kept = review.element(state, local, "node", tuple(node_types(node_id, state, graph)),
+                              None, None)
+        nodes.append((node_id, state if kept is None else kept))
+    edges = []
+    for key, state in message.edges:
+        local = element_state("edge", key) if removes(state) else None
+        kept = review.element(state, local, "edge", (key[2],), review.type_of(key[0]),
+                              review.type_of(key[1]))
+        edges.append((key, state if kept is None else kept))
     if not review.dropped:
         return message, None
-    kept = DecodedMessage(message.kind, message.graph, message.agent, message.replica,
-                          message.writers, nodes, edges, message.top_hlc)
+    kept_message = DecodedMessage(message.kind, message.graph, message.agent, message.replica,
+                                  message.writers, nodes, edges, message.top_hlc)
     summary = f"dropped {review.dropped} part(s) of the state: " + "; ".join(review.problems)
-    return kept, summary
+    return kept_message, summary

@@ -53,8 +53,9 @@ class ChaosError(Exception):
 @dataclass(frozen=True)
 class Fault:
     """One fault. Trigger: ``at_s`` wall seconds after ``mission`` became active (or, without a
-    mission, after the first mission became active), and with ``driving`` only while the robot
-    drives (``nav_active``); never before the previous fault converged."""
+    mission, after the first mission became active); with ``driving``, ``at_s`` seconds into a
+    stretch of the robot driving (``nav_active``) once the mission is active.  Never before the
+    previous fault converged."""
 
     action: Action
     target: str
@@ -160,13 +161,13 @@ def load_schedule(path: Path) -> list[Fault]:
 
 
 # ----------------------------------------------------------------------------- probing replicas
-def probe_digests(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, str]:
-    """Digest of every replica that answers one state query, by agent name."""
+def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, Any]:
+    """Every replica that answers one state query, as an offline DSRGraph copy, by agent name."""
     import zenoh
 
     from dsr import DSRGraph, wire
 
-    digests: dict[str, str] = {}
+    copies: dict[str, Any] = {}
     replies = session.get(wire.state_key(graph_name, "*"), target=zenoh.QueryTarget.ALL,
                           consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout_s)
     for reply in replies:
@@ -175,8 +176,36 @@ def probe_digests(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict
         message = wire.decode(reply.ok.payload.to_bytes())
         copy = DSRGraph("probe", graph=graph_name)
         copy.apply_message(message)
-        digests[message.agent] = copy.digest()
-    return digests
+        copies[message.agent] = copy
+    return copies
+
+
+def describe_divergence(copies: dict[str, Any], limit: int = 4) -> str:
+    """Which replicas disagree with the largest group, and on which nodes/edges (for the report)."""
+    groups: dict[str, list[str]] = {}
+    for agent, copy in copies.items():
+        groups.setdefault(copy.digest(), []).append(agent)
+    if len(groups) <= 1:
+        return ""
+    majority = max(groups.values(), key=len)
+
+    def elements(copy: Any) -> dict[str, Any]:
+        document = copy.to_document()
+        names = {n["id"]: n["name"] for n in document["nodes"]}
+        out = {f"node {n['name']}": (n["type"], n["attrs"]) for n in document["nodes"]}
+        out |= {f"edge {names.get(e['src'])}-{e['type']}->{names.get(e['dst'])}": e["attrs"] for e in document["edges"]}
+        return out
+
+    reference = elements(copies[majority[0]])
+    parts = []
+    for agents in groups.values():
+        if agents is majority:
+            continue
+        other = elements(copies[agents[0]])
+        differ = sorted(k for k in reference.keys() | other.keys() if reference.get(k) != other.get(k))
+        parts.append(f"{','.join(sorted(agents))} vs {','.join(sorted(majority))}: "
+                     f"{'; '.join(differ[:limit])}{' ...' if len(differ) > limit else ''}")
+    return " | ".join(parts)
 
 
 # ----------------------------------------------------------------------------- outcomes
@@ -208,6 +237,7 @@ class ChaosReport:
     lost: list[str]
     requests: dict[str, str]
     final_converged: bool
+    final_divergence: str
     restarts: dict[str, int]
     wall_s: float
     run_dir: str
@@ -228,7 +258,7 @@ class ChaosReport:
             "convergence_max_s": max(times) if times else None,
             "convergence_mean_s": sum(times) / len(times) if times else None,
             "not_converged": sum(1 for f in injected if f.converged_s is None),
-            "final_converged": self.final_converged,
+            "final_converged": self.final_converged, "final_divergence": self.final_divergence,
             "writes_lost": self.writes_lost, "lost": self.lost,
             "agenda_requests": self.requests, "restarts": self.restarts,
             "wall_s": round(self.wall_s, 2), "run_dir": self.run_dir, "rrd": self.rrd,
@@ -242,7 +272,7 @@ class ChaosRun:
 
     ``on_tick`` runs on the launcher's thread (it only records the status and, at the end, takes
     the final digest sample); faults run on a thread of their own with a writable replica named
-    ``chaos`` that writes nothing but ``agenda_request`` nodes."""
+    ``agenda_tool-chaos`` that writes nothing but ``agenda_request`` nodes."""
 
     def __init__(self, schedule: list[Fault], *, converge_timeout_s: float = 30.0,
                  log: Callable[[str], None] | None = None) -> None:
@@ -261,6 +291,9 @@ class ChaosRun:
         self._stopped_pids: set[int] = set()
         self._final_probed = False
         self._requests: list[str] = []
+        self.final_divergence = ""
+        self._last_copies: dict[str, Any] = {}
+        self._unsettled: tuple[FaultOutcome, float] | None = None
 
     # --------------------------------------------------------------- launcher thread
     def on_tick(self, status: dict[str, Any]) -> None:
@@ -279,7 +312,13 @@ class ChaosRun:
                 and not self._final_probed:
             self._final_probed = True
             self.finish()
-            self.final_converged = self._converge(timeout_s=10.0, final=True) is not None
+            final = self._converge(timeout_s=10.0, final=True)
+            self.final_converged = final is not None
+            self.final_divergence = "" if self.final_converged else self._divergence()
+            if self._unsettled is not None and final is not None:
+                outcome, t0 = self._unsettled
+                outcome.converged_s = round(time.monotonic() - t0, 3)
+                outcome.note = (outcome.note + " " if outcome.note else "") + "converged after the last mission"
 
     def finish(self) -> None:
         """Stop injecting (resumes anything still stopped) and wait for the injector."""
@@ -319,10 +358,15 @@ class ChaosRun:
         return not self._stop.wait(max(0.0, seconds))
 
     def _wait_trigger(self, fault: Fault) -> bool:
+        driving_since: float | None = None
         while not self._stop.is_set():
+            now = time.monotonic()
             started = self.activated.get(fault.mission) if fault.mission else min(self.activated.values(), default=None)
-            if started is not None and time.monotonic() >= started + fault.at_s and (
-                    not fault.driving or any(n.attrs.get("nav_active") for n in self.graph.nodes_of_type("robot"))):
+            if fault.driving and started is not None:
+                driving = any(n.attrs.get("nav_active") for n in self.graph.nodes_of_type("robot"))
+                driving_since = (driving_since or now) if driving else None
+                started = driving_since
+            if started is not None and now >= started + fault.at_s:
                 return True
             self._sleep(0.05)
         return False
@@ -385,6 +429,10 @@ class ChaosRun:
             outcome.recovered_s = round(time.monotonic() - t0, 3) if answered else None
         converged = self._converge(self.converge_timeout_s, since=t0)
         outcome.converged_s = None if converged is None else round(converged, 3)
+        if converged is None and self._stop.is_set():
+            self._unsettled = (outcome, t0)  # the missions ended first: the final sample decides
+        elif converged is None:
+            outcome.note = (outcome.note + " " if outcome.note else "") + f"diverged: {self._divergence()}"
 
     def _wait(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
         deadline = time.monotonic() + timeout_s
@@ -408,14 +456,23 @@ class ChaosRun:
         return None if node is None else str(node.attrs.get("state"))
 
     def _safe_probe(self) -> dict[str, str]:
+        """Digests by agent ({} while this replica is cut off); keeps the copies for diagnosis."""
         session = None if self._replica is None else self._replica.session
         if session is None:
             return {}
         try:
-            return probe_digests(session, self.graph.graph_name)
+            copies = probe_replicas(session, self.graph.graph_name)
         except Exception as exc:  # noqa: BLE001 - a replica mid-restart may answer garbage
             self.log(f"probe failed: {type(exc).__name__}: {exc}")
             return {}
+        self._last_copies = copies
+        return {agent: copy.digest() for agent, copy in copies.items()}
+
+    def _divergence(self) -> str:
+        """How the last sample failed: missing answers, or who differs on what."""
+        missing = self._expected() - set(self._last_copies)
+        return describe_divergence(self._last_copies) or (
+            f"no answer from {', '.join(sorted(missing))}" if missing else "")
 
     def _expected(self) -> set[str]:
         """Replicas that must answer: every agent and this one (read-only ones, like the
@@ -524,6 +581,7 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
           and all(o.converged_s is not None for o in chaos.outcomes if o.injected))
     report = ChaosReport(scene=loaded.scene.name, ok=ok, faults=chaos.outcomes, missions=missions,
                          writes_lost=len(lost), lost=lost, requests=requests, final_converged=chaos.final_converged,
+                         final_divergence=chaos.final_divergence,
                          restarts=result.restarts, wall_s=result.wall_s, run_dir=str(result.run_dir),
                          rrd=str(result.rrd_path) if result.rrd_path else None, events=result.events)
     (result.run_dir / "chaos.json").write_text(json.dumps(report.summary(), indent=2))

@@ -1,8 +1,8 @@
 """The single `chronav` console script.
 
 Why one module per command group: each group imports its heavy dependencies (numba, zenoh, rerun)
-only inside its commands, so `chronav --help` stays fast and a broken optional piece cannot take
-the whole CLI down.  Every module listed in COMMAND_MODULES exposes ``register(app)``.
+only inside its commands, so `chronav --help` stays fast.  Every module listed in COMMAND_MODULES
+exposes ``register(app)``; the list is explicit (no discovery by name) so a typo fails loudly.
 """
 
 from __future__ import annotations
@@ -28,13 +28,7 @@ app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated 
 
 def _register_all() -> None:
     for module_name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            if exc.name == module_name:  # not written yet in this checkout
-                continue
-            raise
-        module.register(app)
+        importlib.import_module(module_name).register(app)
 
 
 _register_all()

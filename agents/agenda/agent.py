@@ -20,6 +20,7 @@ from agents.agenda.expand import expand_day
 from agents.agenda.model import Activity, AgendaDay, AgendaError, format_clock
 from agents.agenda.yaml_source import load_scene_agenda
 from agents.runtime.base import Agent
+from agents.runtime.freshness import mark_observed
 from agents.runtime.recording import Recorder
 from agents.social_navigation.chronemics import ChronemicsParams, r_band, r_of_t
 
@@ -86,6 +87,7 @@ class AgendaAgent(Agent):
         self._requests(now_s)
         self._publish_activities(now_s)
         self._publish_r(now_s)
+        mark_observed(g, self.config.name, now_s)
 
     def _apply(self, change_json: str, now_s: float, origin: str) -> tuple[bool, str]:
         try:
@@ -138,10 +140,14 @@ class AgendaAgent(Agent):
                 ok, message = False, "refused: request has no 'change' attribute (JSON text)"
             else:
                 ok, message = self._apply(text, now_s, origin=str(request.attrs.get("requested_by", request.name)))
+            # One delta: a change is never in the log without its answer, or answered without being
+            # logged (a kill in between made a restarted agent apply it twice).
+            with self.graph.transaction():
                 if ok:
-                    self._remember(text)
-            self.graph.update_node(request.id, attrs={"state": "accepted" if ok else "refused",
-                                                      "message": message, "answered_s": now_s})
+                    self._remember(str(text))
+                if self.graph.get_node(request.id) is not None:  # the requester may have withdrawn it
+                    self.graph.update_node(request.id, attrs={"state": "accepted" if ok else "refused",
+                                                              "message": message, "answered_s": now_s})
 
     def _activity_attrs(self, activity: Activity, now_s: float) -> dict[str, object]:
         current = activity.at(now_s, self.upcoming_window_s)

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from agents.runtime.base import Agent
+from agents.runtime.freshness import mark_observed
 from agents.runtime.recording import Recorder
 from scenes.motion import people_at
 
@@ -59,6 +60,7 @@ class HumanObserverAgent(Agent):
             self.tracks[truth.name] = track
             self._publish(truth.name, truth.role, track, now_s)
         self._publish_interactions(now_s)
+        mark_observed(self.graph, self.config.name, now_s)
         self._log()
 
     def _publish(self, name: str, role: str, pose: tuple[float, float, float], now_s: float) -> None:

@@ -33,6 +33,7 @@ class ObjectRecognitionAgent(Agent):
         if now_s - self._last_check < CHECK_PERIOD_S:
             return
         self._last_check = now_s
+        self.rec.set_time(now_s)  # its events belong on the sim_time timeline like everyone's
         for obj in self.scene.objects:
             self._publish(obj, world.id)
 

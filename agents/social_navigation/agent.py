@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from agents.runtime.base import Agent
+from agents.runtime.freshness import observed_up_to
 from agents.runtime.recording import Recorder
 from agents.social_navigation import elastic_band as eb
 from agents.social_navigation.control import BandFollower, ControlParams, DiffCommand
@@ -167,7 +168,8 @@ class SocialNavigationAgent(Agent):
             self._maybe_log_map(now_s)
             return
         if intention.id != self.intention_id:
-            self._start(intention, robot, now_s)
+            if observed_up_to(self.graph, now_s):  # after a clock skip, plan on today's people
+                self._start(intention, robot, now_s)
             return
         if now_s - self.last_replan_s >= REPLAN_PERIOD_S:
             self._replan(intention, robot, now_s)

@@ -67,7 +67,7 @@ def test_sources_expand() -> None:
     expand_day(parse_agenda_text(ICS_TEXTS[0], "ics", "a.ics"), DAYS[0], "Europe/Madrid", None)
 
 
-@fuzz_settings(150)
+@fuzz_settings(250)
 @given(data=st.data())
 def test_mutated_ics_files_give_agenda_errors(data: st.DataObject) -> None:
     text = data.draw(st.sampled_from(ICS_TEXTS), label="source")
@@ -75,19 +75,23 @@ def test_mutated_ics_files_give_agenda_errors(data: st.DataObject) -> None:
     read_and_expand(mutated, "ics", "fuzz.ics", data.draw(st.sampled_from(DAYS), label="day"))
 
 
-@fuzz_settings(120)
+@fuzz_settings(200)
 @given(data=st.data())
 def test_mutated_yaml_agendas_give_agenda_errors(data: st.DataObject) -> None:
     mutated = data.draw(st.one_of(mutated_text(YAML_TEXT), token_soup(YAML_TEXT), st.text(max_size=80)), label="text")
     read_and_expand(mutated, "yaml", "fuzz.yaml", data.draw(st.sampled_from(DAYS), label="day"))
 
 
-@fuzz_settings(40)
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fuzz_agenda")
+
+
+@fuzz_settings(60)
 @given(data=st.data())
-def test_agenda_files_with_stray_bytes_give_agenda_errors(tmp_path_factory: pytest.TempPathFactory,
-                                                          data: st.DataObject) -> None:
+def test_agenda_files_with_stray_bytes_give_agenda_errors(workdir: Path, data: st.DataObject) -> None:
     suffix, text = data.draw(st.sampled_from([(".ics", ICS_TEXTS[0]), (".yaml", YAML_TEXT)]), label="source")
-    path = tmp_path_factory.mktemp("agenda") / f"bytes{suffix}"
+    path = workdir / f"bytes{suffix}"
     path.write_bytes(data.draw(mutated_bytes(text), label="content"))
     try:
         expand_day(load_agenda_file(path), DAYS[0], "Europe/Madrid", OBJECTS, known_rooms=ROOMS)
@@ -108,7 +112,7 @@ CHANGES = [
 ]
 
 
-@fuzz_settings(150)
+@fuzz_settings(250)
 @given(data=st.data())
 def test_mutated_agenda_changes_are_refused_not_crashing(data: st.DataObject) -> None:
     """What `chronav agenda` (or anyone on the network) may put in an agenda_request."""

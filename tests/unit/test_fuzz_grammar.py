@@ -50,7 +50,7 @@ def test_sources_parse() -> None:
         parse_target(text, "source.aggt")
 
 
-@fuzz_settings(250)
+@fuzz_settings(300)
 @given(data=st.data())
 def test_mutated_grammars_give_located_errors(data: st.DataObject) -> None:
     text = data.draw(mutated_text(data.draw(st.sampled_from(GRAMMARS), label="source")), label="text")
@@ -80,11 +80,15 @@ def test_mutated_targets_give_located_errors(data: st.DataObject) -> None:
         check_grammar_error(exc, "fuzz.aggt")
 
 
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fuzz_grammar")
+
+
 @fuzz_settings(40)
 @given(content=mutated_bytes(GRAMMARS[0]))
-def test_grammar_files_with_stray_bytes_give_located_errors(tmp_path_factory: pytest.TempPathFactory,
-                                                             content: bytes) -> None:
-    path = tmp_path_factory.mktemp("aggl", numbered=True) / "bytes.aggl"
+def test_grammar_files_with_stray_bytes_give_located_errors(workdir: Path, content: bytes) -> None:
+    path = workdir / "bytes.aggl"
     path.write_bytes(content)
     try:
         load_grammar(path)

@@ -50,7 +50,7 @@ def test_shipped_scenes_load() -> None:
         load_scene(source)
 
 
-@fuzz_settings(400)
+@fuzz_settings(250)
 @given(data=st.data())
 def test_mutated_scene_files_give_located_errors(workdir: Path, data: st.DataObject) -> None:
     source = data.draw(st.sampled_from(SOURCES), label="source")

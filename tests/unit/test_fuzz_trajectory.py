@@ -35,10 +35,15 @@ def test_valid_file_reads(tmp_path: Path) -> None:
     assert read_trajectory_csv(path).shape == (13, 4)
 
 
-@fuzz_settings(150)
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("fuzz_trajectory")
+
+
+@fuzz_settings(200)
 @given(content=st.one_of(mutated_bytes(VALID), token_soup(VALID, (",", "\r\n", '"', "nan", "-inf", "1e999")).map(str.encode),
                          st.binary(max_size=64)))
-def test_mutated_trajectory_files_give_format_errors(tmp_path_factory: pytest.TempPathFactory, content: bytes) -> None:
-    path = tmp_path_factory.mktemp("traj") / "trajectory.csv"
+def test_mutated_trajectory_files_give_format_errors(workdir: Path, content: bytes) -> None:
+    path = workdir / "trajectory.csv"
     path.write_bytes(content)
     check_file(path)

@@ -1,0 +1,31 @@
+"""Which sim time has each perceiving agent caught up with?
+
+Why: when the simulator skips an idle stretch (10:45 -> 11:15 in one step), people and agenda
+states in the DSR still describe 10:45 for a few milliseconds.  A planner starting a mission at
+11:15 must wait for them, or it plans around people who have left.  Each perceiving agent stamps
+``sensor/<agent>.observed_s`` after processing a clock value; consumers wait until all caught up.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
+
+
+def mark_observed(graph: Any, agent: str, now_s: float) -> None:
+    name = f"sensor/{agent}"
+    node = graph.get_node_by_name(name)
+    if node is None:
+        graph.insert_node(type="sensor", name=name, attrs={"observed_s": now_s})
+    elif node.attrs.get("observed_s") != now_s:
+        graph.update_node(node.id, attrs={"observed_s": now_s})
+
+
+def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
+    """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
+    for agent in agents:
+        node = graph.get_node_by_name(f"sensor/{agent}")
+        if node is None or float(node.attrs.get("observed_s", -1e9)) < now_s - slack_s:
+            return False
+    return True
