@@ -7,17 +7,18 @@ as CRDT deltas; the wire format is in docs/dsr_wire_format.md.
 from dsr.config import ZenohSettings, graph_name_from_env
 from dsr.errors import (ConfigError, DSRError, EdgeNotFoundError, GraphFileError,
                         InvalidAttributeError, InvalidIdentifierError, NameTakenError,
-                        NodeNotFoundError, PoseError, ReadOnlyGraphError, TransactionError,
-                        WireError)
+                        NodeNotFoundError, PolicyError, PoseError, ReadOnlyGraphError,
+                        TransactionError, WireError)
 from dsr.graph import DSRGraph
 from dsr.model import Edge, Node
-from dsr.policy import AllowAll, WritePolicy
+from dsr.policy import AllowAll, WritePolicy, policy_from_env
 from dsr.signals import SIGNALS
 from dsr.transport import Replica, ReplicaStats, join
 
 __all__ = [
     "AllowAll", "ConfigError", "DSRError", "DSRGraph", "Edge", "EdgeNotFoundError",
     "GraphFileError", "InvalidAttributeError", "InvalidIdentifierError", "NameTakenError", "Node",
-    "NodeNotFoundError", "PoseError", "ReadOnlyGraphError", "Replica", "ReplicaStats", "SIGNALS",
-    "TransactionError", "WireError", "WritePolicy", "ZenohSettings", "graph_name_from_env", "join",
+    "NodeNotFoundError", "PolicyError", "PoseError", "ReadOnlyGraphError", "Replica", "ReplicaStats",
+    "SIGNALS", "TransactionError", "WireError", "WritePolicy", "ZenohSettings", "graph_name_from_env",
+    "join", "policy_from_env",
 ]

@@ -72,6 +72,7 @@ class Replica:
         self.watch_interval = watch_interval
         self.linger_s = linger_s
         self.stats = ReplicaStats()
+        self._rejects_by_kind: dict[str, int] = {}
         self.session: Any = None
         self._publisher: Any = None
         self._token: Any = None
@@ -189,10 +190,15 @@ class Replica:
         else:
             stats.rejected += 1
         stats.last_reject = f"{source}: {reason}"
-        count = stats.rejected + stats.rejected_policy
-        if count <= _LOG_FIRST_REJECTS or count % 1000 == 0:
-            log.warning("DSR %s dropped message from %s: %s (rejected so far: %d)",
-                        self.graph.agent, source, reason, count)
+        # One log budget per kind of refusal, so that a flood of garbage on the delta keys
+        # cannot hide policy violations or bad state replies from the log.
+        kind = f"{'state' if '/state/' in source else 'delta'}-{'policy' if policy else 'invalid'}"
+        seen = self._rejects_by_kind.get(kind, 0) + 1
+        self._rejects_by_kind[kind] = seen
+        if seen <= _LOG_FIRST_REJECTS or seen % 1000 == 0:
+            log.warning("DSR %s dropped message from %s: %s (rejected so far: %d, %d of this "
+                        "kind; logging the first %d and every 1000th)", self.graph.agent, source,
+                        reason, stats.rejected + stats.rejected_policy, seen, _LOG_FIRST_REJECTS)
 
     def _problem(self, message: wire.Decoded, claimed: str, kind: str) -> str | None:
         graph = self.graph

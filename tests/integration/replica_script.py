@@ -11,8 +11,9 @@
   `<agent>-<k>` and sets `<agent>-counter.k = k`.  A write is "acknowledged" once applied to the
   local replica; since nothing ever deletes these nodes, a converged replica must hold every
   acknowledged node of every writer and each counter at its writer's last k.
-- Every 50 ms the status file is rewritten atomically: digest, sizes, stats, `acked` and a
-  history of (wall time, acked, deltas received) from which tests compute loop rates.
+- Every 50 ms the status file is rewritten atomically: stats, `acked`, a history of (wall time,
+  acked, deltas received) from which tests compute loop rates, and (at most every 0.25 s, and
+  never while writing with `--measure`) the O(graph) view: digest, names, counters.
 """
 
 from __future__ import annotations

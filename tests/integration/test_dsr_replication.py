@@ -93,9 +93,10 @@ def test_malformed_payloads_are_rejected_and_counted(procs, tmp_path):
     }
     session = _client(endpoint)
     try:
-        token = session.liveliness().declare_token("chronav/chronav/members/eve")
+        # Queryable first: a replica asks a new member for its state as soon as its token appears.
         queryable = session.declare_queryable(
             "chronav/chronav/state/eve", lambda q: q.reply(q.key_expr, b"not json"))
+        token = session.liveliness().declare_token("chronav/chronav/members/eve")
         for agent, payloads in bad_payloads.items():
             for payload in payloads:
                 session.put(wire.delta_key("chronav", agent), payload)

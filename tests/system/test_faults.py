@@ -130,6 +130,9 @@ def _chaos(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
     return summary
 
 
+slow = pytest.mark.slow
+
+
 @pytest.fixture(scope="module")
 def kill_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     work = tmp_path_factory.mktemp("faults")
@@ -138,6 +141,7 @@ def kill_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     return _chaos(["icra_usecase", "--schedule", str(schedule), "--runs-dir", str(work)], work / "chaos.log", 240)
 
 
+@slow
 def test_every_process_killed_during_a_mission_and_the_missions_complete(kill_run: dict[str, Any]) -> None:
     assert kill_run["returncode"] == 0 and kill_run["ok"], json.dumps(kill_run, indent=1)[:4000]
     assert kill_run["missions"] == dict.fromkeys(MISSIONS, "done")
@@ -149,6 +153,7 @@ def test_every_process_killed_during_a_mission_and_the_missions_complete(kill_ru
     assert kill_run["final_converged"]
 
 
+@slow
 def test_nothing_acknowledged_is_lost(kill_run: dict[str, Any]) -> None:
     assert kill_run["writes_lost"] == 0, kill_run["lost"]
     assert list(kill_run["agenda_requests"].values()) == ["accepted"]
@@ -164,6 +169,7 @@ def test_nothing_acknowledged_is_lost(kill_run: dict[str, Any]) -> None:
         assert steps and max(steps, key=lambda n: n.attrs.get("issued_s", 0)).attrs["state"] == "done"
 
 
+@slow
 def test_restarted_agents_resume_from_the_replicated_state(kill_run: dict[str, Any]) -> None:
     run_dir = Path(kill_run["run_dir"])
     at = {f["fault"]["target"]: f["at_sim_s"] for f in kill_run["faults"] if f["fault"]["action"] == "kill"}
@@ -192,6 +198,7 @@ LOGGED = {"sim_robot": ("/world/robot/pose", True), "human_observer": ("/world/p
           "executive": ("/events/executive", False), "object_recognition": ("/events/object_recognition", False)}
 
 
+@slow
 def test_the_recording_of_every_process_reads_back(kill_run: dict[str, Any]) -> None:
     from rerun.chunk import RrdReader
 
@@ -222,6 +229,7 @@ def test_the_recording_of_every_process_reads_back(kill_run: dict[str, Any]) -> 
 
 
 # ----------------------------------------------------------------------------- randomized
+@slow
 def test_a_short_random_chaos_run_loses_nothing(tmp_path: Path) -> None:
     """`chronav chaos` with its own random schedule on a two-mission day (a kill, an agenda
     change, a stop and the router killed, for seed 8)."""
