@@ -77,15 +77,21 @@ def _walk(node: yaml.Node, path: KeyPath, marks: dict[KeyPath, tuple[int, int]])
 
 def load_located(text: str, file: str) -> LocatedYaml:
     """Parse YAML text; syntax errors become SourceError with the parser's own position."""
+    loader: yaml.SafeLoader | None = None
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
+        loader = yaml.SafeLoader(text)  # the reader already refuses control characters here
+        # One parse: compose the node tree (it keeps the marks), then build plain data from it.
+        node = loader.get_single_node()
+        data = loader.construct_document(node) if node is not None else None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, column = (mark.line + 1, mark.column + 1) if mark else (1, 1)
         raise SourceError(file, line, column, "", f"YAML syntax error: {exc.problem}") from None
     except yaml.YAMLError as exc:
         raise SourceError(file, 1, 1, "", f"YAML error: {exc}") from None
+    finally:
+        if loader is not None:
+            loader.dispose()
     marks: dict[KeyPath, tuple[int, int]] = {}
     if node is not None:
         _walk(node, (), marks)

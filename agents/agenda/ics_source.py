@@ -417,6 +417,12 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
         calendars = icalendar.Calendar.from_ical(text, multiple=True)
     except ValueError as exc:
         raise AgendaSourceError([SourceProblem(source, None, f"not a valid iCalendar file: {exc}")]) from None
+    except (AttributeError, TypeError, KeyError, IndexError) as exc:
+        # icalendar's own crashes on malformed input (icalendar 7: a VTIMEZONE with two TZIDs is
+        # an AttributeError); still a file to fix, never an agent to kill.
+        raise AgendaSourceError([SourceProblem(source, None, "not a valid iCalendar file (the parser failed: "
+                                               f"{type(exc).__name__}: {exc}); check VTIMEZONE and "
+                                               "repeated properties")]) from None
     vevents = [event for calendar in calendars for event in calendar.walk("VEVENT")]
     if not calendars:
         raise AgendaSourceError([SourceProblem(source, None, "no complete VCALENDAR found: is this an .ics "

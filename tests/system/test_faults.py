@@ -44,16 +44,21 @@ KILLS: list[dict[str, Any]] = [
 
 
 # ----------------------------------------------------------------------------- offline parts
-def test_random_schedules_are_reproducible_and_valid() -> None:
+def test_random_schedules_are_reproducible_and_hit_every_mission() -> None:
     loaded = load_scene("icra_usecase")
-    first = random_schedule(loaded, seed=3, faults=12, duration_s=20)
-    assert first == random_schedule(loaded, seed=3, faults=12, duration_s=20)
-    assert first != random_schedule(loaded, seed=4, faults=12, duration_s=20)
-    assert [f.at_s for f in first] == sorted(f.at_s for f in first) and all(0 <= f.at_s <= 20 for f in first)
+    first = random_schedule(loaded, seed=3, faults=12, duration_s=3)
+    assert first == random_schedule(loaded, seed=3, faults=12, duration_s=3)
+    assert first != random_schedule(loaded, seed=4, faults=12, duration_s=3)
+    assert [f.mission for f in first] == [m for m in MISSIONS for _ in range(3)]  # in mission order
+    for mission in MISSIONS:
+        times = [f.at_s for f in first if f.mission == mission]
+        assert times == sorted(times) and all(0 <= t <= 3 for t in times)
     assert {f.action for f in first} == {"kill", "stop", "agenda"}
     for fault in first:
         if fault.action == "agenda":
             assert json.loads(fault.change or "")["op"] in ("add", "move", "cancel")
+        if fault.action == "stop":
+            assert 0.3 <= fault.hold_s <= 3.0
 
 
 def test_schedule_files_round_trip_and_name_bad_faults(tmp_path: Path) -> None:
@@ -235,8 +240,9 @@ def test_a_short_random_chaos_run_loses_nothing(tmp_path: Path) -> None:
     change, a stop and the router killed, for seed 8)."""
     text = (Path(load_scene("icra_usecase").path)).read_text()
     scene = tmp_path / "icra_short.yaml"
-    scene.write_text("\n".join(line for line in text.splitlines() if "{id: m1115" not in line and "{id: m1315" not in line))
-    summary = _chaos([str(scene), "--seed", "8", "--faults", "4", "--duration", "8", "--no-record",
+    scene.write_text("\n".join(line for line in text.splitlines()
+                                if "{id: m1115" not in line and "{id: m1315" not in line))
+    summary = _chaos([str(scene), "--seed", "8", "--faults", "4", "--duration", "3", "--no-record",
                       "--runs-dir", str(tmp_path)], tmp_path / "chaos.log", 200)
     assert summary["returncode"] == 0 and summary["ok"], json.dumps(summary, indent=1)[:4000]
     assert summary["missions_completed"] == summary["missions_total"] == 2

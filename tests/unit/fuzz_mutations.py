@@ -60,7 +60,8 @@ def mutated_text(draw: st.DrawFn, text: str, max_ops: int = 3) -> str:
             lines.insert(j, lines.pop(i))
         elif op == "indent":
             line = lines[i]
-            lines[i] = line.lstrip(" \t") if line[:1] in (" ", "\t") else draw(st.sampled_from(("  ", "\t", " "))) + line
+            indent = draw(st.sampled_from(("  ", "\t", " ")))
+            lines[i] = line.lstrip(" \t") if line[:1] in (" ", "\t") else indent + line
         elif op in ("token", "value"):
             tokens = list(_TOKEN.finditer(text))
             if tokens:

@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from agents.agenda import (AgendaChangeError, AgendaError, AgendaSourceError, apply_change, expand_day,
+from agents.agenda import (AgendaChangeError, AgendaError, AgendaSourceError, apply_change, expand_day, parse_ics,
                            load_agenda_file, parse_agenda_text, parse_change)
 from scenes.loader import SCENES_DIR, load_scene
 from tests.support import REPO_ROOT
@@ -128,3 +128,31 @@ def test_mutated_agenda_changes_are_refused_not_crashing(data: st.DataObject) ->
         apply_change(SCENE.agenda_day, parse_change(text), known_objects=OBJECTS, known_rooms=ROOMS)
     except AgendaChangeError as exc:
         assert str(exc).strip()
+
+
+ONE_EVENT = ("BEGIN:VCALENDAR\nVERSION:2.0\nPRODID:x\nBEGIN:VEVENT\nUID:a\nDTSTART:20261125T100000\n{extra}"
+             "X-CHRONAV-OBJECT:tv\nEND:VEVENT\nEND:VCALENDAR\n")
+
+
+@pytest.mark.parametrize("extra,fragment", [
+    ("DTEND:20261125T110000\nDTSTART:20261125T100000\n", "DTSTART appears 2 times"),   # was AttributeError
+    ("DURATION:PT1H\nDURATION:PT2H\n", "DURATION appears 2 times"),                   # was AttributeError
+    ("DURATION:20261125T110000\n", "is not a duration"),                               # was TypeError
+])
+def test_crashes_found_by_fuzzing_are_located_errors(extra: str, fragment: str) -> None:
+    with pytest.raises(AgendaSourceError) as info:
+        parse_ics(ONE_EVENT.format(extra=extra), "found.ics")
+    (problem,) = info.value.problems
+    assert problem.file == "found.ics" and problem.line == 4 and fragment in problem.message
+
+
+def test_a_crash_inside_icalendar_is_an_agenda_error() -> None:
+    """Found by fuzzing a `load` change: a VTIMEZONE with two TZIDs crashed icalendar itself."""
+    text = ICS_TEXTS[0].replace("TZID:Europe/Madrid\n", "TZID:Europe/Madrid\nTZID:Europe/Paris\n", 1)
+    assert text != ICS_TEXTS[0]
+    with pytest.raises(AgendaSourceError, match="not a valid iCalendar file"):
+        parse_ics(text, "two_tzids.ics")
+    with pytest.raises(AgendaChangeError, match="two_tzids.ics"):
+        apply_change(SCENE.agenda_day, parse_change(json.dumps({"op": "load", "mode": "merge", "format": "ics",
+                                                                "text": text, "source": "two_tzids.ics"})),
+                     known_objects=OBJECTS, known_rooms=ROOMS)

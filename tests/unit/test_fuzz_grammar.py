@@ -26,7 +26,8 @@ AGGL_WORDS = ("grammar", "types", "include", "rule", "target", "where", "precond
 def _grammar_texts() -> list[str]:
     texts = [default_grammar_path().read_text(encoding="utf-8")]
     docs = (REPO_ROOT / "docs" / "grammar.md").read_text(encoding="utf-8")
-    texts += [re.sub(r"^include.*$", "", block, flags=re.M) for block in re.findall(r"```text\n(.*?)```", docs, re.S)[:2]]
+    blocks = re.findall(r"```text\n(.*?)```", docs, re.S)[:2]
+    texts += [re.sub(r"^include.*$", "", block, flags=re.M) for block in blocks]
     if CORPUS.is_dir():
         texts += [p.read_text(encoding="utf-8") for p in sorted(CORPUS.glob("*.aggl"))]
     return texts

@@ -65,3 +65,17 @@ def test_random_text_scene_files_give_located_errors(workdir: Path, text: str) -
     path = workdir / "random.yaml"
     path.write_text(text, encoding="utf-8")
     check_scene_file(path)
+
+
+def test_crashes_found_by_fuzzing_are_located_errors(workdir: Path) -> None:
+    icra = (SCENES_DIR / "icra_usecase.yaml").read_text(encoding="utf-8")
+    path = workdir / "latin1.yaml"  # was UnicodeDecodeError
+    path.write_bytes(icra.replace("description: Occ", "description: Terap\xeda Occ").encode("latin-1"))
+    with pytest.raises(SourceError, match="not UTF-8") as info:
+        load_scene(path)
+    assert (info.value.line, info.value.column) == (8, 19)
+    path = workdir / "bowtie.yaml"  # a self-intersecting room was a GEOSException in the union of rooms
+    path.write_text(icra.replace("[[9, 0], [14, 0], [14, 7], [9, 7]]", "[[9, 0], [14, 7], [14, 0], [9, 7]]"))
+    with pytest.raises(SourceError, match="self-intersects") as info:
+        load_scene(path)
+    assert info.value.key == "rooms[1].polygon"

@@ -1,0 +1,143 @@
+"""Fault schedules for `chronav chaos`: what to break, when, and how schedule files are read.
+
+Why faults are anchored to missions: the day's missions end the run, so a fault timed on the
+wall clock may land after the last one; "``at_s`` seconds after mission M started" always hits
+work under way, and the same schedule means the same thing on a slow or a fast machine.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from tools.launch import AGENTS
+
+PROCESSES: tuple[str, ...] = (*AGENTS, "router")
+ACTIONS: tuple[str, ...] = ("kill", "stop", "agenda")
+Action = Literal["kill", "stop", "agenda"]
+
+
+class ChaosError(Exception):
+    """The chaos run could not be set up (bad schedule, scene, ...); the message says why."""
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One fault. Trigger: ``at_s`` wall seconds after ``mission`` became active (or, without a
+    mission, after the first mission became active); with ``driving``, ``at_s`` seconds into a
+    stretch of the robot driving (``nav_active``) once the mission is active.  Never before the
+    previous fault converged."""
+
+    action: Action
+    target: str
+    at_s: float = 0.0
+    mission: str | None = None
+    hold_s: float = 0.0
+    change: str | None = None     # agenda change JSON (agents/agenda/changes.py wire form)
+    driving: bool = False
+
+    def __post_init__(self) -> None:
+        if self.action not in ACTIONS:
+            raise ChaosError(f"fault action must be one of {', '.join(ACTIONS)}, not {self.action!r}")
+        if self.action in ("kill", "stop") and self.target not in PROCESSES:
+            raise ChaosError(f"fault target must be one of {', '.join(PROCESSES)}, not {self.target!r}")
+        if self.action == "agenda" and not self.change:
+            raise ChaosError("an agenda fault needs a change (JSON of an add/cancel/move change)")
+        if self.at_s < 0 or self.hold_s < 0:
+            raise ChaosError(f"fault times must not be negative ({self.at_s}, {self.hold_s})")
+
+    def describe(self) -> str:
+        if self.action == "agenda":
+            return f"agenda {json.loads(self.change or '{}').get('op', '?')}"
+        return f"{self.action} {self.target}" + (f" {self.hold_s:.1f}s" if self.action == "stop" else "")
+
+
+def _hhmm(seconds: float) -> str:
+    minutes = int(seconds // 60)
+    return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def clock_text(seconds: float | None) -> str:
+    if seconds is None:
+        return "-"
+    from scenes.model import format_clock
+
+    return format_clock(seconds)
+
+
+def random_agenda_change(rng: random.Random, scene: Any, known_ids: list[str], index: int, tag: str) -> str:
+    """A plausible staff edit: add an activity on a scene object, move or cancel a known one."""
+    from scenes.model import parse_clock
+
+    start_min = int(parse_clock(scene.clock.start) // 60)
+    end_min = int(parse_clock(scene.clock.end) // 60)
+    op = rng.choice(("add", "add", "move", "cancel")) if known_ids else "add"
+    if op == "add" or not scene.objects:
+        begin = rng.randrange(start_min, max(start_min + 1, end_min - 15))
+        length = rng.choice((15, 30, 45, 60))
+        activity_id = f"{tag}_{index}"
+        known_ids.append(activity_id)
+        return json.dumps({"op": "add", "activity": {
+            "id": activity_id, "name": f"chaos activity {index}", "object": rng.choice(scene.objects).name,
+            "start": _hhmm(begin * 60), "end": _hhmm(min(begin + length, 24 * 60 - 1) * 60)}})
+    target = rng.choice(known_ids)
+    if op == "cancel":
+        return json.dumps({"op": "cancel", "id": target})
+    begin = rng.randrange(start_min, max(start_min + 1, end_min - 15))
+    return json.dumps({"op": "move", "id": target, "start": _hhmm(begin * 60)})
+
+
+def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -> list[Fault]:
+    """``faults`` faults spread evenly over the day's missions, each at a random time within
+    ``duration_s`` wall seconds after its mission starts (so they hit missions under way).
+
+    Deterministic for a seed.  Kills and stops pick any agent or the router; stops last 0.3-3 s
+    (either side of the 2 s link lease); agenda edits add, move or cancel activities."""
+    from scenes.model import parse_clock
+
+    missions = [m.id for m in sorted(loaded.scene.missions, key=lambda m: parse_clock(m.time))]
+    if faults < 0 or duration_s <= 0:
+        raise ChaosError(f"need faults >= 0 and duration > 0 (got {faults}, {duration_s})")
+    if faults and not missions:
+        raise ChaosError(f"scene {loaded.scene.name!r} has no missions to inject faults into")
+    rng = random.Random(seed)
+    known_ids = list(loaded.agenda_day.ids())
+    planned = sorted(((index * len(missions) // max(faults, 1), round(rng.uniform(0.0, duration_s), 2))
+                      for index in range(faults)))
+    out: list[Fault] = []
+    for index, (mission_index, at_s) in enumerate(planned):
+        mission = missions[mission_index]
+        action = rng.choices(ACTIONS, weights=(4, 3, 3))[0]
+        if action == "agenda":
+            change = random_agenda_change(rng, loaded.scene, known_ids, index, f"chaos{seed}")
+            out.append(Fault("agenda", "agenda", at_s=at_s, mission=mission, change=change))
+        else:
+            hold = round(rng.uniform(0.3, 3.0), 2) if action == "stop" else 0.0
+            out.append(Fault(action, rng.choice(PROCESSES), at_s=at_s, mission=mission, hold_s=hold))
+    return out
+
+
+def load_schedule(path: Path) -> list[Fault]:
+    """A schedule file: a JSON list of faults (the "fault" objects of a chaos summary replay a run).
+
+    ``change`` may be given as an object; errors name the file and the fault's index."""
+    try:
+        items = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ChaosError(f"{path}: cannot read a JSON schedule: {exc}") from None
+    if not isinstance(items, list):
+        raise ChaosError(f"{path}: a schedule is a JSON list of faults")
+    faults: list[Fault] = []
+    for index, item in enumerate(items):
+        try:
+            if not isinstance(item, dict):
+                raise TypeError("a fault is an object such as {\"action\": \"kill\", \"target\": \"router\"}")
+            if isinstance(item.get("change"), dict):
+                item = {**item, "change": json.dumps(item["change"])}
+            faults.append(Fault(**item))
+        except (TypeError, ChaosError) as exc:
+            raise ChaosError(f"{path}: fault {index}: {exc}") from None
+    return faults
