@@ -87,6 +87,10 @@ def load_located(text: str, file: str) -> LocatedYaml:
         mark = exc.problem_mark or exc.context_mark
         line, column = (mark.line + 1, mark.column + 1) if mark else (1, 1)
         raise SourceError(file, line, column, "", f"YAML syntax error: {exc.problem}") from None
+    except yaml.reader.ReaderError as exc:
+        line = text.count("\n", 0, exc.position) + 1
+        column = exc.position - (text.rfind("\n", 0, exc.position) + 1) + 1
+        raise SourceError(file, line, column, "", f"control character U+{exc.character:04X} is not allowed in YAML") from None
     except yaml.YAMLError as exc:
         raise SourceError(file, 1, 1, "", f"YAML error: {exc}") from None
     finally:
