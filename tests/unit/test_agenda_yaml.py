@@ -136,7 +136,9 @@ def test_scene_agenda_and_agenda_file(tmp_path: Path) -> None:
     specs = load_scene_agenda(SCENES / "icra_usecase.yaml")
     assert [(s.id, s.object, s.start, s.end) for s in specs] == [
         ("serious_game", "tv", "11:00", "12:00"), ("table_therapy", "round_table", "12:00", "14:00")]
-    assert specs[0].source.endswith("icra_usecase.yaml:76")
+    serious_game_line = next(i for i, line in enumerate((SCENES / "icra_usecase.yaml").read_text().splitlines(), 1)
+                             if "id: serious_game" in line)
+    assert specs[0].source.endswith(f"icra_usecase.yaml:{serious_game_line}")
     scene = tmp_path / "scene.yaml"
     (tmp_path / "agendas").mkdir()
     (tmp_path / "agendas" / "week.ics").write_bytes((DATA / "agenda_daily_therapy.ics").read_bytes())
