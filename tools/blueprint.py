@@ -20,7 +20,8 @@ def blueprint() -> Any:
             rrb.Spatial2DView(origin="/", contents=["/world/**"], name="Social map"),
             rrb.Vertical(
                 rrb.TimeSeriesView(origin="metrics/objects", name="R(t) per object"),
-                rrb.TimeSeriesView(origin="metrics/robot", name="Robot"),
+                rrb.Tabs(rrb.TimeSeriesView(origin="metrics/robot", name="Robot"),
+                         rrb.TimeSeriesView(origin="metrics/missions", name="Mission metrics")),
                 rrb.GraphView(origin="dsr", name="DSR graph"),
                 rrb.TextLogView(origin="events", name="Agent events"),
                 row_shares=[2, 2, 3, 2],

@@ -28,6 +28,7 @@ this one (the run, the report, the CLI).  The run leaves ``chaos.json`` (the sum
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any

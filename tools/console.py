@@ -69,7 +69,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     if with_report:
         from tools.report import build_report, render_report
 
-        report = build_report(result)
+        report = result.metrics or build_report(result.scene_path or result.scene, result.run_dir, result.missions)
         if not as_json:
             render_report(report, Console())
     if as_json:

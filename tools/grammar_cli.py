@@ -65,15 +65,12 @@ def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or targe
 
 def _parse_time(text: str | None) -> float | None:
     """``HH:MM`` (or ``HH:MM:SS``) or plain seconds since midnight."""
+    from scenes.model import parse_clock
+
     if text is None:
         return None
     try:
-        if ":" in text:
-            parts = [float(p) for p in text.split(":")]
-            if len(parts) > 3 or not 0 <= parts[0] < 24:
-                raise ValueError
-            return sum(p * f for p, f in zip(parts, (3600, 60, 1)))
-        return float(text)
+        return parse_clock(text) if ":" in text else float(text)
     except ValueError:
         _fail(f"--at {text!r}: expected HH:MM, HH:MM:SS or seconds since midnight")
     return None

@@ -41,6 +41,7 @@ class RunResult:
     interrupted: bool = False
     timed_out: bool = False
     metrics: dict[str, object] = field(default_factory=dict)
+    scene_path: Path | None = None
 
     @property
     def ok(self) -> bool:
@@ -146,6 +147,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     signal.signal(signal.SIGINT, on_sigint)
     previous_sigterm = signal.signal(signal.SIGTERM, on_sigint)  # stopped by a supervisor: clean up too
     missions: dict[str, dict[str, object]] = {}
+    metrics: dict[str, object] = {}
     recorder = Recorder("launcher", run_dir if record else None, run_id)
     recorder.send_blueprint(blueprint())
     world_frame(recorder)
@@ -167,7 +169,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
                 graph.dispatch(timeout=0.1)
                 if supervisor.poll():
                     write_pids(run_dir, supervisor, router.pid)
-                status = _status(graph, spec, supervisor, started)
+                status = _status(graph, supervisor, started)
                 status["run"] = {"run_dir": str(run_dir), "endpoint": endpoint, "graph": env["CHRONAV_GRAPH"]}
                 missions = status["missions"]  # type: ignore[assignment]
                 graph_logger.maybe_log(graph, status.get("now_s"))
@@ -187,10 +189,16 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
                 if supervisor.given_up():
                     break
             graph_logger.maybe_log(graph, status.get("now_s"), force=True)
+        if record:
+            # Metrics of the day (social vs baseline) as scalars in this same recording.
+            from tools.report import build_report, log_report
+
+            metrics = build_report(loaded.path, run_dir, missions)
+            log_report(recorder, metrics, missions)
     finally:
         signal.signal(signal.SIGINT, previous_sigint)
         signal.signal(signal.SIGTERM, previous_sigterm)
-        agents_first = [n for n in reversed(AGENTS)] + ["router"]
+        agents_first = [*reversed(AGENTS), "router"]
         supervisor.stop_all(order=agents_first)
         recorder.close()
     rrd_path = None
@@ -198,7 +206,8 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
         rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")), runs_dir / f"{run_id}.rrd")
     result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
                        events=list(supervisor.events), restarts={n: m.restarts for n, m in supervisor.processes.items()},
-                       wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out)
+                       wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
+                       metrics=metrics, scene_path=loaded.path)
     (run_dir / "result.json").write_text(json.dumps({
         "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
         "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(rrd_path) if rrd_path else None,
@@ -206,7 +215,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     return result
 
 
-def _status(graph, spec, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
+def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
     clock = graph.get_node_by_name("clock")
     missions = {}
     for node in graph.nodes_of_type("mission"):

@@ -21,25 +21,25 @@ def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -
     return trajectory[mask]
 
 
-def build_report(result: Any) -> dict[str, Any]:
+def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
     from agents.social_navigation.metrics import read_trajectory_csv
     from agents.social_navigation.offline import OfflineError, SceneMaps, path_as_trajectory
     from agents.social_navigation.search import PlanningError
     from agents.social_navigation.social_map import plan
 
-    traj_path = Path(result.run_dir) / "trajectory.csv"
-    report: dict[str, Any] = {"scene": result.scene, "missions": {}}
+    traj_path = Path(run_dir) / "trajectory.csv"
+    report: dict[str, Any] = {"scene": Path(scene).stem, "missions": {}}
     if not traj_path.exists():
         report["error"] = "no trajectory was recorded"
         return report
     trajectory = read_trajectory_csv(traj_path)
     try:
-        maps = SceneMaps.load(result.scene)
+        maps = SceneMaps.load(scene)
     except OfflineError as exc:
         report["error"] = str(exc)
         return report
-    for mission_id, mission in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
+    for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
         if mission.get("state") != "done" or "started_s" not in mission:
             continue
         started, finished = float(mission["started_s"]), float(mission["finished_s"])
@@ -56,6 +56,29 @@ def build_report(result: Any) -> dict[str, Any]:
             entry["baseline_error"] = str(exc)
         report["missions"][mission_id] = entry
     return report
+
+
+def log_report(recorder: Any, report: dict[str, Any], missions: dict[str, dict[str, Any]]) -> None:
+    """The metrics as scalars in the recording, at each mission's end, social and baseline side by side."""
+    if not recorder.enabled:
+        return
+    for mission_id, entry in report.get("missions", {}).items():
+        recorder.set_time(float(missions[mission_id]["finished_s"]))
+        for planner in ("social", "baseline"):
+            metrics = entry.get(planner)
+            if metrics is None:
+                continue
+            base = f"metrics/missions/{planner}"
+            recorder.scalar(f"{base}/d_t_m", metrics["distance_travelled_m"])
+            recorder.scalar(f"{base}/tau_s", metrics["duration_s"])
+            recorder.scalar(f"{base}/chc_rad", metrics["cumulative_heading_change_rad"])
+            for band, value in metrics["psi_zone_percent"].items():
+                recorder.scalar(f"{base}/psi_{band}_pct", value)
+            for name, value in metrics["psi_object_percent"].items():
+                recorder.scalar(f"{base}/psi_space_{name}_pct", value)
+            people = metrics["d_min_person_m"]
+            if people:
+                recorder.scalar(f"{base}/d_min_person_m", min(people.values()))
 
 
 def _rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:

@@ -66,3 +66,12 @@ def test_no_trajectory_point_in_an_intimate_zone(icra_run: dict) -> None:
         smap = maps.at(float(second))
         for row in rows:
             assert smap.zone_at(row[1], row[2]) != "intimate", f"robot in an intimate zone at t={row[0]:.1f}"
+
+
+def test_recording_holds_the_days_metrics(icra_run: dict) -> None:
+    store = load_store(Path(icra_run["rrd"]))
+    table = store.reader(index="sim_time", contents="/metrics/missions/**").to_arrow_table()
+    social = table.column("/metrics/missions/social/psi_intimate_pct:Scalars:scalars").to_pylist()
+    baseline = table.column("/metrics/missions/baseline/psi_intimate_pct:Scalars:scalars").to_pylist()
+    assert len(social) == 4 and all(row == [0.0] for row in social)
+    assert any(row[0] > 0.0 for row in baseline), "the non-social baseline cuts through someone's intimate zone"
