@@ -149,7 +149,7 @@ class SocialNavigationAgent(Agent):
         angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles):
             return np.empty((0, 2))
-        hit = ranges < np.max(ranges) - 1e-6 if len(ranges) else ranges
+        hit = ranges < self.scene.robot.laser_range - 1e-6  # a ray at max range hit nothing
         x, y, theta = pose
         a = angles[hit] + theta
         return np.stack([x + ranges[hit] * np.cos(a), y + ranges[hit] * np.sin(a)], axis=1)
