@@ -59,6 +59,34 @@ def scene_people(scene: Scene, t_s: float) -> list[Person]:
             for p in people_at(scene, t_s)]
 
 
+def door_segment(scene: Scene, door_name: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The door leaf when closed: a segment across the opening, along the wall the two rooms share."""
+    import shapely
+
+    door = next(d for d in scene.doors if d.name == door_name)
+    a, b = (shapely.Polygon(next(r.polygon for r in scene.rooms if r.name == name)) for name in door.between)
+    shared = a.boundary.intersection(b.boundary)
+    centre = shapely.Point(door.position)
+    half = door.width / 2 + 0.05
+    if shared.is_empty or shared.length == 0:
+        return ((door.position[0] - half, door.position[1]), (door.position[0] + half, door.position[1]))
+    along = shared.project(centre)
+    p0 = shared.interpolate(max(0.0, along - 0.01))
+    p1 = shared.interpolate(min(shared.length, along + 0.01))
+    dx, dy = p1.x - p0.x, p1.y - p0.y
+    norm = (dx * dx + dy * dy) ** 0.5 or 1.0
+    ux, uy = dx / norm, dy / norm
+    x, y = door.position
+    return ((x - half * ux, y - half * uy), (x + half * ux, y + half * uy))
+
+
+def closed_door_walls(scene: Scene, graph: Any) -> list[Wall]:
+    """Closed doors in the DSR (``open`` false) as walls, for the map."""
+    known = {d.name for d in scene.doors}
+    return [Wall(points=door_segment(scene, node.name), name=f"door {node.name}")
+            for node in graph.nodes_of_type("door") if node.attrs.get("open") is False and node.name in known]
+
+
 def footprint_polygons(scene: Scene) -> list[Polygon]:
     return [posed_polygon(obj.footprint, obj.x, obj.y, obj.theta) for obj in scene_objects(scene)]
 
@@ -130,6 +158,6 @@ def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
     return out
 
 
-__all__ = ["dsr_activity_windows", "dsr_objects", "dsr_people",
+__all__ = ["closed_door_walls", "door_segment", "dsr_activity_windows", "dsr_objects", "dsr_people",
            "footprint_polygons", "object_attrs", "scene_objects", "scene_people",
            "scene_rooms", "scene_walls", "shape_attrs", "shape_from_attrs"]

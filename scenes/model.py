@@ -232,6 +232,20 @@ class AgendaChange(Strict):
     end: ClockTime | None = None
 
 
+class DoorChange(Strict):
+    """A door opened or closed at a sim time (a world event the simulator carries out)."""
+
+    at: ClockTime
+    door: str
+    open: bool
+
+    @field_validator("at")
+    @classmethod
+    def _clock(cls, value: str) -> str:
+        parse_clock(value)
+        return value
+
+
 class Scene(Strict):
     name: str
     description: str = ""
@@ -246,6 +260,7 @@ class Scene(Strict):
     agenda: list[dict[str, Any]] = Field(default_factory=list, description="activities, see docs/agenda.md")
     agenda_file: str | None = Field(None, description=".yaml or .ics, relative to the scene file")
     agenda_changes: list[AgendaChange] = []
+    door_changes: list[DoorChange] = []
     missions: list[Mission] = []
 
     @model_validator(mode="after")
@@ -265,6 +280,10 @@ class Scene(Strict):
             for room in door.between:
                 if room not in rooms:
                     raise ValueError(f"door {door.name!r} names unknown room {room!r}")
+        doors = {d.name for d in self.doors}
+        for change in self.door_changes:
+            if change.door not in doors:
+                raise ValueError(f"door_changes names unknown door {change.door!r}")
         for person in self.people:
             for other in person.interacting_with:
                 if other not in objects | people or other == person.name:

@@ -46,8 +46,9 @@ def symbolic_graph(scene: Scene, at_s: float | None = None, activities: Iterable
     for door in scene.doors:
         a, b = door.between
         graph.add_node(door.name, type="door", name=door.name, x=door.position[0], y=door.position[1])
-        add_edge(a, b, "connected", door=door.name)
-        add_edge(b, a, "connected", door=door.name)
+        doors = [d.name for d in scene.doors if set(d.between) == set(door.between)]
+        add_edge(a, b, "connected", door=doors[0], doors=doors)
+        add_edge(b, a, "connected", door=doors[0], doors=doors)
 
     def place(name: str, node_type: str, x: float, y: float, **attrs: object) -> None:
         graph.add_node(name, type=node_type, name=name, x=x, y=y, **attrs)

@@ -23,7 +23,8 @@ from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
-from agents.world_model import footprint_polygons
+from agents.world_model import door_segment, footprint_polygons
+from scenes.model import parse_clock
 from scenes.motion import people_at
 
 CONTROL_DT_S = 0.1
@@ -49,8 +50,9 @@ class SimRobotAgent(Agent):
         robot = scene.robot
         self.omni = robot.kinematics == "omnidirectional"
         self.limits = Limits(robot.max_speed, robot.max_angular_speed, robot.max_acceleration)
-        segments = np.vstack([polyline_segments(scene.walls), polygon_segments(footprint_polygons(scene))])
-        self.laser = Laser(segments, robot.laser_rays, robot.laser_range)
+        self._fixed_segments = np.vstack([polyline_segments(scene.walls), polygon_segments(footprint_polygons(scene))])
+        self.laser = Laser(self._fixed_segments, robot.laser_rays, robot.laser_range)
+        self._closed_doors: frozenset[str] = frozenset()
         self.rate = float(self.config.option("rate", str(scene.clock.rate)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
         # The bumper: a move that brings the body into contact is refused; moving away always works.
@@ -86,8 +88,10 @@ class SimRobotAgent(Agent):
                     g.insert_node(type="door", name=door.name,
                                   attrs={"x": door.position[0], "y": door.position[1], "width": door.width,
                                          "rooms": list(door.between), "open": True})
-                g.insert_or_assign_edge(a.id, b.id, "connected", attrs={"door": door.name})
-                g.insert_or_assign_edge(b.id, a.id, "connected", attrs={"door": door.name})
+                # One `connected` edge per room pair (edges are keyed by type): it lists all their doors.
+                doors = [d.name for d in scene.doors if set(d.between) == set(door.between)]
+                g.insert_or_assign_edge(a.id, b.id, "connected", attrs={"door": doors[0], "doors": doors})
+                g.insert_or_assign_edge(b.id, a.id, "connected", attrs={"door": doors[0], "doors": doors})
             if g.get_node_by_name("clock") is None:
                 g.insert_node(type="clock", name="clock",
                               attrs={"now_s": scene.clock.start_s, "start_s": scene.clock.start_s,
@@ -118,7 +122,27 @@ class SimRobotAgent(Agent):
         return RobotState(spec.pose.x, spec.pose.y, spec.pose.theta, Velocity()), now_s
 
     # ----------------------------------------------------------------- loop
+    def _doors(self) -> None:
+        """Scripted door events: each door takes the state of its latest due change (restart-safe),
+        and a closed door blocks the laser and the base like a wall."""
+        g = self.graph
+        due: dict[str, bool] = {}
+        for change in sorted(self.scene.door_changes, key=lambda c: parse_clock(c.at)):
+            if parse_clock(change.at) <= self.now_s:
+                due[change.door] = change.open
+        for name, is_open in due.items():
+            node = g.get_node_by_name(name)
+            if node is not None and node.attrs.get("open") != is_open:
+                g.update_node(node.id, attrs={"open": is_open})
+                self.rec.event(f"door {name} {'opened' if is_open else 'closed'}")
+        closed = frozenset(n.name for n in g.nodes_of_type("door") if n.attrs.get("open") is False)
+        if closed != self._closed_doors:
+            self._closed_doors = closed
+            leaves = [door_segment(self.scene, name) for name in sorted(closed)]
+            self.laser.segments = np.vstack([self._fixed_segments, polyline_segments(leaves)])
+
     def step(self) -> None:
+        self._doors()
         mode = self._mode()
         if mode != self._last_mode:
             self._last_mode = mode

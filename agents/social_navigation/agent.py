@@ -27,8 +27,8 @@ from agents.social_navigation.grid import GridParams
 from agents.social_navigation.search import GoalOccupied, PlanningError, SearchWorkspace, StartOccupied
 from agents.social_navigation.social_map import SocialMap, SocialMapParams, build_social_map, build_static_map, plan
 from agents.social_navigation.view import log_social_map
-from agents.world_model import (PLANNING_MARGIN_M, dsr_activity_windows, dsr_objects, dsr_people, scene_rooms,
-                                scene_walls)
+from agents.world_model import (PLANNING_MARGIN_M, closed_door_walls, dsr_activity_windows, dsr_objects,
+                                dsr_people, scene_rooms, scene_walls)
 from scenes.model import format_clock
 
 REPLAN_PERIOD_S = 1.0
@@ -93,7 +93,6 @@ class SocialNavigationAgent(Agent):
                                                       robot_radius_m=robot.radius + margin))
         self.walls, self.rooms = scene_walls(scene), scene_rooms(scene)
         self.bounds = scene.bounds
-        self.static = build_static_map(self.bounds, self.walls, self.rooms, self.params)
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
                                      max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
@@ -112,7 +111,8 @@ class SocialNavigationAgent(Agent):
         self.map: SocialMap | None = None
         self.workspace = SearchWorkspace()
         self.route_rooms: tuple[str, ...] = ()
-        self._route_statics: dict[tuple[str, ...], Any] = {}
+        # Static maps per (route rooms, closed doors): rasterising the building is the costly part.
+        self._statics: dict[tuple[tuple[str, ...], tuple[str, ...]], Any] = {}
         self._last_map_log_s = -math.inf
 
     # ----------------------------------------------------------------- helpers
@@ -128,15 +128,13 @@ class SocialNavigationAgent(Agent):
         fixed the route's rooms (cells of other rooms become walls, so the metric planner picks the
         doors and the way, but never cuts through a room the plan avoided)."""
         g = self.graph
-        rooms, static = self.rooms, self.static
-        if self.route_rooms:
-            rooms = [room for room in self.rooms if room.name in self.route_rooms]
-            key = tuple(sorted(self.route_rooms))
-            if key not in self._route_statics:
-                self._route_statics[key] = build_static_map(self.bounds, self.walls, rooms, self.params)
-            static = self._route_statics[key]
-        return build_social_map(self.bounds, self.walls, dsr_people(g), dsr_objects(g), dsr_activity_windows(g),
-                                now_s, self.params, rooms=rooms, static=static)
+        rooms = [room for room in self.rooms if room.name in self.route_rooms] if self.route_rooms else self.rooms
+        walls = [*self.walls, *closed_door_walls(self.scene, g)]  # a closed door is a wall
+        key = (tuple(sorted(self.route_rooms)), tuple(w.name for w in walls[len(self.walls):]))
+        if key not in self._statics:
+            self._statics[key] = build_static_map(self.bounds, walls, rooms, self.params)
+        return build_social_map(self.bounds, walls, dsr_people(g), dsr_objects(g), dsr_activity_windows(g),
+                                now_s, self.params, rooms=rooms, static=self._statics[key])
 
     def _active_intention(self) -> Any:
         for node in self.graph.nodes_of_type("intention"):

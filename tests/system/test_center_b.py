@@ -51,3 +51,24 @@ def test_agenda_change_mid_mission_causes_a_replan(run: dict) -> None:
     trajectory = read_trajectory_csv(Path(run["run_dir"]) / "trajectory.csv")
     driven = trajectory[trajectory[:, 0] >= CHANGE_S + 2.0]  # two sim seconds to replan and turn
     assert not shapely.LineString(driven[:, 1:3]).intersects(table)
+
+
+def test_a_door_closing_mid_mission_makes_the_robot_go_round(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """The world diverges: the north door the robot was heading for closes; it replans via the south one."""
+    from agents.world_model import door_segment
+    from scenes.loader import SCENES_DIR, load_scene
+
+    folder = tmp_path_factory.mktemp("door")
+    scene = folder / "center_b_door.yaml"
+    scene.write_text((SCENES_DIR / "center_b.yaml").read_text()
+                     + '\ndoor_changes:\n  - {at: "10:00:25", door: door_ot_north, open: false}\n')
+    run = launch_json(str(scene), folder / "launch.log")
+    assert run["returncode"] == 0 and run["missions"]["to_ot"]["state"] == "done", run
+    store = load_store(Path(run["rrd"]))
+    assert any("door door_ot_north closed" in text for _, text in texts(store, "/events/sim_robot"))
+    closed_s = parse_clock("10:00:25")
+    assert any(closed_s <= t and "current path blocked" in text for t, text in texts(store, "/events/social_navigation"))
+    leaf = shapely.LineString(door_segment(load_scene(scene).scene, "door_ot_north"))
+    trajectory = read_trajectory_csv(Path(run["run_dir"]) / "trajectory.csv")
+    after = trajectory[trajectory[:, 0] >= closed_s]
+    assert not shapely.LineString(after[:, 1:3]).intersects(leaf), "the robot went through a closed door"

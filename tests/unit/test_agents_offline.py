@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from agents.agenda.agent import AgendaAgent
@@ -98,3 +99,32 @@ def test_agenda_request_round_trip(tmp_path: Path) -> None:
     assert refused["state"] == "refused" and "piano" in refused["message"]
     assert graph.get_node_by_name("activity/stretcher-0940").attrs["state"] == "upcoming"
     assert graph.get_node_by_name("stretcher").attrs["R"] > 1.5
+
+
+def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> None:
+    from agents.social_navigation.agent import SocialNavigationAgent
+    from agents.social_navigation.social_map import plan
+
+    text = (SCENES_DIR / "center_b.yaml").read_text()
+    scene = tmp_path / "center_b_door.yaml"
+    scene.write_text(text + '\ndoor_changes:\n  - {at: "10:00:05", door: door_ot_north, open: false}\n')
+    graph = DSRGraph(agent="offline")
+    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=scene, run_dir=tmp_path))
+    sim.setup(graph, Recorder("sim_robot", None, None))
+    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=scene))
+    nav.setup(graph, Recorder("social_navigation", None, None))
+    door = graph.get_node_by_name("door_ot_north")
+    assert door.attrs["open"] is True
+
+    sim.now_s = parse_clock("10:00:10")
+    sim.step()
+    assert graph.get_node_by_name("door_ot_north").attrs["open"] is False
+    beam = sim.laser.scan(7.6, 14.0, 0.0, np.empty((0, 2)))
+    assert beam[len(beam) // 2] == pytest.approx(0.8, abs=0.06), "the laser sees the closed leaf"
+
+    def corridor_to_ot() -> float:
+        return plan(nav._build_map(sim.now_s), (7.2, 14.0), (10.0, 14.0), baseline=True).length_m
+
+    shut = corridor_to_ot()
+    graph.update_node(door.id, attrs={"open": True})
+    assert shut > corridor_to_ot() + 5.0, "with the north door shut the way in is the south door"
