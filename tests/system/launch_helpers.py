@@ -1,25 +1,27 @@
-"""Run `chronav launch SCENE --json` as a user would, in its own process group, and parse its result."""
+"""Run `chronav ... --json` as a user would, in its own process group, and parse its result."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from tests.support import ProcessGroup
 
 
-def launch_json(scene: str, log: Path, timeout_s: float = 300, extra: list[str] | None = None) -> dict:
+def run_json(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
+    """`python -m tools.cli ARGS --json --timeout T`: the last JSON line of its output, plus its exit code."""
     group = ProcessGroup()
     try:
-        proc = group.spawn(["-m", "tools.cli", "launch", scene, "--json", "--timeout", str(timeout_s - 30),
-                            *(extra or [])], env={"RERUN": "on"}, log_path=log)
+        proc = group.spawn(["-m", "tools.cli", *args, "--json", "--timeout", str(timeout_s - 30)],
+                           env={"RERUN": "on"}, log_path=log)
         try:
             proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
-            pytest.fail(f"launch of {scene} did not finish; log:\n{log.read_text()[-3000:]}")
+            pytest.fail(f"`chronav {' '.join(args)}` did not finish; log:\n{log.read_text()[-3000:]}")
     finally:
         group.close()
     text = log.read_text()
@@ -28,3 +30,7 @@ def launch_json(scene: str, log: Path, timeout_s: float = 300, extra: list[str] 
     result = json.loads(line)
     result["returncode"] = proc.returncode
     return result
+
+
+def launch_json(scene: str, log: Path, timeout_s: float = 300, extra: list[str] | None = None) -> dict[str, Any]:
+    return run_json(["launch", scene, *(extra or [])], log, timeout_s)

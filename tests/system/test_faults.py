@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +22,7 @@ from agents.social_navigation.metrics import read_trajectory_csv
 from dsr import DSRGraph
 from scenes.loader import load_scene
 from scenes.model import parse_clock
-from tests.support import ProcessGroup
+from tests.system.launch_helpers import run_json
 from tools.chaos import ChaosError, Fault, load_schedule, lost_writes, random_schedule
 from tools.launch import AGENTS
 
@@ -117,22 +116,7 @@ def test_lost_writes_finds_each_kind_of_loss() -> None:
 
 # ----------------------------------------------------------------------------- the system
 def _chaos(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
-    group = ProcessGroup()
-    try:
-        proc = group.spawn(["-m", "tools.cli", "chaos", *args, "--json", "--timeout", str(timeout_s - 30)],
-                           env={"RERUN": "on"}, log_path=log)
-        try:
-            proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            pytest.fail(f"chaos did not finish; log:\n{log.read_text()[-3000:]}")
-    finally:
-        group.close()
-    text = log.read_text()
-    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
-    assert line is not None, f"no JSON summary; log:\n{text[-3000:]}"
-    summary = json.loads(line)
-    summary["returncode"] = proc.returncode
-    return summary
+    return run_json(["chaos", *args], log, timeout_s)
 
 
 slow = pytest.mark.slow
