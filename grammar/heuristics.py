@@ -25,18 +25,13 @@ from dataclasses import dataclass
 
 from grammar.matcher import Matcher
 from grammar.model import (
-    FAnd,
     FCreate,
-    FExists,
-    FForall,
     FLink,
-    FNot,
-    FOr,
     Formula,
     FRetype,
-    FWhen,
     Rule,
     Target,
+    effect_atoms,
 )
 from grammar.world import State
 
@@ -62,20 +57,10 @@ def _formula_labels(formula: Formula | None) -> tuple[set[str], bool]:
     """Link labels an effect formula touches (outside when-conditions) and whether it edits nodes."""
     labels: set[str] = set()
     edits = False
-    stack: list[Formula] = [formula] if formula is not None else []
-    while stack:
-        f = stack.pop()
-        if isinstance(f, FLink):
-            labels.add(f.label)
-        elif isinstance(f, FNot):
-            stack.append(f.body)
-        elif isinstance(f, (FAnd, FOr)):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
-        elif isinstance(f, (FCreate, FRetype)):
+    for atom in effect_atoms(formula):
+        if isinstance(atom, FLink):
+            labels.add(atom.label)
+        elif isinstance(atom, (FCreate, FRetype)):
             edits = True
     return labels, edits
 

@@ -13,7 +13,7 @@ Two condition languages live side by side:
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Union
@@ -172,6 +172,24 @@ class FRetype:
 
 
 Formula = Union[FNot, FAnd, FOr, FLink, FSame, FExists, FForall, FWhen, FCreate, FDelete, FRetype]
+
+
+def effect_atoms(formula: Formula | None) -> Iterator[Formula]:
+    """The atoms an effect formula applies (links, node edits, ...), found through not, and, or,
+    forall, exists and the THEN of a when (a when's condition is read, not applied)."""
+    stack: list[Formula] = [formula] if formula is not None else []
+    while stack:
+        f = stack.pop()
+        if isinstance(f, FNot):
+            stack.append(f.body)
+        elif isinstance(f, (FAnd, FOr)):
+            stack.extend(f.items)
+        elif isinstance(f, (FForall, FExists)):
+            stack.append(f.body)
+        elif isinstance(f, FWhen):
+            stack.append(f.then)
+        else:
+            yield f
 
 
 # --------------------------------------------------------------------------- patterns

@@ -40,6 +40,7 @@ from grammar.model import (
     Pattern,
     Rule,
     Target,
+    effect_atoms,
 )
 
 
@@ -132,20 +133,7 @@ def _effect_reads(formula: Formula | None, relevant: set[str], out: _Reads) -> N
 def _edits_nodes(rule: Rule) -> bool:
     if rule.created_nodes or rule.deleted_nodes or rule.retyped_nodes:
         return True
-    stack: list[Formula] = [rule.effect] if rule.effect is not None else []
-    while stack:
-        f = stack.pop()
-        if isinstance(f, (FCreate, FDelete, FRetype)):
-            return True
-        if isinstance(f, FNot):
-            stack.append(f.body)
-        elif isinstance(f, (FAnd, FOr)):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
-    return False
+    return any(isinstance(atom, (FCreate, FDelete, FRetype)) for atom in effect_atoms(rule.effect))
 
 
 def relevant_rules(rules: Iterable[Rule], target: Target) -> list[Rule]:
