@@ -12,7 +12,7 @@ import math
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
 
 # One clock-time syntax for scenes, agendas and missions ("HH:MM[:SS]" since local midnight).
 from agents.agenda.model import format_clock, parse_clock
@@ -20,7 +20,13 @@ from agents.agenda.model import format_clock, parse_clock
 __all__ = ["format_clock", "parse_clock"]
 
 
-ClockTime = Annotated[str, Field(description="local clock time HH:MM[:SS]")]
+def _checked_clock(value: str) -> str:
+    parse_clock(value)
+    return value
+
+
+# A clock time checked where it is declared, so every model that uses one validates it the same way.
+ClockTime = Annotated[str, AfterValidator(_checked_clock), Field(description="local clock time HH:MM[:SS]")]
 
 
 class Strict(BaseModel):
@@ -61,11 +67,6 @@ class Clock(Strict):
     rate: float = Field(60.0, gt=0, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
 
-    @field_validator("start", "end")
-    @classmethod
-    def _clock(cls, value: str) -> str:
-        parse_clock(value)
-        return value
 
     @field_validator("timezone")
     @classmethod
@@ -144,11 +145,6 @@ class Waypoint(Strict):
     time: ClockTime
     pose: Pose
 
-    @field_validator("time")
-    @classmethod
-    def _clock(cls, value: str) -> str:
-        parse_clock(value)
-        return value
 
 
 class PersonSpec(Strict):
@@ -203,11 +199,6 @@ class Mission(Strict):
     goal: Goal
     description: str = ""
 
-    @field_validator("time")
-    @classmethod
-    def _clock(cls, value: str) -> str:
-        parse_clock(value)
-        return value
 
     def goal_text(self) -> str:
         """The mission string of the executive (`room:X`, `object:X`, `person:X`, `pose:x,y,theta`)."""
@@ -228,8 +219,8 @@ class AgendaChange(Strict):
     op: Literal["add", "cancel", "move"]
     activity: dict[str, Any] | None = None
     id: str | None = None
-    start: ClockTime | None = None
-    end: ClockTime | None = None
+    start: str | None = Field(None, description="new start (move): HH:MM or an ISO date-time")
+    end: str | None = Field(None, description="new end (move): HH:MM or an ISO date-time")
 
 
 class DoorChange(Strict):
@@ -239,11 +230,6 @@ class DoorChange(Strict):
     door: str
     open: bool
 
-    @field_validator("at")
-    @classmethod
-    def _clock(cls, value: str) -> str:
-        parse_clock(value)
-        return value
 
 
 class Scene(Strict):
