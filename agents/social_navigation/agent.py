@@ -196,9 +196,14 @@ class SocialNavigationAgent(Agent):
         except PlanningError as exc:
             self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
             return False
-        points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+        points = self._route(pose, path)
         self._adopt(points, now_s, reason, path.cost)
         return True
+
+    def _route(self, pose: tuple[float, float, float], path: Any) -> np.ndarray:
+        """The path's cell centres with its ends replaced by the exact robot position and goal."""
+        assert self.goal is not None
+        return np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
 
     def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
         self.global_points = points
@@ -250,7 +255,7 @@ class SocialNavigationAgent(Agent):
         self._maybe_log_map(now_s)
         if math.isinf(old_cost) or (old_cost > REPLAN_GAIN * new_cost and old_cost - new_cost > REPLAN_MIN_GAIN):
             why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"
-            points = np.vstack([[pose[0], pose[1]], new_path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+            points = self._route(pose, new_path)
             self._adopt(points, now_s, f"replanned ({why})", new_path.cost)
 
     def _control(self, intention: Any, robot: Any, now_s: float, pose_stamp: float) -> None:
@@ -302,7 +307,7 @@ class SocialNavigationAgent(Agent):
         except PlanningError as exc:
             self.rec.event(f"{format_clock(now_s)} stalled and cannot replan: {exc}", level="WARN")
             return
-        points = np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
+        points = self._route(pose, path)
         self._adopt(points, now_s, "replanned (no progress: recovery)", path.cost)
 
     def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
