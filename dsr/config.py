@@ -123,8 +123,8 @@ class ZenohSettings(BaseModel):
     tls_certificate: Path | None = None
     tls_private_key: Path | None = None
     mtls: bool = False
-    #: bound on opening the session (TCP connect + Zenoh handshake), in ms; None = Zenoh's
-    #: defaults (a listener that is not a Zenoh router then holds a client for 10 s)
+    #: bound on the Zenoh handshake when opening a link, in ms; None = Zenoh's default (10 s:
+    #: a listener that is not a Zenoh router holds a client that long)
     open_timeout_ms: int | None = Field(default=None, ge=1, le=3_600_000)
 
     @field_validator("config_file", "credentials_file", "acl_file", "tls_root_ca",
@@ -194,8 +194,9 @@ class ZenohSettings(BaseModel):
             entries.append(("transport/link/tx/lease", self.lease_ms))
         entries.append(("scouting/multicast/enabled", self.multicast))
         if self.open_timeout_ms is not None:
-            entries += [("connect/timeout_ms", self.open_timeout_ms),
-                        ("transport/unicast/open_timeout", self.open_timeout_ms)]
+            # The handshake bound only: connect/timeout_ms would also make a refused connection
+            # retry until the timeout instead of failing at once.
+            entries.append(("transport/unicast/open_timeout", self.open_timeout_ms))
         entries += self._security_entries()
         for key, value in entries:
             try:

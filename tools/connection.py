@@ -203,6 +203,9 @@ def require_system(graph: Any, target: Target) -> list[str]:
     others = [m for m in present or [] if m != graph.agent]
     if present is None or others or len(graph) > 0:
         return others
+    if target.run_dir is not None and run_is_alive(target.run_dir):
+        raise ConnectionProblem(f"run {target.run_dir.name} is live but no agent has joined its graph yet (it is "
+                                f"starting, or its agents are down: see {target.run_dir / 'logs'}); retry in a moment")
     hints = []
     graphs = [g for g in graphs_with_members(graph) if g != target.graph]
     if graphs:
