@@ -180,8 +180,8 @@ class ProgressWatch:
             return None
         waited = now - state.since
         if state.stamped and waited > self.hang_s:
-            return (f"made no progress for {waited:.0f} s (heartbeat {state.stamp[1] if state.stamp else '?'} "
+            return (f"made no progress for {waited:.1f} s (heartbeat {state.stamp[1] if state.stamp else '?'} "
                     f"was its last; limit {self.hang_s:g} s)")
         if not state.stamped and waited > self.startup_s:
-            return f"wrote no heartbeat within {waited:.0f} s of its start (limit {self.startup_s:g} s)"
+            return f"wrote no heartbeat within {waited:.1f} s of its start (limit {self.startup_s:g} s)"
         return None
