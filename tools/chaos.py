@@ -160,6 +160,7 @@ def register(app: typer.Typer) -> None:
         from rich.console import Console
 
         from scenes.yamlio import SourceError
+        from tools.launch import LaunchError
 
         err = Console(stderr=True)
         try:
@@ -167,7 +168,7 @@ def register(app: typer.Typer) -> None:
             report = run_chaos(scene, planned, seed=seed, faults=faults, duration_s=duration, timeout_s=timeout,
                                record=not no_record, runs_dir=runs_dir,
                                log=lambda text: err.print(f"[chaos] {text}", highlight=False))
-        except (SourceError, ChaosError) as exc:
+        except (SourceError, ChaosError, LaunchError) as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         summary = report.summary()

@@ -182,7 +182,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
     from agents.social_navigation.view import log_walls
-    from dsr import join
+    from dsr import DSRError, join
     from dsr.config import ZenohSettings
     from dsr.policy import policy_from_env
     from scenes.loader import load_scene
@@ -277,22 +277,26 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
         interrupted = interrupted or stop_requested["flag"]
         if record and not interrupted:
             metrics = _report(loaded.path, run_dir, missions, recorder)
-    except LaunchError as exc:
+    except (LaunchError, DSRError) as exc:    # e.g. the launcher could not join its own router
         error = str(exc)
     finally:
-        signal.signal(signal.SIGINT, previous_sigint)
-        signal.signal(signal.SIGTERM, previous_sigterm)
-        supervisor.stop_all(order=[*reversed(AGENTS), "router"])
-        recorder.close()
-        if record:
-            rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")), run_dir.parent / f"{run_id}.rrd")
-        missions = {**scene_missions(spec), **missions}
-        result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
-                           events=list(supervisor.events),
-                           restarts={n: m.restarts for n, m in supervisor.processes.items()},
-                           wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
-                           metrics=metrics, scene_path=loaded.path, error=error)
-        _write_result(result)
+        # Still under our handlers: a second Ctrl-C must not cut the clean-up short.
+        try:
+            supervisor.stop_all(order=[*reversed(AGENTS), "router"])
+            recorder.close()
+            if record:
+                rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")),
+                                            run_dir.parent / f"{run_id}.rrd")
+            missions = {**scene_missions(spec), **missions}
+            result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
+                               events=list(supervisor.events),
+                               restarts={n: m.restarts for n, m in supervisor.processes.items()},
+                               wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
+                               metrics=metrics, scene_path=loaded.path, error=error)
+            _write_result(result)
+        finally:
+            signal.signal(signal.SIGINT, previous_sigint)
+            signal.signal(signal.SIGTERM, previous_sigterm)
     return result
 
 

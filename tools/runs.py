@@ -29,7 +29,6 @@ import json
 import os
 import secrets
 import stat
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -350,13 +349,3 @@ def open_run(run: str, directory: Path | None = None) -> ConnectInfo:
                        f"{info.launcher_pid}, has ended); {HOW_TO_START}")
     return info
 
-
-def wait_for_connect_file(run_dir: Path, timeout_s: float) -> ConnectInfo | None:
-    """For tests and scripts: the connect file once the launcher wrote it."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        try:
-            return read_connect_file(run_dir)
-        except RunError:
-            time.sleep(0.05)
-    return None
