@@ -70,10 +70,10 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
             result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
                                 restart_limit=restart_limit, on_tick=None if as_json else plain_tick, **limits)
     except (SourceError, LaunchError, DSRError) as exc:
-        err.print(f"error: {exc}", highlight=False, markup=False)
+        err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         return 2
     except KeyboardInterrupt:
-        err.print("interrupted before the run started; nothing was launched", highlight=False)
+        err.print("interrupted before the run started; nothing was launched", highlight=False, soft_wrap=True)
         return 130
 
     report: dict[str, Any] | None = None
@@ -120,13 +120,14 @@ def print_result(result: Any, out: Console) -> None:
                       format_clock(float(m["finished_s"])) if "finished_s" in m else "-",
                       str(m.get("reason", "")))
     out.print(table)
+    line = {"highlight": False, "markup": False, "soft_wrap": True}    # paths and messages stay whole
     for event in result.events:
-        out.print(f"[supervisor] {event}", highlight=False, markup=False)
+        out.print(f"[supervisor] {event}", **line)
     if result.error:
-        out.print(f"error: {result.error}", highlight=False, markup=False)
-    out.print(f"run directory: {result.run_dir}", highlight=False)
+        out.print(f"error: {result.error}", **line)
+    out.print(f"run directory: {result.run_dir}", **line)
     if result.rrd_path:
-        out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", highlight=False)
+        out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", **line)
     done = f"{result.missions_done}/{len(result.missions)} missions done"
     wall = f"{result.wall_s:.1f} s wall"
     closing = {
@@ -136,4 +137,4 @@ def print_result(result: Any, out: Console) -> None:
         "ok": f"OK: {done} in {wall}",
         "failed": f"FAILED: {done} in {wall}",
     }[outcome(result)]
-    out.print(closing, highlight=False, markup=False)
+    out.print(closing, **line)

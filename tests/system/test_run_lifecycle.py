@@ -66,6 +66,13 @@ def test_bad_rate_and_timeout_are_refused_at_once(args: list[str], option: str, 
     assert not any(tmp_path.iterdir()), "nothing may start"
 
 
+def test_a_runs_directory_that_cannot_be_created_is_one_line() -> None:
+    result = CliRunner().invoke(app, ["launch", str(LIVE_SCENE)], env={"CHRONAV_RUNS": "/proc/chronav-runs"})
+    assert result.exit_code == 2
+    assert result.stderr.startswith("error: cannot create the run directory /proc/chronav-runs/agenda_live-")
+    assert "set CHRONAV_RUNS" in result.stderr and "Traceback" not in result.output
+
+
 def test_failed_mission_before_the_robot_moves_still_gives_table_recording_and_result(
         procs: ProcessGroup, tmp_path: Path) -> None:
     log = tmp_path / "launch.log"
