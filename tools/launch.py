@@ -108,13 +108,13 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     from agents.runtime.recording import Recorder
     from dsr import join
     from dsr.config import ZenohSettings
-    from dsr.policy import policy_from_env
-    from scenes.loader import load_scene
-    from agents.social_navigation.view import log_walls
-    from tools.blueprint import blueprint, world_frame
-    from tools.dsr_view import GraphLogger
+    from agents.world.write_policy import policy_from_env
+    from agents.world.scene_world import load_world
+    from agents.runtime.drawing.social_map import log_walls
+    from agents.runtime.drawing.layout import blueprint, world_frame
+    from agents.runtime.drawing.dsr_graph import GraphLogger
 
-    loaded = load_scene(scene)
+    loaded = load_world(scene)
     spec = loaded.scene
     policy = policy_from_env()  # fail before any process starts if the write policy is broken
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
