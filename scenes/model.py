@@ -131,7 +131,9 @@ class PersonSpec(Strict):
     role: Literal["resident", "new_resident", "staff", "therapist", "visitor"] = "resident"
     pose: Pose
     waypoints: list[Waypoint] = []
-    interacting_with: list[str] = Field(default_factory=list, description="people or objects")
+    interacting_with: list[str] = Field(default_factory=list,
+                                        description="people this one is in conversation with (all day); "
+                                                    "interactions with objects come from the agenda")
 
     @model_validator(mode="after")
     def _waypoints_in_order(self) -> PersonSpec:
@@ -251,8 +253,12 @@ class Scene(Strict):
                 raise ValueError(f"door_changes names unknown door {change.door!r}")
         for person in self.people:
             for other in person.interacting_with:
-                if other not in objects | people or other == person.name:
-                    raise ValueError(f"person {person.name!r} interacts with unknown {other!r}")
+                if other in objects:
+                    raise ValueError(f"person {person.name!r}: interacting_with names the object {other!r}; "
+                                     "links to objects come from the agenda: add an activity on it with "
+                                     f"{person.name!r} among its participants")
+                if other not in people or other == person.name:
+                    raise ValueError(f"person {person.name!r} interacts with unknown person {other!r}")
         for mission in self.missions:
             goal = mission.goal
             if isinstance(goal, RoomGoal) and goal.room not in rooms:
