@@ -8,7 +8,7 @@ states, and queries merge the base indexes with the (tiny) overlay.
 
 Input is a ``networkx.MultiDiGraph`` whose nodes carry ``type`` and ``name`` attributes and whose
 edges carry their type as attribute ``type`` (or as the edge key), as produced by
-``DSRGraph.to_networkx()`` and ``scenes.symbolic.symbolic_graph``.
+``DSRGraph.to_networkx()`` and ``agents.world.symbolic.symbolic_graph``.
 """
 
 from __future__ import annotations

@@ -8,56 +8,32 @@ point at the line of the offending key.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import shapely
 
 from scenes.model import Scene
 from scenes.yamlio import LocatedYaml, SourceError, load_located_file, validate_located
 
-if TYPE_CHECKING:
-    from agents.agenda.model import AgendaDay
-
 SCENES_DIR = Path(__file__).resolve().parent
 
 
 @dataclass
 class LoadedScene:
-    """A validated scene plus where it came from (agenda files resolve relative to it)."""
+    """A validated scene plus where it came from (agenda files resolve relative to it) and where
+    each of its keys is in the file (so checks made later, by the world model, are located too)."""
 
     scene: Scene
     path: Path
+    located: LocatedYaml
 
     def resolve(self, relative: str) -> Path:
         candidate = Path(relative)
         return candidate if candidate.is_absolute() else (self.path.parent / candidate)
 
-    @cached_property
-    def agenda_day(self) -> AgendaDay:
-        """The scene's agenda (inline and ``agenda_file``) expanded for the sim date, validated."""
-        from agents.agenda import expand_day, load_scene_agenda
-
-        clock = self.scene.clock
-        return expand_day(load_scene_agenda(self.path), clock.date, clock.timezone,
-                          {o.name for o in self.scene.objects}, known_rooms={r.name for r in self.scene.rooms})
-
-
-def _agenda_error(exc: Exception, scene_file: str) -> SourceError:
-    """Agenda errors name "file:line" in their findings; keep that position for the scene check."""
-    from agents.agenda import AgendaSourceError, AgendaValidationError
-
-    if isinstance(exc, AgendaSourceError):
-        problem = exc.problems[0]
-        return SourceError(problem.file, problem.line or 1, 1, problem.key, problem.message)
-    if isinstance(exc, AgendaValidationError) and exc.report.errors:
-        finding = exc.report.errors[0]
-        file, _, line = finding.source.rpartition(":")
-        if file and line.isdigit():
-            return SourceError(file, int(line), 1, "agenda", finding.message)
-        return SourceError(scene_file, 1, 1, "agenda", finding.message)
-    return SourceError(scene_file, 1, 1, "agenda", str(exc))
+    def error(self, key: tuple[str | int, ...], message: str) -> SourceError:
+        """An error at ``key``'s line in the scene file."""
+        return self.located.error(key, message)
 
 
 def resolve_scene_path(name_or_path: str | Path) -> Path:
@@ -112,13 +88,7 @@ def load_scene(name_or_path: str | Path) -> LoadedScene:
         raise SourceError(str(path), 1, 1, "", "a scene file must be a YAML mapping")
     scene = validate_located(Scene, located)
     _check_geometry(scene, located)
-    loaded = LoadedScene(scene=scene, path=path)
+    loaded = LoadedScene(scene=scene, path=path, located=located)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise located.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
-    from agents.agenda import AgendaError
-
-    try:
-        loaded.agenda_day  # noqa: B018 - validates the agenda now, so a bad one fails at load
-    except AgendaError as exc:
-        raise _agenda_error(exc, str(path)) from None
     return loaded

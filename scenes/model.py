@@ -12,21 +12,11 @@ import math
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PlainSerializer, PlainValidator, field_validator, model_validator
 
-# One clock-time syntax for scenes, agendas and missions ("HH:MM[:SS]" since local midnight).
-from agents.agenda.model import format_clock, parse_clock
-
-__all__ = ["format_clock", "parse_clock"]
-
-
-def _checked_clock(value: str) -> str:
-    parse_clock(value)
-    return value
-
-
-# A clock time checked where it is declared, so every model that uses one validates it the same way.
-ClockTime = Annotated[str, AfterValidator(_checked_clock), Field(description="local clock time HH:MM[:SS]")]
+from scenes.clock import ClockTime, parse_clock
+from scenes.geometry import Circle, Rectangle, Trapezoid, shape_from_spec, shape_to_dict
+from scenes.geometry import Shape as GeometryShape
 
 
 class Strict(BaseModel):
@@ -106,30 +96,19 @@ class Door(Strict):
     width: float = Field(1.0, gt=0)
 
 
-class RectangleShape(Strict):
-    """Axis-aligned in the object's frame: ``length`` along its +x (facing), ``width`` along +y."""
-
-    shape: Literal["rectangle"]
-    length: float = Field(gt=0)
-    width: float = Field(gt=0)
-    offset: float = Field(0.0, description="shift of the centre along the object's +x axis")
-
-
-class CircleShape(Strict):
-    shape: Literal["circle"]
-    radius: float = Field(gt=0)
+def _shape(value: Any) -> GeometryShape:
+    """A shape mapping as written in the scene (``{shape: circle, radius: 1.5}``)."""
+    if isinstance(value, Rectangle | Circle | Trapezoid):
+        return value
+    if not isinstance(value, dict):
+        raise ValueError("a shape is a mapping such as {shape: circle, radius: 1.5}; "
+                         "kinds: rectangle (length, width, offset), circle (radius), "
+                         "trapezoid (height, near_width, far_width)")
+    return shape_from_spec(value, where=str(value.get("shape", "shape")))
 
 
-class TrapezoidShape(Strict):
-    """Isosceles trapezoid in front of the object (+x): near edge at the object, far edge ``height`` away."""
-
-    shape: Literal["trapezoid"]
-    height: float = Field(gt=0)
-    near_width: float = Field(gt=0)
-    far_width: float = Field(gt=0)
-
-
-Shape = Annotated[RectangleShape | CircleShape | TrapezoidShape, Field(discriminator="shape")]
+# The one shape definition (scenes/geometry.py), read from and written back to the scene's mapping form.
+Shape = Annotated[GeometryShape, PlainValidator(_shape), PlainSerializer(shape_to_dict)]
 
 
 class SceneObject(Strict):
@@ -152,7 +131,9 @@ class PersonSpec(Strict):
     role: Literal["resident", "new_resident", "staff", "therapist", "visitor"] = "resident"
     pose: Pose
     waypoints: list[Waypoint] = []
-    interacting_with: list[str] = Field(default_factory=list, description="people or objects")
+    interacting_with: list[str] = Field(default_factory=list,
+                                        description="people this one is in conversation with (all day); "
+                                                    "interactions with objects come from the agenda")
 
     @model_validator(mode="after")
     def _waypoints_in_order(self) -> PersonSpec:
@@ -272,8 +253,12 @@ class Scene(Strict):
                 raise ValueError(f"door_changes names unknown door {change.door!r}")
         for person in self.people:
             for other in person.interacting_with:
-                if other not in objects | people or other == person.name:
-                    raise ValueError(f"person {person.name!r} interacts with unknown {other!r}")
+                if other in objects:
+                    raise ValueError(f"person {person.name!r}: interacting_with names the object {other!r}; "
+                                     "links to objects come from the agenda: add an activity on it with "
+                                     f"{person.name!r} among its participants")
+                if other not in people or other == person.name:
+                    raise ValueError(f"person {person.name!r} interacts with unknown person {other!r}")
         for mission in self.missions:
             goal = mission.goal
             if isinstance(goal, RoomGoal) and goal.room not in rooms:

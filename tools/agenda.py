@@ -97,8 +97,8 @@ def add_change(object_name: str, start: str, end: str, *, name: str | None = Non
     """The wire form of an ``add``; bad times, end before start and bad ids are refused here."""
     from pydantic import ValidationError
 
-    from agents.agenda.changes import AddChange
-    from agents.agenda.model import ActivitySpec
+    from agents.lib.agenda.changes import AddChange
+    from agents.lib.agenda.model import ActivitySpec
 
     fields: dict[str, Any] = {"name": name or object_name, "object": object_name, "start": start, "end": end,
                               "participants": tuple(participants or ()), "id": activity_id, "room": room,
@@ -122,7 +122,7 @@ def cancel_change(activity_id: str) -> dict[str, Any]:
 
 def move_change(activity_id: str, start: str | None, end: str | None) -> dict[str, Any]:
     """A ``move``: at least one new time; times are checked here, and their order when both are given."""
-    from agents.agenda.model import parse_when
+    from agents.lib.agenda.model import parse_when
 
     if start is None and end is None:
         raise LocalRefusal("say the new time: --start HH:MM and/or --end HH:MM (with only --start the "
@@ -155,8 +155,8 @@ def load_change(path: Path, *, replace: bool) -> dict[str, Any]:
     Checks against the scene (unknown objects...) and the expansion for the sim day are the
     agent's: only it knows the scene and the date.
     """
-    from agents.agenda.model import AgendaSourceError
-    from agents.agenda.yaml_source import parse_agenda_text
+    from agents.lib.agenda.model import AgendaSourceError
+    from agents.lib.agenda.yaml_source import parse_agenda_text
 
     fmt = AGENDA_FORMATS.get(path.suffix.lower())
     if fmt is None:
@@ -266,13 +266,13 @@ def submit_change(graph: Any, change: dict[str, Any], *, timeout_s: float,
 # ---------------------------------------------------------------------------------------------
 
 def _clock_text(seconds: object) -> str:
-    from agents.agenda.model import format_clock
+    from scenes.clock import format_clock
 
     return format_clock(float(seconds)) if isinstance(seconds, (int, float)) else "?"
 
 
 def _band_name(band: object) -> str:
-    from agents.social_navigation.chronemics import BAND_NAMES
+    from agents.lib.agenda.chronemics import BAND_NAMES
 
     return BAND_NAMES[band] if isinstance(band, int) and 0 <= band < len(BAND_NAMES) else "?"
 

@@ -89,10 +89,10 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
               runs_dir: Path | None = None, rate: float | None = None,
               log: Callable[[str], None] | None = None) -> ChaosReport:
     """Launch SCENE, inject the faults (``schedule``, else a random one from ``seed``), report."""
-    from scenes.loader import load_scene
+    from agents.world.scene_world import load_world
     from tools.launch import run_system
 
-    loaded = load_scene(scene)
+    loaded = load_world(scene)
     if schedule is None:
         schedule = random_schedule(loaded, seed=seed, faults=faults, duration_s=duration_s)
     chaos = ChaosRun(schedule, log=log)

@@ -15,7 +15,7 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from scenes.model import format_clock
+from scenes.clock import format_clock
 
 
 def _status_table(status: dict[str, Any]) -> Table:

@@ -65,7 +65,7 @@ def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or targe
 
 def _parse_time(text: str | None) -> float | None:
     """``HH:MM`` (or ``HH:MM:SS``) or plain seconds since midnight."""
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     if text is None:
         return None
@@ -92,15 +92,16 @@ def _load_world(scene: Path, at_s: float | None) -> Any:
             return json_graph.node_link_graph(data, directed=True, multigraph=True, edges=edges_key)
         except (KeyError, TypeError, ValueError) as exc:
             _fail(f"{scene}: not a node-link graph: {exc}")
-    from scenes.loader import load_scene
-    from scenes.symbolic import symbolic_graph
+    from agents.world.dsr_readers import symbolic_view
+    from agents.world.offline import graph_at
+    from agents.world.scene_world import load_world
     from scenes.yamlio import SourceError
 
     try:
-        loaded = load_scene(scene)
-        return symbolic_graph(loaded.scene, at_s=at_s, activities=loaded.agenda_day.activities)
+        world = load_world(scene)
     except SourceError as exc:
         _fail(str(exc))
+    return symbolic_view(graph_at(world, world.scene.clock.start_s if at_s is None else at_s))
 
 
 def plan_command(scene: Path = typer.Argument(..., help="scene file, or a .json node-link symbolic graph"),

@@ -156,7 +156,7 @@ def run_environment(endpoint: str, graph: str, run_id: str, record: bool) -> dic
 def scene_missions(spec: Any) -> dict[str, dict[str, object]]:
     """Every mission of the scene as not started: what the table shows for missions the executive
     never published (a run stopped in its first seconds)."""
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     return {m.id: {"mission_id": m.id, "goal": m.goal_text(), "time_s": parse_clock(m.time), "state": NOT_STARTED}
             for m in spec.missions}
@@ -181,19 +181,19 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C."""
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
-    from agents.social_navigation.view import log_walls
     from dsr import DSRError, join
     from dsr.config import ZenohSettings
-    from dsr.policy import policy_from_env
-    from scenes.loader import load_scene
-    from tools.blueprint import blueprint, world_frame
-    from tools.dsr_view import GraphLogger
+    from agents.world.write_policy import policy_from_env
+    from agents.world.scene_world import load_world
+    from agents.runtime.drawing.social_map import log_walls
+    from agents.runtime.drawing.layout import blueprint, world_frame
+    from agents.runtime.drawing.dsr_graph import GraphLogger
 
     check_rate(rate)
     check_timeout(timeout_s)
     check_timeout(hang_timeout_s, "--hang-timeout")
     check_timeout(startup_timeout_s, "--startup-timeout")
-    loaded = load_scene(scene)
+    loaded = load_world(scene)
     spec = loaded.scene
     policy = policy_from_env()  # fail before any process starts if the write policy is broken
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"

@@ -15,14 +15,14 @@ def register(app: typer.Typer) -> None:
     def check(files: list[Path] = typer.Argument(..., help="scene YAML files"),
               as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
         """Validate scenes: schema, names, geometry and agenda. Exit 1 on the first error of any file."""
-        from scenes.loader import load_scene
+        from agents.world.scene_world import load_world
         from scenes.yamlio import SourceError
 
         results: dict[str, str] = {}
         failed = False
         for file in files:
             try:
-                loaded = load_scene(file)
+                loaded = load_world(file)
             except SourceError as exc:
                 typer.echo(str(exc), err=True)
                 results[str(file)] = str(exc)

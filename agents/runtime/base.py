@@ -24,7 +24,7 @@ from typing import ClassVar
 from agents.runtime.config import AgentConfig, parse_agent_args
 from agents.runtime.heartbeat import Heartbeat
 from agents.runtime.recording import Recorder
-from scenes.loader import load_scene
+from agents.world.scene_world import SceneWorld, load_world
 from scenes.model import Scene
 
 log = logging.getLogger("chronav.agent")
@@ -37,7 +37,8 @@ class Agent(ABC):
 
     def __init__(self, config: AgentConfig) -> None:
         self.config = config
-        self.scene: Scene = load_scene(config.scene).scene
+        self.world: SceneWorld = load_world(config.scene)
+        self.scene: Scene = self.world.scene
         self.log = logging.getLogger(f"chronav.{config.name}")
 
     @abstractmethod
@@ -61,7 +62,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.config import ZenohSettings
-    from dsr.policy import policy_from_env
+    from agents.world.write_policy import policy_from_env
 
     config = parse_agent_args(agent_cls.kind, argv)
     configure_logging(config.name)
@@ -79,7 +80,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     agent = agent_cls(config)
     recorder = Recorder(config.name, config.run_dir, config.recording_id)
     settings = ZenohSettings.from_env()
-    policy = policy_from_env()  # deploy/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
+    policy = policy_from_env()  # agents/world/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
     try:
         with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as graph:
             agent.setup(graph, recorder)

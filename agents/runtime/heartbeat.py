@@ -14,13 +14,10 @@ import os
 import time
 from typing import Any
 
-HEARTBEAT_TYPE = "heartbeat"
+from agents.world.vocabulary import NodeType, heartbeat_name
+
 #: wall seconds between two stamps: 6 agents -> 6 small deltas a second
 HEARTBEAT_PERIOD_S = 1.0
-
-
-def heartbeat_name(agent: str) -> str:
-    return f"{HEARTBEAT_TYPE}/{agent}"
 
 
 class Heartbeat:
@@ -40,7 +37,7 @@ class Heartbeat:
         attrs = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
         node = self.graph.get_node_by_name(heartbeat_name(self.agent))
         if node is None:
-            self.graph.insert_node(type=HEARTBEAT_TYPE, name=heartbeat_name(self.agent), attrs=attrs)
+            self.graph.insert_node(type=NodeType.HEARTBEAT, name=heartbeat_name(self.agent), attrs=attrs)
         else:
             self.graph.update_node(node.id, attrs=attrs)
 

@@ -24,11 +24,13 @@ from typing import Any
 import numpy as np
 import shapely
 
-from agents.social_navigation.objects import object_geometry
-from agents.world_model import scene_objects
+from agents.lib.socialmap.objects import object_geometry
+from agents.world.dsr_readers import dsr_objects
+from agents.world.offline import graph_at
+from agents.world.scene_world import load_world
 from dsr import ZenohSettings, join
 from scenes.loader import load_scene
-from scenes.model import format_clock
+from scenes.clock import format_clock
 from tests.support import REPO_ROOT, ProcessGroup, wait_until
 from tools.runs import read_connect_file
 
@@ -70,7 +72,8 @@ def launched(procs: ProcessGroup, runs: Path, log: Path) -> Iterator[subprocess.
 
 
 def _tv_space() -> shapely.Polygon:
-    (tv,) = [o for o in scene_objects(load_scene(SCENE).scene) if o.name == "tv"]
+    world = load_world(SCENE)
+    (tv,) = [o for o in dsr_objects(graph_at(world, world.scene.clock.start_s)) if o.name == "tv"]
     return object_geometry(tv).interaction
 
 

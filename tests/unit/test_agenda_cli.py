@@ -26,9 +26,9 @@ from typer.testing import CliRunner
 from agents.agenda.agent import AgendaAgent
 from agents.runtime.config import AgentConfig
 from agents.runtime.recording import Recorder
-from agents.social_navigation.chronemics import ChronemicsParams, r_of_t
-from agents.social_navigation.types import ActivityWindow
-from agents.world_model import object_attrs
+from agents.lib.agenda.chronemics import ChronemicsParams, r_of_t
+from agents.lib.agenda.model import ActivityWindow
+from agents.world.dsr_writers import object_attrs
 from dsr import DSRGraph, ZenohSettings, join
 from scenes.loader import load_scene
 from tests.support import REPO_ROOT, free_port, wait_until

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from agents.agenda import (ActivitySpec, AgendaSourceError, IcsAgenda, expand_day, load_agenda_file,
+from agents.lib.agenda import (ActivitySpec, AgendaSourceError, IcsAgenda, expand_day, load_agenda_file,
                            load_scene_agenda, parse_yaml_agenda)
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -14,7 +14,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from scenes.loader import SCENES_DIR, load_scene
+from agents.world.scene_world import load_world as load_scene  # the full check: schema, geometry, agenda
+from scenes.loader import SCENES_DIR
 from scenes.yamlio import SourceError
 from tests.support import REPO_ROOT
 from tests.unit.fuzz_mutations import fuzz_settings, mutated_bytes, token_soup

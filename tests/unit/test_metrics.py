@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon, box
 
-from agents.social_navigation.metrics import (
+from agents.lib.socialmap.metrics import (
     MetricsInputError,
     TrajectoryFormatError,
     compute_metrics,
