@@ -280,15 +280,14 @@ class Matcher:
     @staticmethod
     def _name_join(var: str, conds: list[tuple[Expr, PatternLink | None, frozenset[str]]],
                    bound: set[str]) -> tuple[Expr, PatternLink | None] | None:
-        """A condition ``X == var.name`` whose X is computable from bound variables: look ``var``
-        up by name instead of scanning (e.g. the door named by a ``connected`` edge)."""
+        """A condition that names ``var`` through values computable from bound variables: look
+        ``var`` up by name instead of scanning its type (e.g. the door named by a ``connected``
+        edge: ``[d.name in doors or door == d.name]``). See ``_name_source``."""
         for expr, link, _needs in conds:
-            if not (isinstance(expr, Compare) and expr.op == "==") or (link is not None and link.negated):
+            if link is not None and link.negated:
                 continue
-            for mine, other in ((expr.left, expr.right), (expr.right, expr.left)):
-                if isinstance(mine, AttrRef) and mine.var == var and mine.attr == "name":
-                    if _expr_refs(other, None, link) <= bound and not isinstance(other, Exists):
-                        return (other, link)
+            if _name_source(expr, var, bound, link):
+                return (expr, link)
         return None
 
     # ------------------------------------------------------------------ matching
@@ -351,20 +350,47 @@ class Matcher:
             return () if found is None else (found,)
         if kind == "name":
             expr, link = step.source[1], step.source[2]
-            names: list[Value] = []
-            if link is None:
-                names.append(self.eval(expr, state, b))
-            else:
-                for edge in self._edges_of(link, state, b):
-                    names.append(self.eval(expr, state, b, edge))
+            names: set[Value] = set()
+            edges = [None] if link is None else self._edges_of(link, state, b)
+            for edge in edges:
+                found_names = self._names_from(expr, step.var, state, b, edge)
+                if found_names is None:  # a value that cannot be enumerated: scan the type
+                    return self.candidates_of_type(state, step.type)
+                names |= found_names
             out_ids: list[int] = []
-            for name in names:
-                if isinstance(name, str):
-                    found = state.node_by_name(name)
-                    if found is not None and found not in out_ids:
-                        out_ids.append(found)
+            for name in sorted(n for n in names if isinstance(n, str)):
+                found = state.node_by_name(name)
+                if found is not None:
+                    out_ids.append(found)
             return out_ids
         return self.candidates_of_type(state, step.type)
+
+    def _names_from(self, expr: Expr, var: str, state: State, b: Bindings,
+                    edge: tuple[int, int, str] | None) -> set[Value] | None:
+        """Every name ``var`` may have for ``expr`` to hold (a superset), or ``None`` if unknown."""
+        if isinstance(expr, Or):
+            out: set[Value] = set()
+            for item in expr.items:
+                part = self._names_from(item, var, state, b, edge)
+                if part is None:
+                    return None
+                out |= part
+            return out
+        if isinstance(expr, And):
+            for item in expr.items:
+                if _is_name_atom(item, var):
+                    return self._names_from(item, var, state, b, edge)
+            return None
+        if isinstance(expr, Compare) and _is_name_atom(expr, var):
+            mine_left = _is_name_ref(expr.left, var)
+            other = expr.right if mine_left else expr.left
+            value = self.eval(other, state, b, edge)
+            if expr.op == "==":
+                return {value} if isinstance(value, str) else set()
+            if isinstance(value, tuple):
+                return set(value)
+            return None if isinstance(value, str) else set()  # 'in' a string: substrings, unknown
+        return None
 
     @staticmethod
     def _edges_of(link: PatternLink, state: State, b: Bindings) -> list[tuple[int, int, str]]:
@@ -427,6 +453,33 @@ class Matcher:
         if isinstance(expr, ListLit):
             return tuple(self.eval(e, state, b, edge) for e in expr.items)
         return self.truth(expr, state, b, edge)
+
+
+def _is_name_ref(expr: Expr, var: str) -> bool:
+    return isinstance(expr, AttrRef) and expr.var == var and expr.attr == "name"
+
+
+def _is_name_atom(expr: Expr, var: str) -> bool:
+    """``X == var.name``, ``var.name == X`` or ``var.name in X``."""
+    if not isinstance(expr, Compare):
+        return False
+    if expr.op == "==":
+        return _is_name_ref(expr.left, var) != _is_name_ref(expr.right, var)
+    return expr.op == "in" and _is_name_ref(expr.left, var) and not _is_name_ref(expr.right, var)
+
+
+def _name_source(expr: Expr, var: str, bound: set[str], link: PatternLink | None) -> bool:
+    """Does ``expr`` (if true) name ``var`` through values computable from ``bound`` variables?
+    An ``or`` qualifies if every branch does, an ``and`` if one of its items does."""
+    if isinstance(expr, Or):
+        return bool(expr.items) and all(_name_source(item, var, bound, link) for item in expr.items)
+    if isinstance(expr, And):
+        return any(_is_name_atom(item, var) and _name_source(item, var, bound, link) for item in expr.items)
+    if not _is_name_atom(expr, var):
+        return False
+    assert isinstance(expr, Compare)
+    other = expr.right if _is_name_ref(expr.left, var) else expr.left
+    return not isinstance(other, Exists) and _expr_refs(other, None, link) <= bound
 
 
 def _compare(op: str, left: Any, right: Any) -> bool:
