@@ -24,6 +24,8 @@ def _fail(message: str, code: int = 2) -> None:
 
 @grammar_app.command("check")
 def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or target (.aggt) files"),
+          no_includes: bool = typer.Option(False, "--no-includes",
+                                           help="check each file alone, without reading its includes"),
           as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
     """Parse each file; print file:line:col: message for the first error of each broken file."""
     from grammar.errors import GrammarError
@@ -35,32 +37,51 @@ def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or targe
             if path.suffix == ".aggt":
                 target = load_target(path)
                 results.append({"file": str(path), "ok": True, "kind": "target",
-                                "nodes": len(target.pattern.nodes), "links": len(target.pattern.links)})
+                                "nodes": len(target.pattern.nodes), "links": len(target.pattern.links),
+                                "warnings": []})
             else:
-                grammar = load_grammar(path)
+                grammar = load_grammar(path, includes=not no_includes)
                 results.append({"file": str(path), "ok": True, "kind": "grammar", "name": grammar.name,
                                 "dialect": grammar.dialect, "rules": len(grammar.rules),
-                                "types": len(grammar.types.parents), "includes": len(grammar.includes)})
+                                "hierarchical": sum(r.hierarchical for r in grammar.rules),
+                                "combos": len(grammar.combos), "types": len(grammar.types.parents),
+                                "includes": len(grammar.includes),
+                                "skipped_includes": list(grammar.skipped_includes),
+                                "warnings": [str(w) for w in grammar.warnings]})
         except GrammarError as err:
             typer.echo(str(err), err=True)
             results.append({"file": str(path), "ok": False, "error": str(err), "line": err.line,
                             "column": err.column, "message": err.message})
+    for r in results:
+        for warning in r.get("warnings", ()):
+            typer.echo(warning, err=True)
     failed = [r for r in results if not r["ok"]]
     if as_json:
         typer.echo(json.dumps({"ok": not failed, "files": results}))
     else:
         for r in results:
-            if not r["ok"]:
-                continue
-            if r["kind"] == "target":
-                typer.echo(f"{r['file']}: OK (target, {r['nodes']} nodes, {r['links']} links)")
-            else:
-                typer.echo(f"{r['file']}: OK ({r['dialect']} grammar {r['name']!r}, {r['rules']} rules, "
-                           f"{r['types']} types)")
+            if r["ok"]:
+                typer.echo(f"{r['file']}: OK ({_summary(r)})")
         if not failed:
             typer.echo(f"{len(results)} file(s) OK")
     if failed:
         raise typer.Exit(1)
+
+
+def _summary(r: dict[str, Any]) -> str:
+    if r["kind"] == "target":
+        return f"target, {r['nodes']} nodes, {r['links']} links"
+    parts = [f"{r['dialect']} grammar {r['name']!r}", f"{r['rules']} rules"]
+    if r["hierarchical"]:
+        parts.append(f"{r['hierarchical']} hierarchical")
+    if r["combos"]:
+        parts.append(f"{r['combos']} combo rules (parsed, not planned: AGM removed them in 2017)")
+    parts.append(f"{r['types']} types")
+    if r["includes"]:
+        parts.append(f"{r['includes']} included files")
+    if r["skipped_includes"]:
+        parts.append(f"{len(r['skipped_includes'])} includes not read")
+    return ", ".join(parts)
 
 
 def _parse_time(text: str | None) -> float | None:
