@@ -198,6 +198,9 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
     """Parse grammar text; ``path`` (the file it came from) anchors relative includes.
     ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``."""
     text = text.removeprefix("\ufeff")
+    if not _stack and all(not line.strip() or line.lstrip().startswith("#") for line in text.splitlines()):
+        raise GrammarError("the file is empty (nothing but blank lines and comments): a grammar needs at "
+                           "least one rule", file, 1, 1)
     dialect = dialect or detect_dialect(text)
     if dialect not in ("agm", "native"):
         raise GrammarError(f"unknown dialect {shorten(dialect)!r} (use 'agm' or 'native')", file, 1, 1)

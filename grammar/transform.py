@@ -430,11 +430,11 @@ class ModelBuilder(Transformer):
             if sec.kind in ("where", "set"):
                 continue
             if sec.kind in single:
-                raise self._error(sec.pos, f"rule {str(name)!r} has two '{sec.kind}' sections")
+                raise self._error(sec.pos, f"rule {shorten(str(name))!r} has two '{sec.kind}' sections")
             single[sec.kind] = sec
         for required in ("lhs", "rhs"):
             if required not in single:
-                raise self._error(name, f"rule {str(name)!r} has no '{required}' section")
+                raise self._error(name, f"rule {shorten(str(name))!r} has no '{required}' section")
 
         def value(kind: str, default: Any) -> Any:
             return single[kind].value if kind in single else default

@@ -221,7 +221,7 @@ def check_target(target: Target) -> None:
 def _types_used(rule: Rule) -> Iterator[tuple[str, SourcePos | None]]:
     """Every type a rule names: pattern nodes (nested ``exists`` included), quantified and
     parameter variables, ``create``/``retype`` in formulas."""
-    patterns = [rule.lhs, rule.rhs]
+    patterns = [rule.rhs, rule.lhs]  # popped from the end: left-hand side first
     exprs: list[Expr] = list(rule.where) + [a.value for a in rule.assignments]
     formulas: list[Formula] = [f for f in (rule.precondition, rule.effect) if f is not None]
     for decl in rule.parameters:
@@ -284,4 +284,4 @@ def check_grammar(grammar: Grammar, *, top_level: bool = True) -> None:
                                           f"rule {shorten(rule.name)!r} uses type {shorten(type_name)!r}, "
                                           f"which the types section does not declare (declared: {known})")
     if top_level and not grammar.rules and not grammar.combos and not grammar.skipped_includes:
-        raise GrammarError(f"no rules: an empty grammar cannot plan anything", grammar.file, 1, 1)
+        raise GrammarError("no rules: a grammar needs at least one rule to plan with", grammar.file, 1, 1)
