@@ -57,11 +57,25 @@ class Changes:
 class FormulaEvaluator:
     def __init__(self, matcher: Matcher) -> None:
         self.matcher = matcher
+        self._guards: dict[tuple[int, str], tuple[Formula, list[tuple[FLink, bool]] | None]] = {}
 
     # ------------------------------------------------------------------ quantifiers
+    def _guard(self, body: Formula, var: str) -> list[tuple[FLink, bool]] | None:
+        key = (id(body), var)
+        found = self._guards.get(key)
+        if found is None or found[0] is not body:
+            found = self._guards[key] = (body, _guard_links(body, var))
+        return found[1]
+
     def _domain(self, decl: VarDecl, body: Formula, state: State, b: Bindings) -> Iterable[int]:
-        guards = _guard_links(body, decl.name)
+        guards = self._guard(body, decl.name)
         if guards is not None and all((link.dst if forward else link.src) in b for link, forward in guards):
+            if len(guards) == 1:
+                link, forward = guards[0]
+                linked = state.inn(b[link.dst], link.label) if forward else state.out(b[link.src], link.label)
+                if not linked:
+                    return ()
+                return [n for n in linked if self.matcher.type_ok(state.type_of(n), decl.type)]
             nodes: dict[int, None] = {}
             for link, forward in guards:
                 other = b[link.dst if forward else link.src]
@@ -124,6 +138,11 @@ class FormulaEvaluator:
             if self.holds(formula.condition, state, b):
                 self.collect(formula.then, state, b, changes, editor)
         elif isinstance(formula, FForall):
+            if len(formula.vars) == 1:  # the common case, without a generator
+                decl = formula.vars[0]
+                for n in self._domain(decl, formula.body, state, b):
+                    self.collect(formula.body, state, {**b, decl.name: n}, changes, editor)
+                return
             for inner in list(self._assignments(formula.vars, formula.body, state, b)):
                 self.collect(formula.body, state, inner, changes, editor)
         elif isinstance(formula, FCreate):

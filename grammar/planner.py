@@ -36,7 +36,7 @@ from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
 from grammar.matcher import Bindings, CompiledPattern, Matcher
 from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
-from grammar.relevance import relevant_rules
+from grammar.relevance import condition_reads, relevant_rules
 from grammar.rewrite import apply_rule
 from grammar.world import State, World
 
@@ -122,6 +122,7 @@ PlanResult = Union[Plan, NoPlan]
 class _Compiled:
     rule: Rule
     lhs: CompiledPattern
+    reads: tuple[frozenset[str], frozenset[str]]  # what decides its matches (relevance.condition_reads)
 
 
 class Planner:
@@ -145,7 +146,10 @@ class Planner:
                           if lhs.node(p.name) is None)
             if extra:
                 lhs = Pattern(lhs.nodes + extra, lhs.links)
-            self.rules.append(_Compiled(rule, self.matcher.compile(lhs)))
+            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), condition_reads(rule)))
+        # matches that pass every condition, by (rule, what the rule can see of the state): states
+        # that differ only in links and attributes a rule does not read share its matches
+        self._matches: dict[tuple[str, tuple[object, ...]], list[Bindings]] = {}
 
     # ------------------------------------------------------------------ pieces used by the search
     def applications(self, state: State, rules: list[_Compiled] | None = None
@@ -156,14 +160,27 @@ class Planner:
             rule = compiled.rule
             if rule.dormant and rule.name not in state.overlay.activated:
                 continue
-            for b in self.matcher.matches(compiled.lhs, state):
-                if rule.where and not all(self.matcher.truth(c, state, b) for c in rule.where):
-                    continue
-                if rule.precondition is not None and not self.formulas.holds(rule.precondition, state, b):
-                    continue
+            for b in self.applicable(compiled, state):
                 application = apply_rule(rule, state, b, self.matcher, self.formulas)
                 out.append((rule, application.bindings, application.state))
         return out
+
+    def applicable(self, compiled: _Compiled, state: State) -> list[Bindings]:
+        """The left-hand side matches of a rule that pass its conditions (cached, see __init__)."""
+        key = (compiled.rule.name, state.view(*compiled.reads))
+        found = self._matches.get(key)
+        if found is not None:
+            return found
+        rule = compiled.rule
+        found = []
+        for b in self.matcher.matches(compiled.lhs, state):
+            if rule.where and not all(self.matcher.truth(c, state, b) for c in rule.where):
+                continue
+            if rule.precondition is not None and not self.formulas.holds(rule.precondition, state, b):
+                continue
+            found.append(b)
+        self._matches[key] = found
+        return found
 
     def target_match(self, target: Target, compiled: CompiledPattern, state: State) -> Bindings | None:
         for b in self.matcher.matches(compiled, state):

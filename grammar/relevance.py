@@ -178,3 +178,16 @@ def relevant_rules(rules: Iterable[Rule], target: Target) -> list[Rule]:
         if (len(reads.labels), len(reads.attrs)) != before:
             grew = True
     return [rule for rule in rules if rule.name in chosen]
+
+
+def condition_reads(rule: Rule) -> tuple[frozenset[str], frozenset[str]]:
+    """Link labels and attribute keys that decide whether (and where) ``rule`` applies: its
+    left-hand side (negated links and ``[...]`` conditions included), ``where`` and
+    ``precondition``. Two states that agree on these (and on their nodes) give the same matches,
+    which is what lets the planner reuse them (planner.py)."""
+    reads = _Reads()
+    _pattern_reads(rule.lhs, reads)
+    for cond in rule.where:
+        _expr_reads(cond, reads)
+    _formula_reads(rule.precondition, reads)
+    return frozenset(reads.labels), frozenset(reads.attrs)

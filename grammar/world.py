@@ -99,31 +99,61 @@ class Overlay:
     next_id: int = -1  # id of the next created node; -1 = world.size
 
 
+_NO_CHANGE = Overlay()
+_EMPTY_MAP: dict = {}  # shared, never written: the indexes of an overlay without node changes
+
+
 class State:
     """One world in the search: base + overlay, with the overlay indexed for fast queries."""
 
     __slots__ = ("world", "overlay", "_added_out", "_added_in", "_types", "_names", "_attrs",
-                 "_by_type_new", "_hash")
+                 "_by_type_new", "_hash", "_views")
 
     def __init__(self, world: World, overlay: Overlay | None = None) -> None:
         self.world = world
-        self.overlay = overlay or Overlay()
+        self.overlay = overlay or _NO_CHANGE
         ov = self.overlay
         self._added_out: dict[tuple[int, str], list[int]] = {}
         self._added_in: dict[tuple[int, str], list[int]] = {}
-        for s, d, label in sorted(ov.added):  # sorted: iteration order must not depend on hashing
-            self._added_out.setdefault((s, label), []).append(d)
-            self._added_in.setdefault((d, label), []).append(s)
-        self._types: dict[int, str] = {i: t for i, t, _ in ov.created}
-        self._types.update(dict(ov.retyped))
-        self._names: dict[int, str] = {i: n for i, _, n in ov.created}
-        self._attrs: dict[int, dict[str, Value]] = {}
-        for i, key, value in ov.attrs:
-            self._attrs.setdefault(i, {})[key] = value
-        self._by_type_new: dict[str, list[int]] = {}
-        for i in sorted(self._types):
-            self._by_type_new.setdefault(self._types[i], []).append(i)
+        if ov.added:
+            for s, d, label in sorted(ov.added):  # sorted: iteration order must not depend on hashing
+                self._added_out.setdefault((s, label), []).append(d)
+                self._added_in.setdefault((d, label), []).append(s)
+        if ov.created or ov.retyped:  # (most states only move links: share the empty indexes)
+            self._types: dict[int, str] = {i: t for i, t, _ in ov.created}
+            self._types.update(dict(ov.retyped))
+            self._names: dict[int, str] = {i: n for i, _, n in ov.created}
+            self._by_type_new: dict[str, list[int]] = {}
+            for i in sorted(self._types):
+                self._by_type_new.setdefault(self._types[i], []).append(i)
+        else:
+            self._types = self._names = _EMPTY_MAP  # type: ignore[assignment]
+            self._by_type_new = _EMPTY_MAP  # type: ignore[assignment]
+        if ov.attrs:
+            self._attrs: dict[int, dict[str, Value]] = {}
+            for i, key, value in ov.attrs:
+                self._attrs.setdefault(i, {})[key] = value
+        else:
+            self._attrs = _EMPTY_MAP  # type: ignore[assignment]
         self._hash = hash(ov)
+        self._views: dict[tuple[frozenset[str], frozenset[str]], tuple[object, ...]] | None = None
+
+    def view(self, labels: frozenset[str], attrs: frozenset[str]) -> tuple[object, ...]:
+        """The part of this state's difference from the base world that a reader of these link
+        labels and attribute keys can see (plus every node change): equal views, equal answers."""
+        views = self._views
+        if views is None:
+            views = self._views = {}
+        key = (labels, attrs)
+        found = views.get(key)
+        if found is None:
+            ov = self.overlay
+            found = (frozenset(e for e in ov.added if e[2] in labels),
+                     frozenset(e for e in ov.removed if e[2] in labels),
+                     frozenset(a for a in ov.attrs if a[1] in attrs),
+                     ov.created, ov.deleted, ov.retyped)
+            views[key] = found
+        return found
 
     # ------------------------------------------------------------------ identity
     def __hash__(self) -> int:
@@ -339,12 +369,15 @@ class StateEditor:
         self.activated.update(rule_names)
 
     def freeze(self) -> State:
+        ov = self.state.overlay
         overlay = Overlay(
-            added=frozenset(self.added), removed=frozenset(self.removed),
-            created=tuple((i, t, n) for i, (t, n) in sorted(self.created.items())),
-            deleted=frozenset(self.deleted), retyped=frozenset(self.retyped.items()),
-            attrs=frozenset((i, k, v) for (i, k), v in self.attrs.items()),
-            activated=frozenset(self.activated),
+            added=ov.added if self.added == ov.added else frozenset(self.added),
+            removed=ov.removed if self.removed == ov.removed else frozenset(self.removed),
+            created=tuple((i, t, n) for i, (t, n) in sorted(self.created.items())) if self.created else (),
+            deleted=ov.deleted if self.deleted == ov.deleted else frozenset(self.deleted),
+            retyped=frozenset(self.retyped.items()) if self.retyped else frozenset(),
+            attrs=frozenset((i, k, v) for (i, k), v in self.attrs.items()) if self.attrs else frozenset(),
+            activated=ov.activated if self.activated == ov.activated else frozenset(self.activated),
             next_id=self.next_id if self.created or self.next_id != self.world.size else -1,
         )
         return State(self.world, overlay)
