@@ -122,7 +122,25 @@ PlanResult = Union[Plan, NoPlan]
 class _Compiled:
     rule: Rule
     lhs: CompiledPattern
-    reads: tuple[frozenset[str], frozenset[str]]  # what decides its matches (relevance.condition_reads)
+    links: frozenset[tuple[str, str, str]]  # typed links that decide its matches (relevance.condition_reads)
+    attrs: frozenset[str]                   # attributes that decide them
+    labels: frozenset[str] = frozenset()
+    _seen: dict[tuple[str, str, str], bool] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.labels = frozenset(link[0] for link in self.links)
+
+    def visible(self, matcher: Matcher, state: State, edge: tuple[int, int, str]) -> bool:
+        """Can a link of the world be one the rule reads (label and end types)?"""
+        label = edge[2]
+        if label not in self.labels:
+            return False
+        key = (label, state.type_of(edge[0]), state.type_of(edge[1]))
+        found = self._seen.get(key)
+        if found is None:
+            found = self._seen[key] = any(l == label and matcher.type_ok(key[1], a) and matcher.type_ok(key[2], b)
+                                          for l, a, b in self.links)
+        return found
 
 
 class Planner:
@@ -146,7 +164,7 @@ class Planner:
                           if lhs.node(p.name) is None)
             if extra:
                 lhs = Pattern(lhs.nodes + extra, lhs.links)
-            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), condition_reads(rule)))
+            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), *condition_reads(rule)))
         # matches that pass every condition, by (rule, what the rule can see of the state): states
         # that differ only in links and attributes a rule does not read share its matches
         self._matches: dict[tuple[str, tuple[object, ...]], list[Bindings]] = {}
@@ -167,7 +185,9 @@ class Planner:
 
     def applicable(self, compiled: _Compiled, state: State) -> list[Bindings]:
         """The left-hand side matches of a rule that pass its conditions (cached, see __init__)."""
-        key = (compiled.rule.name, state.view(*compiled.reads))
+        matcher = self.matcher
+        key = (compiled.rule.name,
+               state.view(compiled.rule.name, lambda st, e: compiled.visible(matcher, st, e), compiled.attrs))
         found = self._matches.get(key)
         if found is not None:
             return found
@@ -214,7 +234,7 @@ class Planner:
         goal = self.matcher.compile(target.pattern)
         rules = self.rules
         if prune:
-            keep = {rule.name for rule in relevant_rules([c.rule for c in self.rules], target)}
+            keep = {rule.name for rule in relevant_rules([c.rule for c in self.rules], target, self.grammar.types)}
             rules = [c for c in self.rules if c.rule.name in keep]
         h = self._heuristic(heuristic, target, start, rules)
 

@@ -13,7 +13,7 @@ edges carry their type as attribute ``type`` (or as the edge key), as produced b
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -136,23 +136,24 @@ class State:
         else:
             self._attrs = _EMPTY_MAP  # type: ignore[assignment]
         self._hash = hash(ov)
-        self._views: dict[tuple[frozenset[str], frozenset[str]], tuple[object, ...]] | None = None
+        self._views: dict[Hashable, tuple[object, ...]] | None = None
 
-    def view(self, labels: frozenset[str], attrs: frozenset[str]) -> tuple[object, ...]:
-        """The part of this state's difference from the base world that a reader of these link
-        labels and attribute keys can see (plus every node change): equal views, equal answers."""
+    def view(self, reader: Hashable, visible: Callable[[State, Edge], bool], attrs: frozenset[str]
+             ) -> tuple[object, ...]:
+        """The part of this state's difference from the base world that ``reader`` can see: the
+        added and removed links ``visible`` accepts, the attributes it reads, every node change.
+        States with equal views give a reader the same answers (cached per state and reader)."""
         views = self._views
         if views is None:
             views = self._views = {}
-        key = (labels, attrs)
-        found = views.get(key)
+        found = views.get(reader)
         if found is None:
             ov = self.overlay
-            found = (frozenset(e for e in ov.added if e[2] in labels),
-                     frozenset(e for e in ov.removed if e[2] in labels),
-                     frozenset(a for a in ov.attrs if a[1] in attrs),
+            found = (frozenset(e for e in ov.added if visible(self, e)),
+                     frozenset(e for e in ov.removed if visible(self, e)),
+                     frozenset(a for a in ov.attrs if a[1] in attrs) if ov.attrs else frozenset(),
                      ov.created, ov.deleted, ov.retyped)
-            views[key] = found
+            views[reader] = found
         return found
 
     # ------------------------------------------------------------------ identity
@@ -304,8 +305,9 @@ class StateEditor:
         self.state = state
         ov = state.overlay
         self.world = state.world
-        self.added = set(ov.added)
-        self.removed = set(ov.removed)
+        # links are copied on first change (most rule applications change two or three)
+        self.added: set[Edge] | frozenset[Edge] = ov.added
+        self.removed: set[Edge] | frozenset[Edge] = ov.removed
         self.created = {i: (t, n) for i, t, n in ov.created}
         self.deleted = set(ov.deleted)
         self.retyped = dict(ov.retyped)
@@ -313,22 +315,32 @@ class StateEditor:
         self.activated = set(ov.activated)
         self.next_id = ov.next_id if ov.next_id >= 0 else self.world.size
 
+    def _own_links(self) -> None:
+        if isinstance(self.added, frozenset):
+            self.added = set(self.added)
+        if isinstance(self.removed, frozenset):
+            self.removed = set(self.removed)
+
     def _base_has(self, e: Edge) -> bool:
         return e in self.world.edge_attrs
 
     def add_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.removed:
-            self.removed.discard(e)
-        elif not self._base_has(e):
-            self.added.add(e)
+            self._own_links()
+            self.removed.discard(e)  # type: ignore[union-attr]
+        elif e not in self.added and not self._base_has(e):
+            self._own_links()
+            self.added.add(e)  # type: ignore[union-attr]
 
     def remove_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.added:
-            self.added.discard(e)
-        elif self._base_has(e):
-            self.removed.add(e)
+            self._own_links()
+            self.added.discard(e)  # type: ignore[union-attr]
+        elif e not in self.removed and self._base_has(e):
+            self._own_links()
+            self.removed.add(e)  # type: ignore[union-attr]
 
     def create_node(self, node_type: str, name_hint: str) -> int:
         i = self.next_id
@@ -342,6 +354,7 @@ class StateEditor:
         for s, label in view.edges_to(n):
             self.remove_edge(s, n, label)
         self.added = {e for e in self.added if e[0] != n and e[1] != n}
+        self.removed = set(self.removed)
         if n in self.created:
             del self.created[n]
         else:
@@ -371,8 +384,8 @@ class StateEditor:
     def freeze(self) -> State:
         ov = self.state.overlay
         overlay = Overlay(
-            added=ov.added if self.added == ov.added else frozenset(self.added),
-            removed=ov.removed if self.removed == ov.removed else frozenset(self.removed),
+            added=self.added if isinstance(self.added, frozenset) else frozenset(self.added),
+            removed=self.removed if isinstance(self.removed, frozenset) else frozenset(self.removed),
             created=tuple((i, t, n) for i, (t, n) in sorted(self.created.items())) if self.created else (),
             deleted=ov.deleted if self.deleted == ov.deleted else frozenset(self.deleted),
             retyped=frozenset(self.retyped.items()) if self.retyped else frozenset(),
