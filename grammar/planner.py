@@ -36,7 +36,7 @@ from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
 from grammar.matcher import Bindings, CompiledPattern, Matcher
 from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
-from grammar.relevance import condition_reads, relevant_rules
+from grammar.relevance import condition_reads, drop_useless_removers, relevant_rules
 from grammar.rewrite import apply_rule
 from grammar.world import State, World
 
@@ -234,7 +234,8 @@ class Planner:
         goal = self.matcher.compile(target.pattern)
         rules = self.rules
         if prune:
-            keep = {rule.name for rule in relevant_rules([c.rule for c in self.rules], target, self.grammar.types)}
+            relevant = relevant_rules([c.rule for c in self.rules], target, self.grammar.types)
+            keep = {rule.name for rule in drop_useless_removers(relevant, target, self.grammar.types)}
             rules = [c for c in self.rules if c.rule.name in keep]
         h = self._heuristic(heuristic, target, start, rules)
 

@@ -265,3 +265,209 @@ def condition_reads(rule: Rule) -> tuple[frozenset[TypedLink], frozenset[str]]:
     reads = _Reads()
     _condition_reads_typed(rule, reads)
     return frozenset(reads.links), frozenset(reads.attrs)
+
+
+# ----------------------------------------------------------------------------- useless removers
+# A second pass drops relevant rules whose only relevant change is to *remove* links that nothing
+# needs absent (approachPerson and takeTheAttention clear the robot's `near` link to objects, but
+# an object mission needs that link present). Argument (docs/grammar.md, "How planning works"):
+# call a typed link class *monotone* when every remaining reader wants it present (positive
+# pattern links and formula atoms), clears it unconditionally (an effect `(when (L a x) (not
+# (L a x)))` gives the same result whether the link was there or not), or is a *self-guard*
+# (`a->b(L)*` on the left of a rule that adds `a->b(L)` and otherwise only removes monotone
+# links). A world with more monotone links is then never worse: every plan step either applies
+# there too with a result that again has more monotone links, or is a self-guarded step whose
+# link is already there and can be skipped. So a step that only removes monotone links can be
+# left out of any plan at no loss, and its rule can be dropped.
+
+def _is_clear(formula: FWhen) -> bool:
+    """``(when (L a b) (not (L a b)))``: removes the link whether or not it was there."""
+    c, t = formula.condition, formula.then
+    return isinstance(c, FLink) and isinstance(t, FNot) and isinstance(t.body, FLink) and \
+        (c.label, c.src, c.dst) == (t.body.label, t.body.src, t.body.dst)
+
+
+def _negative_expr(expr: Expr, negative: bool, out: set[TypedLink], scope: Mapping[str, str]) -> None:
+    if isinstance(expr, Not):
+        _negative_expr(expr.expr, not negative, out, scope)
+    elif isinstance(expr, (And, Or)):
+        for item in expr.items:
+            _negative_expr(item, negative, out, scope)
+    elif isinstance(expr, Exists):
+        _negative_pattern(expr.pattern, negative, out, scope)
+
+
+def _negative_pattern(pattern: Pattern, negative: bool, out: set[TypedLink], scope: Mapping[str, str],
+                      skip: Iterable[tuple[str, str, str]] = ()) -> None:
+    """Typed links a pattern (read with polarity ``negative``) needs absent; ``skip`` = self-guards."""
+    inner = _pattern_scope(pattern, scope)
+    skipped = set(skip)
+    for link in pattern.links:
+        if link.negated != negative and (link.src, link.dst, link.label) not in skipped:
+            out.update(_typed(link.label, link.src, link.dst, inner, link.undirected))
+        for cond in link.conditions:
+            _negative_expr(cond, negative, out, inner)
+    for node in pattern.nodes:
+        for cond in node.conditions:
+            _negative_expr(cond, negative, out, inner)
+
+
+def _negative_formula(formula: Formula | None, negative: bool, out: set[TypedLink], scope: Mapping[str, str]) -> None:
+    if formula is None:
+        return
+    if isinstance(formula, FLink):
+        if negative:
+            out.update(_typed(formula.label, formula.src, formula.dst, scope))
+    elif isinstance(formula, FNot):
+        _negative_formula(formula.body, not negative, out, scope)
+    elif isinstance(formula, (FAnd, FOr)):
+        for item in formula.items:
+            _negative_formula(item, negative, out, scope)
+    elif isinstance(formula, (FExists, FForall)):
+        _negative_formula(formula.body, negative, out, {**scope, **{v.name: v.type for v in formula.vars}})
+    elif isinstance(formula, FWhen):
+        _negative_formula(formula.condition, not negative, out, scope)
+        _negative_formula(formula.then, negative, out, scope)
+
+
+def _effect_condition_reads(formula: Formula | None, out: set[TypedLink], scope: Mapping[str, str]) -> None:
+    """Links read by an effect's when-conditions, unconditional clears excepted (both polarities)."""
+    if formula is None:
+        return
+    if isinstance(formula, FAnd):
+        for item in formula.items:
+            _effect_condition_reads(item, out, scope)
+    elif isinstance(formula, FForall):
+        _effect_condition_reads(formula.body, out, {**scope, **{v.name: v.type for v in formula.vars}})
+    elif isinstance(formula, FWhen):
+        if not _is_clear(formula):
+            reads = _Reads()
+            _formula_reads(formula.condition, reads, scope)
+            out.update(reads.links)
+        _effect_condition_reads(formula.then, out, scope)
+
+
+def _effect_edits(formula: Formula | None, scope: Mapping[str, str]) -> tuple[set[TypedLink], set[TypedLink]]:
+    """(links an effect adds, links it removes), typed."""
+    adds: set[TypedLink] = set()
+    removes: set[TypedLink] = set()
+    stack: list[tuple[Formula, Mapping[str, str]]] = [(formula, scope)] if formula is not None else []
+    while stack:
+        f, sc = stack.pop()
+        if isinstance(f, FLink):
+            adds.update(_typed(f.label, f.src, f.dst, sc))
+        elif isinstance(f, FNot) and isinstance(f.body, FLink):
+            removes.update(_typed(f.body.label, f.body.src, f.body.dst, sc))
+        elif isinstance(f, FAnd):
+            stack.extend((item, sc) for item in f.items)
+        elif isinstance(f, FForall):
+            stack.append((f.body, {**sc, **{v.name: v.type for v in f.vars}}))
+        elif isinstance(f, FWhen):
+            stack.append((f.then, sc))
+        else:  # anything else: count it as an unknown addition
+            adds.add((ANY_TYPE, ANY_TYPE, ANY_TYPE))
+    return adds, removes
+
+
+@dataclass
+class _RuleFacts:
+    rule: Rule
+    reads: set[TypedLink]          # every typed link its conditions read
+    attrs_read: set[str]
+    negative: set[TypedLink]       # read as "must be absent" (self-guards excluded)
+    guards: set[TypedLink]         # its self-guards
+    adds: set[TypedLink]           # added, guarded links excluded
+    guarded_adds: set[TypedLink]   # the guarded links it adds
+    removes: set[TypedLink]
+    edits: bool                    # creates/deletes/retypes nodes, sets attributes or activates rules
+
+
+def _facts(rule: Rule) -> _RuleFacts:
+    scope = rule_scope(rule)
+    added = {(l.src, l.dst, l.label) for l in rule.added_links}
+    guard_keys = [(l.src, l.dst, l.label) for l in rule.lhs.links
+                  if l.negated and not l.conditions and not l.undirected and (l.src, l.dst, l.label) in added]
+    reads = _Reads()
+    _condition_reads_typed(rule, reads)
+    effect_reads: set[TypedLink] = set()
+    _effect_condition_reads(rule.effect, effect_reads, scope)
+    negative: set[TypedLink] = set()
+    _negative_pattern(rule.lhs, False, negative, scope, skip=guard_keys)
+    for cond in rule.where:
+        _negative_expr(cond, False, negative, scope)
+    _negative_formula(rule.precondition, False, negative, scope)
+    negative |= effect_reads
+    guards = {t for key in guard_keys for t in _typed(key[2], key[0], key[1], scope)}
+    adds: set[TypedLink] = set()
+    guarded_adds: set[TypedLink] = set()
+    for link in rule.added_links:
+        typed = _typed(link.label, link.src, link.dst, scope, link.undirected)
+        (guarded_adds if (link.src, link.dst, link.label) in guard_keys else adds).update(typed)
+    removes: set[TypedLink] = set()
+    for link in rule.removed_links:
+        removes.update(_typed(link.label, link.src, link.dst, scope, link.undirected))
+    effect_adds, effect_removes = _effect_edits(rule.effect, scope)
+    edits = _edits_nodes(rule) or bool(rule.assignments) or bool(rule.activates) or rule.dormant
+    return _RuleFacts(rule, reads.links | effect_reads, reads.attrs, negative, guards, adds | effect_adds,
+                      guarded_adds, removes | effect_removes, edits)
+
+
+def drop_useless_removers(rules: list[Rule], target: Target, types: TypeTable | None = None) -> list[Rule]:
+    """``rules`` (already relevant) without those whose only relevant changes remove monotone links."""
+    typing = _Types(types)
+    facts = {rule.name: _facts(rule) for rule in rules}
+    target_reads = _Reads()
+    _pattern_reads(target.pattern, target_reads, {})
+    target_scope = {node.name: node.type for node in target.pattern.nodes}
+    for cond in target.where:
+        _expr_reads(cond, target_reads, target_scope)
+    _formula_reads(target.precondition, target_reads, target_scope)
+    target_negative: set[TypedLink] = set()
+    _negative_pattern(target.pattern, False, target_negative, {})
+    for cond in target.where:
+        _negative_expr(cond, False, target_negative, target_scope)
+    _negative_formula(target.precondition, False, target_negative, target_scope)
+
+    kept = [rule.name for rule in rules]
+    changed = True
+    while changed:
+        changed = False
+        for name in list(kept):
+            others = [facts[n] for n in kept if n != name]
+            if _prunable(facts[name], others, target_reads, target_negative, typing):
+                kept.remove(name)
+                changed = True
+                break
+    return [rule for rule in rules if rule.name in kept]
+
+
+def _prunable(me: _RuleFacts, others: list[_RuleFacts], target_reads: _Reads, target_negative: set[TypedLink],
+              typing: _Types) -> bool:
+    if me.edits:
+        return False
+    reads = set(target_reads.links)
+    attrs = set(target_reads.attrs)
+    for other in others:
+        reads |= other.reads
+        attrs |= other.attrs_read
+    if _touches(me.adds | me.guarded_adds, reads, typing):  # it adds something someone reads: it may help
+        return False
+    removed = [link for link in me.removes if any(typing.link_overlap(link, r) for r in reads)]
+    if not removed:
+        return False  # relevant for some other reason (kept: the first pass chose it)
+    # self-guarded rules are skippable when, besides their guarded link, they only remove
+    # monotone links: greatest fixpoint over (monotone classes, skippable rules)
+    skippable = {id(o) for o in others if o.guards and not o.edits}
+    while True:
+        negative = set(target_negative)
+        for other in others:
+            negative |= other.negative
+            if id(other) not in skippable:
+                negative |= other.guards
+        bad = [o for o in others if id(o) in skippable and
+               (_touches(o.adds, reads, typing) or _touches(o.removes, negative, typing))]
+        if not bad:
+            break
+        for o in bad:
+            skippable.discard(id(o))
+    return not _touches(removed, negative, typing)
