@@ -193,3 +193,28 @@ def test_plan_arguments_must_be_one_form_or_the_other() -> None:
               "--target", str(DATA / "robot_in_3.aggt"))
     assert bad.exit_code == 2 and "give no SCENE" in bad.stderr
     assert "give SCENE --mission M" in run("plan").stderr
+
+
+def test_nested_hierarchical_steps_expand_recursively() -> None:
+    from grammar import parse_target, plan
+    from grammar.world import graph_from_mapping
+
+    g = parse_grammar('''
+        rule walk { lhs { r:robot a:room b:room  r->a(in) a->b(door) } rhs { r:robot a:room b:room  r->b(in) a->b(door) } }
+        rule pick cost 2 { lhs { r:robot x:room o:object  r->x(in) o->x(in) } rhs { r:robot x:room o:object  r->x(in) r->o(holds) } }
+        rule give { lhs { r:robot o:object p:person x:room  r->o(holds) r->x(in) p->x(in) }
+                    rhs { r:robot o:object p:person x:room  r->x(in) p->o(holds) } }
+        rule fetch hierarchical { lhs { r:robot o:object } rhs { r:robot o:object  r->o(holds) } }
+        rule serve hierarchical { lhs { r:robot o:object p:person } rhs { r:robot o:object p:person  p->o(holds) } }
+    ''', "serve.aggl")
+    world = graph_from_mapping({"1": {"type": "robot"}, "2": {"type": "room"}, "3": {"type": "room"},
+                                "4": {"type": "object"}, "5": {"type": "person"}},
+                               [("1", "2", "in"), ("2", "3", "door"), ("4", "2", "in"), ("5", "2", "in")])
+    result = plan(g, world, parse_target("{ 4:object 5:person 5->4(holds) }", "t.aggt"))
+    assert result.found and [s.rule for s in result.steps] == ["serve"]
+    serve = result.steps[0].expansion
+    assert serve is not None and [s.rule for s in serve.steps] == ["fetch", "give"]  # cheaper than pick
+    assert [s.rule for s in result.flat_steps()] == ["pick", "give"]
+    assert result.agm_lines() == ["pick@{'r': '1', 'x': '2', 'o': '4'}", "#!*fetch@{'r': '1', 'o': '4'}",
+                                  "give@{'r': '1', 'o': '4', 'x': '2', 'p': '5'}",
+                                  "#!*serve@{'r': '1', 'o': '4', 'p': '5'}"]
