@@ -23,6 +23,7 @@ expanded there is no plan; a later step that cannot be expanded yet keeps ``expa
 from __future__ import annotations
 
 import heapq
+import itertools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -30,8 +31,8 @@ from typing import Union
 
 import networkx as nx
 
-from grammar.errors import PlanningError
 from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
+from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
 from grammar.matcher import Bindings, CompiledPattern, Matcher
@@ -116,6 +117,7 @@ class NoPlan:
 
 
 PlanResult = Union[Plan, NoPlan]
+_TOKENS = itertools.count()
 
 
 @dataclass
@@ -125,10 +127,12 @@ class _Compiled:
     links: frozenset[tuple[str, str, str]]  # typed links that decide its matches (relevance.condition_reads)
     attrs: frozenset[str]                   # attributes that decide them
     labels: frozenset[str] = frozenset()
+    token: int = 0  # unique in the process: names this reader in State.view caches
     _seen: dict[tuple[str, str, str], bool] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.labels = frozenset(link[0] for link in self.links)
+        self.token = next(_TOKENS)
 
     def visible(self, matcher: Matcher, state: State, edge: tuple[int, int, str]) -> bool:
         """Can a link of the world be one the rule reads (label and end types)?"""
@@ -187,7 +191,7 @@ class Planner:
         """The left-hand side matches of a rule that pass its conditions (cached, see __init__)."""
         matcher = self.matcher
         key = (compiled.rule.name,
-               state.view(compiled.rule.name, lambda st, e: compiled.visible(matcher, st, e), compiled.attrs))
+               state.view(compiled.token, lambda st, e: compiled.visible(matcher, st, e), compiled.attrs))
         found = self._matches.get(key)
         if found is not None:
             return found
