@@ -8,8 +8,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
+from grammar import GrammarError, parse_grammar
 from tests.support import REPO_ROOT
 from tools.cli import app
 
@@ -79,3 +82,21 @@ def test_bad_worlds_are_clear_errors(name: str, message: str) -> None:
     if name.endswith(".json"):  # the older form: the world given as SCENE
         old = runner.invoke(app, ["plan", str(world), "--mission", "room:kitchen"])
         assert old.exit_code == 2 and message in old.stderr
+
+
+@settings(max_examples=25, deadline=None)
+@given(depth=st.integers(1, 600), kind=st.sampled_from(["parens", "not", "fnot", "exists", "block"]))
+def test_any_nesting_depth_parses_or_gives_a_located_error(depth: int, kind: str) -> None:
+    """Deep structures of every kind: a model or a located GrammarError, never a RecursionError."""
+    body = {
+        "parens": "where " + "(" * depth + "a.x == 1" + ")" * depth,
+        "not": "where " + "not " * depth + "a.x",
+        "fnot": "precondition { " + "(not " * depth + "(in a a)" + ")" * depth + " }",
+        "exists": "precondition { " + "".join(f"(exists x{i}:room " for i in range(depth)) + "(in a a)" + ")" * depth + " }",
+        "block": "where " + "exists { b:room [" * depth + "x == 1" + "] }" * depth,
+    }[kind]
+    text = f"rule r {{\n  lhs {{ a:room }}\n  rhs {{ a:room }}\n  {body}\n}}\n"
+    try:
+        parse_grammar(text, "deep.aggl")
+    except GrammarError as err:
+        assert err.file == "deep.aggl" and err.line >= 1 and err.column >= 1, str(err)
