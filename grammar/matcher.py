@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+import itertools
 from functools import lru_cache
 from typing import Any
 
@@ -50,6 +51,39 @@ class NodeRef:
     """Value of a bare variable in an expression: compares equal only to the same world node."""
 
     node: int
+
+
+_TOKENS = itertools.count()
+
+
+class Reader:
+    """What a rule or a nested pattern reads: typed links ``(label, source type, destination
+    type)`` and attribute keys. States that agree on what a reader can see (``view``) give it the
+    same answers, which is what lets the planner reuse matches and ``exists`` results."""
+
+    def __init__(self, links: Iterable[tuple[str, str, str]], attrs: Iterable[str], type_ok: Any) -> None:
+        self.links = frozenset(links)
+        self.attrs = frozenset(attrs)
+        self.labels = frozenset(link[0] for link in self.links)
+        self.type_ok = type_ok
+        self.token = next(_TOKENS)  # unique in the process: names this reader in State.view caches
+        self._seen: dict[tuple[str, str, str], bool] = {}
+
+    def visible(self, state: State, edge: tuple[int, int, str]) -> bool:
+        """Can a link of the world be one this reader reads (label and end types)?"""
+        label = edge[2]
+        if label not in self.labels:
+            return False
+        key = (label, state.type_of(edge[0]), state.type_of(edge[1]))
+        found = self._seen.get(key)
+        if found is None:
+            type_ok = self.type_ok
+            found = self._seen[key] = any(l == label and type_ok(key[1], a) and type_ok(key[2], b)
+                                          for l, a, b in self.links)
+        return found
+
+    def view(self, state: State) -> tuple[object, ...]:
+        return state.view(self.token, self.visible, self.attrs)
 
 
 # ---------------------------------------------------------------------------- compiled patterns
@@ -145,6 +179,11 @@ class Matcher:
         self._compiled: dict[tuple[int, frozenset[str]], CompiledPattern] = {}
         self._ancestors = lru_cache(maxsize=None)(types.ancestors)
         self._free: dict[int, tuple[Pattern, frozenset[str], tuple[str, ...]]] = {}
+        # results of nested `exists` patterns, by (pattern, its bound variables' nodes, what it
+        # can see of the state): the agenda conditions of changeRoom ask the same question about
+        # a room from every room next to it
+        self._exists: dict[tuple[object, ...], bool] = {}
+        self._readers: dict[int, tuple[Pattern, Reader]] = {}
 
     # ------------------------------------------------------------------ typing
     def type_ok(self, world_type: str, pattern_type: str) -> bool:
@@ -313,6 +352,20 @@ class Matcher:
         prebound = cached[1] | {name for name in cached[2] if name in b}
         return self.compile(pattern, prebound)
 
+    def _exists_holds(self, pattern: Pattern, state: State, b: Bindings) -> bool:
+        compiled = self._compile_exists(pattern, b)
+        found = self._readers.get(id(pattern))
+        if found is None or found[0] is not pattern:
+            from grammar.relevance import pattern_reads  # (relevance imports no matcher)
+
+            found = self._readers[id(pattern)] = (pattern, Reader(*pattern_reads(pattern), self.type_ok))
+        reader = found[1]
+        key = (reader.token, tuple(sorted((v, b[v]) for v in compiled.prebound if v in b)), reader.view(state))
+        holds = self._exists.get(key)
+        if holds is None:
+            holds = self._exists[key] = self.first_match(compiled, state, b) is not None
+        return holds
+
     def first_match(self, compiled: CompiledPattern, state: State, bindings: Bindings | None = None
                     ) -> Bindings | None:
         return next(self.matches(compiled, state, bindings), None)
@@ -430,7 +483,7 @@ class Matcher:
         if isinstance(expr, Not):
             return not self.truth(expr.expr, state, b, edge)
         if isinstance(expr, Exists):
-            return self.first_match(self._compile_exists(expr.pattern, b), state, b) is not None
+            return self._exists_holds(expr.pattern, state, b)
         if isinstance(expr, Compare):
             return _compare(expr.op, self.eval(expr.left, state, b, edge), self.eval(expr.right, state, b, edge))
         return bool(self.eval(expr, state, b, edge))

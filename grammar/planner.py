@@ -23,7 +23,6 @@ expanded there is no plan; a later step that cannot be expanded yet keeps ``expa
 from __future__ import annotations
 
 import heapq
-import itertools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -35,7 +34,7 @@ from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
 from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
-from grammar.matcher import Bindings, CompiledPattern, Matcher
+from grammar.matcher import Bindings, CompiledPattern, Matcher, Reader
 from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
 from grammar.relevance import condition_reads, drop_useless_removers, relevant_rules
 from grammar.rewrite import apply_rule
@@ -117,34 +116,13 @@ class NoPlan:
 
 
 PlanResult = Union[Plan, NoPlan]
-_TOKENS = itertools.count()
 
 
 @dataclass
 class _Compiled:
     rule: Rule
     lhs: CompiledPattern
-    links: frozenset[tuple[str, str, str]]  # typed links that decide its matches (relevance.condition_reads)
-    attrs: frozenset[str]                   # attributes that decide them
-    labels: frozenset[str] = frozenset()
-    token: int = 0  # unique in the process: names this reader in State.view caches
-    _seen: dict[tuple[str, str, str], bool] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        self.labels = frozenset(link[0] for link in self.links)
-        self.token = next(_TOKENS)
-
-    def visible(self, matcher: Matcher, state: State, edge: tuple[int, int, str]) -> bool:
-        """Can a link of the world be one the rule reads (label and end types)?"""
-        label = edge[2]
-        if label not in self.labels:
-            return False
-        key = (label, state.type_of(edge[0]), state.type_of(edge[1]))
-        found = self._seen.get(key)
-        if found is None:
-            found = self._seen[key] = any(l == label and matcher.type_ok(key[1], a) and matcher.type_ok(key[2], b)
-                                          for l, a, b in self.links)
-        return found
+    reader: Reader  # what decides its matches (relevance.condition_reads)
 
 
 class Planner:
@@ -168,7 +146,8 @@ class Planner:
                           if lhs.node(p.name) is None)
             if extra:
                 lhs = Pattern(lhs.nodes + extra, lhs.links)
-            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), *condition_reads(rule)))
+            reader = Reader(*condition_reads(rule), self.matcher.type_ok)
+            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), reader))
         # matches that pass every condition, by (rule, what the rule can see of the state): states
         # that differ only in links and attributes a rule does not read share its matches
         self._matches: dict[tuple[str, tuple[object, ...]], list[Bindings]] = {}
@@ -189,9 +168,7 @@ class Planner:
 
     def applicable(self, compiled: _Compiled, state: State) -> list[Bindings]:
         """The left-hand side matches of a rule that pass its conditions (cached, see __init__)."""
-        matcher = self.matcher
-        key = (compiled.rule.name,
-               state.view(compiled.token, lambda st, e: compiled.visible(matcher, st, e), compiled.attrs))
+        key = (compiled.rule.name, compiled.reader.view(state))
         found = self._matches.get(key)
         if found is not None:
             return found

@@ -471,3 +471,11 @@ def _prunable(me: _RuleFacts, others: list[_RuleFacts], target_reads: _Reads, ta
         for o in bad:
             skippable.discard(id(o))
     return not _touches(removed, negative, typing)
+
+
+def pattern_reads(pattern: Pattern) -> tuple[frozenset[TypedLink], frozenset[str]]:
+    """Typed links and attribute keys a (nested) pattern reads; variables it does not declare
+    (those of the enclosing pattern) may be of any type."""
+    reads = _Reads()
+    _pattern_reads(pattern, reads, {})
+    return frozenset(reads.links), frozenset(reads.attrs)
