@@ -516,10 +516,13 @@ def _first_failure(planner: Planner, rule: Rule, state: State, b: Bindings, focu
 
     if rule.dormant and rule.name not in state.overlay.activated:
         return blocker("dormant", rule.pos, ["no applied rule has activated it"])
+    added = {(l.src, l.dst, l.label) for l in rule.added_links}
     for link in rule.lhs.links:
         s, d = b.get(link.src), b.get(link.dst)
         if s is None or d is None:
             continue
+        if link.negated and (link.src, link.dst, link.label) in added and state.has_edge(s, d, link.label):
+            return None  # a self-guard: what the rule would do is already done, it blocks nothing
         edges = [(s, d, link.label)] if state.has_edge(s, d, link.label) else []
         if link.undirected and state.has_edge(d, s, link.label):
             edges.append((d, s, link.label))
@@ -603,10 +606,10 @@ def _collect(planner: Planner, states: list[State], base: Any,
     for state in states:
         if len(blockers) >= MAX_BLOCKERS:
             return
-        bases = (list(_take(matcher.matches(base, state), MAX_BASE_MATCHES)) or [{}]) if tied else [{}]
+        bases = list(_take(matcher.matches(base, state), MAX_BASE_MATCHES)) if tied else [{}]
         for _goal, found in achievers:
             for rule, tie in found:
-                for base_match in bases:
+                for base_match in (bases if tie and tied else [{}]):
                     prebound = {var: base_match[t] for var, t in tie.items() if t in base_match} if tied else {}
                     if len(set(prebound.values())) != len(prebound):
                         continue
