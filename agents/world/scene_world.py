@@ -14,7 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from agents.lib.agenda import (AgendaChangeError, AgendaDay, AgendaError, AgendaSourceError, AgendaValidationError,
-                               apply_change, expand_day, load_scene_agenda, parse_change)
+                               apply_change, expand_day, parse_change)
+from agents.lib.agenda.yaml_source import scene_agenda
 from scenes.clock import parse_clock
 from scenes.loader import LoadedScene, load_scene
 from scenes.model import Scene
@@ -80,8 +81,7 @@ def _agenda_error(exc: Exception, loaded: LoadedScene) -> SourceError:
     """Agenda errors name "file:line" in their findings; keep that position for the scene check."""
     scene_file = str(loaded.path)
     if isinstance(exc, AgendaSourceError):
-        problem = exc.problems[0]
-        return SourceError(problem.file, problem.line or 1, 1, problem.key, problem.message)
+        return exc.problems[0]
     if isinstance(exc, AgendaValidationError) and exc.report.errors:
         finding = exc.report.errors[0]
         file, _, line = finding.source.rpartition(":")
@@ -98,7 +98,7 @@ def resolve_world(loaded: LoadedScene) -> SceneWorld:
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise loaded.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
     try:
-        day = expand_day(load_scene_agenda(loaded.path), scene.clock.date, scene.clock.timezone,
+        day = expand_day(scene_agenda(loaded.located, loaded.path.parent), scene.clock.date, scene.clock.timezone,
                          {o.name for o in scene.objects}, known_rooms={r.name for r in scene.rooms})
     except AgendaError as exc:
         raise _agenda_error(exc, loaded) from None

@@ -24,9 +24,11 @@ from pathlib import Path
 from typing import Any
 
 import icalendar
+
+from scenes.yamlio import SourceError
 from dateutil import rrule
 
-from agents.lib.agenda.model import AgendaSourceError, SourceProblem, local_midnight
+from agents.lib.agenda.model import AgendaSourceError, local_midnight, problem
 
 UTC = dt.timezone.utc
 _UNESCAPED_COMMA = re.compile(r"(?<!\\),")
@@ -386,7 +388,7 @@ def _vevent_lines(text: str) -> list[int]:
             if line.strip().upper() == "BEGIN:VEVENT"]
 
 
-def _check_series(events: Iterable[IcsEvent], problems: list[SourceProblem]) -> None:
+def _check_series(events: Iterable[IcsEvent], problems: list[SourceError]) -> None:
     seen: dict[tuple[str, object], IcsEvent] = {}
     masters = {e.uid for e in events if e.recurrence_id is None}
     for event in events:
@@ -394,13 +396,13 @@ def _check_series(events: Iterable[IcsEvent], problems: list[SourceProblem]) -> 
         if key in seen:
             what = ("event" if event.recurrence_id is None
                     else f"change to the {event.recurrence_id} occurrence")
-            problems.append(SourceProblem(event.file, event.line, f"UID={event.uid}: a second {what} with "
+            problems.append(problem(event.file, event.line, f"UID={event.uid}: a second {what} with "
                                           f"this UID (first at line {seen[key].line}); give each event its "
                                           "own UID"))
         else:
             seen[key] = event
         if event.recurrence_id is not None and event.object is None and event.uid not in masters:
-            problems.append(SourceProblem(event.file, event.line, f"UID={event.uid}: no object: set "
+            problems.append(problem(event.file, event.line, f"UID={event.uid}: no object: set "
                                           "X-CHRONAV-OBJECT (or LOCATION)"))
 
 
@@ -410,32 +412,32 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
         try:
             data = data.decode("utf-8-sig")
         except UnicodeDecodeError as exc:
-            raise AgendaSourceError([SourceProblem(source, None, f"not UTF-8 text (byte {exc.start}); "
+            raise AgendaSourceError([problem(source, None, f"not UTF-8 text (byte {exc.start}); "
                                                    "iCalendar files are UTF-8: export it again")]) from None
     text = data.removeprefix("\ufeff")  # a byte-order mark, as some Windows exports write
     try:
         calendars = icalendar.Calendar.from_ical(text, multiple=True)
     except ValueError as exc:
-        raise AgendaSourceError([SourceProblem(source, None, f"not a valid iCalendar file: {exc}")]) from None
+        raise AgendaSourceError([problem(source, None, f"not a valid iCalendar file: {exc}")]) from None
     except (AttributeError, TypeError, KeyError, IndexError) as exc:
         # icalendar's own crashes on malformed input (icalendar 7: a VTIMEZONE with two TZIDs is
         # an AttributeError); still a file to fix, never an agent to kill.
-        raise AgendaSourceError([SourceProblem(source, None, "not a valid iCalendar file (the parser failed: "
+        raise AgendaSourceError([problem(source, None, "not a valid iCalendar file (the parser failed: "
                                                f"{type(exc).__name__}: {exc}); check VTIMEZONE and "
                                                "repeated properties")]) from None
     vevents = [event for calendar in calendars for event in calendar.walk("VEVENT")]
     if not calendars:
-        raise AgendaSourceError([SourceProblem(source, None, "no complete VCALENDAR found: is this an .ics "
+        raise AgendaSourceError([problem(source, None, "no complete VCALENDAR found: is this an .ics "
                                                "file, and does it end with END:VCALENDAR?")])
     lines = _vevent_lines(text)
     if len(lines) != len(vevents):
         lines = [None] * len(vevents)  # type: ignore[list-item]
     events: list[IcsEvent] = []
-    problems: list[SourceProblem] = []
+    problems: list[SourceError] = []
     for vevent, line in zip(vevents, lines, strict=True):
         parsed, messages = _parse_event(vevent, source, line)
         uid = _text(vevent.get("UID")) or f"line-{line}"
-        problems.extend(SourceProblem(source, line, f"UID={uid}: {message}") for message in messages)
+        problems.extend(problem(source, line, f"UID={uid}: {message}") for message in messages)
         if parsed is not None:
             events.append(parsed)
     _check_series(events, problems)
@@ -449,6 +451,6 @@ def load_ics_file(path: str | Path) -> IcsAgenda:
     try:
         data = path.read_bytes()
     except OSError as exc:
-        raise AgendaSourceError([SourceProblem(str(path), None,
+        raise AgendaSourceError([problem(str(path), None,
                                                f"cannot read file: {exc.strerror}")]) from None
     return parse_ics(data, str(path))

@@ -26,6 +26,7 @@ from pydantic import (BaseModel, ConfigDict, Field, StringConstraints, Validatio
                       field_validator, model_validator)
 
 from scenes.clock import CLOCK_PATTERN, format_clock, parse_clock
+from scenes.yamlio import SourceError
 
 SECONDS_PER_DAY = 86400.0
 
@@ -43,27 +44,20 @@ class AgendaError(Exception):
     """Base of every agenda error, so an agent can refuse bad input without crashing."""
 
 
-@dataclass(frozen=True)
-class SourceProblem:
-    """One thing wrong in an input file, located so that staff can find and fix it."""
-
-    file: str
-    line: int | None
-    message: str
-    key: str = ""
-
-    def __str__(self) -> str:
-        where = f"{self.file}:{self.line}" if self.line is not None else self.file
-        return f"{where}: {self.key}: {self.message}" if self.key else f"{where}: {self.message}"
+def problem(file: str, line: int | None, message: str, key: str = "", column: int | None = None) -> SourceError:
+    """One located problem of an agenda file: the same SourceError every input file uses."""
+    return SourceError(file, line, column, key, message)
 
 
 class AgendaSourceError(AgendaError, ValueError):
-    """An agenda file (YAML or .ics) could not be read; lists *every* problem found, one a line."""
+    """An agenda file (YAML or .ics) could not be read; lists *every* problem found, one a line.
 
-    def __init__(self, problems: list[SourceProblem]) -> None:
+    Each problem is a :class:`scenes.yamlio.SourceError` (file, line, column, key, message)."""
+
+    def __init__(self, problems: list[SourceError]) -> None:
         if not problems:
             raise ValueError("AgendaSourceError needs at least one problem")
-        self.problems: tuple[SourceProblem, ...] = tuple(problems)
+        self.problems: tuple[SourceError, ...] = tuple(problems)
         super().__init__("\n".join(str(p) for p in self.problems))
 
 
