@@ -18,7 +18,7 @@ from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Di
 from scenes.clock import ClockTime, parse_clock
 from scenes.geometry import Circle, Rectangle, Trapezoid, shape_from_spec, shape_to_dict
 from scenes.geometry import Shape as GeometryShape
-from scenes.limits import NAME_CHARS
+from scenes.names import Name
 from scenes.yamlio import as_date
 
 
@@ -43,23 +43,6 @@ def _finite(value: float) -> float:
 Real = Annotated[float, BeforeValidator(_number), AfterValidator(_finite)]
 WholeNumber = Annotated[int, BeforeValidator(_number)]
 
-
-def _name(value: str) -> str:
-    """Names are shown in terminals and written to the DSR: bounded, printable, one line."""
-    limit = NAME_CHARS.value()
-    if len(value) > limit:
-        raise ValueError(f"a name of {len(value):,} characters; names have at most {limit} "
-                         f"({NAME_CHARS.env})")
-    if not value.strip():
-        raise ValueError("must not be empty")
-    if any(not ch.isprintable() for ch in value):
-        raise ValueError(f"{value[:40]!r} contains control characters (such as a terminal escape or a "
-                         "line break); use letters, digits, spaces and punctuation")
-    return value
-
-
-# A name or id: non-empty, printable, at most NAME_CHARS characters (scenes/limits.py).
-Name = Annotated[str, AfterValidator(_name)]
 
 Point = tuple[Real, Real]
 

@@ -22,18 +22,26 @@ from dataclasses import dataclass
 from typing import Annotated
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from pydantic import (BaseModel, ConfigDict, Field, StringConstraints, ValidationInfo,
+from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, ValidationInfo,
                       field_validator, model_validator)
 
 from scenes.clock import CLOCK_PATTERN, format_clock, parse_clock
+from scenes.names import check_name, shown
 from scenes.yamlio import SourceError
 
 SECONDS_PER_DAY = 86400.0
 
 
-NonEmptyStr = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
-ActivityId = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=100,
-                                              pattern=r"^\S+$")]
+def _one_word(value: str) -> str:
+    if any(ch.isspace() for ch in value):
+        raise ValueError(f"an id is one word without spaces, got {shown(value, 60)}")
+    return value
+
+
+# Names and ids staff type: bounded, printable (scenes/names.py); an id is also one word.
+NonEmptyStr = Annotated[str, StringConstraints(strip_whitespace=True), AfterValidator(check_name)]
+ActivityId = Annotated[str, StringConstraints(strip_whitespace=True), AfterValidator(check_name),
+                       AfterValidator(_one_word)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -233,7 +241,7 @@ class Activity(BaseModel):
     room: str | None = None
     start_s: float
     end_s: float
-    participants: tuple[str, ...] = ()
+    participants: tuple[NonEmptyStr, ...] = ()
     state: ActivityState = ActivityState.SCHEDULED
     source: str
     kind: str | None = None
