@@ -188,10 +188,13 @@ def resolve_address(connect: list[str] | None, graph: str | None, run: str | Non
 # ---------------------------------------------------------------------------------------------
 
 def _pydantic_problems(exc: Any) -> str:
+    """pydantic's errors in the user's words (scenes/yamlio.user_message), one per field."""
+    from scenes.yamlio import user_message
+
     parts = []
     for error in exc.errors():
-        where = ".".join(str(p) for p in error["loc"])
-        message = "required" if error["type"] == "missing" else str(error["msg"]).removeprefix("Value error, ")
+        where = ".".join(str(p) for p in error["loc"] if not (isinstance(p, str) and "function-" in p))
+        message = user_message(error)
         parts.append(f"{where}: {message}" if where else message)
     return "; ".join(parts)
 

@@ -257,7 +257,7 @@ def nobody_env() -> dict[str, str]:
     (["add", "tv", "25:00", "26:00"], "start: '25:00' is not a valid clock time (00:00 to 24:00)"),
     (["add", "tv", "10:00", "09:00"], "end: end '09:00' is not after start '10:00'"),
     (["add", "tv", "10", "11:00"], "start: '10' is not a time: use HH:MM"),
-    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: String should match pattern"),
+    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: an id is one word without spaces, got 'my game'"),
     (["move", "tv-0908"], "say the new time: --start HH:MM and/or --end HH:MM"),
     (["move", "tv-0908", "--start", "10:00", "--end", "09:30"], "--end '09:30' is not after --start '10:00'"),
     (["move", "tv-0908", "--end", "half past"], "--end: 'half past' is not a time"),
@@ -275,8 +275,8 @@ def test_load_reports_file_errors_with_lines_before_sending(nobody_env: dict[str
                    '  - {name: Quiz, objet: tv, start: "10:00", end: "11:00"}\n')
     result = runner.invoke(app, ["agenda", "load", str(bad)], env=nobody_env)
     assert result.exit_code == 1
-    assert f"{bad}:4: activities[0].start: '25:00' is not a valid clock time" in result.stderr
-    assert f"{bad}:6: activities[1].objet: unknown key; did you mean 'object'?" in result.stderr
+    assert f"{bad}:4:5: activities[0].start: '25:00' is not a valid clock time" in result.stderr
+    assert f"{bad}:6:18: activities[1].objet: unknown key 'objet' (did you mean 'object'?)" in result.stderr
 
     ics = tmp_path / "bad.ics"
     ics.write_text((REPO_ROOT / "tests" / "data" / "agenda_bad.ics").read_text())

@@ -34,7 +34,7 @@ SECONDS_PER_DAY = 86400.0
 
 def _one_word(value: str) -> str:
     if any(ch.isspace() for ch in value):
-        raise ValueError(f"an id is one word without spaces, got {shown(value, 60)}")
+        raise ValueError(f"an id is one word without spaces, got {shown(value, 60)!r}")
     return value
 
 
