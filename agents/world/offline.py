@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import shapely
 
 from agents.lib.agenda.chronemics import ChronemicsParams
 from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_trajectory_csv
@@ -139,9 +140,24 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
     }
 
 
+def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
+    """A trajectory none of whose samples is in the scene's rooms belongs to another scene (or
+    another frame): measuring it would report distances to people it never met."""
+    scene = world.scene
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    inside = shapely.covers_xy(building, traj[:, 1], traj[:, 2])
+    if not inside.any():
+        xmin, ymin, xmax, ymax = scene.bounds
+        raise OfflineError(f"{source}: no sample of the trajectory lies in a room of {scene.name!r} (samples span "
+                           f"x {traj[:, 1].min():g}..{traj[:, 1].max():g} m, y {traj[:, 2].min():g}.."
+                           f"{traj[:, 2].max():g} m; the building spans x {xmin:g}..{xmax:g} m, y {ymin:g}..{ymax:g} m); "
+                           "is it a trajectory of this scene?")
+
+
 def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None) -> dict[str, Any]:
     maps = SceneMaps.load(scene)
     traj = read_trajectory_csv(trajectory_csv)
+    _check_on_map(maps.world, traj, trajectory_csv)
     if at_s is None:
         first = float(traj[0, 0])
         at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s
