@@ -31,6 +31,7 @@ from agents.world.navigation import NavigationMaps
 from agents.world.scene_world import SceneWorld, load_world
 from agents.world.timeline import world_at
 from dsr import DSRGraph
+from scenes.clock import format_clock
 from scenes.loader import LoadedScene
 from scenes.yamlio import SourceError
 
@@ -127,7 +128,8 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
         path = plan(smap, start, goal, method=method, baseline=baseline, arrival_time=arrival_time,
                     cruise_speed_mps=maps.cruise_speed)
     except PlanningError as exc:
-        raise OfflineError(f"no path from {start} to {goal} at {t_s:.0f} s: {exc}", no_path=True) from None
+        raise OfflineError(f"no path from ({start[0]:g}, {start[1]:g}) to ({goal[0]:g}, {goal[1]:g}) m at "
+                           f"{format_clock(t_s)}: {exc}", no_path=True) from None
     points = np.vstack([path.points_m])
     report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
     return {
