@@ -17,11 +17,13 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from scenes.errors import SourceError
+
 ENV_PREFIX = "CHRONAV_LIMIT_"
 
 
-class LimitConfigError(ValueError):
-    """A ``CHRONAV_LIMIT_*`` variable that is not a positive whole number."""
+class LimitConfigError(SourceError):
+    """A ``CHRONAV_LIMIT_*`` variable that is not a positive whole number (reported like a bad file)."""
 
 
 @dataclass(frozen=True)
@@ -44,8 +46,8 @@ class Limit:
         if not raw:
             return self.default
         if not raw.isdigit() or len(raw) > 18 or int(raw) <= 0:
-            raise LimitConfigError(f"{self.env}={raw!r}: expected a positive whole number "
-                                   f"(default {self.default} {self.unit})")
+            raise LimitConfigError(f"{self.env}={raw[:40]!r}", None, None, "",
+                                   f"expected a positive whole number of {self.unit} (default {self.default})")
         return int(raw)
 
 

@@ -31,6 +31,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ValidationError
 
+from scenes.errors import SourceError
 from scenes.limits import TEXT_CHARS, YAML_BYTES, YAML_DEPTH, YAML_INT_DIGITS, YAML_NODES
 
 KeyPath = tuple[str | int, ...]
@@ -42,26 +43,6 @@ _FLOAT = "tag:yaml.org,2002:float"
 _STR = "tag:yaml.org,2002:str"
 _TIMESTAMP = "tag:yaml.org,2002:timestamp"
 _MERGE = "tag:yaml.org,2002:merge"
-
-
-@dataclass(frozen=True)
-class SourceError(Exception):
-    """An input-file error a person can act on: file, line, column, key path and message.
-
-    ``line``/``column`` are 1-based; None when the problem concerns the whole file (the column
-    is also None for line-oriented formats such as .ics)."""
-
-    file: str
-    line: int | None
-    column: int | None
-    key: str
-    message: str
-
-    def __str__(self) -> str:
-        where = self.file
-        if self.line is not None:
-            where += f":{self.line}" + (f":{self.column}" if self.column is not None else "")
-        return f"{where}: {self.key}: {self.message}" if self.key else f"{where}: {self.message}"
 
 
 def format_key(path: KeyPath) -> str:

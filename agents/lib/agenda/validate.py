@@ -163,9 +163,12 @@ def validate_activities(activities: Iterable[ActivityLike], known_objects: Colle
         if known_people is not None:
             for person in item.participants:
                 if person not in known_people:
+                    close = difflib.get_close_matches(person, list(known_people), n=1)
+                    hint = f"; did you mean {close[0]!r}?" if close else ""
+                    listed = ", ".join(sorted(known_people)) or "none"
                     findings.append(Finding(Severity.ERROR, "unknown_participant",
-                                            f"{_label(item)}: participant {_unknown('person', person, known_people)}",
-                                            item.id, item.source))
+                                            f"{_label(item)}: participant {shown(person, 60)!r} is not a person of "
+                                            f"the scene{hint} (people: {listed})", item.id, item.source))
     findings.extend(_overlaps(items))
     return ValidationReport(tuple(findings))
 

@@ -67,10 +67,14 @@ def grid_shape(bounds: Sequence[float], resolution: float, max_cells: int | None
     if rows * cols > limit:
         coarsest = math.sqrt(width * height / limit)
         raise GridTooLargeError(
-            f"the map is {width:,.4g} m x {height:,.4g} m; at {resolution:g} m cells that is {cols:,} x {rows:,} = "
+            f"the map is {_metres(width)} m x {_metres(height)} m; at {resolution:g} m cells that is {cols:,} x {rows:,} = "
             f"{rows * cols:,} cells, more than the limit of {limit:,} ({GRID_CELLS.env}); use cells of at least "
             f"{coarsest:.3g} m (the scene's `resolution`), a smaller building, or raise the limit")
     return rows, cols
+
+
+def _metres(value: float) -> str:
+    return f"{value:,.0f}" if value >= 100 else f"{value:g}"
 
 
 @dataclass(frozen=True, slots=True)
