@@ -147,7 +147,7 @@ def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
     another frame): measuring it would report distances to people it never met."""
     scene = world.scene
     building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
-    inside = shapely.covers_xy(building, traj[:, 1], traj[:, 2])
+    inside = shapely.intersects_xy(building, traj[:, 1], traj[:, 2])
     if not inside.any():
         xmin, ymin, xmax, ymax = scene.bounds
         raise OfflineError(f"{source}: no sample of the trajectory lies in a room of {scene.name!r} (samples span "
