@@ -53,7 +53,7 @@ class Limit:
 
 YAML_BYTES = Limit("yaml_bytes", 4 * 1024 * 1024, "bytes", "size of one YAML file (scene, agenda, write policy)")
 YAML_DEPTH = Limit("yaml_depth", 64, "levels", "nesting of mappings and lists in a YAML file")
-YAML_NODES = Limit("yaml_nodes", 200_000, "values",
+YAML_NODES = Limit("yaml_nodes", 100_000, "values",
                    "values in a YAML file after expanding its aliases (*name); stops 'billion laughs'")
 YAML_INT_DIGITS = Limit("yaml_int_digits", 30, "digits", "digits of one integer in a YAML file")
 TEXT_CHARS = Limit("text_chars", 10_000, "characters", "one text value (a description, a YAML scalar)")
