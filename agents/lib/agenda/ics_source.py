@@ -1,10 +1,15 @@
 """Agenda activities from iCalendar (.ics) files, the format staff calendars already export.
 
-Why parse with ``icalendar`` and expand with ``dateutil.rrule`` ourselves: icalendar resolves
-time zones (IANA TZIDs, Windows names and the file's own VTIMEZONE blocks) but does not expand
-recurrences; dateutil does RRULE arithmetic but knows nothing of EXDATE in other zones or of
-RECURRENCE-ID overrides.  Recurrences are expanded in the *wall-clock time of the event's own
-zone*, so a daily 10:00 therapy in Europe/Madrid stays at 10:00 across a DST change.
+Why ``icalendar`` plus ``recurring-ical-events``: icalendar resolves time zones (IANA TZIDs,
+Windows names and the file's own VTIMEZONE blocks); recurring-ical-events expands RRULE, RDATE,
+EXDATE and RECURRENCE-ID overrides over a time span, in the *wall-clock time of the event's own
+zone*, so a daily 10:00 therapy in Europe/Madrid stays at 10:00 across a DST change.  We expand
+only around the simulated day, and first bound the work a rule needs to get there
+(``RECURRENCE_STEPS``, docs/limits.md): ``FREQ=SECONDLY`` without COUNT or UNTIL would otherwise
+walk millions of steps and hang `scene check` or the live agenda agent.  What we add: each
+event is checked at load time with its line (so expansion cannot fail later), an override
+inherits what it does not repeat from its series, and durations are real seconds (a one-hour
+event across the spring-forward gap ends at 03:30).
 
 Conventions (docs/agenda.md):
 - object: ``X-CHRONAV-OBJECT``, else ``LOCATION`` (the object's name in the scene);
@@ -483,6 +488,9 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
             raise AgendaSourceError([problem(source, None, f"not UTF-8 text (byte {exc.start}); "
                                                    "iCalendar files are UTF-8: export it again")]) from None
     text = data.removeprefix("\ufeff")  # a byte-order mark, as some Windows exports write
+    if len(text) > ICS_BYTES.value():  # also received as text, by `chronav agenda load`
+        raise AgendaSourceError([problem(source, None, f"{len(text):,} characters; an .ics file may have at most "
+                                         f"{ICS_BYTES.value():,} ({ICS_BYTES.env})")])
     try:
         calendars = icalendar.Calendar.from_ical(text, multiple=True)
     except ValueError as exc:
@@ -518,8 +526,12 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
 def load_ics_file(path: str | Path) -> IcsAgenda:
     path = Path(path)
     try:
+        size = path.stat().st_size
+        if size > ICS_BYTES.value():
+            raise AgendaSourceError([problem(str(path), None, f"{size:,} bytes; an .ics file may have at most "
+                                             f"{ICS_BYTES.value():,} ({ICS_BYTES.env})")])
         data = path.read_bytes()
     except OSError as exc:
         raise AgendaSourceError([problem(str(path), None,
-                                               f"cannot read file: {exc.strerror}")]) from None
+                                         f"cannot read file: {exc.strerror}")]) from None
     return parse_ics(data, str(path))
