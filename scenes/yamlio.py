@@ -400,8 +400,11 @@ def user_message(error: Any) -> str:
         return f"{_show(value)} does not have the expected form"
     if kind == "literal_error":
         return f"must be one of {ctx.get('expected', '?').replace(' or ', ', ')}, got {_show(value)}"
-    if kind in ("union_tag_not_found", "union_tag_invalid"):
-        return str(error["msg"])
+    if kind == "union_tag_invalid":
+        return (f"{ctx.get('discriminator', 'kind')} {ctx.get('tag')!r} is not one of "
+                f"{ctx.get('expected_tags', '?')}")
+    if kind == "union_tag_not_found":
+        return f"say which kind it is with {ctx.get('discriminator', 'a kind key')}"
     if kind == "extra_forbidden":
         return "unknown key"
     return str(error["msg"]).removeprefix("Value error, ")

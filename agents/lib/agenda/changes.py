@@ -20,6 +20,7 @@ from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, Ac
                                  wall_seconds)
 from agents.lib.agenda.validate import ValidationReport, validate_activities
 from agents.lib.agenda.yaml_source import parse_agenda_text
+from scenes.yamlio import user_message
 
 LoadMode = Literal["replace", "merge"]
 
@@ -181,8 +182,10 @@ def parse_change(data: str | bytes | dict[str, Any]) -> AddChange | CancelChange
             return _CHANGE.validate_python(data)
         return _CHANGE.validate_json(data)
     except ValidationError as exc:
-        details = "; ".join(f"{'.'.join(str(p) for p in e['loc']) or 'change'}: {e['msg']}"
-                            for e in exc.errors())
+        parts = [".".join(str(p) for p in e["loc"] if not (isinstance(p, str) and "function-" in p))
+                 for e in exc.errors()]
+        details = "; ".join(f"{part or 'change'}: {user_message(e)}" for part, e in zip(parts, exc.errors(),
+                                                                                    strict=True))
         raise AgendaChangeError(f"refused: malformed agenda change ({details})") from None
 
 
