@@ -14,16 +14,14 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import shapely
-from scipy import ndimage
 
 from agents.lib.agenda import (AgendaChangeError, AgendaDay, AgendaError, AgendaSourceError, AgendaValidationError,
                                apply_change, expand_day, parse_change, validate_day)
 from agents.lib.agenda.yaml_source import scene_agenda
-from agents.lib.socialmap.grid import geometry_mask, grid_shape
+from agents.lib.socialmap.grid import grid_shape
 from agents.lib.socialmap.types import SocialMapInputError
-from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
+from agents.world.building import PLANNING_MARGIN_M
 from scenes.clock import parse_clock
 from scenes.loader import LoadedScene, load_scene
 from scenes.model import PoseGoal, RoomGoal, Scene
@@ -107,41 +105,41 @@ def _agenda_error(exc: Exception, loaded: LoadedScene) -> SourceError:
 def _check_navigable(loaded: LoadedScene) -> None:
     """The map the navigation will build: not too large, and every mission goal reachable from the
     robot's start (a goal on a wall or in a walled-off box would leave the mission "active" until
-    the run times out).  Checked on the static map of the navigation itself (walls inflated by the
-    robot's radius plus the planning margin), all doors open."""
+    the run times out).  Free space is the building less the walls grown by the robot's radius plus
+    the planning margin, all doors open: what the navigation's static map blocks, as polygons
+    (cheap, and without importing the planner into every agent that loads a scene)."""
     scene = loaded.scene
     try:
         grid_shape(scene.bounds, scene.resolution)
     except SocialMapInputError as exc:
         raise loaded.error(("resolution",), str(exc)) from None
-    static = NavigationMaps.for_scene(scene).static()
-    spec, free = static.spec, np.isfinite(static.grid)
-    labels, _ = ndimage.label(free)
     clearance = scene.robot.radius + PLANNING_MARGIN_M
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
+    free = building.difference(walls.buffer(clearance)) if not walls.is_empty else building
     robot = scene.robot.pose
-    start = spec.cell_of(robot.x, robot.y) if spec.contains_xy(robot.x, robot.y) else None
-    if start is None or not free[start]:
+    parts = list(getattr(free, "geoms", [free]))
+    start = next((part for part in parts if part.covers(shapely.Point(robot.x, robot.y))), None)
+    if start is None:
         raise loaded.error(("robot", "pose"), f"the robot at ({robot.x:g}, {robot.y:g}) is within {clearance:.2f} m "
                            "(its radius plus the planning margin) of a wall or outside the rooms: the navigation "
                            "cannot start there; move it further into the room")
-    reachable = labels == labels[start]
     for i, mission in enumerate(scene.missions):
         goal = mission.goal
         if isinstance(goal, PoseGoal):
             x, y = goal.pose.x, goal.pose.y
-            cell = spec.cell_of(x, y) if spec.contains_xy(x, y) else None
-            if cell is None or not free[cell]:
+            point = shapely.Point(x, y)
+            if not free.covers(point):
                 raise loaded.error(("missions", i, "goal", "pose"), f"goal ({x:g}, {y:g}) of mission {mission.id!r} "
                                    f"is within {clearance:.2f} m (the robot's radius plus the planning margin) of "
                                    "a wall: the robot cannot stand there; move the goal into the room")
-            if not reachable[cell]:
+            if not start.covers(point):
                 raise loaded.error(("missions", i, "goal", "pose"), f"goal ({x:g}, {y:g}) of mission {mission.id!r} "
                                    f"cannot be reached from the robot's start ({robot.x:g}, {robot.y:g}): walls "
                                    "close it off (is a door missing, or narrower than the robot?)")
         elif isinstance(goal, RoomGoal):
             room = next(r for r in scene.rooms if r.name == goal.room)
-            found = geometry_mask(spec, shapely.Polygon(room.polygon))
-            if found is None or not reachable[found[0], found[1]][found[2]].any():
+            if not start.intersects(shapely.Polygon(room.polygon).buffer(-1e-6)):
                 raise loaded.error(("missions", i, "goal", "room"), f"room {goal.room!r} of mission {mission.id!r} "
                                    f"cannot be reached from the robot's start ({robot.x:g}, {robot.y:g}): no door "
                                    "wide enough for the robot leads there")
