@@ -135,7 +135,7 @@ class IcsAgenda:
         longest = max([dt.timedelta(0), *(e.duration for e in self.events),
                        *(end - start for e in self.events for start, end in _rdate_periods(e))])
         low, high = day_start - longest - dt.timedelta(days=1), day_end + dt.timedelta(days=1)
-        _check_steps(self.events, high)
+        _check_steps(self.events, high, day)
         masters = {e.uid: e for e in self.events if e.recurrence_id is None}
         overrides = {(e.uid, _key(e.recurrence_id)): e for e in self.events if e.recurrence_id is not None}
         found: list[IcsOccurrence] = []
@@ -218,7 +218,7 @@ def recurrence_steps(rule: icalendar.vRecur, start: Moment, horizon: dt.datetime
     return steps
 
 
-def _check_steps(events: Iterable[IcsEvent], horizon: dt.datetime) -> None:
+def _check_steps(events: Iterable[IcsEvent], horizon: dt.datetime, day: dt.date) -> None:
     limit = RECURRENCE_STEPS.value()
     problems = []
     for event in events:
@@ -229,7 +229,7 @@ def _check_steps(events: Iterable[IcsEvent], horizon: dt.datetime) -> None:
                 freq = str((rule.get("FREQ") or ["?"])[0]).upper()
                 problems.append(problem(event.file, event.line, (
                     f"UID={event.uid}: RRULE:FREQ={freq} from {_show(event.start)} takes about {steps:,.0f} "
-                    f"steps to reach {horizon.date().isoformat()}; chronav follows at most {limit:,} "
+                    f"steps to reach the simulated day {day.isoformat()}; chronav follows at most {limit:,} "
                     f"({RECURRENCE_STEPS.env}): add COUNT or UNTIL, use a coarser FREQ, or start the series "
                     "closer to the simulated day")))
     if problems:
