@@ -96,6 +96,16 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
                 raise located.error(("people", i, "waypoints", j, "time"),
                                     f"{person.waypoints[j].time} is not after the previous waypoint's "
                                     f"{person.waypoints[j - 1].time}; waypoints go in time order")
+        if person.home is not None and person.home not in rooms:
+            raise located.error(("people", i, "home"), unknown("room", person.home, rooms))
+        for j, room in enumerate(person.rooms):
+            if room not in rooms:
+                raise located.error(("people", i, "rooms", j), unknown("room", room, rooms))
+        if person.visits is not None:
+            if person.visits == person.name:
+                raise located.error(("people", i, "visits"), f"{person.name!r} cannot visit themself")
+            if person.visits not in people:
+                raise located.error(("people", i, "visits"), unknown("person", person.visits, people))
         for j, other in enumerate(person.interacting_with):
             key = ("people", i, "interacting_with", j)
             if other in objects:

@@ -144,7 +144,23 @@ class Waypoint(Strict):
 
 
 
+# Walking speeds people have (m/s): a resident with a walker ~0.5, a brisk nurse ~1.3 (Bohannon 1997
+# measured 0.6-1.5 m/s comfortable gait speeds from the 70s to the 20s).
+MIN_WALK_SPEED_MPS = 0.4
+MAX_WALK_SPEED_MPS = 1.5
+
+Routine = Literal["stay", "wander", "staff", "visitor"]
+
+
 class PersonSpec(Strict):
+    """One person of the scene and how they spend the day.
+
+    ``routine``: ``stay`` (default) keeps the pose, or walks the timed ``waypoints``, and ignores the
+    agenda (the shipped single-scenario scenes); ``wander`` (a resident: moves between rooms with
+    dwell times, sits, chats), ``staff`` (crosses rooms briskly, fetches residents marked
+    ``escort`` to their activities) and ``visitor`` (keeps company with ``visits``) walk by
+    themselves, and every one of them goes to the activities they take part in."""
+
     name: Name
     role: Literal["resident", "new_resident", "staff", "therapist", "visitor"] = "resident"
     pose: Pose
@@ -152,6 +168,32 @@ class PersonSpec(Strict):
     interacting_with: list[Name] = Field(default_factory=list,
                                          description="people this one is in conversation with (all day); "
                                                      "interactions with objects come from the agenda")
+    routine: Routine = "stay"
+    home: Name | None = Field(None, description="the room the person returns to most (default: the room of pose)")
+    rooms: list[Name] = Field(default_factory=list, description="rooms the routine goes to (default: all)")
+    speed: Real | None = Field(None, ge=MIN_WALK_SPEED_MPS, le=MAX_WALK_SPEED_MPS,
+                               description="walking speed, m/s (default by role; 0.5 with a walker)")
+    walker: bool = Field(False, description="walks with a walking frame: slower, and wider")
+    escort: bool = Field(False, description="staff fetch this person to their activities")
+    dwell: tuple[Real, Real] | None = Field(None, description="min and max seconds spent at one place")
+    visits: Name | None = Field(None, description="visitor: the person they keep company with")
+
+    @model_validator(mode="after")
+    def _routine_fields(self) -> PersonSpec:
+        moving = self.routine != "stay"
+        if moving and self.waypoints:
+            raise ValueError(f"routine {self.routine!r} walks by itself: timed waypoints go with routine 'stay'")
+        if self.visits is not None and self.routine != "visitor":
+            raise ValueError("'visits' belongs to routine 'visitor'")
+        if self.routine == "visitor" and self.visits is None:
+            raise ValueError("routine 'visitor' needs 'visits': the person they come to see")
+        if self.dwell is not None and not 0 < self.dwell[0] <= self.dwell[1]:
+            raise ValueError(f"dwell [{self.dwell[0]:g}, {self.dwell[1]:g}] s: the minimum must be above 0 and "
+                             "not above the maximum")
+        if not moving and (self.rooms or self.home or self.speed is not None or self.dwell or self.escort):
+            raise ValueError("home, rooms, speed, dwell and escort describe a routine that walks; "
+                             "this person has routine 'stay' (add routine: wander, staff or visitor)")
+        return self
 
 
 # Bounds a real robot meets; a value beyond them is a typo (radius: 50), not a robot.
@@ -246,6 +288,12 @@ class DoorChange(Strict):
 
 
 
+class CrowdSpec(Strict):
+    """How the people with a walking routine are simulated (agents/lib/crowd)."""
+
+    seed: WholeNumber = Field(0, ge=0, le=2**31 - 1, description="one seed gives one day, exactly")
+
+
 class Scene(Strict):
     name: Name
     description: str = ""
@@ -256,6 +304,7 @@ class Scene(Strict):
     doors: list[Door] = []
     objects: list[SceneObject] = []
     people: list[PersonSpec] = []
+    crowd: CrowdSpec = CrowdSpec()
     robot: RobotSpec
     agenda: list[dict[str, Any]] = Field(default_factory=list, description="activities, see docs/agenda.md")
     agenda_file: str | None = Field(None, description=".yaml or .ics, relative to the scene file")

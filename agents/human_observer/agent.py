@@ -1,31 +1,38 @@
 """The human observer agent: perceives people, tracks them, writes them into the DSR.
 
-Why noise and a tracker in a simulator: the social map must be robust to jittery detections,
-and an observer that republishes every sensor jitter would flood the graph and make the
-navigation replan for nothing.  Detections carry identity (as a re-identification camera
-network does); the tracker smooths them and publishes a person only when it has moved.
+Why noise and a tracker in a simulator: the social map must be robust to jittery detections and
+needs each walking person's velocity, which a real detector does not give; an observer that
+republished every sensor jitter would also flood the graph and make the navigation replan for
+nothing.  The simulator publishes the people as they truly are (``ground_truth/people``, one delta
+with the clock); this agent detects them with position and heading noise, tracks them with a
+constant-velocity Kalman filter per person (agents/lib/perception/tracking.py: identities kept by
+the tracks, velocities estimated), and publishes a person when they moved, turned or changed speed
+enough.  With zero noise it is a perfect sensor: it reports the truth, velocity included, which is
+what the offline commands assume (agents/world/offline.py).
 """
 
 from __future__ import annotations
 
 import math
+import zlib
 
 import numpy as np
 
+from agents.lib.perception.tracking import Detection, Tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
+from agents.runtime.recording import Recorder
 from agents.world.dsr_readers import running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
-from agents.world.interactions import interaction_pairs, scene_conversations
-from agents.world.motion import people_at
-from agents.world.vocabulary import WORLD
-from agents.world.vocabulary import now_s as now_of
+from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
+from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
 from scenes.geometry import angle_difference
-from agents.runtime.recording import Recorder
 
 PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
+PUBLISH_SPEED_MPS = 0.1
+STILL_DEADBAND_MPS = 0.15    # an estimated speed below this is sensor noise on a still person
 
 
 class HumanObserverAgent(Agent):
@@ -36,42 +43,77 @@ class HumanObserverAgent(Agent):
         self.rec = recorder
         self.noise_xy = float(self.config.option("noise_xy", "0.02"))
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
-        self.smoothing = float(self.config.option("smoothing", "0.5"))
-        self.rng = np.random.default_rng(int(self.config.option("seed", "7")))
-        self.tracks: dict[str, tuple[float, float, float]] = {}
-        self.published: dict[str, tuple[float, float, float]] = {}
+        self.seed = int(self.config.option("seed", "7"))
+        self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
+        self.tracker = Tracker(measurement_sigma=max(self.noise_xy, 0.01))
+        self.roles: dict[str, str] = {}
+        self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
 
+    def _truth(self) -> tuple[float, list[tuple[str, str, float, float, float, float, float]]] | None:
+        node = self.graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
+        if node is None:
+            return None
+        a = node.attrs
+        try:
+            rows = list(zip(a["names"], a["roles"], a["x"], a["y"], a["theta"], a["vx"], a["vy"], strict=True))
+            return float(a["stamp"]), rows
+        except (KeyError, TypeError, ValueError):
+            return None   # a half-written or foreign node: wait for the next one
+
     def step(self) -> None:
-        now_s = now_of(self.graph)
-        if now_s is None or self.graph.get_node_by_name(WORLD) is None or now_s == self._last_t:
+        truth = self._truth()
+        if truth is None or self.graph.get_node_by_name(WORLD) is None:
+            return
+        now_s, rows = truth
+        if now_s == self._last_t:
             return
         self._last_t = now_s
         self.rec.set_time(now_s)
-        for truth in people_at(self.scene, now_s):
-            det = (truth.x + self.rng.normal(0, self.noise_xy), truth.y + self.rng.normal(0, self.noise_xy),
-                   truth.theta + self.rng.normal(0, self.noise_theta))
-            prev = self.tracks.get(truth.name)
-            if prev is None or truth.moving or math.hypot(det[0] - prev[0], det[1] - prev[1]) > 0.5:
-                track = det  # new, walking or re-acquired: no smoothing lag
-            else:
-                a = self.smoothing
-                track = (prev[0] + a * (det[0] - prev[0]), prev[1] + a * (det[1] - prev[1]),
-                         prev[2] + a * angle_difference(det[2], prev[2]))
-            self.tracks[truth.name] = track
-            self._publish(truth.name, truth.role, track, now_s)
-        positions = {name: (x, y) for name, (x, y, _) in self.tracks.items()}
+        estimates: dict[str, tuple[float, float, float, float, float]] = {}
+        if self.perfect:
+            for name, role, x, y, theta, vx, vy in rows:
+                self.roles[name] = role
+                estimates[name] = (x, y, theta, vx, vy)
+        else:
+            detections = []
+            for name, role, x, y, theta, _vx, _vy in rows:
+                self.roles[name] = role
+                rng = self._noise(name, now_s)
+                detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
+                                            theta + rng.normal(0, self.noise_theta)))
+            for name, track in self.tracker.update(now_s, detections).items():
+                vx, vy = self.tracker.velocity(name, now_s)
+                if math.hypot(vx, vy) < STILL_DEADBAND_MPS:
+                    vx = vy = 0.0
+                estimates[name] = (*track.xy, track.theta, vx, vy)
+        for name, estimate in estimates.items():
+            self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
+        positions = {name: (e[0], e[1]) for name, e in estimates.items()}
+        seen = {name: (e[0], e[1], e[2], math.hypot(e[3], e[4])) for name, e in estimates.items()}
         write_interactions(self.graph, interaction_pairs(positions, running_activities(self.graph),
-                                                         scene_conversations(self.scene)))
+                                                         [*scene_conversations(self.scene),
+                                                          *observed_conversations(seen)]))
         mark_observed(self.graph, self.config.name, now_s)
-        log_people(self.rec, self.tracks)
+        log_people(self.rec, {name: e[:3] for name, e in estimates.items()},
+                   {name: e[3:] for name, e in estimates.items()})
 
-    def _publish(self, name: str, role: str, pose: tuple[float, float, float], now_s: float) -> None:
-        """Write a person when new, or moved or turned enough: sensor jitter is not news."""
+    def _noise(self, name: str, now_s: float) -> np.random.Generator:
+        """The sensor noise of one detection, drawn from (seed, person, time): this loop is not in
+        lockstep with the clock, so how many clock values it sees differs from run to run, and one
+        stream would give another world each time."""
+        return np.random.default_rng([self.seed, zlib.crc32(f"{name}|{round(now_s * 10)}".encode())])
+
+    def _publish(self, name: str, role: str, estimate: tuple[float, float, float, float, float], now_s: float) -> None:
+        """Write a person when new, or moved, turned or changed speed enough: sensor jitter is not news."""
+        x, y, theta, vx, vy = estimate
         old = self.published.get(name)
-        if self.graph.get_node_by_name(name) is not None and old is not None \
-                and math.hypot(pose[0] - old[0], pose[1] - old[1]) < PUBLISH_MOVE_M \
-                and abs(angle_difference(pose[2], old[2])) < PUBLISH_TURN_RAD:
+        if self.perfect and old == estimate and self.graph.get_node_by_name(name) is not None:
+            return   # a perfect sensor reports every change, however small (what offline assumes)
+        if not self.perfect and self.graph.get_node_by_name(name) is not None and old is not None \
+                and math.hypot(x - old[0], y - old[1]) < PUBLISH_MOVE_M \
+                and abs(angle_difference(theta, old[2])) < PUBLISH_TURN_RAD \
+                and math.hypot(vx - old[3], vy - old[4]) < PUBLISH_SPEED_MPS:
             return
-        write_person(self.graph, name, role, pose, self.scene.room_at(pose[0], pose[1]), now_s)
-        self.published[name] = pose
+        write_person(self.graph, name, role, (x, y, theta), self.scene.room_at(x, y), now_s, (vx, vy))
+        self.published[name] = estimate

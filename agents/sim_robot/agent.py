@@ -24,15 +24,17 @@ from agents.runtime.drawing.bodies import log_robot
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
+from agents.lib.crowd.model import PersonTruth, RobotBody
 from agents.world.building import closed_door_walls, footprint_polygons
 from agents.world.dsr_readers import closed_doors
-from agents.world.dsr_writers import set_doors, write_building, write_clock, write_robot
-from agents.world.motion import people_at
+from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
+from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at
-from agents.world.vocabulary import CLOCK, WORLD
+from agents.world.vocabulary import AGENDA, CLOCK, WORLD
 from scenes.geometry import project_on_segments
 
 CONTROL_DT_S = 0.1
+PEOPLE_HEADER = ("t", "name", "x", "y", "theta", "vx", "vy", "group")
 WATCHDOG_WALL_S = 1.0
 BUSY_RATE = 1.0
 
@@ -65,6 +67,12 @@ class SimRobotAgent(Agent):
         self._bumped = False
         self._write_static_world()
         self.state, self.now_s = self._resume_or_start()
+        # The simulated people: one crowd, fed the scene's script and the agenda changes staff make
+        # (agents/world/people.py); a restarted simulator replays the day up to now.
+        self.crowd = new_crowd(self.world)
+        self.feed = WorldFeed(self.world)
+        self._people: tuple[PersonTruth, ...] = ()
+        self._people_file = self._open_people()
         self._wall_anchor = time.monotonic()
         self._sim_anchor = self.now_s
         self._waiting_since: float | None = None
@@ -206,15 +214,19 @@ class SimRobotAgent(Agent):
             self._bumped = False
         self.state = RobotState(x, y, theta, vel)
         self.now_s += dt
+        self._publish()
         if self._trajectory_file is not None and self._last_mode == "driving":
             self._trajectory_file.write(f"{self.now_s:.3f},{x:.4f},{y:.4f},{theta:.5f}\n")
             self._trail.append([x, y])
-        self._publish()
+            if self._people_file is not None:
+                self._people_file.writelines(
+                    f"{self.now_s:.3f},{p.name},{p.x:.4f},{p.y:.4f},{p.theta:.5f},{p.vx:.4f},{p.vy:.4f},{p.group}\n"
+                    for p in self._people)
 
     def _clearance(self, x: float, y: float) -> float:
         """Distance from the robot's centre to the nearest wall, footprint or person body."""
         nearest = math.inf
-        for p in people_at(self.scene, self.now_s):
+        for p in self._people:
             nearest = min(nearest, math.hypot(p.x - x, p.y - y) - PERSON_RADIUS_M)
         segs = self.laser.segments
         if len(segs):
@@ -232,15 +244,45 @@ class SimRobotAgent(Agent):
             handle.write("t,x,y,theta\n")
         return handle
 
+    def _open_people(self):  # noqa: ANN202 - text file or None
+        """Every person's true pose and velocity at each trajectory sample (``people.csv`` beside
+        ``trajectory.csv``: what `chronav metrics` measures the robot's manners against)."""
+        if self.config.run_dir is None:
+            return None
+        path = self.config.run_dir / "people.csv"
+        new = not path.exists()
+        handle = path.open("a", encoding="utf-8", buffering=1 << 16)
+        if new:
+            handle.write(",".join(PEOPLE_HEADER) + "\n")
+        return handle
+
     def teardown(self) -> None:
-        if self._trajectory_file is not None:
-            self._trajectory_file.close()
+        for handle in (self._trajectory_file, self._people_file):
+            if handle is not None:
+                handle.close()
+
+    def _update_people(self) -> None:
+        """Bring the crowd to the sim time: staff's agenda changes from the DSR's log, the robot
+        while it drives (people avoid it then; at rest nobody reacts to it)."""
+        log = self.graph.get_node_by_name(AGENDA)
+        if log is not None:
+            manual = manual_changes(log.attrs.get("applied", []), log.attrs.get("changes", []), self.world)
+            if manual != self.feed.manual:
+                self.feed = WorldFeed(self.world, manual)
+        robot = None
+        if self._last_mode == "driving":
+            s = self.state
+            vx = s.velocity.vx * math.cos(s.theta) - s.velocity.vy * math.sin(s.theta)
+            vy = s.velocity.vx * math.sin(s.theta) + s.velocity.vy * math.cos(s.theta)
+            robot = RobotBody(s.x, s.y, vx, vy, self.scene.robot.radius)
+        self.crowd.advance(self.now_s, self.feed, robot)
+        self._people = self.crowd.at(self.now_s)
 
     def _publish(self) -> None:
         """Pose, laser and clock in ONE delta, so readers never see a pose from another time."""
         g, s = self.graph, self.state
-        people = people_at(self.scene, self.now_s)
-        people_xy = np.array([[p.x, p.y] for p in people]).reshape(-1, 2)
+        self._update_people()
+        people_xy = np.array([[p.x, p.y] for p in self._people]).reshape(-1, 2)
         ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
         robot = g.get_node_by_name(self.scene.robot.name)
         world = g.get_node_by_name(WORLD)
@@ -254,6 +296,7 @@ class SimRobotAgent(Agent):
             g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
                                             "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
             g.update_node(g.get_node_by_name(CLOCK).id, attrs={"now_s": self.now_s})
+            write_ground_truth(g, self._people, self.now_s)
         self.rec.set_time(self.now_s)
         self._log_frame(ranges)
 

@@ -9,12 +9,12 @@ from the graph, so an agent may call it every loop and a restarted agent may cal
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from agents.lib.agenda import Activity, AgendaDay
 from agents.lib.agenda.chronemics import ChronemicsParams, r_band, r_of_t
-from agents.world.vocabulary import (AGENDA, CLOCK, WORLD, EdgeType, NodeType, activity_name)
+from agents.world.vocabulary import (AGENDA, CLOCK, GROUND_TRUTH_PEOPLE, WORLD, EdgeType, NodeType, activity_name)
 from scenes.geometry import Shape, shape_keys
 from scenes.model import RobotSpec, Scene, SceneObject
 
@@ -111,6 +111,23 @@ def write_robot(graph: Any, spec: RobotSpec, pose: tuple[float, float, float], r
     return node
 
 
+def write_ground_truth(graph: Any, people: Sequence[Any], now_s: float) -> None:
+    """The simulated world's people as they truly are (``ground_truth/people``): what the simulated
+    sensors - the human observer - perceive, with their own noise.  Written with the pose and the
+    clock in one delta; never read by planners, which see people only through the observer."""
+    attrs = {"names": [p.name for p in people], "roles": [p.role for p in people],
+             "x": [float(p.x) for p in people], "y": [float(p.y) for p in people],
+             "theta": [float(p.theta) for p in people], "vx": [float(p.vx) for p in people],
+             "vy": [float(p.vy) for p in people], "groups": [p.group for p in people]}
+    node = graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
+    if node is None:
+        graph.insert_node(type=NodeType.GROUND_TRUTH, name=GROUND_TRUTH_PEOPLE, attrs={**attrs, "stamp": now_s})
+        return
+    changed = {k: v for k, v in attrs.items() if node.attrs.get(k) != v}
+    if changed or node.attrs.get("stamp") != now_s:
+        graph.update_node(node.id, attrs={**changed, "stamp": now_s})
+
+
 # ----------------------------------------------------------------------------- object recognition
 def object_attrs(obj: SceneObject) -> dict[str, Any]:
     """DSR attributes of a recognised scene object (its pose goes on its RT edge)."""
@@ -137,15 +154,16 @@ def write_object(graph: Any, obj: SceneObject, room: str | None) -> bool:
 
 # ----------------------------------------------------------------------------- human observer
 def write_person(graph: Any, name: str, role: str, pose: tuple[float, float, float], room: str | None,
-                 seen_s: float) -> None:
-    """A person as perceived: pose (RT world -> person), room, and when they were seen."""
+                 seen_s: float, velocity: tuple[float, float] = (0.0, 0.0)) -> None:
+    """A person as perceived: pose (RT world -> person), velocity (m/s, world frame), room, and
+    when they were seen."""
     with graph.transaction():
         world = _world(graph)
         node = graph.get_node_by_name(name)
         if node is None:
             node = graph.insert_node(type=NodeType.PERSON, name=name, attrs={"role": role})
         _set_pose(graph, world.id, node.id, {"x": pose[0], "y": pose[1], "theta": pose[2]})
-        graph.update_node(node.id, attrs={"seen_s": seen_s})
+        graph.update_node(node.id, attrs={"seen_s": seen_s, "vx": float(velocity[0]), "vy": float(velocity[1])})
         _set_in_room(graph, node.id, room)
 
 

@@ -3,8 +3,9 @@
 Why from the agenda: a resident at the table therapy interacts with the table and the therapist
 while the therapy runs, and not after; links declared once in a scene and never ended kept an
 object "in use" all day (center_a's table could never be approached).  So links come from the
-running activities whose participants are actually at the object, plus the conversations a scene
-declares between people.
+running activities whose participants are actually at the object, the conversations a scene
+declares between people, and the conversations the observer sees: two people standing close and
+facing each other (an F-formation, Kendon 1990; the pair circles of agents/lib/crowd/formations.py).
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ from collections.abc import Iterable, Mapping
 from scenes.model import Scene
 
 INTERACTION_RANGE_M = 1.8   # a participant farther than this from the activity's object is not (yet) in it
+CONVERSATION_RANGE_M = 1.6  # two people talking stand at most this far apart (Hall's personal distance + a bit)
+CONVERSATION_FACING_RAD = math.radians(60)   # ... each facing the other within this
+STILL_MPS = 0.2             # ... and neither walking
 
 
 def scene_conversations(scene: Scene) -> list[tuple[str, str]]:
@@ -39,3 +43,25 @@ def interaction_pairs(positions: Mapping[str, tuple[float, float]],
             pairs.add((person, obj))
             pairs.update((person, other) for other in present if other != person)
     return pairs
+
+
+def observed_conversations(people: Mapping[str, tuple[float, float, float, float]]) -> list[tuple[str, str]]:
+    """(person, person) pairs seen talking: ``people`` maps a name to (x, y, theta, speed); two
+    still people within CONVERSATION_RANGE_M of each other, each facing the other within
+    CONVERSATION_FACING_RAD (a circle of three or four facing its centre passes this pairwise)."""
+    still = sorted((name, p) for name, p in people.items() if p[3] < STILL_MPS)
+    pairs = []
+    for i, (a, (ax, ay, ath, _)) in enumerate(still):
+        for b, (bx, by, bth, _) in still[i + 1:]:
+            dx, dy = bx - ax, by - ay
+            if math.hypot(dx, dy) > CONVERSATION_RANGE_M:
+                continue
+            bearing = math.atan2(dy, dx)
+            if abs(_wrap(bearing - ath)) <= CONVERSATION_FACING_RAD and \
+                    abs(_wrap(bearing + math.pi - bth)) <= CONVERSATION_FACING_RAD:
+                pairs += [(a, b), (b, a)]
+    return pairs
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi

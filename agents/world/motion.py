@@ -1,7 +1,8 @@
-"""Ground-truth motion of the scene's people along their timed waypoints.
+"""The script of a ``stay`` person: their pose at a time along their timed waypoints.
 
-Why shared: the simulated robot's laser, the human observer (which adds noise to it) and the
-tests that check intimate-zone intrusions must all agree on where a person truly is at time t.
+Why here: a scripted person is part of the crowd (agents/world/people.py), which places them
+exactly where this says; the crowd is what the simulator, the observer and the offline commands
+share, so this is called only through it.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from dataclasses import dataclass
 
 from scenes.clock import parse_clock
 from scenes.geometry import lerp_angle
-from scenes.model import PersonSpec, Scene
+from scenes.model import PersonSpec
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,3 @@ def person_at(person: PersonSpec, t_s: float) -> PersonState:
             return PersonState(person.name, person.role, a.x, a.y, lerp_angle(a.theta, b.theta, f), False)
     last = person.waypoints[-1].pose
     return PersonState(person.name, person.role, last.x, last.y, last.theta, False)
-
-
-def people_at(scene: Scene, t_s: float) -> list[PersonState]:
-    return [person_at(person, t_s) for person in scene.people]

@@ -26,10 +26,10 @@ from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.world.dsr_readers import running_activities, symbolic_view
 from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_interactions,
                                       write_object, write_object_r, write_person, write_robot)
-from agents.world.interactions import interaction_pairs, scene_conversations
+from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
 from agents.world.navigation import NavigationMaps
 from agents.world.scene_world import SceneWorld, load_world
-from agents.world.timeline import world_at
+from agents.world.people import world_at
 from dsr import DSRGraph
 from scenes.clock import format_clock
 from scenes.loader import LoadedScene
@@ -60,11 +60,13 @@ def graph_at(world: SceneWorld, t_s: float, robot_pose: tuple[float, float, floa
         write_object(graph, obj, scene.room_at(obj.pose.x, obj.pose.y))
     for person in state.people:
         write_person(graph, person.name, person.role, (person.x, person.y, person.theta),
-                     scene.room_at(person.x, person.y), t_s)
+                     scene.room_at(person.x, person.y), t_s, (person.vx, person.vy))
     write_activities(graph, state.agenda)
     write_object_r(graph, state.agenda, t_s, ChronemicsParams())
     positions = {p.name: (p.x, p.y) for p in state.people}
-    write_interactions(graph, interaction_pairs(positions, running_activities(graph), scene_conversations(scene)))
+    seen = {p.name: (p.x, p.y, p.theta, math.hypot(p.vx, p.vy)) for p in state.people}
+    write_interactions(graph, interaction_pairs(positions, running_activities(graph),
+                                                [*scene_conversations(scene), *observed_conversations(seen)]))
     return graph
 
 

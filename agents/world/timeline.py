@@ -1,19 +1,16 @@
-"""The world at a sim time: a scene plus its scripted events applied up to ``t``.
+"""The scripted world at a sim time: a scene's doors and agenda with its scripted events applied up to ``t``.
 
-Why one function for it: the simulator, the agenda agent and the human observer each carry out
-part of the scene's script (doors, agenda changes, people's walks) live; `chronav path`, `plan`
-and `metrics --at t` must see the same world without running them.  Both sides call these
-functions, so a door closed at 09:00 is closed for the offline planner at 09:30 too.
+Why one function for each: the simulator and the agenda agent carry out part of the scene's script
+(doors, agenda changes) live; `chronav path`, `plan` and `metrics --at t` must see the same world
+without running them.  Both sides call these functions, so a door closed at 09:00 is closed for
+the offline planner at 09:30 too.  Where the people are at ``t`` is agents/world/people.py.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
-
 from agents.lib.agenda import AgendaChangeError, AgendaDay
 from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S
-from agents.world.motion import PersonState, people_at
 from agents.world.scene_world import SceneWorld
 from scenes.clock import parse_clock
 from scenes.model import Scene
@@ -41,19 +38,3 @@ def agenda_at(world: SceneWorld, t_s: float, upcoming_window_s: float = UPCOMING
         except AgendaChangeError:
             continue
     return day.at(t_s, upcoming_window_s)
-
-
-@dataclass(frozen=True)
-class WorldAt:
-    """The scripted world at ``t_s``: doors, agenda and where everyone truly is."""
-
-    world: SceneWorld
-    t_s: float
-    doors_open: Mapping[str, bool]
-    agenda: AgendaDay
-    people: tuple[PersonState, ...]
-
-
-def world_at(world: SceneWorld, t_s: float) -> WorldAt:
-    return WorldAt(world, t_s, doors_at(world.scene, t_s), agenda_at(world, t_s),
-                   tuple(people_at(world.scene, t_s)))

@@ -34,6 +34,7 @@ class NodeType:
     INTENTION = "intention"
     SENSOR = "sensor"
     HEARTBEAT = "heartbeat"
+    GROUND_TRUTH = "ground_truth"   # the simulated world's truth for simulated sensors (never for planning)
 
 
 class EdgeType:
@@ -53,6 +54,7 @@ class EdgeType:
 WORLD = "world"
 CLOCK = "clock"
 AGENDA = "agenda"
+GROUND_TRUTH_PEOPLE = "ground_truth/people"
 
 
 def activity_name(activity_id: str) -> str:
@@ -117,7 +119,12 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
         **_attrs((SIM_ROBOT, NAVIGATION), nav_active=BOOL),
         **_attrs(NAVIGATION, cmd_vx=FLOAT, cmd_vy=FLOAT, cmd_omega=FLOAT, cmd_stamp=FLOAT, path_x=FLOATS,
                  path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
-    NodeSpec(NodeType.PERSON, (OBSERVER,), _attrs(OBSERVER, role=STR, seen_s=FLOAT)),
+    NodeSpec(NodeType.PERSON, (OBSERVER,), _attrs(OBSERVER, role=STR, seen_s=FLOAT, vx=FLOAT, vy=FLOAT)),
+    # the simulator's people as they truly are, one list per attribute (agents/world/people.py); only
+    # the human observer reads it, to perceive them with noise
+    NodeSpec(NodeType.GROUND_TRUTH, (SIM_ROBOT,), _attrs(SIM_ROBOT, names=STRS, roles=STRS, x=FLOATS, y=FLOATS,
+                                                         theta=FLOATS, vx=FLOATS, vy=FLOATS, groups=STRS,
+                                                         stamp=FLOAT)),
     NodeSpec(NodeType.OBJECT, (RECOGNITION,), {
         **_attrs(RECOGNITION, kind=STR, forbidden_while_active=BOOL, footprint_shape=STR, footprint_dims=FLOATS,
                  interaction_shape=STR, interaction_dims=FLOATS),

@@ -9,6 +9,7 @@ from typing import Any
 ROBOT_RGB = (30, 120, 255)
 PEOPLE_RGB = (240, 160, 40)
 LASER_RGB = (255, 60, 60)
+VELOCITY_RGB = (250, 90, 200)
 
 
 def _heading(x: float, y: float, theta: float, length: float) -> list[list[float]]:
@@ -31,8 +32,10 @@ def log_robot(rec: Any, name: str, radius: float, pose: tuple[float, float, floa
         rec.line_strip("world/robot/trajectory", trail, color=ROBOT_RGB, radius=0.02)
 
 
-def log_people(rec: Any, tracks: Mapping[str, tuple[float, float, float]]) -> None:
-    """Tracked people: positions with their names, and where they face."""
+def log_people(rec: Any, tracks: Mapping[str, tuple[float, float, float]],
+               velocities: Mapping[str, tuple[float, float]] | None = None) -> None:
+    """Tracked people: positions with their names, where they face, and their estimated velocity
+    (an arrow of the distance walked in one second)."""
     if not rec.enabled or not tracks:
         return
     import rerun as rr
@@ -42,3 +45,8 @@ def log_people(rec: Any, tracks: Mapping[str, tuple[float, float, float]]) -> No
     rec.log("world/people/positions", rr.Points2D(xy, radii=0.25, colors=[PEOPLE_RGB], labels=names))
     heads = [_heading(*tracks[n], 0.45) for n in names]
     rec.log("world/people/headings", rr.LineStrips2D(heads, colors=[PEOPLE_RGB], radii=0.03))
+    if velocities is not None:
+        moving = [n for n in names if math.hypot(*velocities.get(n, (0.0, 0.0))) > 0.05]
+        rec.log("world/people/velocities", rr.Arrows2D(origins=[xy[names.index(n)] for n in moving],
+                                                         vectors=[list(velocities[n]) for n in moving],
+                                                         colors=[VELOCITY_RGB], radii=0.03))
