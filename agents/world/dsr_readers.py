@@ -49,14 +49,39 @@ def dsr_people(graph: Any) -> list[Person]:
         other = graph.get_node(edge.dst)
         if other is not None and other.type == NodeType.PERSON:
             interacting.setdefault(edge.src, []).append(other.name)
+    heading_to = destinations(graph)
     for node in graph.nodes_of_type(NodeType.PERSON):
         try:
             x, y, theta = graph.world_pose(node.id)
             out.append(Person(name=node.name, x=x, y=y, theta=theta, role=str(node.attrs.get("role", "resident")),
-                              interacting_with=tuple(sorted(interacting.get(node.id, ())))))
-        except (SocialMapInputError, KeyError, LookupError, ValueError):
+                              interacting_with=tuple(sorted(interacting.get(node.id, ()))),
+                              vx=float(node.attrs.get("vx", 0.0)), vy=float(node.attrs.get("vy", 0.0)),
+                              destination=heading_to.get(node.id)))
+        except (SocialMapInputError, KeyError, LookupError, ValueError, TypeError):
             continue
     return out
+
+
+def destinations(graph: Any) -> dict[int, tuple[float, float]]:
+    """Where the agenda says people are going: a participant of an upcoming or running activity is
+    walking to its object (the prediction of a walker's path follows it, motion.py).  The earliest
+    such activity wins."""
+    out: dict[int, tuple[float, float, float]] = {}
+    for edge in graph.edges_of_type(EdgeType.PARTICIPANT):
+        activity = graph.get_node(edge.dst)
+        if activity is None or activity.attrs.get("state") not in ("upcoming", "running"):
+            continue
+        obj = graph.get_node_by_name(str(activity.attrs.get("object", "")))
+        if obj is None:
+            continue
+        try:
+            x, y, _ = graph.world_pose(obj.id)
+            start = float(activity.attrs.get("start_s", 0.0))
+        except (KeyError, LookupError, ValueError, TypeError):
+            continue
+        if edge.src not in out or start < out[edge.src][2]:
+            out[edge.src] = (x, y, start)
+    return {person: (x, y) for person, (x, y, _) in out.items()}
 
 
 def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:

@@ -30,13 +30,19 @@ from scenes.clock import parse_clock
 from scenes.loader import SCENES_DIR
 
 SCENES = sorted(p.stem for p in SCENES_DIR.glob("*.yaml"))
+# A scene whose people live their day (agents/lib/crowd): the offline replay equals the live crowd.
+CROWD_SCENE = Path(__file__).resolve().parents[1] / "data" / "crowd_small.yaml"
+
+
+def scene_path(scene_name: str) -> Path:
+    return CROWD_SCENE if scene_name == CROWD_SCENE.stem else SCENES_DIR / f"{scene_name}.yaml"
 # The simulator's sensor readings of the moment: not world-model state, not written offline.
 SENSOR_ATTRS = {"robot": {"laser_angles", "laser_ranges", "pose_stamp", "v", "vy", "omega"},
                 "person": {"seen_s"}}  # when the observer last published a move
 
 
 def parity_times(scene_name: str) -> list[float]:
-    scene = load_world(scene_name).scene
+    scene = load_world(scene_path(scene_name)).scene
     start, end = scene.clock.start_s, scene.clock.end_s
     times = {start, end - 1.0, (start + end) / 2}
     times |= {parse_clock(c.at) + 1.0 for c in scene.door_changes}
@@ -52,7 +58,7 @@ def parity_times(scene_name: str) -> list[float]:
 
 def live_agents(scene_name: str, tmp_path: Path) -> tuple[DSRGraph, SimRobotAgent, list]:
     graph = DSRGraph(agent="parity")
-    scene = SCENES_DIR / f"{scene_name}.yaml"
+    scene = scene_path(scene_name)
 
     def build(cls: type, **options: str):  # noqa: ANN202
         agent = cls(AgentConfig(name=cls.kind, scene=scene, run_dir=tmp_path, options=options))
@@ -88,9 +94,9 @@ def named(view) -> tuple[dict[str, dict], dict[tuple[str, str, str], dict]]:  # 
     return nodes, edges
 
 
-@pytest.mark.parametrize("scene_name", SCENES)
+@pytest.mark.parametrize("scene_name", [*SCENES, CROWD_SCENE.stem])
 def test_offline_world_equals_what_the_agents_hold(scene_name: str, tmp_path: Path) -> None:
-    world = load_world(scene_name)
+    world = load_world(scene_path(scene_name))
     nav = NavigationMaps.for_scene(world.scene)
     graph, sim, perceivers = live_agents(scene_name, tmp_path)
     times = parity_times(scene_name)

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
-from agents.lib.crowd.formations import chat_place, join_circle, ring_places, screen_places
+from agents.lib.crowd.formations import CHAT_RADIUS_M, chat_place, join_circle, ring_places, screen_places
 from agents.lib.crowd.model import Agenda, Appointment, Building, PersonTruth, RobotBody, Walker
 from agents.lib.crowd.orca import PARKED, Orca
 from agents.lib.crowd.routes import NoRoute, Router
@@ -64,7 +64,10 @@ SPOT_WALL_M = 0.5           # a chosen spot keeps this from walls
 SPOT_FURNITURE_M = 0.6
 SPOT_DOOR_M = 1.3           # ... and out of doorways
 SPOT_PEOPLE_M = 1.0         # ... and from other people and where they are going
+SPOT_CORNER_M = 0.9         # ... and off the corners routes turn at (where others will walk)
+SIDESTEP_RAD = 0.9          # a walker blocked for half of STUCK_S steps this much to a side
 ROBOT_MARGIN_M = 0.1        # people give the robot this much more than its body
+PASSAGE_WIDTH_M = 3.0       # a room narrower than this is a corridor: people pass, they do not stay
 FIRST_DECISION = 2**31      # the random stream index of the start-of-day draw
 SCRIPT_VELOCITY_DT_S = 0.05
 
@@ -80,6 +83,7 @@ class Task:
     activity: str = ""
     other: str = ""                   # fetch/escort: the resident; chat: the group id
     route: list[tuple[float, float]] = field(default_factory=list)
+    look_at: tuple[float, float] | None = None   # what they face when they settle short of the target
     best_m: float = math.inf
     progress_s: float = 0.0
     replans: int = 0
@@ -93,6 +97,13 @@ class Person:
     decisions: int = 0
     next_check_s: float = -math.inf
     escorted_to: str = ""             # activity a staff member is walking them to
+
+
+def _width(polygon: shapely.Polygon) -> float:
+    """The short side of a room's minimum rotated rectangle: a corridor's width."""
+    box = shapely.minimum_rotated_rectangle(polygon)
+    corners = np.asarray(box.exterior.coords)[:3]
+    return float(min(np.hypot(*(corners[1] - corners[0])), np.hypot(*(corners[2] - corners[1]))))
 
 
 def _rng(seed: int, name: str, k: int) -> np.random.Generator:
@@ -132,6 +143,7 @@ class Crowd:
         shapely.prepare(self._footprints)
         shapely.prepare(self._wall_lines)
         self._door_xy = np.array(list(building.doors.values()), dtype=float).reshape(-1, 2)
+        self._stay_rooms = sorted(name for name, poly in self._room_polys.items() if _width(poly) >= PASSAGE_WIDTH_M)
         radii = [w.radius_m for w in self.walkers] + [self._robot_radius]
         positions = np.vstack([self.pos, [PARKED]])
         self.orca = Orca(step_s, self._obstacles(frozenset()), radii, positions)
@@ -253,6 +265,13 @@ class Crowd:
                 return name
         return None
 
+    def _out_of_the_way(self, x: float, y: float) -> bool:
+        """A body fits at (x, y) and does not stand where routes turn (a chat or a rest place)."""
+        if not self._fits(x, y):
+            return False
+        corners = self.router.graphs[0].corners
+        return not len(corners) or float(np.min(np.hypot(*(corners - (x, y)).T))) >= SPOT_CORNER_M
+
     def _fits(self, x: float, y: float) -> bool:
         """A body can stand at (x, y): in the building, clear of walls and furniture."""
         return bool(shapely.contains_xy(self._building_poly, x, y)
@@ -329,8 +348,8 @@ class Crowd:
         for a in self._by_person.get(name, ()):
             if t >= a.end_s:
                 continue
-            if person.escorted_to == a.id:
-                return a
+            if person.escorted_to == a.id or person.task.activity == a.id:
+                return a    # on the way (the estimate shrinks as they walk) or there: until it ends
             leave = self._departure_s(person, a)
             if (a.id, name) in self._jobs and (a.id, name) not in self._jobs_done:
                 leave += ESCORT_WAIT_S
@@ -457,7 +476,8 @@ class Crowd:
             if task.activity != due.id:
                 self._leave_chat(person)
                 x, y, th = self._place(due, person.spec.name)
-                self._walk(person, t, (x, y, th), "attend", activity=due.id)
+                thing = self.building.things[due.object]
+                self._walk(person, t, (x, y, th), "attend", activity=due.id, look_at=(thing.x, thing.y))
             elif task.kind == "walk":
                 self._walking(person, t)
             person.next_check_s = due.end_s if person.task.kind == "stand" else t
@@ -478,9 +498,10 @@ class Crowd:
         person.next_check_s = min(person.task.until_s, self._next_due_s(person, t))
 
     def _walk(self, person: Person, t: float, target: tuple[float, float, float], purpose: str,
-              activity: str = "", other: str = "", until_s: float = math.inf) -> None:
+              activity: str = "", other: str = "", until_s: float = math.inf,
+              look_at: tuple[float, float] | None = None) -> None:
         person.task = Task("walk", purpose, target, until_s=until_s, activity=activity, other=other,
-                           progress_s=t)
+                           progress_s=t, look_at=look_at)
         self._route(person)
         self.orca.set_max_speed(person.index, person.spec.speed_mps)
         person.next_check_s = t
@@ -509,8 +530,11 @@ class Crowd:
         elif t - task.progress_s > STUCK_S:
             task.progress_s = t
             task.replans += 1
+            if task.purpose == "chat" and self._rejoin(person, t):
+                return
             if distance < SETTLE_M or (task.replans > 3 and task.purpose not in ("attend", "fetch")):
-                self._arrive(person, t, (float(x), float(y), gth))
+                facing = gth if task.look_at is None else math.atan2(task.look_at[1] - y, task.look_at[0] - x)
+                self._arrive(person, t, (float(x), float(y), facing))
                 return
             self._route(person)
         if not task.route:
@@ -553,6 +577,12 @@ class Crowd:
         if distance < 1e-9:
             self.orca.prefer(i, 0.0, 0.0)
             return
+        if task.replans and t - task.progress_s > STUCK_S / 2 and task.purpose != "escort":
+            # Blocked (someone stands on the way): step aside, left or right in turn, and let ORCA
+            # find the way round; the route is replanned when STUCK_S passes without progress.
+            turn = SIDESTEP_RAD if task.replans % 2 else -SIDESTEP_RAD
+            c, s_ = math.cos(turn), math.sin(turn)
+            dx, dy = c * dx - s_ * dy, s_ * dx + c * dy
         speed = person.spec.speed_mps
         if task.purpose == "escort":
             speed = min(speed, 1.2 * self.people[task.other].spec.speed_mps + 0.2 * distance)
@@ -586,7 +616,11 @@ class Crowd:
         self._dwell(person, t, room, u, dwell)
 
     def _rooms(self, person: Person) -> list[str]:
-        return list(person.spec.rooms) if person.spec.rooms else sorted(self._room_polys)
+        """Where the routine goes: the person's ``rooms``, or every room a group can stand in
+        (corridors, narrower than ``PASSAGE_WIDTH_M``, are for passing through)."""
+        if person.spec.rooms:
+            return list(person.spec.rooms)
+        return self._stay_rooms or sorted(self._room_polys)
 
     def _dwell(self, person: Person, t: float, room: str | None, u: np.ndarray, dwell: float) -> None:
         spot = self._spot(person, room, int(u[3] * 2**31))
@@ -617,6 +651,8 @@ class Crowd:
                 continue
             if len(self._place_points) and np.min(np.hypot(*(self._place_points - (x, y)).T)) < SPOT_PEOPLE_M:
                 continue
+            if not self._out_of_the_way(x, y):
+                continue
             return x, y
         i = person.index
         return float(self.pos[i, 0]), float(self.pos[i, 1])   # nowhere free: stay where one is
@@ -630,12 +666,12 @@ class Crowd:
         group = self._chats.get(group_id)
         if group is not None and len(group["members"]) >= 2:
             members = [tuple(self.pos[self.people[m].index]) for m in sorted(group["members"])]
-            place = join_circle(group["centre"], members, self._fits)
+            place = join_circle(group["centre"], members, self._out_of_the_way)
             if place is None:
                 return False
             centre = group["centre"]
         else:
-            found = chat_place(tuple(self.pos[j]), tuple(self.pos[i]), self._fits)
+            found = chat_place(tuple(self.pos[j]), tuple(self.pos[i]), self._out_of_the_way)
             if found is None:
                 return False
             place, partner_pose, centre = found
@@ -648,9 +684,44 @@ class Crowd:
         group["members"].add(person.spec.name)
         travel = math.hypot(place[0] - self.pos[i, 0], place[1] - self.pos[i, 1]) * DETOUR / person.spec.speed_mps
         until = t + travel + dwell
-        self._walk(person, t, place, "chat", other=group_id, until_s=until)
+        self._walk(person, t, place, "chat", other=group_id, until_s=until, look_at=tuple(centre))
         partner.task.until_s = max(partner.task.until_s, until)
         partner.next_check_s = min(partner.next_check_s, t)
+        return True
+
+    def _rejoin(self, person: Person, t: float) -> bool:
+        """Blocked on the way to a conversation: talk from where one is, if that is a conversation
+        distance from the others (the circle's centre moves between them), else give it up."""
+        group = self._chats.get(person.task.other)
+        i = person.index
+        here = self.pos[i]
+        others = [self.pos[self.people[m].index] for m in sorted(group["members"]) if m != person.spec.name] \
+            if group else []
+        if not others or min(math.hypot(*(here - o)) for o in others) > 2 * CHAT_RADIUS_M + 0.8:
+            return False
+        nearest = min(others, key=lambda o: math.hypot(*(here - o)))
+        gap = math.hypot(*(here - nearest))
+        if gap < 2 * CHAT_RADIUS_M - 0.3:
+            # Pressed against them: step back to a conversation distance on this side.
+            away = (here - nearest) / max(gap, 1e-9)
+            x, y = nearest + away * 2 * CHAT_RADIUS_M
+            if not self._fits(float(x), float(y)):
+                return False
+            person.task.target = (float(x), float(y), math.atan2(-away[1], -away[0]))
+            person.task.look_at = tuple(nearest + away * CHAT_RADIUS_M)
+            person.task.route = [(float(x), float(y))]
+            person.task.best_m = math.inf
+            return True
+        centre = tuple(np.mean([here, *others], axis=0))
+        group["centre"] = centre
+        for name in group["members"]:
+            member = self.people[name]
+            j = member.index
+            facing = math.atan2(centre[1] - self.pos[j, 1], centre[0] - self.pos[j, 0])
+            if member is person:
+                self._arrive(person, t, (float(here[0]), float(here[1]), facing))
+            elif member.task.kind == "stand":
+                member.task.target = (member.task.target[0], member.task.target[1], facing)
         return True
 
     def _leave_chat(self, person: Person) -> None:
@@ -667,15 +738,22 @@ class Crowd:
                     other.task = replace(other.task, purpose="dwell", other="")
             del self._chats[group_id]
 
-    def _group_of(self, person: Person) -> str:
+    def _settled(self, person: Person) -> bool:
+        """Standing at their place and turned to face where they should."""
         task = person.task
-        if task.kind != "stand":
+        turn = (task.target[2] - self.theta[person.index] + math.pi) % (2 * math.pi) - math.pi
+        return task.kind == "stand" and abs(turn) < 0.3
+
+    def _group_of(self, person: Person) -> str:
+        """The formation a person stands in (the truth the metrics' group intrusions use)."""
+        task = person.task
+        if not self._settled(person):
             return ""
         if task.purpose == "attend":
             return f"activity/{task.activity}"
         if task.purpose == "chat" and task.other in self._chats and len(self._chats[task.other]["members"]) >= 2:
-            standing = [m for m in self._chats[task.other]["members"] if self.people[m].task.kind == "stand"]
-            return f"chat/{task.other}" if len(standing) >= 2 else ""
+            settled = [m for m in self._chats[task.other]["members"] if self._settled(self.people[m])]
+            return f"chat/{task.other}" if len(settled) >= 2 else ""
         return ""
 
     # ------------------------------------------------------------------------------------ staff
@@ -744,7 +822,8 @@ class Crowd:
         resident.escorted_to = activity_id
         self._leave_chat(resident)
         x, y, th = self._place(a, resident_name)
-        self._walk(resident, t, (x, y, th), "attend", activity=activity_id)
+        thing = self.building.things[a.object]
+        self._walk(resident, t, (x, y, th), "attend", activity=activity_id, look_at=(thing.x, thing.y))
         staff.task = Task("walk", "escort", (x, y, th), other=resident_name, progress_s=t)
         self.orca.set_max_speed(staff.index, staff.spec.speed_mps)
         staff.next_check_s = t

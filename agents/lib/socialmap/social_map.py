@@ -90,6 +90,7 @@ from agents.lib.socialmap.layers import (
     interaction_masks,
     interaction_patches,
 )
+from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, predict, prediction_patches, stretched
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.roles import RoleParams, role_scale
@@ -129,6 +130,7 @@ class SocialMapParams(BaseModel):
     adaptive: AdaptiveParams = AdaptiveParams()
     chronemics: ChronemicsParams = ChronemicsParams()
     planner: PlannerParams = PlannerParams()
+    motion: MotionParams = MotionParams()
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,6 +187,8 @@ class SocialMap:
     interaction_patches: tuple[CostPatch, ...]   # interaction spaces at R(t_s)
     density: tuple[DensityWindow, ...]
     interaction_cells: tuple[CellMask | None, ...]
+    predictions: tuple[Prediction, ...] = ()
+    prediction_patches: tuple[CostPatch, ...] = ()   # where walkers will be (motion.py): never intimate
     _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
 
     # The three grids are composed on first use: a rebuild followed by the default (arrival-time)
@@ -200,7 +204,8 @@ class SocialMap:
     def people_cost(self) -> CostArray:
         """``physical`` plus the people's zones (the arrival-time planner's static part)."""
         if "people_cost" not in self._cache:
-            self._cache["people_cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches))
+            self._cache["people_cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
+                                                               *self.prediction_patches))
         return self._cache["people_cost"]
 
     @property
@@ -208,7 +213,7 @@ class SocialMap:
         """``people_cost`` plus the interaction spaces at R(t_s): the departure-time social grid."""
         if "cost" not in self._cache:
             self._cache["cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
-                                                        *self.interaction_patches))
+                                                        *self.prediction_patches, *self.interaction_patches))
         return self._cache["cost"]
 
     def zones(self) -> list[GroupZones]:
@@ -245,7 +250,7 @@ class SocialMap:
         if name == "walls":
             return self.static
         if name == "people":
-            return compose(free, self.zone_patches)
+            return compose(free, (*self.zone_patches, *self.prediction_patches))
         if name == "objects":
             return compose(free, self.interaction_patches)
         raise ValueError(f"unknown layer {name!r}; expected walls, people or objects")
@@ -265,7 +270,8 @@ class SocialMap:
             xmin, ymin, xmax, ymax = self.spec.bounds
             horizon = self.params.planner.horizon_factor * ((xmax - xmin) + (ymax - ymin))
             cached = "people_cost" in self._cache
-            base = self.people_cost if cached else compose(self.static, (*self.obstacle_patches, *self.zone_patches))
+            base = self.people_cost if cached else compose(self.static, (*self.obstacle_patches, *self.zone_patches,
+                                                                         *self.prediction_patches))
             self._cache[key] = time_costs(base, self.interaction_cells, profiles, self.t_s, cruise_speed_mps,
                                           self.spec.resolution, self.params.planner.time_step_s, horizon,
                                           in_place=not cached)
@@ -315,8 +321,13 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     people = tuple(people)
     objects = tuple(objects)
 
-    # People: role-scaled spaces, adapted to walls, grouped, densities on windows, cost bands.
-    base_spaces = [PersonalSpace.from_params(params.personal_space, role_scale(p, params.roles)) for p in people]
+    # People: role-scaled spaces (a walker's oriented along their motion and stretched ahead,
+    # motion.py), adapted to walls, grouped, densities on windows, cost bands.
+    scales = [role_scale(p, params.roles) for p in people]
+    rest_spaces = [PersonalSpace.from_params(params.personal_space, scale) for scale in scales]
+    people = tuple(oriented(p, params.motion) for p in people)
+    base_spaces = [stretched(space, p, scale, params.motion) for space, p, scale in zip(rest_spaces, people, scales,
+                                                                                       strict=True)]
     adaptations = adapt_spaces(people, base_spaces, static.walls, params.zones.level(params.adaptive.zone),
                                2.0 * grid_params.robot_radius_m, params.adaptive)
     spaces = [a.space for a in adaptations]
@@ -344,6 +355,9 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     obstacles = (*footprint_patches(spec, objects, geometries, inflate),
                  *body_patches(spec, people, grid_params.person_radius_m + grid_params.robot_radius_m))
     zone_costs = band_patches(windows, params.zones, grid_params.social_cost, grid_params.personal_cost)
+    predicted = [(found, space, p.theta) for p, space in zip(people, rest_spaces, strict=True)
+                 if (found := predict(p, params.motion, static.walls)) is not None]
+    ahead = prediction_patches(spec, predicted, params.zones, grid_params.social_cost, grid_params.personal_cost)
     return SocialMap(spec=spec, params=params, t_s=float(t_s), people=people, objects=objects,
                      activities=matched, unmatched_activities=unmatched,
                      person_spaces=tuple(PersonSpace(p.name, a.space, a) for p, a in zip(people, adaptations,
@@ -351,7 +365,8 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
                      groups=tuple(groups), object_spaces=tuple(object_spaces), static=static.grid,
                      obstacle_patches=obstacles, zone_patches=tuple(zone_costs),
                      interaction_patches=tuple(interaction_patches(masks, [s.cost for s in object_spaces])),
-                     density=tuple(windows), interaction_cells=tuple(masks))
+                     density=tuple(windows), interaction_cells=tuple(masks),
+                     predictions=tuple(found for found, _, _ in predicted), prediction_patches=tuple(ahead))
 
 
 def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,

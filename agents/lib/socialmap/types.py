@@ -36,6 +36,8 @@ class Person:
 
     ``interacting_with`` names other people this one is known to interact with (the DSR's
     ``interacting`` edges); such pairs are grouped even when the Omega rule would not group them.
+    ``vx``/``vy`` stretch a walker's space and predict where they go (motion.py), toward
+    ``destination`` when the agenda says where that is.
     """
 
     name: str
@@ -44,12 +46,18 @@ class Person:
     theta: float
     role: str = "resident"
     interacting_with: tuple[str, ...] = ()
+    vx: float = 0.0                                  # velocity (m/s, world frame), as the observer estimates it
+    vy: float = 0.0
+    destination: tuple[float, float] | None = None   # where the agenda says they are walking to
 
     def __post_init__(self) -> None:
         owner = f"person {self.name!r}"
-        for attr in ("x", "y", "theta"):
+        for attr in ("x", "y", "theta", "vx", "vy"):
             object.__setattr__(self, attr, _finite(owner, attr, getattr(self, attr)))
         object.__setattr__(self, "interacting_with", tuple(self.interacting_with))
+        if self.destination is not None:
+            object.__setattr__(self, "destination", (_finite(owner, "destination x", self.destination[0]),
+                                                      _finite(owner, "destination y", self.destination[1])))
 
 
 @dataclass(frozen=True, slots=True)

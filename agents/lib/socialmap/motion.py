@@ -1,0 +1,138 @@
+"""Moving people on the social map: a personal space stretched along the velocity, and where they
+will be over the next seconds.
+
+**Stretch.**  Kirby's velocity-dependent asymmetric Gaussian (R. Kirby, "Social Robot Navigation",
+PhD thesis, Carnegie Mellon University, 2010, ch. 6; also Kirby, Simmons and Forlizzi, "COMPANION",
+RO-MAN 2009) orients a walking person's Gaussian along their direction of motion and sets its
+front deviation to ``sigma_h = max(2 v, 0.5)`` m (v in m/s: the space reaches about two seconds of
+walking ahead), the sides to 2/3 and the rear to 1/2 of it.  Our resting space (personal_space.py)
+is exactly Kirby's at v <= 0.5 m/s: front 1.0, sides 0.67, rear 0.5 m.  We stretch the front only:
+scaling the sides with speed as Kirby does makes a resident walking at 1 m/s 2.7 m wide at the
+intimate level, wider than the centre's 2.4 m corridors, so the robot could never pass anyone
+there; passing beside a walker is what people do too.  The front uses the role's scale like the
+rest of the space: ``front = max(rest front, FRONT_GAIN_S x speed x scale)``.
+
+**Prediction.**  A walking person is predicted every ``step_s`` up to ``horizon_s`` (the seconds in
+which the robot's next metres are driven): at constant velocity, or - when the DSR says they take
+part in an activity whose object they are not at yet - along the straight line to that object at
+their current speed, stopping at its interaction range.  A prediction never passes a wall (it
+stops there).  Each predicted position adds the person's resting Gaussian scaled by a weight that
+falls linearly with the prediction time, from ``weight`` at ``step_s`` to 0 past the horizon.
+``weight`` stays below the intimate level, so predictions make the robot prefer to pass behind a
+walker (personal and social costs) but never forbid a cell: the robot is not blocked by a future
+that may not happen.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+from shapely.geometry.base import BaseGeometry
+
+from agents.lib.socialmap.grid import COST_DTYPE, CostPatch, GridSpec
+from agents.lib.socialmap.personal_space import PersonalSpace, asymmetric_gaussian, support_radius
+from agents.lib.socialmap.types import Person
+from agents.lib.socialmap.zones import ZoneParams
+
+ARRIVED_RANGE_M = 1.8     # a participant this close to the activity's object has arrived (interactions.py)
+
+
+class MotionParams(BaseModel):
+    """How walking people shape the map (defaults: module doc)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    moving_mps: float = Field(0.2, ge=0, description="slower than this a person counts as standing")
+    front_gain_s: float = Field(2.0, ge=0, description="Kirby: front sigma = max(2 v, rest)")
+    horizon_s: float = Field(4.0, ge=0, description="how far ahead people are predicted")
+    step_s: float = Field(0.5, gt=0, description="time between predicted positions")
+    weight: float = Field(0.6, ge=0, lt=1, description="peak density of the first prediction (< intimate)")
+
+
+def speed(person: Person) -> float:
+    return math.hypot(person.vx, person.vy)
+
+
+def oriented(person: Person, params: MotionParams) -> Person:
+    """A walking person's space points where they walk, not where they look."""
+    if speed(person) < params.moving_mps:
+        return person
+    return replace(person, theta=math.atan2(person.vy, person.vx))
+
+
+def stretched(space: PersonalSpace, person: Person, scale: float, params: MotionParams) -> PersonalSpace:
+    """Kirby's front stretch (module doc); a standing person keeps their resting space."""
+    v = speed(person)
+    if v < params.moving_mps:
+        return space
+    return space.with_side("front", max(space.front_m, params.front_gain_s * v * scale))
+
+
+@dataclass(frozen=True, slots=True)
+class Prediction:
+    """One person's predicted positions (``times`` s from now) and their weights."""
+
+    name: str
+    times: NDArray[np.float64]
+    points: NDArray[np.float64]    # (T, 2)
+    weights: NDArray[np.float64]
+
+
+def predict(person: Person, params: MotionParams, walls: BaseGeometry | None) -> Prediction | None:
+    """Where a walking person will be (module doc); None for a standing one."""
+    v = speed(person)
+    if v < params.moving_mps or params.horizon_s <= 0:
+        return None
+    times = np.arange(params.step_s, params.horizon_s + 1e-9, params.step_s)
+    if len(times) == 0:
+        return None
+    direction = np.array([person.vx, person.vy]) / v
+    reach = v * times
+    if person.destination is not None:
+        dx, dy = person.destination[0] - person.x, person.destination[1] - person.y
+        distance = math.hypot(dx, dy)
+        if distance > ARRIVED_RANGE_M:
+            direction = np.array([dx, dy]) / distance
+            reach = np.minimum(reach, distance - ARRIVED_RANGE_M + 0.5)
+    points = np.array([person.x, person.y]) + reach[:, None] * direction[None, :]
+    if walls is not None and not walls.is_empty:
+        path = shapely.LineString([(person.x, person.y), tuple(points[-1])])
+        hit = path.intersection(walls) if path.length > 0 else shapely.GeometryCollection()
+        if not hit.is_empty:
+            crossings = [shapely.Point(c) for part in getattr(hit, "geoms", [hit]) for c in part.coords]
+            blocked = min(path.project(point) for point in crossings)
+            keep = reach < max(0.0, blocked - 0.3)
+            times, points, reach = times[keep], points[keep], reach[keep]
+    if len(times) == 0:
+        return None
+    weights = params.weight * (1.0 - times / (params.horizon_s + params.step_s))
+    return Prediction(person.name, times, points, weights)
+
+
+def prediction_patches(spec: GridSpec, predictions: Sequence[tuple[Prediction, PersonalSpace, float]],
+                       zones: ZoneParams, social_cost: float, personal_cost: float) -> list[CostPatch]:
+    """Cost patches of the predicted positions: each the resting Gaussian (facing the motion)
+    times its weight, banded like the zones (never intimate: weights stay below its level)."""
+    table = np.array([0.0, social_cost, personal_cost, math.inf], dtype=COST_DTYPE)
+    patches = []
+    for prediction, space, theta in predictions:
+        for (x, y), w in zip(prediction.points, prediction.weights, strict=True):
+            if w <= zones.social:
+                continue
+            radius = support_radius(space, zones.social / w) + spec.resolution
+            window = spec.window(x - radius, y - radius, x + radius, y + radius)
+            if window is None:
+                continue
+            rows, cols = window
+            density = w * asymmetric_gaussian(space, float(x), float(y), theta, spec.xs(cols)[np.newaxis, :],
+                                              spec.ys(rows)[:, np.newaxis])
+            index = (density >= zones.social).astype(np.int8) + (density >= zones.personal) + \
+                (density >= zones.intimate)
+            patches.append(CostPatch(rows, cols, table[index]))
+    return patches
