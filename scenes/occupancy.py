@@ -260,7 +260,8 @@ def write_map(yaml_path: str | Path, values: NDArray[np.integer], resolution: fl
               mode: Literal["trinary", "scale"] = "trinary", header: str = "") -> Path:
     """Write ``values`` (bottom row first) as a map_server map: ``<name>.pgm`` beside ``yaml_path``.
 
-    ``trinary`` keeps occupied / free / unknown (thresholds 0.65 / 0.25, as map_saver); ``scale``
+    ``trinary`` keeps occupied / free / unknown (thresholds 0.65 / 0.196: with map_saver's 0.25, its
+    unknown grey 205 would read back as free); ``scale``
     keeps every value 0..100 exactly (thresholds 1 / 0).  ``header`` becomes comments atop the yaml."""
     from PIL import Image
 
@@ -269,7 +270,7 @@ def write_map(yaml_path: str | Path, values: NDArray[np.integer], resolution: fl
     pixels = trinary_pixels(values) if mode == "trinary" else scale_pixels(values)
     image_path = yaml_path.with_suffix(".pgm")
     Image.fromarray(np.ascontiguousarray(pixels[::-1]), mode="L").save(image_path)
-    thresholds = (0.65, 0.25) if mode == "trinary" else (1.0, 0.0)
+    thresholds = (0.65, 0.196) if mode == "trinary" else (1.0, 0.0)
     meta = {"image": image_path.name, "mode": mode, "resolution": float(resolution),
             "origin": [float(origin[0]), float(origin[1]), 0.0], "negate": 0,
             "occupied_thresh": thresholds[0], "free_thresh": thresholds[1]}
