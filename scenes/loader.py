@@ -85,7 +85,7 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
             inside(("missions", i, "goal", "pose"), pose.x, pose.y, f"goal of mission {mission.id!r}")
 
 
-ROOM_SAMPLES = 20_000          # cell centres sampled per room to measure how much of it is wall
+ROOM_SAMPLES = 4_000           # cell centres sampled per room to measure how much of it is wall
 ROOM_MAX_BLOCKED = 0.5         # a room more than half on walls was drawn over the wrong part of the map
 
 

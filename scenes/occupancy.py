@@ -155,9 +155,10 @@ class OccupancyMap:
         return f"the cell centred at ({x:.3f}, {y:.3f}) m, pixel ({px}, {py}) of {self.image_path.name}"
 
 
-def _shade_and_alpha(image: Any, mode: str) -> tuple[NDArray[np.float64], NDArray[np.bool_] | None]:
-    """Per pixel: mean of the channels over their maximum (map_io's ``shade``), and where the
-    pixel is not fully opaque (None without an alpha channel)."""
+def _levels(image: Any, mode: str) -> tuple[NDArray[np.integer], int, NDArray[np.bool_] | None]:
+    """Per pixel the sum of the channels map_io averages (shade = level / top), ``top``, and where
+    the pixel is not fully opaque (None without an alpha channel).  Integers, so that the values
+    come from a lookup table over the possible levels instead of float maths on every pixel."""
     if image.mode == "P":
         image = image.convert("RGBA" if "transparency" in image.info else "RGB")
     elif image.mode == "1":
@@ -165,23 +166,20 @@ def _shade_and_alpha(image: Any, mode: str) -> tuple[NDArray[np.float64], NDArra
     elif image.mode == "PA":
         image = image.convert("RGBA")
     if image.mode in ("I;16", "I;16B", "I;16L", "I"):
-        grey = np.asarray(image, dtype=np.float64)
-        top = 65535.0 if grey.size == 0 or grey.max() > 255 or image.mode.startswith("I;16") else 255.0
-        return grey / top, None
+        grey = np.clip(np.asarray(image, dtype=np.int64), 0, 65535)
+        return grey, 65535, None
     if image.mode not in ("L", "LA", "RGB", "RGBA"):
         raise ValueError(f"unsupported image mode {image.mode!r}; save the map as 8-bit grey PGM or PNG")
-    data = np.asarray(image, dtype=np.float64)
+    data = np.asarray(image)
     if image.mode == "L":
-        return data / 255.0, None
+        return data, 255, None
     if image.mode == "RGB":
-        return data.mean(axis=2) / 255.0, None
-    colours = np.repeat(data[..., :1], 3, axis=2) if image.mode == "LA" else data[..., :3]
+        return data.sum(axis=2, dtype=np.uint16), 3 * 255, None
+    colours = 3 * data[..., 0].astype(np.uint16) if image.mode == "LA" else data[..., :3].sum(axis=2, dtype=np.uint16)
     alpha = data[..., -1]
     if mode == "trinary":   # map_io: "average in alpha with color channels in Trinary mode"
-        shade = (colours.sum(axis=2) + alpha) / 4.0 / 255.0
-    else:
-        shade = colours.mean(axis=2) / 255.0
-    return shade, alpha < 255.0
+        return colours + alpha, 4 * 255, alpha < 255
+    return colours, 3 * 255, alpha < 255
 
 
 def occupancy_values(shade: NDArray[np.float64], transparent: NDArray[np.bool_] | None, meta: MapYaml) -> NDArray[np.int8]:
@@ -229,12 +227,15 @@ def load_occupancy(yaml_path: str | Path) -> OccupancyMap:
                 raise image_error(f"the image is {width} x {height} pixels; chronav reads maps of 1 to "
                                   f"{MAX_MAP_CELLS:,} pixels (crop it or use a coarser resolution)")
             image.load()
-            shade, transparent = _shade_and_alpha(image, meta.mode)
+            levels, top, transparent = _levels(image, meta.mode)
     except SourceError:
         raise
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
         raise image_error(f"not a readable map image ({exc}); map_server images are PGM or PNG") from None
-    values = occupancy_values(shade, transparent, meta)
+    lookup = occupancy_values(np.arange(top + 1, dtype=np.float64) / top, None, meta)
+    values = lookup[levels]
+    if meta.mode == "scale" and transparent is not None:
+        values[transparent] = UNKNOWN
     x0, y0, _ = meta.origin
     return OccupancyMap(values=np.ascontiguousarray(values[::-1]), resolution=meta.resolution, x0=x0, y0=y0,
                         yaml_path=yaml_path, image_path=image_path, mode=meta.mode)

@@ -70,9 +70,7 @@ def cells_in_polygon(geometry: BaseGeometry, xs: NDArray[np.float64], ys: NDArra
     cols = np.floor((px - xs[0]) / step_x + 0.5).astype(np.int64)
     rows = np.floor((py - ys[0]) / step_y + 0.5).astype(np.int64)
     keep = (cols >= 0) & (cols < n_cols) & (rows >= 0) & (rows < n_rows)
-    touched = np.zeros((n_rows, n_cols), dtype=bool)
-    touched[rows[keep], cols[keep]] = True
-    rows, cols = np.nonzero(touched)
+    rows, cols = np.divmod(np.unique(rows[keep] * n_cols + cols[keep]), n_cols)
     shapely.prepare(geometry)
     inside[rows, cols] = shapely.intersects_xy(geometry, xs[cols], ys[rows])
     return inside
