@@ -97,6 +97,9 @@ def _load_map(scene: Scene, located: LocatedYaml, path: Path) -> Scene:
     map_path = Path(scene.map.file)
     if not map_path.is_absolute():
         map_path = path.parent / map_path
+    if map_path.suffix.lower() not in (".yaml", ".yml"):
+        raise located.error(key, f"{scene.map.file!r} is not a map_server .yaml: name the map's yaml file "
+                                 "(it names the image and gives its resolution and origin)")
     if not map_path.is_file():
         raise located.error(key, f"map file {scene.map.file!r} not found (paths are relative to the scene file)")
     occupancy = load_occupancy(map_path)

@@ -325,3 +325,32 @@ def test_occupancy_layer_on_another_grid_samples_cell_centres() -> None:
     assert sampled[:, 0].all() and sampled[:, 1].all()          # outside the map: blocked
     assert sampled[:, 22:].all()                                 # beyond x = 1.0 too
     assert sampled[8:10, 14:16].all() and sampled.sum() == 4 * 20 + 4
+
+
+# ------------------------------------------------------------------------------ fuzzing map files
+from hypothesis import given  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from tests.unit.fuzz_mutations import fuzz_settings, mutated_bytes  # noqa: E402
+
+
+@fuzz_settings(120)
+@given(data=st.data())
+def test_mutated_map_files_give_located_errors(tmp_path_factory: pytest.TempPathFactory, data: st.DataObject) -> None:
+    """Whatever the yaml or the image holds, loading answers with a map or a SourceError naming it."""
+    folder = tmp_path_factory.mktemp("fuzz_map")
+    write_pgm(folder / "m.pgm", ward_pixels(0.25))
+    text = write_yaml(folder / "m.yaml", "m.pgm").read_text()
+    if data.draw(st.booleans(), label="mutate the image"):
+        pgm = (folder / "m.pgm").read_bytes()
+        cut = data.draw(st.integers(0, len(pgm)), label="cut")
+        junk = data.draw(st.binary(max_size=40), label="junk")
+        (folder / "m.pgm").write_bytes(pgm[:cut] + junk + pgm[cut + len(junk):])
+    else:
+        (folder / "m.yaml").write_bytes(data.draw(mutated_bytes(text), label="yaml"))
+    try:
+        occupancy = load_occupancy(folder / "m.yaml")
+    except SourceError as exc:
+        assert exc.line >= 1 and exc.message.strip() and Path(exc.file).parent == folder, exc
+    else:
+        assert occupancy.values.dtype == np.int8 and occupancy.values.ndim == 2
