@@ -31,6 +31,10 @@ map_server PGM, tools/building_maps.large_floor) with the rooms and doors `chron
 proposes, 12 people and 4 objects; the plan crosses the floor (generated in a temporary directory):
   map_load_ms            the scene loaded and checked (yaml, map image, rooms and people on the map)
                          and its static map built (rooms rasterised, wall cells inflated)
+  scene_yaml_ms_map      of which: parsing the scene file once (scenes/yamlio.py; the agenda loader
+                         parses it a second time)
+  map_image_ms_map       of which: reading the map (yaml + 2.4 MB PGM -> OccupancyGrid values)
+  static_map_ms_map      of which: the static map (rooms rasterised, wall cells inflated)
   social_map_ms_map      the agents' DSR at the time and the social map built on that static map
   plan_ms_map            A* across the floor on a fresh social map (arrival-time table included)
   path_cli_s_map         `chronav path` on that scene, a fresh process (imports, loading, plan,
@@ -228,7 +232,8 @@ def map_scene(folder: Path) -> tuple[Path, tuple[float, float], tuple[float, flo
                          "participants": []} for i, o in enumerate(objects)],
              "missions": [{"id": "across", "time": "11:00", "goal": {"pose": [goal[0], goal[1], 0.0]}}]}
     path = folder / "large_floor.yaml"
-    path.write_text(yaml.safe_dump(scene, sort_keys=False), encoding="utf-8")
+    # Leaf lists in flow style, as `chronav scene from-map` writes them.
+    path.write_text(yaml.safe_dump(scene, sort_keys=False, default_flow_style=None, width=1_000_000), encoding="utf-8")
     return path, start, goal
 
 
@@ -246,6 +251,8 @@ def cli_seconds(args: list[str], repeats: int) -> float:
 def bench_map(repeats: int, results: dict[str, Any]) -> None:
     from agents.lib.socialmap.search import SearchWorkspace
     from agents.lib.socialmap.social_map import plan
+    from agents.world.building import _occupancy_layer
+    from agents.world.navigation import NavigationMaps
     from agents.world.offline import SceneMaps
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -256,7 +263,17 @@ def bench_map(repeats: int, results: dict[str, Any]) -> None:
             maps.nav.static()
             return maps
 
+        from scenes.occupancy import load_occupancy
+        from scenes.yamlio import load_located_file
+
         load_ms, maps = median_ms(load, max(1, repeats // 2))
+        yaml_ms, _ = median_ms(lambda: load_located_file(scene), repeats)
+        image_ms, _ = median_ms(lambda: load_occupancy(scene.parent / "floor.yaml"), repeats)
+        def fresh_static() -> Any:
+            _occupancy_layer.cache_clear()   # inflate the wall cells again, as a fresh process does
+            return NavigationMaps.for_scene(maps.world.scene).static()
+
+        static_ms, _ = median_ms(fresh_static, max(1, repeats // 2))
         social_ms, smap = median_ms(lambda: maps.nav.build(SceneMaps(maps.world, maps.nav).graph(T_S), T_S), repeats)
         ws = SearchWorkspace()
         plan_ms, path = median_ms_after(lambda: maps.nav.build(maps.graph(T_S), T_S),
@@ -266,6 +283,8 @@ def bench_map(repeats: int, results: dict[str, Any]) -> None:
         cli_map = cli_seconds(["path", str(scene), *where], 3)
         cli_icra = cli_seconds(["path", "icra_usecase", "--at", "11:15", "--from", "12,2", "--to", "1,1", "--json"], 3)
     results.update({"map_cells": int(smap.spec.rows * smap.spec.cols), "map_load_ms": round(load_ms, 1),
+                    "scene_yaml_ms_map": round(yaml_ms, 1), "map_image_ms_map": round(image_ms, 1),
+                    "static_map_ms_map": round(static_ms, 1),
                     "social_map_ms_map": round(social_ms, 1), "plan_ms_map": round(plan_ms, 1),
                     "plan_length_m_map": round(path.length_m, 2), "path_cli_s_map": round(cli_map, 3),
                     "path_cli_s_icra": round(cli_icra, 3)})

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from agents.lib.socialmap.grid import COST_DTYPE, CostArray, compose
+from agents.lib.socialmap.social_map import SocialMap, SocialMapParams
 
 KEEPOUT_FILTER_TYPE = 0        # nav2_msgs/CostmapFilterInfo: keepout / preferred lanes
 SPEED_FILTER_PERCENT_TYPE = 1  # speed limit in % of the robot's maximum speed
@@ -45,8 +46,8 @@ class MaskScale:
     max_cost: float
 
     @classmethod
-    def for_params(cls, params: object) -> MaskScale:
-        grid, chron = params.grid, params.chronemics  # type: ignore[attr-defined]
+    def for_params(cls, params: SocialMapParams) -> MaskScale:
+        grid, chron = params.grid, params.chronemics
         return cls(free_cost=grid.free_cost, max_cost=max(grid.social_cost, grid.personal_cost, chron.r_max,
                                                           grid.free_cost + 1e-6))
 
@@ -59,12 +60,10 @@ class MaskScale:
         return (self.max_cost - self.free_cost) / KEEPOUT_STEPS
 
 
-def social_costs(smap: object) -> CostArray:
+def social_costs(smap: SocialMap) -> CostArray:
     """The social layers of a map (departure-time: R at the map's time) over free floor, no walls."""
-    spec, params = smap.spec, smap.params  # type: ignore[attr-defined]
-    free = np.full(spec.shape, params.grid.free_cost, dtype=COST_DTYPE)
-    return compose(free, (*smap.obstacle_patches, *smap.zone_patches,  # type: ignore[attr-defined]
-                          *smap.interaction_patches))  # type: ignore[attr-defined]
+    free = np.full(smap.spec.shape, smap.params.grid.free_cost, dtype=COST_DTYPE)
+    return compose(free, (*smap.obstacle_patches, *smap.zone_patches, *smap.interaction_patches))
 
 
 def keepout_values(costs: CostArray, scale: MaskScale) -> NDArray[np.int8]:
