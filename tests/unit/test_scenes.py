@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 from scenes.loader import SCENES_DIR, load_scene
 from scenes.clock import parse_clock
-from agents.world.motion import people_at
+from agents.world.people import people_at
 from agents.world.dsr_readers import symbolic_view
 from agents.world.offline import graph_at
 from agents.world.scene_world import load_world
@@ -96,7 +96,7 @@ def test_cli_scene_check_exit_codes(tmp_path: Path) -> None:
 
 
 def test_people_follow_waypoints_and_face_their_way() -> None:
-    scene = load_scene("icra_usecase").scene
+    scene = load_world("icra_usecase")
     start = {p.name: p for p in people_at(scene, parse_clock("09:00"))}
     assert (start["senior_1"].x, start["senior_1"].y) == (1.2, 6.0)
     at_tv = {p.name: p for p in people_at(scene, parse_clock("11:30"))}

@@ -117,7 +117,8 @@ class PersonTruth:
 
     @property
     def moving(self) -> bool:
-        return self.vx * self.vx + self.vy * self.vy > 0.05 * 0.05
+        """Walking, however slowly (a scripted stroll across a room may take minutes)."""
+        return self.vx * self.vx + self.vy * self.vy > 1e-12
 
 
 @dataclass(frozen=True)
