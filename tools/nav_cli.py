@@ -90,13 +90,17 @@ def register(app: typer.Typer) -> None:
                         trajectory: Path = typer.Argument(..., help="CSV with header t,x,y,theta (s, m, m, rad)"),
                         at: str = typer.Option(None, "--at", help="HH:MM for people and agenda (default: t of the "
                                                                   "first sample if >= 1 h, else the scene's start)"),
+                        people: Path = typer.Option(None, "--people", help="people's trajectories (header "
+                                                    "t,name,x,y,theta,vx,vy,group; default: people.csv beside the "
+                                                    "trajectory, as a run writes it)"),
                         as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """Social-navigation metrics of a trajectory: d_min, d_t, tau, CHC, Psi zones and spaces."""
+        """Social-navigation metrics of a trajectory: d_min, d_t, tau, CHC, Psi zones and spaces, and with
+        the people's trajectories HuNavSim's dynamic metrics (distances, intrusions, social work, collisions)."""
         from agents.lib.socialmap.metrics import MetricsInputError
         from agents.world.offline import OfflineError, metrics_offline
 
         try:
-            report = metrics_offline(scene, trajectory, _clock(at, "--at"))
+            report = metrics_offline(scene, trajectory, _clock(at, "--at"), people)
         except (OfflineError, MetricsInputError) as exc:
             _fail(str(exc))
             return

@@ -18,11 +18,14 @@ from typing import Any
 
 import numpy as np
 import shapely
+from shapely.geometry.base import BaseGeometry
 
 from agents.lib.agenda.chronemics import ChronemicsParams
-from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_trajectory_csv
+from agents.lib.socialmap.dynamic_metrics import PeopleTracks
+from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_people_csv, read_trajectory_csv
 from agents.lib.socialmap.search import PlanningError
 from agents.lib.socialmap.social_map import SocialMap, plan
+from agents.world.building import footprint_polygons
 from agents.world.dsr_readers import running_activities, symbolic_view
 from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_interactions,
                                       write_object, write_object_r, write_person, write_robot)
@@ -101,14 +104,26 @@ class SceneMaps:
     def symbolic(self, t_s: float) -> Any:
         return symbolic_view(self.graph(t_s))
 
-    def measure(self, trajectory: np.ndarray, t_s: float) -> MetricsReport:
-        """Seed-table metrics of a trajectory against the people and agenda at ``t_s``."""
+    def measure(self, trajectory: np.ndarray, t_s: float, people_tracks: PeopleTracks | None = None) -> MetricsReport:
+        """Seed-table metrics of a trajectory against the people and agenda at ``t_s``, and with
+        ``people_tracks`` (a run's people.csv) HuNavSim's dynamic metrics among the moving people."""
         smap = self.at(t_s)
         return compute_metrics(trajectory,
                                people={p.name: (p.x, p.y) for p in smap.people},
                                objects={s.name: s.footprint for s in smap.object_spaces},
                                zones=smap.zone_polygons(),
-                               interaction_spaces=smap.interaction_polygons())
+                               interaction_spaces=smap.interaction_polygons(),
+                               people_tracks=people_tracks, robot_radius_m=self.world.scene.robot.radius,
+                               obstacles=self.obstacles)
+
+    @property
+    def obstacles(self) -> BaseGeometry:
+        """Walls and object footprints: what pushes the robot in the social force model."""
+        if "_obstacles" not in self.__dict__:
+            scene = self.world.scene
+            walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
+            self.__dict__["_obstacles"] = shapely.union_all([*walls, *footprint_polygons(scene)])
+        return self.__dict__["_obstacles"]
 
 
 def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.ndarray:
@@ -158,14 +173,21 @@ def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
                            "is it a trajectory of this scene?")
 
 
-def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None) -> dict[str, Any]:
+def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
+                    people_csv: Path | None = None) -> dict[str, Any]:
+    """`chronav metrics`: the seed's metrics of a trajectory, and HuNavSim's dynamic metrics when
+    the people's trajectories are known (``people_csv``, by default the run's people.csv beside it)."""
     maps = SceneMaps.load(scene)
     traj = read_trajectory_csv(trajectory_csv)
     _check_on_map(maps.world, traj, trajectory_csv)
+    if people_csv is None and (trajectory_csv.parent / "people.csv").exists():
+        people_csv = trajectory_csv.parent / "people.csv"
+    tracks = read_people_csv(people_csv) if people_csv is not None else None
     if at_s is None:
         first = float(traj[0, 0])
         at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s
     if not math.isfinite(at_s):
         raise OfflineError("--at must be a finite time")
-    report = maps.measure(traj, at_s)
-    return {"scene": maps.world.scene.name, "at_s": at_s, "metrics": report.model_dump(), "table": report.to_table()}
+    report = maps.measure(traj, at_s, tracks)
+    return {"scene": maps.world.scene.name, "at_s": at_s, "people": None if people_csv is None else str(people_csv),
+            "metrics": report.model_dump(), "table": report.to_table()}

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
+from agents.lib.socialmap.dynamic_metrics import DynamicMetrics, PeopleTracks, dynamic_metrics, tracks_from_rows
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
 
@@ -77,6 +78,7 @@ class MetricsReport(BaseModel):
     psi_zone_percent: dict[str, float]
     psi_object_percent: dict[str, float]
     psi_basis: str = "path_length"
+    dynamic: DynamicMetrics | None = None     # HuNavSim's, when the people's trajectories are known
 
     def to_table(self) -> list[tuple[str, str]]:
         """(parameter, value) rows in the order of the seed's tables, ready to print."""
@@ -89,6 +91,8 @@ class MetricsReport(BaseModel):
         rows += [(f"d_min {name} (m)", f"{value:.2f}") for name, value in self.d_min_object_m.items()]
         rows += [(f"Psi {band} (%)", f"{self.psi_zone_percent[band]:.1f}") for band in PSI_BANDS]
         rows += [(f"Psi {name} (%)", f"{value:.1f}") for name, value in self.psi_object_percent.items()]
+        if self.dynamic is not None:
+            rows += self.dynamic.to_table()
         return rows
 
 
@@ -98,13 +102,18 @@ def compute_metrics(
     objects: Mapping[str, BaseGeometry] | None = None,
     zones: Mapping[str, BaseGeometry | None] | None = None,
     interaction_spaces: Mapping[str, BaseGeometry] | None = None,
+    people_tracks: PeopleTracks | None = None,
+    robot_radius_m: float = 0.3,
+    obstacles: BaseGeometry | None = None,
 ) -> MetricsReport:
-    """Measure one run.
+    """Measure one run: the seed's tables and, with ``people_tracks``, HuNavSim's dynamic metrics.
 
     ``trajectory``: (N, 4) rows of (t [s], x [m], y [m], theta [rad]), time non-decreasing.
     ``people``: name -> (x, y). ``objects``: name -> footprint geometry. ``zones``: any of
     "intimate", "personal", "social" -> (multi)polygon of that contour (missing or None = empty).
-    ``interaction_spaces``: object name -> polygon.
+    ``interaction_spaces``: object name -> polygon.  ``people_tracks``: every person's trajectory
+    (people.csv); ``robot_radius_m`` and ``obstacles`` (walls and footprints, for the obstacle
+    force of the social work) go with it (dynamic_metrics.py).
     """
     traj = validate_trajectory(trajectory)
     zone_geoms = _validate_zones(zones or {})
@@ -123,6 +132,7 @@ def compute_metrics(
         d_min_object_m={name: float(path.distance(geom)) for name, geom in objects.items()},
         psi_zone_percent=psi_zone_percent(path, zone_geoms),
         psi_object_percent={name: _share_inside(path, geom) for name, geom in interaction_spaces.items()},
+        dynamic=None if people_tracks is None else dynamic_metrics(traj, people_tracks, robot_radius_m, obstacles),
     )
 
 
@@ -291,3 +301,63 @@ def read_trajectory_csv(path: str | Path) -> FloatArray:
 def cell_text(cell: str) -> str:
     """A CSV cell as quoted in a message, cut short (a cell may be megabytes long)."""
     return cell if len(cell) <= 30 else cell[:27] + "..."
+
+
+PEOPLE_HEADER: tuple[str, ...] = ("t", "name", "x", "y", "theta", "vx", "vy", "group")
+
+
+def read_people_csv(path: str | Path) -> PeopleTracks:
+    """Read a ``people.csv`` (the simulator writes it beside trajectory.csv: header
+    ``t,name,x,y,theta,vx,vy,group``; s, m, m, rad, m/s, m/s, a group label or empty) into tracks.
+
+    Any problem raises TrajectoryFormatError("FILE:LINE: ...")."""
+    path = Path(path)
+    max_rows = TRAJECTORY_SAMPLES.value() * 50
+    try:
+        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env, what="people CSV")
+    except SourceError as exc:
+        raise TrajectoryFormatError(str(exc)) from None
+    rows: list[tuple[float, str, float, float, float, float, float, str]] = []
+    header_seen = False
+    last_t = -math.inf
+    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
+        if not fields or all(not f.strip() for f in fields):
+            continue
+        cells = [f.strip() for f in fields]
+        if not header_seen:
+            if tuple(c.lower() for c in cells) != PEOPLE_HEADER:
+                raise TrajectoryFormatError(f"{path}:{lineno}: expected header '{','.join(PEOPLE_HEADER)}', "
+                                            f"got {cell_text(','.join(cells))!r}")
+            header_seen = True
+            continue
+        if len(cells) != len(PEOPLE_HEADER):
+            raise TrajectoryFormatError(f"{path}:{lineno}: expected {len(PEOPLE_HEADER)} values "
+                                        f"({','.join(PEOPLE_HEADER)}), got {len(cells)}")
+        t_cell, name, *numbers, group = cells
+        values = []
+        for column, cell in zip(("t", "x", "y", "theta", "vx", "vy"), [t_cell, *numbers], strict=True):
+            try:
+                value = float(cell)
+            except ValueError:
+                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not a number") \
+                    from None
+            if not math.isfinite(value):
+                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not finite")
+            values.append(value)
+        if not name:
+            raise TrajectoryFormatError(f"{path}:{lineno}: column 'name' is empty; each row is one person")
+        if not 0.0 <= values[0] <= MAX_TRAJECTORY_TIME_S:
+            raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(t_cell)} s is not a time of the "
+                                        f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s)")
+        if max(abs(values[1]), abs(values[2])) > MAX_COORDINATE_M:
+            raise TrajectoryFormatError(f"{path}:{lineno}: position is more than {MAX_COORDINATE_M:,.0f} m from "
+                                        "the origin; positions are metres in the scene's frame")
+        if values[0] < last_t:
+            raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
+        last_t = values[0]
+        rows.append((values[0], cell_text(name), values[1], values[2], values[3], values[4], values[5], group))
+        if len(rows) > max_rows:
+            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} rows ({TRAJECTORY_SAMPLES.env})")
+    if not header_seen:
+        raise TrajectoryFormatError(f"{path}:1: empty file, expected header '{','.join(PEOPLE_HEADER)}'")
+    return tracks_from_rows(rows)

@@ -1,0 +1,121 @@
+"""HuNavSim's dynamic metrics (agents/lib/socialmap/dynamic_metrics.py) against values worked out by
+hand, and `chronav metrics` reading a run's people.csv."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from typer.testing import CliRunner
+
+from agents.lib.socialmap.dynamic_metrics import tracks_from_rows
+from agents.lib.socialmap.metrics import compute_metrics, read_people_csv
+from tools.cli import app
+
+ROBOT_R = 0.3
+
+
+def robot_line(xs: list[float], dt: float = 1.0, y: float = 0.0) -> np.ndarray:
+    return np.array([[k * dt, x, y, 0.0] for k, x in enumerate(xs)])
+
+
+def still(name: str, x: float, y: float, times: list[float], theta: float = 0.0, group: str = "") -> list:
+    return [(t, name, x, y, theta, 0.0, 0.0, group) for t in times]
+
+
+def test_distances_and_intrusions_past_a_standing_person() -> None:
+    """Robot along y = 0 at 1 m/s, a person at (2, 1): centre distances sqrt(5), sqrt(2), 1,
+    sqrt(2), sqrt(5); minus the robot's 0.3 m: 1.936, 1.114, 0.7, 1.114, 1.936."""
+    traj = robot_line([0, 1, 2, 3, 4])
+    tracks = tracks_from_rows(still("ana", 2.0, 1.0, [0, 1, 2, 3, 4], theta=-math.pi / 2))
+    d = compute_metrics(traj, people_tracks=tracks, robot_radius_m=ROBOT_R).dynamic
+    assert d is not None
+    assert d.time_to_goal_s == 4.0 and d.path_length_m == pytest.approx(4.0)
+    assert d.cumulative_heading_changes_rad == 0.0
+    assert d.min_distance_to_people_m == pytest.approx(0.7)
+    edges = [math.sqrt(5) - 0.3, math.sqrt(2) - 0.3, 0.7, math.sqrt(2) - 0.3, math.sqrt(5) - 0.3]
+    assert d.avg_distance_to_closest_person_m == pytest.approx(np.mean(edges) - 0.25)
+    assert (d.intimate_intrusions_percent, d.personal_intrusions_percent, d.social_intrusions_percent) == \
+        pytest.approx((0.0, 60.0, 40.0))
+    assert d.intrusions_per_person == {"ana": pytest.approx({"intimate": 0.0, "personal": 60.0, "social": 40.0})}
+    assert d.time_not_moving_s == 0.0
+    assert d.robot_on_person_collisions == d.person_on_robot_collisions == 0
+
+
+def test_social_forces_between_two_still_bodies_and_the_walls_push() -> None:
+    """Both at rest, 1 m apart: the interaction vector is the unit direction (theta = 0, B = 0.35), so
+    each pushes the other with 2.1 exp(-1 / 0.35) = 0.1206; a wall 1 m from the robot's centre
+    pushes with 10 exp(-(1 - 0.3) / 0.2) = 0.3020.  Two samples."""
+    traj = robot_line([0.0, 0.0])
+    tracks = tracks_from_rows(still("ben", 1.0, 0.0, [0, 1], theta=math.pi))
+    force = 2.1 * math.exp(-1.0 / 0.35)
+    wall = shapely.LineString([(-5, 1.0), (5, 1.0)])
+    d = compute_metrics(traj, people_tracks=tracks, robot_radius_m=ROBOT_R, obstacles=wall).dynamic
+    assert d.social_force_on_robot == pytest.approx(2 * force, rel=1e-6)
+    assert d.social_force_on_people == pytest.approx(2 * force, rel=1e-6)
+    push = 10.0 * math.exp(-0.7 / 0.2)
+    assert d.social_work == pytest.approx(2 * (force + push + force), rel=1e-6)
+    assert d.time_not_moving_s == pytest.approx(1.0), "one interval of 1 s at rest"
+    assert d.intimate_intrusions_percent == pytest.approx(0.0)
+    assert d.personal_intrusions_percent == pytest.approx(100.0), "1 - 0.3 = 0.7 m: personal"
+
+
+def test_collisions_are_blamed_on_who_moved_into_whom() -> None:
+    """Contact is d < 0.3 + 0.25 + 0.02 = 0.57 m.  The robot drives into a still person at 0.5 m/s
+    (in contact at x = 0.75 and 1.0: one collision, the robot's); then a person walks into the still
+    robot (one, the person's)."""
+    traj = robot_line([0.0, 0.25, 0.5, 0.75, 1.0], dt=0.5)
+    times = [0.0, 0.5, 1.0, 1.5, 2.0]
+    d = compute_metrics(traj, people_tracks=tracks_from_rows(still("ana", 1.1, 0.0, times)),
+                        robot_radius_m=ROBOT_R).dynamic
+    assert (d.robot_on_person_collisions, d.person_on_robot_collisions) == (1, 0)
+    walker = [(t, "ben", 1.5 - 0.5 * t, 0.0, math.pi, -0.5, 0.0, "") for t in times]   # 1.5 .. 0.5 m
+    d = compute_metrics(robot_line([0.0] * 5, dt=0.5), people_tracks=tracks_from_rows(walker),
+                        robot_radius_m=ROBOT_R).dynamic
+    assert (d.robot_on_person_collisions, d.person_on_robot_collisions) == (0, 1)
+
+
+def test_group_intrusions_use_where_the_members_gazes_meet() -> None:
+    """Two people facing each other 3 m apart at y = 2: each gaze 1.5 m ahead ends at (1.5, 2), the
+    group's centre; the robot at (1.5, 0) is 2 - 0.3 = 1.7 m from it (social), and 0.3 m ... no
+    person is closer than sqrt(1.5^2 + 2^2) - 0.3 = 2.2 m (social too)."""
+    traj = np.array([[0.0, 1.5, 0.0, 0.0], [1.0, 1.5, 0.0, 0.0]])
+    rows = still("a", 0.0, 2.0, [0, 1], theta=0.0, group="chat/1") + \
+        still("b", 3.0, 2.0, [0, 1], theta=math.pi, group="chat/1")
+    d = compute_metrics(traj, people_tracks=tracks_from_rows(rows), robot_radius_m=ROBOT_R).dynamic
+    assert (d.group_intimate_intrusions_percent, d.group_personal_intrusions_percent,
+            d.group_social_intrusions_percent) == pytest.approx((0.0, 0.0, 100.0))
+    assert d.intrusions_per_group == {"chat/1": pytest.approx({"intimate": 0.0, "personal": 0.0, "social": 100.0})}
+    assert d.min_distance_to_people_m == pytest.approx(2.5 - 0.3)
+
+
+def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
+    """A run directory holds trajectory.csv and people.csv: `chronav metrics` measures both."""
+    (tmp_path / "trajectory.csv").write_text("t,x,y,theta\n" + "".join(
+        f"{36000 + k},{1.0 + 0.5 * k},1.2,0\n" for k in range(5)))
+    (tmp_path / "people.csv").write_text("t,name,x,y,theta,vx,vy,group\n" + "".join(
+        f"{36000 + k},walker,{3.0 + 0.0 * k},1.2,3.14159,0,0,\n" for k in range(5)))
+    result = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv"), "--json"])
+    assert result.exit_code == 0, result.output
+    dynamic = json.loads(result.stdout)["metrics"]["dynamic"]
+    # robot x 1.0 .. 3.0 toward a person at x = 3: centre distances 2, 1.5, 1, 0.5, 0 -> contact at the
+    # last two (0.5 < 0.57): one collision, the robot's
+    assert dynamic["min_distance_to_people_m"] == pytest.approx(-0.3)
+    assert dynamic["robot_on_person_collisions"] == 1 and dynamic["person_on_robot_collisions"] == 0
+    assert dynamic["time_to_goal_s"] == 4.0
+    table = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")])
+    assert "social work" in table.output and "collisions" in table.output
+
+
+def test_a_bad_people_csv_is_named_with_its_line(tmp_path: Path) -> None:
+    bad = tmp_path / "people.csv"
+    bad.write_text("t,name,x,y,theta,vx,vy,group\n36000,ana,1,2,0,0,0,\n36001,ana,one,2,0,0,0,\n")
+    with pytest.raises(ValueError, match=rf"{bad}:3: column 'x': 'one' is not a number"):
+        read_people_csv(bad)
+    (tmp_path / "trajectory.csv").write_text("t,x,y,theta\n36000,1,1.2,0\n36001,1.5,1.2,0\n")
+    result = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")])
+    assert result.exit_code != 0 and f"{bad}:3" in result.output and "Traceback" not in result.output
