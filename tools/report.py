@@ -23,7 +23,7 @@ def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -
 
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
-    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_trajectory_csv
+    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv, read_trajectory_csv
     from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
     from agents.lib.socialmap.search import PlanningError
     from agents.lib.socialmap.social_map import plan
@@ -43,6 +43,11 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
     except OfflineError as exc:
         report["error"] = str(exc)
         return report
+    people_path = Path(run_dir) / "people.csv"
+    try:   # the people's trajectories, for HuNavSim's dynamic metrics of each mission
+        tracks = read_people_csv(people_path) if people_path.exists() else None
+    except TrajectoryFormatError:
+        tracks = None
     for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
         if mission.get("state") != "done" or "started_s" not in mission:
             continue
@@ -50,7 +55,7 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
         social = _mission_rows(trajectory, started, finished)
         if len(social) < 2:
             continue
-        entry: dict[str, Any] = {"social": maps.measure(social, started).model_dump()}
+        entry: dict[str, Any] = {"social": maps.measure(social, started, tracks).model_dump()}
         smap = maps.at(started)
         try:
             base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), baseline=True)

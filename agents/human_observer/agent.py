@@ -17,18 +17,23 @@ import math
 import zlib
 
 import numpy as np
+import shapely
 
 from agents.lib.perception.tracking import Detection, Tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
-from agents.world.dsr_readers import running_activities
+from agents.lib.socialmap.motion import MotionParams, predict
+from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
 from scenes.geometry import angle_difference
 
+TRAIL_S = 60.0               # the recording shows each person's last minute of track
+TRAIL_SPACING_S = 0.5
+DRAW_EVERY_S = 0.5
 PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
 PUBLISH_SPEED_MPS = 0.1
@@ -49,6 +54,11 @@ class HumanObserverAgent(Agent):
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
+        self.trails: dict[str, list[tuple[float, float, float]]] = {}
+        self._drawn_s = -math.inf
+        walls = [shapely.LineString(w) for w in self.scene.walls if len(w) >= 2]
+        self._walls = shapely.union_all(walls) if walls else None
+        self._motion = MotionParams()
 
     def _truth(self) -> tuple[float, list[tuple[str, str, float, float, float, float, float]]] | None:
         node = self.graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
@@ -95,8 +105,25 @@ class HumanObserverAgent(Agent):
                                                          [*scene_conversations(self.scene),
                                                           *observed_conversations(seen)]))
         mark_observed(self.graph, self.config.name, now_s)
+        self._draw(now_s, estimates)
+
+    def _draw(self, now_s: float, estimates: dict[str, tuple[float, float, float, float, float]]) -> None:
+        """Tracks, velocities and the social map's predictions of the walkers (from what this agent
+        published, read back as the navigation reads it), every DRAW_EVERY_S of sim time."""
+        if not self.rec.enabled or now_s - self._drawn_s < DRAW_EVERY_S:
+            return
+        self._drawn_s = now_s
+        for name, (x, y, *_rest) in estimates.items():
+            trail = self.trails.setdefault(name, [])
+            if not trail or now_s - trail[-1][0] >= TRAIL_SPACING_S or now_s < trail[-1][0]:
+                trail.append((now_s, x, y))
+            while trail and (trail[0][0] < now_s - TRAIL_S or trail[0][0] > now_s):
+                trail.pop(0)
+        predictions = [found for person in dsr_people(self.graph)
+                       if (found := predict(person, self._motion, self._walls)) is not None]
         log_people(self.rec, {name: e[:3] for name, e in estimates.items()},
-                   {name: e[3:] for name, e in estimates.items()})
+                   {name: e[3:] for name, e in estimates.items()},
+                   {name: [(x, y) for _, x, y in trail] for name, trail in self.trails.items()}, predictions)
 
     def _noise(self, name: str, now_s: float) -> np.random.Generator:
         """The sensor noise of one detection, drawn from (seed, person, time): this loop is not in

@@ -10,6 +10,8 @@ ROBOT_RGB = (30, 120, 255)
 PEOPLE_RGB = (240, 160, 40)
 LASER_RGB = (255, 60, 60)
 VELOCITY_RGB = (250, 90, 200)
+TRACK_RGB = (200, 140, 60)
+PREDICTED_RGB = (250, 90, 200, 120)
 
 
 def _heading(x: float, y: float, theta: float, length: float) -> list[list[float]]:
@@ -33,9 +35,12 @@ def log_robot(rec: Any, name: str, radius: float, pose: tuple[float, float, floa
 
 
 def log_people(rec: Any, tracks: Mapping[str, tuple[float, float, float]],
-               velocities: Mapping[str, tuple[float, float]] | None = None) -> None:
-    """Tracked people: positions with their names, where they face, and their estimated velocity
-    (an arrow of the distance walked in one second)."""
+               velocities: Mapping[str, tuple[float, float]] | None = None,
+               trails: Mapping[str, Sequence[Sequence[float]]] | None = None,
+               predictions: Sequence[Any] = ()) -> None:
+    """Tracked people: positions with their names, where they face, their estimated velocity (an
+    arrow of the distance walked in one second), the track behind each (last minute) and the
+    positions the social map predicts for the walkers (fading with the prediction time)."""
     if not rec.enabled or not tracks:
         return
     import rerun as rr
@@ -50,3 +55,12 @@ def log_people(rec: Any, tracks: Mapping[str, tuple[float, float, float]],
         rec.log("world/people/velocities", rr.Arrows2D(origins=[xy[names.index(n)] for n in moving],
                                                          vectors=[list(velocities[n]) for n in moving],
                                                          colors=[VELOCITY_RGB], radii=0.03))
+    if trails is not None:
+        strips = [list(map(list, trail)) for trail in trails.values() if len(trail) >= 2]
+        rec.log("world/people/tracks", rr.LineStrips2D(strips, colors=[TRACK_RGB], radii=0.015))
+    points, radii = [], []
+    for prediction in predictions:
+        for (x, y), w in zip(prediction.points, prediction.weights, strict=True):
+            points.append([float(x), float(y)])
+            radii.append(0.05 + 0.2 * float(w))
+    rec.log("world/people/predicted", rr.Points2D(points, radii=radii, colors=[PREDICTED_RGB]))
