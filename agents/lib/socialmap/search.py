@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numba
 import numpy as np
@@ -94,8 +95,8 @@ U = np.uint64
 
 @numba.njit(cache=True, nogil=True)
 def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependent,  # type: ignore[no-untyped-def]
-            table, cells_per_bin, learned, use_learned, mark, stamp, g, parent, pos, length, keys, nodes,
-            order):
+            table, cells_per_bin, use_learned, h_mark, h_stamp, h_g, h_radius, h_scale, h_target, beyond, mark,
+            stamp, g, parent, pos, length, keys, nodes, order):
     # mark[cell] == stamp: open (g, parent, pos, length valid); stamp + 1: closed; anything else:
     # not reached in this search. So no buffer needs a reset between searches (SearchWorkspace).
     open_s = np.uint32(stamp)
@@ -111,6 +112,9 @@ def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependen
     h_straight = c_min * (1.0 + _TIE_BREAK) if use_heuristic else 0.0
     h_diagonal = h_straight * (SQRT2 - 1.0)
     learned_weight = 1.0 + _TIE_BREAK
+    h_stamp = np.uint32(h_stamp)
+    target_row = h_target // cols
+    target_col = h_target - target_row * cols
 
     g[U(start)] = 0.0
     if time_dependent:
@@ -122,7 +126,11 @@ def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependen
     size = 1
     expanded = 0
     found = False
+    limit = np.inf   # with beyond >= 0: after the goal, close every cell with a key up to goal's + beyond
     while size > 0:
+        top_key = keys[0]
+        if top_key > limit:
+            break
         node = np.int64(nodes[0])
         un = U(node)
         mark[un] = closed_s
@@ -171,7 +179,9 @@ def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependen
             pos[U(moved)] = i
         if node == goal:
             found = True
-            break
+            if beyond < 0.0:
+                break
+            limit = top_key + beyond
         node_g = g[un]
         row = node // cols
         col = node - row * cols
@@ -227,8 +237,14 @@ def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependen
                 h = h_straight * dr + h_diagonal * dc
             else:
                 h = h_straight * dc + h_diagonal * dr
-            if use_learned:
-                h_l = learned_weight * learned[ub]
+            if use_learned:   # LearnedBounds (replan.py): a stored value, else the radius bound
+                if h_mark[ub] == h_stamp:
+                    h_l = h_g[ub]
+                else:
+                    tr = abs(row + d_row[k] - target_row)
+                    tc = abs(col + d_col[k] - target_col)
+                    h_l = h_radius - h_scale * (max(tr, tc) + (SQRT2 - 1.0) * min(tr, tc))
+                h_l *= learned_weight
                 if h_l > h:
                     h = h_l
             key = new_g + h
@@ -312,6 +328,7 @@ class SearchWorkspace:
 
 _NO_TABLE = np.zeros((1, 1))
 _NO_LEARNED = np.zeros(1)
+_NO_MARK = np.zeros(1, dtype=np.uint32)
 
 
 @dataclass(frozen=True, slots=True)
@@ -363,18 +380,38 @@ def prepare(cost: NDArray[np.floating] | TimeCosts, start: tuple[int, int], goal
                          cells_per_bin=float(cost.cells_per_bin) if isinstance(cost, TimeCosts) else 1.0)
 
 
+@dataclass(frozen=True, slots=True)
+class LearnedBounds:
+    """Lower bounds of each cell's cost to the goal, learned by earlier searches (replan.py).
+
+    A cell whose ``mark`` equals ``stamp`` has the bound ``g``; any other cell has
+    ``radius - scale * octile(cell, target)``. The search's heuristic is the larger of this and
+    ``c_min * octile(cell, goal)``; the caller guarantees it is consistent."""
+
+    mark: NDArray[np.uint32]
+    stamp: int
+    g: NDArray[np.float64]
+    radius: float
+    scale: float
+    target: int
+
+
 def run_search(problem: SearchProblem, workspace: SearchWorkspace, *, heuristic: bool = True,
-               learned: NDArray[np.float64] | None = None) -> GridPath:
-    """The kernel on a prepared problem. ``learned``: per-cell lower bounds of the cost to the goal
-    (replan.py); the heuristic is then the larger of it and ``c_min`` octile."""
+               learned: LearnedBounds | None = None, beyond: float = -1.0) -> GridPath:
+    """The kernel on a prepared problem, optionally with learned lower bounds (replan.py). With
+    ``beyond`` >= 0 the search goes on after reaching the goal until it has closed every cell whose
+    key is at most the goal's plus ``beyond`` (``expanded`` counts them all)."""
     stamp = workspace.next_stamp(problem.rows * problem.cols)
     time_dependent = problem.table is not None
     table = problem.table if problem.table is not None else _NO_TABLE
+    if learned is None:
+        bounds = (False, _NO_MARK, 1, _NO_LEARNED, -np.inf, 0.0, 0)
+    else:
+        bounds = (True, learned.mark, learned.stamp, learned.g, learned.radius, learned.scale, learned.target)
     indices, cost_cells, expanded = _search(
         problem.flat, problem.rows, problem.cols, problem.start, problem.goal, problem.c_min, heuristic,
-        time_dependent, table, problem.cells_per_bin, learned if learned is not None else _NO_LEARNED,
-        learned is not None, workspace.mark, stamp, workspace.g, workspace.parent, workspace.pos,
-        workspace.length, workspace.keys, workspace.nodes, workspace.order)
+        time_dependent, table, problem.cells_per_bin, *bounds, float(beyond), workspace.mark, stamp, workspace.g,
+        workspace.parent, workspace.pos, workspace.length, workspace.keys, workspace.nodes, workspace.order)
     if indices.size == 0:
         raise NoPathFound(f"no path from cell {divmod(problem.start, problem.cols)} to cell "
                           f"{divmod(problem.goal, problem.cols)}")
@@ -414,20 +451,34 @@ class Path:
         return float(np.sum(np.hypot(*np.diff(self.points_m, axis=0).T)))
 
 
+class GridSearcher(Protocol):
+    """Something that searches a grid like ``search_cells`` (replan.Replanner)."""
+
+    def search(self, cost: NDArray[np.floating] | TimeCosts, start: tuple[int, int], goal: tuple[int, int], *,
+               c_min: float | None = None) -> GridPath: ...
+
+
 def plan_on_grid(cost: NDArray[np.floating] | TimeCosts, spec: GridSpec, start_xy: tuple[float, float],
                  goal_xy: tuple[float, float], *, method: str = "astar", c_min: float | None = None,
-                 workspace: SearchWorkspace | None = None) -> Path:
-    """Plan between two points in metres on ``cost`` laid out by ``spec`` (A* or Dijkstra)."""
+                 workspace: SearchWorkspace | None = None, searcher: GridSearcher | None = None) -> Path:
+    """Plan between two points in metres on ``cost`` laid out by ``spec`` (A* or Dijkstra).
+    ``searcher`` (A* only) replaces the one-off search, e.g. by a replan.Replanner that reuses
+    earlier searches to the same goal."""
     if method not in ("astar", "dijkstra"):
         raise ValueError(f"method must be 'astar' or 'dijkstra', got {method!r}")
+    if searcher is not None and method != "astar":
+        raise ValueError("a replanning searcher needs method='astar'")
     cells = []
     for name, (x, y) in (("start", start_xy), ("goal", goal_xy)):
         if not spec.contains_xy(x, y):
             raise OutsideMap(f"{name} ({x:g}, {y:g}) is outside the map {spec.bounds}")
         cells.append(spec.cell_of(x, y))
     try:
-        found = search_cells(cost, cells[0], cells[1], heuristic=method == "astar", c_min=c_min,
-                             workspace=workspace)
+        if searcher is not None:
+            found = searcher.search(cost, cells[0], cells[1], c_min=c_min)
+        else:
+            found = search_cells(cost, cells[0], cells[1], heuristic=method == "astar", c_min=c_min,
+                                 workspace=workspace)
     except StartOccupied as exc:
         raise StartOccupied(f"start ({start_xy[0]:g}, {start_xy[1]:g}): {exc}") from None
     except GoalOccupied as exc:
