@@ -39,6 +39,7 @@ from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
 
 REPLAN_PERIOD_S = 0.2   # sim seconds between map rebuilds and searches (>= 5 Hz, issue 15)
+TIME_EPS_S = 1e-6       # sim-time comparisons tolerate float rounding
 SLOW_ZONE_M = 0.5
 STALL_S = 4.0           # sim seconds without getting closer to the goal before recovering
 PROGRESS_M = 0.05
@@ -165,7 +166,8 @@ class SocialNavigationAgent(Agent):
         pose_stamp = float(robot.attrs.get("pose_stamp", -1.0))
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
-        if self.intention_id == intention.id and now_s - self.last_replan_s >= REPLAN_PERIOD_S:
+        # (sim time advances in float steps of control_dt: 2 x 0.1 may sum to 0.19999...)
+        if self.intention_id == intention.id and now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S:
             self._replan(intention, robot, now_s)
 
     def _start(self, intention: Any, robot: Any, now_s: float) -> None:
