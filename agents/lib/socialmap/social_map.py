@@ -5,6 +5,7 @@ and the tests.
     smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
     path = plan(smap, start_xy, goal_xy)                               # social, arrival-time R
     base = plan(smap, start_xy, goal_xy, baseline=True)                # non-social baseline
+    path = plan(smap, robot_xy, goal_xy, replanner=replanner)          # again, reusing earlier searches
 
 Layers (Nav2 style, composed by cell-wise maximum, grid.py):
   static  walls inflated by the robot radius, outside the rooms          -> ``static``
@@ -366,7 +367,8 @@ def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[fl
     would reach it at ``cruise_speed_mps``; False prices it at the map's time (the seeds).
     Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py), or the
     same ``replanner`` to repeated A* plans to one goal on successive maps to reuse what the earlier
-    searches learned (replan.py: same optimal costs, far fewer cells expanded)."""
+    searches learned (replan.py: same optimal costs, far fewer cells expanded; keep one replanner
+    per kind of plan, social or baseline)."""
     planner = social_map.params.planner
     if arrival_time is None:
         arrival_time = planner.arrival_time
