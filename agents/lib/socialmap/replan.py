@@ -11,11 +11,15 @@ by Generalized Adaptive A*'s repair, Sun, Koenig and Yeoh 2008):
 1. *Lower-bound grid.* Each cell's cost (for an arrival-time cell, the minimum of its table row)
    is truncated to 6 significant bits (so 1, 1.5, 2, 3.5 and 4 stay exact and R(t) creeping by a
    thousandth does not count as a change), giving a grid ``b`` that is <= the search's costs.
-2. *Refresh* (first plan to a goal, or when reuse stopped paying): one A* from the goal to the
-   robot on ``b``. Every cell it closed gets ``X(n) = g_b(n)``, its exact cost to the goal on
-   ``b``; every other cell gets ``X(n) = C_b / w - c_b * octile(n, robot)`` (C_b: cost found,
-   c_b: cheapest cell of ``b``, w = 1 + 1e-9 the tie-break): a node A* did not close satisfies
-   ``w (d(n) + c_b octile(n, robot)) >= C_b``, so this is a lower bound too.
+2. *Refresh* (first plan to a goal, or when reuse stopped paying): one A* from the goal towards the
+   robot on ``b``, continued after reaching the robot until every cell with a key up to
+   ``C_b + m`` is closed (C_b: the cost found, m: ``margin_cells``). Every closed cell gets
+   ``X(n) = g_b(n)``, its exact cost to the goal on ``b``; every other cell gets
+   ``X(n) = (C_b + m) / w - c_b octile(n, robot)`` (c_b: the cheapest cost of ``b``, w = 1 + 1e-9
+   the tie-break weight): a cell the weighted A* did not close has
+   ``w (d(n) + c_b octile(n, robot)) >= C_b + m``, so this is a lower bound too. The margin is
+   why the plans below stay on the exact values: without it the cells beside the old path that
+   A* never closed would carry a bound tied with the optimum and be expanded by the thousand.
 3. *Plan* (every time): forward A* from the robot with ``H(n) = max(c_min octile(n, goal), X(n))``
    on the real costs (search.py's kernel). Near the old path H is the exact remaining cost, so the
    search walks along the new path and expands only cells whose cost-to-go rose.
@@ -26,31 +30,36 @@ by Generalized Adaptive A*'s repair, Sun, Koenig and Yeoh 2008):
 Why the result is optimal (static cost grids; the tests compare with scipy):
   * X is consistent on ``b`` (``X(n) <= c_b(n, m) + X(m)``): between closed cells by the triangle
     inequality of exact distances; from a closed to an unclosed cell because closed cells had a
-    key <= C_b; between unclosed cells because ``c_b octile`` changes by at most ``c_b L`` per step.
+    key <= C_b + m; between unclosed cells because ``c_b octile`` changes by at most ``c_b L`` per
+    step.
     A cost increase keeps it; the repair restores it after decreases. With ``X(goal) = 0``
     consistency implies admissibility, and both carry over from ``b`` to the real costs (>= b).
     ``c_min octile`` is consistent, and so is the maximum of two consistent heuristics. So each
-    plan is an A* with a consistent heuristic: optimal like plain A*. The tie-break weight makes
-    the backward values exact only within a factor 1 + 1e-9, so the plan is optimal within
-    (1 + 1e-9)^2, and nothing accumulates over replans (a refresh starts from the grid itself).
+    plan is an A* with a consistent heuristic: optimal like plain A*. The tie-break weight w makes
+    the backward values, and so these inequalities, hold only within a factor w, so a plan is
+    optimal within about w^2 = 1 + 2e-9; nothing accumulates over replans (a refresh starts from
+    the grid itself, a repair only lowers values).
   * A new goal, grid shape or ``c_min`` starts afresh.
 
-Cost: a pass over the grid to compare bounds (about 1 ms at 1000^2), the repair (proportional to the
-cells whose cost-to-go fell), and A* expanding the path plus the cells within the cost increase of
-it. When a plan expands (or repairs) more than ``refresh_fraction`` of what the last refresh
-closed, the next plan refreshes (about one plain A*).
+Cost: a pass over the grid to compare bounds (0.3 ms at 1000^2), the repair (proportional to the
+cells whose cost-to-go fell), and A* expanding the path plus the cells whose old cost-to-go lies
+within the cost increase of the optimum (tools/bench_planner.py: replan_*). When a plan expands
+(or repairs) more than ``refresh_fraction`` of what the last refresh closed, the next plan
+refreshes: about 2.5 plain A*s at 1000^2 (from the goal's side, plus the margin), paid once per
+goal and after far-reaching changes.
 
 Arrival-time costs (TimeCosts): X comes from lower bounds (each space at its cheapest over the
-table's horizon), so it stays admissible whatever the arrival times; only the search order
-differs from a plain A*, and the time-dependent search is itself a label-setting approximation
-(search.py): a replan can settle an interaction-space cell through another first-found path than
-a fresh plan and differ from it where a space's cost changes during the trip (tests bound it).
+table's horizon), so it stays admissible whatever the arrival times, and when no space changes
+cost during the trip the plan is the optimum as above (tested against scipy). Otherwise the
+time-dependent search is itself a label-setting approximation (search.py) whose result depends
+on the order of expansion: a replan may then settle an interaction-space cell through another
+first-found path than a fresh plan. The tests check that its cost is its path's own (each space
+charged at the length travelled along it) and never below the optimum at the spaces' cheapest.
 """
 
 from __future__ import annotations
 
 import heapq
-import math
 from dataclasses import dataclass
 
 import numba
