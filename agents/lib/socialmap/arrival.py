@@ -123,7 +123,10 @@ def time_costs(base: CostArray, masks: Sequence[CellMask | None], profiles: Sequ
                  for k in sorted({k for covering, _ in labels for k in covering})}
     table = np.ones((max(1, len(labels)), bins))
     for row, (covering, static) in enumerate(labels):
-        table[row] = np.maximum(static, np.max([per_space[k] for k in covering], axis=0))
+        spaces = iter(covering)
+        np.maximum(static, per_space[next(spaces)], out=table[row])
+        for k in spaces:   # a cell in several spaces costs the dearest
+            np.maximum(table[row], per_space[k], out=table[row])
     return TimeCosts(grid=grid, table=table, cells_per_bin=cruise_speed_mps * time_step_s / resolution_m)
 
 
