@@ -23,7 +23,21 @@ Keys (medians over repeated runs; ms unless the key says otherwise):
   pyastar2d_ms_N         pyastar2d on the same grid (other step semantics: speed reference only)
   plan_cost_m_N / ref_cost_m_N  cost of our A* and of scipy on the departure-time grid (equal)
   expanded_N             cells expanded by our A* (arrival-time)
-  numba_compile_s        first compilation of the search kernels in a fresh cache (subprocess)
+  astar_over_pyastar2d_N our A* (departure-time grid, as plan_departure_ms_N) divided by pyastar2d,
+                         median of runs taken in alternation (so both see the same machine load)
+  replan_ms_N            a replan with a Replanner (replan.py) after a local change, map at t + 0.2 s
+                         (one 5 Hz period: R(t) crept), the person nearest the path moved 0.2 m,
+                         the robot 0.25 m along the path; arrival-time table built in the timing as
+                         in plan_ms_N, the previous plan (on the old map) untimed
+  replan_agenda_ms_N     the same, but instead of the person the activity of the object nearest
+                         the path moved 10 min earlier (R changed in one interaction space)
+  replan_first_ms_N      the first plan to a goal with a Replanner (its backward refresh, then the plan)
+  replan_over_plan_N / replan_agenda_over_plan_N  those replans divided by a fresh plan_ms_N-style
+                         plan on the same changed map, median of alternated runs (the goal: <= 0.3)
+  replan_expanded_N / replan_agenda_expanded_N / replan_refresh_expanded_N  cells expanded by
+                         those replans, and by the refresh's backward search
+  replan_cost_m_N / replan_fresh_cost_m_N  the replan's cost and a fresh plan's on the same map
+  numba_compile_s        first compilation of all planner kernels in a fresh cache (subprocess)
   numba_cache_load_s     warm-up in this process with the on-disk cache
 
 A real building (issue 17): a 100 m x 60 m occupancy map at 5 cm (2,000 x 1,200 cells, ROS
@@ -133,7 +147,8 @@ def median_ms_after(setup: Callable[[], Any], fn: Callable[[Any], Any], repeats:
 def numba_compile_seconds() -> float:
     """Compile the kernels in a subprocess with an empty numba cache directory."""
     code = ("import time; t = time.perf_counter(); "
-            "from agents.lib.socialmap.search import warm_up; warm_up(); "
+            "from agents.lib.socialmap import arrival, replan, search; "
+            "search.warm_up(); replan.warm_up(); arrival.warm_up(); "
             "print(time.perf_counter() - t)")
     with tempfile.TemporaryDirectory() as cache_dir:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir, PYTHONPATH=str(REPO_ROOT))
@@ -177,6 +192,9 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
                              ref_repeats)
     weights = smap.cost.astype(np.float32)
     pyastar_ms, _ = median_ms(lambda: pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True), repeats)
+    ours_ms = lambda: median_ms(lambda: plan(smap, start, goal, arrival_time=False, workspace=ws), 1)[0]  # noqa: E731
+    theirs_ms = lambda: median_ms(lambda: pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True), 1)[0]  # noqa: E731
+    ratio = statistics.median(ours_ms() / theirs_ms() for _ in range(max(3, repeats)))
     n = n_cells
     results.update({
         f"static_build_ms_{n}": round(static_ms, 2),
@@ -190,9 +208,94 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
         f"ref_csr_build_ms_{n}": round(csr_ms, 2),
         f"ref_plan_ms_{n}": round(ref_ms, 2),
         f"pyastar2d_ms_{n}": round(pyastar_ms, 2),
+        f"astar_over_pyastar2d_{n}": round(ratio, 3),
         f"plan_cost_m_{n}": round(departure.cost, 6),
         f"ref_cost_m_{n}": round(float(dist[g_cell[0] * cols + g_cell[1]]) * smap.spec.resolution, 6),
         f"expanded_{n}": path.expanded,
+    })
+    bench_replan(n_cells, repeats, scene, params, static, path, results)
+
+
+def replan_changes(scene: dict[str, Any], path: Any) -> tuple[list[Any], list[Any], tuple[float, float]]:
+    """The local changes of the replan benchmark: people with the one nearest ``path`` moved 0.2 m
+    across it, activities with the one on the object nearest ``path`` 10 min earlier, and the robot
+    0.25 m along ``path``."""
+    import dataclasses
+
+    points = path.points_m
+    people = list(scene["people"])
+    near = int(np.argmin([np.min(np.hypot(*(points - (p.x, p.y)).T)) for p in people]))
+    person = people[near]
+    heading = np.diff(points, axis=0)[int(np.argmin(np.hypot(*(points[:-1] - (person.x, person.y)).T)))]
+    across = np.array([-heading[1], heading[0]]) / np.hypot(*heading) * 0.2
+    people[near] = dataclasses.replace(person, x=person.x + float(across[0]), y=person.y + float(across[1]))
+    objects = scene["objects"]
+    nearest = objects[int(np.argmin([np.min(np.hypot(*(points - (o.x, o.y)).T)) for o in objects]))].name
+    activities = [dataclasses.replace(a, start_s=a.start_s - 600.0, end_s=a.end_s - 600.0) if a.object == nearest
+                  else a for a in scene["activities"]]
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+    robot = points[int(np.searchsorted(arc, 0.25))]
+    return people, activities, (float(robot[0]), float(robot[1]))
+
+
+def bench_replan(n: int, repeats: int, scene: dict[str, Any], params: Any, static: Any, path: Any,
+                 results: dict[str, Any]) -> None:
+    """replan_* keys: plan on the old map (untimed), then time the replan on the changed one."""
+    from agents.lib.socialmap.replan import Replanner
+    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.socialmap.social_map import build_social_map, plan
+
+    people, activities, robot = replan_changes(scene, path)
+    goal = scene["goal"]
+    ws = SearchWorkspace()
+
+    def social_map(people: Any, activities: Any, t_s: float) -> Any:
+        return build_social_map(scene["bounds"], scene["walls"], people, scene["objects"], activities, t_s, params,
+                                static=static)
+
+    def after_plan(people: Any, activities: Any) -> Any:
+        replanner = Replanner(ws)
+        plan(social_map(scene["people"], scene["activities"], T_S), scene["start"], goal, replanner=replanner)
+        return replanner, social_map(people, activities, T_S + 0.2)
+
+    def replan(prepared: Any) -> Any:
+        replanner, smap = prepared
+        return plan(smap, robot, goal, replanner=replanner), replanner.last
+
+    person_ms, (person, person_stats) = median_ms_after(lambda: after_plan(people, scene["activities"]), replan,
+                                                        repeats)
+    agenda_ms, (_, agenda_stats) = median_ms_after(lambda: after_plan(scene["people"], activities), replan, repeats)
+    ratios: dict[str, list[float]] = {"person": [], "agenda": []}
+    for _ in range(max(3, repeats)):   # alternated with a full plan on the same changed map: load-proof
+        for name, changed in (("person", (people, scene["activities"])), ("agenda", (scene["people"], activities))):
+            prepared = after_plan(*changed)
+            full = social_map(*changed, T_S + 0.2)
+            started = time.perf_counter()
+            plan(full, robot, goal, workspace=ws)
+            full_ms = time.perf_counter() - started
+            started = time.perf_counter()
+            replan(prepared)
+            ratios[name].append((time.perf_counter() - started) / full_ms)
+    kept = Replanner(ws)   # as the agent keeps one: a new goal refreshes it, its buffers stay
+
+    def first_plan(smap: Any) -> Any:
+        kept.reset()
+        return plan(smap, scene["start"], goal, replanner=kept), kept.last
+
+    first_ms, (_, first_stats) = median_ms_after(lambda: social_map(scene["people"], scene["activities"], T_S),
+                                                 first_plan, max(1, repeats // 2))
+    fresh = plan(social_map(people, scene["activities"], T_S + 0.2), robot, goal, workspace=ws)
+    results.update({
+        f"replan_ms_{n}": round(person_ms, 2),
+        f"replan_agenda_ms_{n}": round(agenda_ms, 2),
+        f"replan_first_ms_{n}": round(first_ms, 2),
+        f"replan_over_plan_{n}": round(statistics.median(ratios["person"]), 3),
+        f"replan_agenda_over_plan_{n}": round(statistics.median(ratios["agenda"]), 3),
+        f"replan_expanded_{n}": person_stats.expanded,
+        f"replan_agenda_expanded_{n}": agenda_stats.expanded,
+        f"replan_refresh_expanded_{n}": first_stats.backward_expanded,
+        f"replan_cost_m_{n}": round(person.cost, 6),
+        f"replan_fresh_cost_m_{n}": round(fresh.cost, 6),
     })
 
 
@@ -302,8 +405,10 @@ def main(argv: list[str] | None = None) -> None:
     if not options.skip_compile:
         results["numba_compile_s"] = round(numba_compile_seconds(), 2)
     start = time.perf_counter()
-    from agents.lib.socialmap.search import warm_up
-    warm_up()
+    from agents.lib.socialmap import arrival, replan, search
+    search.warm_up()
+    replan.warm_up()
+    arrival.warm_up()
     results["numba_cache_load_s"] = round(time.perf_counter() - start, 3)
     for size in (int(s) for s in options.sizes.split(",") if s):
         bench_size(size, options.repeats, results)

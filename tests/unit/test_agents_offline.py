@@ -128,3 +128,46 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
     shut = corridor_to_ot()
     graph.update_node(door.id, attrs={"open": True})
     assert shut > corridor_to_ot() + 5.0, "with the north door shut the way in is the south door"
+
+
+def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
+    """The navigation agent plans an intention, then every 0.2 s of sim time rebuilds the map and
+    searches again through its Replanner: the replans reuse the first search (no refresh, a
+    fraction of its work) and find what a fresh plan on the same map finds."""
+    from agents.lib.socialmap.social_map import plan
+    from agents.social_navigation.agent import REPLAN_PERIOD_S, SocialNavigationAgent
+
+    assert REPLAN_PERIOD_S <= 0.2
+    graph, agents = world("center_a", tmp_path)
+    set_clock(graph, agents, "11:30")
+    agents["executive"].step()
+    graph.dispatch()
+    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
+    nav.setup(graph, Recorder("social_navigation", None, None))
+    found: list[tuple[float, object]] = []
+    search = nav.replanner.search
+
+    def recording(*args, **kwargs):  # type: ignore[no-untyped-def]
+        result = search(*args, **kwargs)
+        found.append((result.cost_cells, nav.replanner.last))
+        return result
+
+    nav.replanner.search = recording  # type: ignore[method-assign]
+    nav.step()
+    assert nav.intention_id is not None and len(found) == 1 and found[0][1].refreshed
+    refresh_work = found[0][1].backward_expanded
+    start_s = parse_clock("11:30")
+    for k in range(1, 4):
+        now = start_s + k * REPLAN_PERIOD_S
+        graph.update_node(graph.get_node_by_name("clock").id, attrs={"now_s": now})
+        for name in ("object_recognition", "human_observer", "agenda"):
+            agents[name].step()
+        graph.dispatch()
+        nav.step()
+        assert len(found) == 1 + k, "one search per replan period (0.2 s, float rounding included)"
+        cost, stats = found[-1]
+        assert not stats.refreshed and stats.expanded < refresh_work / 4
+        pose = graph.world_pose(graph.get_node_by_name("robot").id)
+        assert nav.map is not None and nav.goal is not None
+        fresh = plan(nav.map, (pose[0], pose[1]), nav.goal[:2], cruise_speed_mps=nav.cruise)
+        assert cost * nav.map.spec.resolution == pytest.approx(fresh.cost, rel=1e-7)

@@ -131,11 +131,16 @@ def test_arrival_time_costs_depend_on_distance_travelled() -> None:
 
 
 def test_reused_workspace_with_stale_lengths_gives_the_same_arrival_costs() -> None:
-    """Regression: the start's travelled length must be reset, not read from a previous search."""
+    """Regression: the start's travelled length must be reset, not read from a previous search; no
+    buffer content left by an earlier search (only the stamps in ``mark``) may matter."""
     grid = np.ones((1, 10), dtype=np.float32)
     grid[0, 6] = -1.0
     late = TimeCosts(grid, np.array([[1.0, 9.0]]), cells_per_bin=5.0)
     workspace = SearchWorkspace()
+    workspace.next_stamp(grid.size)   # sizes the buffers
     for junk in (-1e300, 1e300, np.nan):
-        workspace.buffers(grid.size, True)[3].fill(junk)
+        for buffer in (workspace.g, workspace.length, workspace.keys):
+            buffer.fill(junk)
+        workspace.pos.fill(-7)
+        workspace.parent.fill(-7)
         assert search_cells(late, (0, 0), (0, 9), workspace=workspace).cost_cells == pytest.approx(17.0)

@@ -5,6 +5,7 @@ and the tests.
     smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
     path = plan(smap, start_xy, goal_xy)                               # social, arrival-time R
     base = plan(smap, start_xy, goal_xy, baseline=True)                # non-social baseline
+    path = plan(smap, robot_xy, goal_xy, replanner=replanner)          # again, reusing earlier searches
 
 Layers (Nav2 style, composed by cell-wise maximum, grid.py):
   static  walls inflated by the robot radius, outside the rooms          -> ``static``
@@ -95,6 +96,7 @@ from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
 from agents.lib.socialmap.roles import RoleParams, role_scale
+from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
 from agents.lib.agenda.model import ActivityWindow
 from agents.lib.socialmap.types import Person, Room, SocialMapInputError, SocialObject, Wall
@@ -378,23 +380,26 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
 
 def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,
          method: str = "astar", baseline: bool = False, arrival_time: bool | None = None,
-         cruise_speed_mps: float | None = None, workspace: SearchWorkspace | None = None) -> Path:
+         cruise_speed_mps: float | None = None, workspace: SearchWorkspace | None = None,
+         replanner: Replanner | None = None) -> Path:
     """Plan on the social map (A* or Dijkstra).
 
     ``baseline=True`` plans on the physical grid (walls, bodies, footprints; no social cost).
     ``arrival_time`` (default from params) prices each interaction space at the time the robot
     would reach it at ``cruise_speed_mps``; False prices it at the map's time (the seeds).
-    Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py)."""
+    Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py), or the
+    same ``replanner`` to repeated A* plans to one goal on successive maps to reuse what the earlier
+    searches learned (replan.py: same optimal costs, far fewer cells expanded; keep one replanner
+    per kind of plan, social or baseline)."""
     planner = social_map.params.planner
     if arrival_time is None:
         arrival_time = planner.arrival_time
     speed = planner.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
     if not speed > 0.0:
         raise ValueError(f"cruise speed must be > 0, got {speed}")
-    grid_params = social_map.params.grid
     try:
         return _plan(social_map, start_xy, goal_xy, method=method, baseline=baseline, arrival_time=arrival_time,
-                     speed=speed, workspace=workspace)
+                     speed=speed, workspace=workspace, replanner=replanner)
     except (StartOccupied, GoalOccupied) as exc:
         xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
         raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
@@ -423,14 +428,16 @@ def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
 
 
 def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *, method: str,
-          baseline: bool, arrival_time: bool, speed: float, workspace: SearchWorkspace | None) -> Path:
+          baseline: bool, arrival_time: bool, speed: float, workspace: SearchWorkspace | None,
+          replanner: Replanner | None) -> Path:
     grid_params = social_map.params.grid
     if baseline:
         return plan_on_grid(social_map.physical, social_map.spec, start_xy, goal_xy, method=method,
-                            c_min=grid_params.free_cost, workspace=workspace)
+                            c_min=grid_params.free_cost, workspace=workspace, searcher=replanner)
     # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
     c_min = min(grid_params.free_cost, grid_params.social_cost, grid_params.personal_cost,
                 social_map.params.chronemics.r_min)
     costs = social_map.time_costs(speed) if arrival_time else None
     grid = social_map.cost if costs is None else costs
-    return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace)
+    return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace,
+                        searcher=replanner)
