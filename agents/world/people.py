@@ -22,63 +22,16 @@ from collections.abc import Sequence
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import shapely
-
 from agents.lib.agenda import AgendaChangeError, AgendaDay, apply_change, parse_change
 from agents.lib.crowd.crowd import Crowd
-from agents.lib.crowd.model import (ROLE_SPEED_MPS, ROUTINE_DWELL_S, WALKER_SPEED_MPS, Agenda, Appointment,
-                                    Building, PersonTruth, Thing, Walker)
-from agents.world.building import door_segment
-from agents.world.motion import person_at
+from agents.lib.crowd.model import Agenda, Appointment, PersonTruth
+from agents.world.crowd_scene import building_of, walker_of
 from agents.world.scene_world import SceneWorld
 from agents.world.timeline import agenda_at, doors_at
 from scenes.clock import parse_clock
-from scenes.geometry import posed_polygon
-from scenes.model import PersonSpec, Scene, Trapezoid
 
 SNAPSHOT_EVERY_S = 1800.0   # offline: a copy of the crowd every half hour, to go back in time cheaply
 MEMO_WORLDS = 4             # offline: how many scenes' days are kept
-
-
-def walker_of(scene: Scene, person: PersonSpec) -> Walker:
-    """A scene person with the defaults of their role and routine applied."""
-    pose = (person.pose.x, person.pose.y, person.pose.theta)
-    if person.routine == "stay":
-        moves = tuple(_moves(person))
-        script = (lambda t, p=person: _pose(person_at(p, t))) if person.waypoints else None
-        return Walker(person.name, person.role, "stay", pose, script=script, moves=moves)
-    speed = person.speed if person.speed is not None else \
-        (WALKER_SPEED_MPS if person.walker else ROLE_SPEED_MPS.get(person.role, 0.8))
-    home = person.home or scene.room_at(person.pose.x, person.pose.y)
-    dwell = tuple(person.dwell) if person.dwell is not None else ROUTINE_DWELL_S[person.routine]
-    return Walker(person.name, person.role, person.routine, pose, home=home, rooms=tuple(person.rooms),
-                  speed_mps=float(speed), walker=person.walker, escort=person.escort,
-                  dwell_s=(float(dwell[0]), float(dwell[1])), visits=person.visits)
-
-
-def _pose(state: object) -> tuple[float, float, float]:
-    return (state.x, state.y, state.theta)  # type: ignore[attr-defined]
-
-
-def _moves(person: PersonSpec) -> list[tuple[float, float]]:
-    """The time intervals in which a scripted person's pose changes (walking or turning)."""
-    out = []
-    stops = [(parse_clock(w.time), w.pose) for w in person.waypoints]
-    for (t0, a), (t1, b) in zip(stops, stops[1:], strict=False):
-        if (a.x, a.y, a.theta) != (b.x, b.y, b.theta):
-            out.append((t0, t1))
-    return out
-
-
-def building_of(scene: Scene) -> Building:
-    rooms = {room.name: shapely.Polygon(room.polygon) for room in scene.rooms}
-    things = {obj.name: Thing(obj.name, obj.pose.x, obj.pose.y, obj.pose.theta,
-                              posed_polygon(obj.footprint, obj.pose.x, obj.pose.y, obj.pose.theta),
-                              screen=isinstance(obj.interaction, Trapezoid))
-              for obj in scene.objects}
-    leaves = {door.name: door_segment(scene, door.name) for door in scene.doors}
-    doors = {door.name: (float(door.position[0]), float(door.position[1])) for door in scene.doors}
-    return Building(rooms, [list(map(tuple, wall)) for wall in scene.walls], things, leaves, doors)
 
 
 def new_crowd(world: SceneWorld) -> Crowd:

@@ -22,6 +22,7 @@ from agents.lib.agenda.yaml_source import scene_agenda
 from agents.lib.socialmap.grid import grid_shape
 from agents.lib.socialmap.types import SocialMapInputError
 from agents.world.building import PLANNING_MARGIN_M
+from agents.world.crowd_scene import check_people
 from scenes.clock import parse_clock
 from scenes.loader import LoadedScene, load_scene
 from scenes.model import PoseGoal, RoomGoal, Scene
@@ -150,6 +151,7 @@ def resolve_world(loaded: LoadedScene) -> SceneWorld:
     them in order (SourceError at the offending ``agenda_changes`` entry)."""
     scene = loaded.scene
     _check_navigable(loaded)
+    check_people(loaded)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise loaded.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
     try:

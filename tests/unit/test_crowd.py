@@ -15,7 +15,8 @@ from agents.lib.crowd.crowd import ARRIVE_EARLY_S, Crowd
 from agents.lib.crowd.model import RobotBody
 from agents.lib.crowd.routes import NoRoute, Router
 from agents.world.interactions import observed_conversations
-from agents.world.people import WorldFeed, building_of, new_crowd, people_at, walker_of
+from agents.world.crowd_scene import building_of, walker_of
+from agents.world.people import WorldFeed, new_crowd, people_at
 from agents.world.scene_world import load_world
 from scenes.clock import parse_clock
 from scenes.loader import load_scene
