@@ -34,7 +34,7 @@ from agents.world.vocabulary import AGENDA, CLOCK, WORLD
 from scenes.geometry import project_on_segments
 
 CONTROL_DT_S = 0.1
-PEOPLE_HEADER = ("t", "name", "x", "y", "theta", "vx", "vy", "group")
+PEOPLE_HEADER = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
 WATCHDOG_WALL_S = 1.0
 BUSY_RATE = 1.0
 
@@ -221,7 +221,7 @@ class SimRobotAgent(Agent):
             self._trail.append([x, y])
             if self._people_file is not None:
                 self._people_file.writelines(
-                    f"{self.now_s:.3f},{p.name},{p.x:.4f},{p.y:.4f},{p.theta:.5f},{p.vx:.4f},{p.vy:.4f},{p.group}\n"
+                    f"{self.now_s:.3f},{p.name},{p.role},{p.x:.4f},{p.y:.4f},{p.theta:.5f},{p.vx:.4f},{p.vy:.4f},{p.group}\n"
                     for p in self._people)
 
     def _clearance(self, x: float, y: float) -> float:

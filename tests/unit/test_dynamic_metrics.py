@@ -97,8 +97,8 @@ def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
     """A run directory holds trajectory.csv and people.csv: `chronav metrics` measures both."""
     (tmp_path / "trajectory.csv").write_text("t,x,y,theta\n" + "".join(
         f"{36000 + k},{1.0 + 0.5 * k},1.2,0\n" for k in range(5)))
-    (tmp_path / "people.csv").write_text("t,name,x,y,theta,vx,vy,group\n" + "".join(
-        f"{36000 + k},walker,{3.0 + 0.0 * k},1.2,3.14159,0,0,\n" for k in range(5)))
+    (tmp_path / "people.csv").write_text("t,name,role,x,y,theta,vx,vy,group\n" + "".join(
+        f"{36000 + k},walker,resident,3.0,1.2,3.14159,0,0,\n" for k in range(5)))
     result = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv"), "--json"])
     assert result.exit_code == 0, result.output
     dynamic = json.loads(result.stdout)["metrics"]["dynamic"]
@@ -106,6 +106,7 @@ def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
     # last two (0.5 < 0.57): one collision, the robot's
     assert dynamic["min_distance_to_people_m"] == pytest.approx(-0.3)
     assert dynamic["robot_on_person_collisions"] == 1 and dynamic["person_on_robot_collisions"] == 0
+    assert dynamic["robot_intimate_entries"] == 1
     assert dynamic["time_to_goal_s"] == 4.0
     table = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")])
     assert "social work" in table.output and "collisions" in table.output
@@ -113,9 +114,28 @@ def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
 
 def test_a_bad_people_csv_is_named_with_its_line(tmp_path: Path) -> None:
     bad = tmp_path / "people.csv"
-    bad.write_text("t,name,x,y,theta,vx,vy,group\n36000,ana,1,2,0,0,0,\n36001,ana,one,2,0,0,0,\n")
+    bad.write_text("t,name,role,x,y,theta,vx,vy,group\n36000,ana,resident,1,2,0,0,0,\n36001,ana,resident,one,2,0,0,0,\n")
     with pytest.raises(ValueError, match=rf"{bad}:3: column 'x': 'one' is not a number"):
         read_people_csv(bad)
     (tmp_path / "trajectory.csv").write_text("t,x,y,theta\n36000,1,1.2,0\n36001,1.5,1.2,0\n")
     result = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")])
     assert result.exit_code != 0 and f"{bad}:3" in result.output and "Traceback" not in result.output
+
+
+def test_intimate_zone_entries_count_only_the_robots_approaches() -> None:
+    """A resident's intimate zone reaches sqrt(2 ln 1.25) x 1.0 m = 0.668 m in front of them
+    (personal_space.py).  The robot drives up to a resident facing it: at 0.6 m it is inside, one
+    entry; a therapist (0.75 scale: 0.50 m) at the same place is not entered; a resident who walks
+    up to a still robot is not the robot's entry."""
+    traj = robot_line([0.0, 0.5, 1.0, 1.4], dt=0.5)
+    times = [0.0, 0.5, 1.0, 1.5]
+    facing = [(t, "ana", 2.0, 0.0, math.pi, 0.0, 0.0, "", "resident") for t in times]
+    d = compute_metrics(traj, people_tracks=tracks_from_rows(facing), robot_radius_m=ROBOT_R).dynamic
+    assert d.robot_intimate_entries == 1
+    staff = [(t, "eva", 2.0, 0.0, math.pi, 0.0, 0.0, "", "therapist") for t in times]
+    assert compute_metrics(traj, people_tracks=tracks_from_rows(staff), robot_radius_m=ROBOT_R).dynamic \
+        .robot_intimate_entries == 0
+    walker = [(t, "ben", 1.5 - t, 0.0, math.pi, -1.0, 0.0, "", "resident") for t in times]
+    d = compute_metrics(robot_line([0.0] * 4, dt=0.5), people_tracks=tracks_from_rows(walker),
+                        robot_radius_m=ROBOT_R).dynamic
+    assert d.robot_intimate_entries == 0

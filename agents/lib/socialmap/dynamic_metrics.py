@@ -29,6 +29,10 @@ r_p = 0.25 m a person's:
   each blamed on whichever of the two was moving toward the other faster.  HuNavSim counts every
   sample in contact; we count each contact once (its first sample), so a robot resting against a
   person is one collision, not one per 0.1 s.
+* ``robot_intimate_entries``: how often the robot entered someone's intimate zone as the social
+  map draws it (their personal space, role-scaled and stretched along their velocity, at the
+  intimate level 0.8; personal_space.py, motion.py, zones.py), each entry blamed like a collision
+  and counted only when the robot did the approaching: a person walking up to the robot is theirs.
 * ``time_not_moving_s``: total time (each sample's interval to the next) in which the robot moved
   less than 1 cm/s and turned less than 0.01 rad/s.
 """
@@ -44,6 +48,11 @@ import shapely
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
+
+from agents.lib.socialmap.motion import MotionParams, oriented, stretched
+from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams, asymmetric_gaussian
+from agents.lib.socialmap.roles import RoleParams
+from agents.lib.socialmap.types import Person
 
 PERSON_RADIUS_M = 0.25
 BANDS: tuple[tuple[str, float, float], ...] = (("intimate", -math.inf, 0.45), ("personal", 0.45, 1.2),
@@ -69,6 +78,7 @@ class PeopleTracks:
     vx: NDArray[np.float64]
     vy: NDArray[np.float64]
     groups: NDArray[np.object_]
+    roles: tuple[str, ...] = ()         # per name ("" unknown: a resident's space)
 
     def at(self, times: NDArray[np.float64]) -> PeopleTracks:
         """The tracks at ``times``: interpolated linearly (headings along the shorter turn), groups
@@ -84,7 +94,7 @@ class PeopleTracks:
         unwrapped = np.unwrap(self.theta, axis=0) if len(self.times) else self.theta
         return PeopleTracks(np.asarray(times, dtype=float), self.names, lerp(self.x), lerp(self.y),
                             (lerp(unwrapped) + math.pi) % (2 * math.pi) - math.pi, lerp(self.vx), lerp(self.vy),
-                            self.groups[idx])
+                            self.groups[idx], self.roles)
 
 
 class DynamicMetrics(BaseModel):
@@ -110,6 +120,7 @@ class DynamicMetrics(BaseModel):
     social_work: float
     robot_on_person_collisions: int
     person_on_robot_collisions: int
+    robot_intimate_entries: int
     time_not_moving_s: float
 
     def to_table(self) -> list[tuple[str, str]]:
@@ -132,6 +143,7 @@ class DynamicMetrics(BaseModel):
             ("social work", f"{self.social_work:.2f}"),
             ("collisions robot-on-person / person-on-robot",
              f"{self.robot_on_person_collisions} / {self.person_on_robot_collisions}"),
+            ("intimate zone entries by the robot", str(self.robot_intimate_entries)),
             ("time not moving (s)", f"{self.time_not_moving_s:.1f}"),
         ]
 
@@ -164,7 +176,7 @@ def social_force(source_xy: NDArray[np.float64], source_v: NDArray[np.float64], 
 
 
 def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robot_radius_m: float,
-                    obstacles: BaseGeometry | None = None) -> DynamicMetrics:
+                    obstacles: BaseGeometry | None = None, intimate_level: float | None = 0.8) -> DynamicMetrics:
     """HuNavSim's metrics of the robot's ``traj`` (N, 4: t, x, y, theta) among ``tracks``."""
     t, xy, theta = traj[:, 0], traj[:, 1:3], traj[:, 3]
     n = len(t)
@@ -195,7 +207,7 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
                               group_social_intrusions_percent=0.0, intrusions_per_group={},
                               social_force_on_robot=0.0, social_force_on_people=0.0,
                               social_work=float(obstacle_force.sum()), robot_on_person_collisions=0,
-                              person_on_robot_collisions=0)
+                              person_on_robot_collisions=0, robot_intimate_entries=0)
     people = tracks.at(t)
     pxy = np.stack([people.x, people.y], axis=-1)            # (T, N, 2)
     pv = np.stack([people.vx, people.vy], axis=-1)
@@ -235,6 +247,8 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
     total_on_robot = on_robot.sum(axis=1)
     work = np.hypot(total_on_robot[:, 0], total_on_robot[:, 1]) + obstacle_force + on_people_mod.sum(axis=1)
     robot_hits, person_hits = _collisions(xy, velocity, pxy, pv, centre - robot_radius_m - PERSON_RADIUS_M)
+    inside = _intimate(people, xy, intimate_level) if intimate_level is not None else np.zeros_like(centre, dtype=bool)
+    entries, _ = _collisions(xy, velocity, pxy, pv, np.where(inside, -1.0, np.inf))
     shares = _bands(closest)
     return DynamicMetrics(
         **base,
@@ -245,7 +259,27 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
         group_intimate_intrusions_percent=groups["intimate"], group_personal_intrusions_percent=groups["personal"],
         group_social_intrusions_percent=groups["social"], intrusions_per_group=per_group,
         social_force_on_robot=float(on_robot_mod.sum()), social_force_on_people=float(on_people_mod.sum()),
-        social_work=float(work.sum()), robot_on_person_collisions=robot_hits, person_on_robot_collisions=person_hits)
+        social_work=float(work.sum()), robot_on_person_collisions=robot_hits, person_on_robot_collisions=person_hits,
+        robot_intimate_entries=entries)
+
+
+def _intimate(people: PeopleTracks, xy: NDArray[np.float64], level: float = 0.8) -> NDArray[np.bool_]:
+    """(T, N): the robot's centre inside each person's intimate zone - their personal space as the
+    social map draws it (role-scaled, stretched along their velocity: personal_space.py,
+    motion.py) at or above the intimate level, from where they truly are."""
+    motion, space_params, roles = MotionParams(), PersonalSpaceParams(), RoleParams()
+    out = np.zeros(people.x.shape, dtype=bool)
+    for j, name in enumerate(people.names):
+        role = people.roles[j] if j < len(people.roles) and people.roles[j] in roles.scales else "resident"
+        scale = roles.scales[role]
+        rest = PersonalSpace.from_params(space_params, scale)
+        for k in range(len(xy)):
+            person = Person(name, float(people.x[k, j]), float(people.y[k, j]), float(people.theta[k, j]),
+                            vx=float(people.vx[k, j]), vy=float(people.vy[k, j]))
+            walking = oriented(person, motion)
+            space = stretched(rest, walking, scale, motion)
+            out[k, j] = float(asymmetric_gaussian(space, walking.x, walking.y, walking.theta, xy[k, 0], xy[k, 1])) >= level
+    return out
 
 
 def _collisions(xy: NDArray[np.float64], velocity: NDArray[np.float64], pxy: NDArray[np.float64],
@@ -268,8 +302,8 @@ def _collisions(xy: NDArray[np.float64], velocity: NDArray[np.float64], pxy: NDA
     return robot_hits, person_hits
 
 
-def tracks_from_rows(rows: Sequence[tuple[float, str, float, float, float, float, float, str]]) -> PeopleTracks:
-    """(t, name, x, y, theta, vx, vy, group) rows, any order of names within a time, into tracks."""
+def tracks_from_rows(rows: Sequence[tuple]) -> PeopleTracks:
+    """(t, name, x, y, theta, vx, vy, group[, role]) rows, any order of names within a time, into tracks."""
     times = sorted({row[0] for row in rows})
     names = tuple(sorted({row[1] for row in rows}))
     index_t = {t: i for i, t in enumerate(times)}
@@ -277,8 +311,11 @@ def tracks_from_rows(rows: Sequence[tuple[float, str, float, float, float, float
     shape = (len(times), len(names))
     arrays: Mapping[str, NDArray[np.float64]] = {key: np.full(shape, np.nan) for key in ("x", "y", "theta", "vx", "vy")}
     groups = np.full(shape, "", dtype=object)
-    for t, name, x, y, theta, vx, vy, group in rows:
+    roles = {name: "" for name in names}
+    for t, name, x, y, theta, vx, vy, group, *role in rows:
         i, j = index_t[t], index_n[name]
+        if role:
+            roles[name] = role[0]
         for key, value in zip(("x", "y", "theta", "vx", "vy"), (x, y, theta, vx, vy), strict=True):
             arrays[key][i, j] = value
         groups[i, j] = group
@@ -295,4 +332,4 @@ def tracks_from_rows(rows: Sequence[tuple[float, str, float, float, float, float
                 idx[idx < 0] = first
                 values[:, j] = column[idx]
     return PeopleTracks(np.asarray(times, dtype=float), names, arrays["x"], arrays["y"], arrays["theta"],
-                        arrays["vx"], arrays["vy"], groups)
+                        arrays["vx"], arrays["vy"], groups, tuple(roles[n] for n in names))

@@ -303,12 +303,13 @@ def cell_text(cell: str) -> str:
     return cell if len(cell) <= 30 else cell[:27] + "..."
 
 
-PEOPLE_HEADER: tuple[str, ...] = ("t", "name", "x", "y", "theta", "vx", "vy", "group")
+PEOPLE_HEADER: tuple[str, ...] = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
 
 
 def read_people_csv(path: str | Path) -> PeopleTracks:
     """Read a ``people.csv`` (the simulator writes it beside trajectory.csv: header
-    ``t,name,x,y,theta,vx,vy,group``; s, m, m, rad, m/s, m/s, a group label or empty) into tracks.
+    ``t,name,role,x,y,theta,vx,vy,group``; s, -, -, m, m, rad, m/s, m/s, a group label or empty)
+    into tracks.
 
     Any problem raises TrajectoryFormatError("FILE:LINE: ...")."""
     path = Path(path)
@@ -317,7 +318,7 @@ def read_people_csv(path: str | Path) -> PeopleTracks:
         text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env, what="people CSV")
     except SourceError as exc:
         raise TrajectoryFormatError(str(exc)) from None
-    rows: list[tuple[float, str, float, float, float, float, float, str]] = []
+    rows: list[tuple[float, str, float, float, float, float, float, str, str]] = []
     header_seen = False
     last_t = -math.inf
     for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
@@ -333,7 +334,7 @@ def read_people_csv(path: str | Path) -> PeopleTracks:
         if len(cells) != len(PEOPLE_HEADER):
             raise TrajectoryFormatError(f"{path}:{lineno}: expected {len(PEOPLE_HEADER)} values "
                                         f"({','.join(PEOPLE_HEADER)}), got {len(cells)}")
-        t_cell, name, *numbers, group = cells
+        t_cell, name, role, *numbers, group = cells
         values = []
         for column, cell in zip(("t", "x", "y", "theta", "vx", "vy"), [t_cell, *numbers], strict=True):
             try:
@@ -355,7 +356,8 @@ def read_people_csv(path: str | Path) -> PeopleTracks:
         if values[0] < last_t:
             raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
         last_t = values[0]
-        rows.append((values[0], cell_text(name), values[1], values[2], values[3], values[4], values[5], group))
+        rows.append((values[0], cell_text(name), values[1], values[2], values[3], values[4], values[5], group,
+                     cell_text(role)))
         if len(rows) > max_rows:
             raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} rows ({TRAJECTORY_SAMPLES.env})")
     if not header_seen:
