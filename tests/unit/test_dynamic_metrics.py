@@ -139,3 +139,12 @@ def test_intimate_zone_entries_count_only_the_robots_approaches() -> None:
     d = compute_metrics(robot_line([0.0] * 4, dt=0.5), people_tracks=tracks_from_rows(walker),
                         robot_radius_m=ROBOT_R).dynamic
     assert d.robot_intimate_entries == 0
+
+
+def test_time_not_moving_skips_the_gap_between_two_missions() -> None:
+    """Samples every second at rest, then nothing for 98 s (parked between missions), then two more:
+    three one-second intervals at rest, not 101 s."""
+    traj = np.array([[t, 1.0, 1.0, 0.0] for t in (0.0, 1.0, 2.0, 100.0, 101.0)])
+    d = compute_metrics(traj, people_tracks=tracks_from_rows(still("ana", 5.0, 5.0, [0.0, 101.0])),
+                        robot_radius_m=ROBOT_R).dynamic
+    assert d.time_not_moving_s == pytest.approx(3.0)

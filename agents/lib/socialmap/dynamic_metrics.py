@@ -34,7 +34,8 @@ r_p = 0.25 m a person's:
   intimate level 0.8; personal_space.py, motion.py, zones.py), each entry blamed like a collision
   and counted only when the robot did the approaching: a person walking up to the robot is theirs.
 * ``time_not_moving_s``: total time (each sample's interval to the next) in which the robot moved
-  less than 1 cm/s and turned less than 0.01 rad/s.
+  less than 1 cm/s and turned less than 0.01 rad/s; an interval over ``GAP_FACTOR`` times the
+  median sampling is a gap between two missions (nothing was recorded) and does not count.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ BANDS: tuple[tuple[str, float, float], ...] = (("intimate", -math.inf, 0.45), ("
 GROUP_GAZE_M = 1.5
 CONTACT_M = 0.02
 STILL_MPS, STILL_RADPS = 0.01, 0.01
+GAP_FACTOR = 5.0            # an interval this many times the median sampling is a gap between missions
 # HuNavSim's social force model (hunav_evaluator/sfm.py)
 SF_FACTOR, SF_LAMBDA, SF_GAMMA, SF_N, SF_N_PRIME = 2.1, 2.0, 0.35, 2.0, 3.0
 OBSTACLE_FACTOR, OBSTACLE_SIGMA_M = 10.0, 0.2
@@ -186,7 +188,10 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
     with np.errstate(divide="ignore", invalid="ignore"):
         speed = np.where(dt > 0, step / dt, 0.0)
         omega = np.where(dt > 0, turn / dt, 0.0)
-    still = (speed < STILL_MPS) & (omega < STILL_RADPS)
+    # A trajectory of several missions has gaps (the robot was parked, nothing recorded): an interval
+    # much longer than the usual sampling is not time spent standing still while navigating.
+    gap = dt > GAP_FACTOR * float(np.median(dt)) if len(dt) else np.zeros(0, dtype=bool)
+    still = (speed < STILL_MPS) & (omega < STILL_RADPS) & ~gap
     # The robot's velocity at each sample: toward the next one (the last repeats the one before).
     velocity = np.zeros((n, 2))
     if n > 1:
