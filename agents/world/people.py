@@ -59,13 +59,20 @@ class WorldFeed:
         self._change_times = sorted({c.at_s for c in self.world.scripted}
                                     | {parse_clock(c.at) for c in scene.door_changes})
         self._cache: dict[tuple[int, tuple[str, ...]], Agenda] = {}
+        self._last: tuple[float, Agenda] | None = None
 
     def __call__(self, t_s: float) -> Agenda:
+        last = self._last
+        if last is not None and last[0] <= t_s < last[1].next_change_s:
+            return last[1]          # the crowd asks every step: nothing changes between scripted events
         epoch = sum(1 for at in self._change_times if at <= t_s)
         key = (epoch, self.manual)
         if key not in self._cache:
             self._cache[key] = self._agenda(t_s, epoch)
-        return self._cache[key]
+        agenda = self._cache[key]
+        start = max([at for at in self._change_times if at <= t_s], default=-math.inf)
+        self._last = (start, agenda)
+        return agenda
 
     def _agenda(self, t_s: float, epoch: int) -> Agenda:
         day = self.world.agenda
@@ -123,17 +130,23 @@ class _Day:
         return crowd.at(t_s)
 
 
-_DAYS: dict[int, _Day] = {}
+_DAYS: dict[str, _Day] = {}
+
+
+def _day_key(world: SceneWorld) -> str:
+    """The same scene loaded twice replays one day (its content, not the Python object, is the key)."""
+    return f"{world.path.resolve()}|{world.scene.model_dump_json()}"
 
 
 def people_at(world: SceneWorld, t_s: float) -> tuple[PersonTruth, ...]:
     """Everyone at ``t_s`` as the simulated world would have them if the robot had not driven and
     nobody had changed the agenda by hand (the offline commands' people)."""
-    day = _DAYS.get(id(world))
-    if day is None or day.world is not world:
+    key = _day_key(world)
+    day = _DAYS.get(key)
+    if day is None:
         if len(_DAYS) >= MEMO_WORLDS:
             _DAYS.pop(next(iter(_DAYS)))
-        day = _DAYS[id(world)] = _Day(world)
+        day = _DAYS[key] = _Day(world)
     return day.at(t_s)
 
 

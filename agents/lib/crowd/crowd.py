@@ -48,7 +48,7 @@ from agents.lib.crowd.model import Agenda, Appointment, Building, PersonTruth, R
 from agents.lib.crowd.orca import PARKED, Orca
 from agents.lib.crowd.routes import NoRoute, Router
 
-STEP_S = 0.25               # people's decisions and ORCA steps: 4 Hz of sim time
+STEP_S = 0.25              # people's decisions and ORCA steps: 4 Hz of sim time
 ARRIVE_EARLY_S = 150.0      # aim to be at an activity this long before it starts (within 5 min)
 START_SLACK_S = 20.0        # time to get up and turn at the start of a walk
 DETOUR = 1.4                # route length over straight distance, for the departure estimate
@@ -125,11 +125,14 @@ class Crowd:
                                                  until_s=self._first_move_s(w)))
                        for i, w in enumerate(self.walkers)}
         n = len(self.walkers)
+        self._dynamic = [self.people[w.name] for w in self.walkers if w.dynamic]          # name order
+        self._scripted = [self.people[w.name] for w in self.walkers if not w.dynamic and w.moves and w.script]
         self.pos = np.array([w.pose[:2] for w in self.walkers], dtype=float).reshape(n, 2)
         self.theta = np.array([w.pose[2] for w in self.walkers], dtype=float)
         self.vel = np.zeros((n, 2))
         self.prev = (self.pos.copy(), self.theta.copy(), self.vel.copy())
         self._robot_index = n
+        self._robot_parked = True
         self._robot_radius = robot_radius_m + ROBOT_MARGIN_M
         self._closed: frozenset[str] = frozenset()
         self._routers: dict[frozenset[str], Router] = {}
@@ -216,7 +219,7 @@ class Crowd:
         for w, person in zip(self.walkers, (self.people[w.name] for w in self.walkers), strict=True):
             i = person.index
             if not w.dynamic:
-                out.append(self._scripted(w, t_s))
+                out.append(self._scripted_truth(w, t_s))
                 continue
             x = float(p0[i, 0] + f * (self.pos[i, 0] - p0[i, 0]))
             y = float(p0[i, 1] + f * (self.pos[i, 1] - p0[i, 1]))
@@ -226,7 +229,7 @@ class Crowd:
                                    self._group_of(person), person.task.activity or person.escorted_to))
         return tuple(out)
 
-    def _scripted(self, w: Walker, t_s: float) -> PersonTruth:
+    def _scripted_truth(self, w: Walker, t_s: float) -> PersonTruth:
         """A ``stay`` person is exactly where their script puts them (no step grid, no interpolation)."""
         if w.script is None:
             return PersonTruth(w.name, w.role, *w.pose)
@@ -386,15 +389,17 @@ class Crowd:
         agenda = agenda_at(t)
         self._doors(agenda.closed_doors)
         self._read_agenda(agenda)
-        for name in sorted(self.people):
-            person = self.people[name]
-            if person.spec.dynamic and (person.task.kind == "walk" or t >= person.next_check_s):
+        for person in self._dynamic:
+            if person.task.kind == "walk" or t >= person.next_check_s:
                 self._decide(person, t)
-        walking = [p for p in self.people.values() if p.task.kind == "walk"]
-        scripted_moving = [p for p in self.people.values() if not p.spec.dynamic and p.spec.script is not None
-                           and any(t0 - self.step_s < t < t1 + self.step_s for t0, t1 in p.spec.moves)]
-        turning = [p for p in self.people.values() if p.task.kind == "stand"
-                   and abs((p.task.target[2] - self.theta[p.index] + math.pi) % (2 * math.pi) - math.pi) > 1e-6]
+        walking = [p for p in self._dynamic if p.task.kind == "walk"]
+        scripted_moving = [p for p in self._scripted
+                           if any(t0 - self.step_s < t < t1 + self.step_s for t0, t1 in p.spec.moves)]
+        standing = [p for p in self._dynamic if p.task.kind == "stand"]
+        want = np.array([p.task.target[2] for p in standing])
+        have = self.theta[[p.index for p in standing]] if standing else np.zeros(0)
+        off = np.abs((want - have + math.pi) % (2 * math.pi) - math.pi) > 1e-6
+        turning = [p for p, o in zip(standing, off, strict=True) if o] if off.any() else []
         if not walking and not scripted_moving and not turning and robot is None:
             self._quiet_jump(t, agenda, until_s)
             return
@@ -412,9 +417,11 @@ class Crowd:
             self.orca.place(self._robot_index, robot.x, robot.y, robot.vx, robot.vy)
             self.orca.set_max_speed(self._robot_index, max(2.0, math.hypot(robot.vx, robot.vy)))
             self.orca.prefer(self._robot_index, robot.vx, robot.vy)
-        else:
+            self._robot_parked = False
+        elif not self._robot_parked:
             self.orca.place(self._robot_index, *PARKED)
             self.orca.set_max_speed(self._robot_index, 0.0)
+            self._robot_parked = True
         self.orca.step()
         self.k += 1
         t1 = self.t_s
@@ -442,14 +449,16 @@ class Crowd:
             limit = TURN_RATE_RADPS * self.step_s
             self.theta[i] = want if abs(diff) <= limit else self.theta[i] + math.copysign(limit, diff)
             self.vel[i] = (0.0, 0.0)
-        for person in self.people.values():
-            if person.task.kind == "stand" and person not in scripted_moving:
+        if standing:
+            self.vel[[p.index for p in standing]] = 0.0
+        for person in self._scripted:
+            if person not in scripted_moving:
                 self.vel[person.index] = (0.0, 0.0)
 
     def _quiet_jump(self, t: float, agenda: Agenda, until_s: float) -> None:
         """Nobody moves: jump to the step where the next decision is due (or the caller's time)."""
-        due = min([p.next_check_s for p in self.people.values() if p.spec.dynamic] + [agenda.next_change_s])
-        for person in self.people.values():
+        due = min([p.next_check_s for p in self._dynamic] + [agenda.next_change_s])
+        for person in self._scripted:
             for t0, _ in person.spec.moves:
                 if t0 > t:
                     due = min(due, t0)

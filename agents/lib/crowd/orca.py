@@ -50,6 +50,8 @@ class Orca:
             sim.set_agent_radius(index, float(radius))
             sim.set_agent_velocity(index, (float(vx), float(vy)))
             sim.set_agent_max_speed(index, float(speed))
+            # An agent that cannot move need not look at its neighbours (the others still see it).
+            sim.set_agent_max_neighbors(index, MAX_NEIGHBOURS if speed > 0.0 else 0)
         for polygon in self._obstacles:
             sim.add_obstacle(polygon)
         sim.process_obstacles()
@@ -82,7 +84,9 @@ class Orca:
         self.sim.set_agent_velocity(index, (float(vx), float(vy)))
 
     def set_max_speed(self, index: int, speed: float) -> None:
+        """0 makes the agent an obstacle the others avoid; it then skips its own avoidance (cheaper)."""
         self.sim.set_agent_max_speed(index, float(speed))
+        self.sim.set_agent_max_neighbors(index, MAX_NEIGHBOURS if speed > 0.0 else 0)
 
     def prefer(self, index: int, vx: float, vy: float) -> None:
         self.sim.set_agent_pref_velocity(index, (float(vx), float(vy)))
