@@ -156,10 +156,9 @@ class RouteGraph:
         lines = np.ascontiguousarray(lines, dtype=np.float64)
         ok = _clear_of(lines, self.walls, clearance - 1e-9)
         if len(self.furniture):
+            # (A leg wholly inside a footprint would cross none of its edges, but every leg ends at a
+            # corner, a start or a goal, and none of those is inside furniture.)
             ok &= _clear_of(lines, self.furniture, object_clearance - 1e-9)
-            # A leg wholly inside a footprint crosses none of its edges.
-            mid = lines.mean(axis=1)
-            ok &= ~shapely.intersects_xy(self.footprints, mid[:, 0], mid[:, 1])
         return ok
 
     def _sees(self, origin: Point, targets: NDArray[np.float64]) -> NDArray[np.bool_]:
