@@ -219,7 +219,7 @@ class RouteGraph:
 
     def free(self, x: float, y: float) -> bool:
         """A body fits at (x, y): inside the building, clear of walls and furniture by a body."""
-        if not shapely.contains_xy(self.building, x, y):
+        if not shapely.contains_xy(self.building, x, y) or shapely.intersects_xy(self.footprints, x, y):
             return False
         point = np.asarray([[[x, y], [x, y]]], dtype=float)
         return bool(self._clear(point, BODY_RADIUS_M)[0])
