@@ -13,9 +13,10 @@ import re
 from dataclasses import dataclass, field
 from typing import Annotated, Any, Union
 
-from pydantic import AfterValidator, AllowInfNan, Field, Strict, StringConstraints
+from pydantic import AfterValidator, AllowInfNan, BeforeValidator, Field, Strict, StringConstraints
 
 from dsr.errors import InvalidAttributeError, InvalidIdentifierError
+from dsr.limits import LIMITS, value_bytes
 
 AttrValue = Union[bool, int, float, str, list[float], list[str]]  # noqa: UP007 (runtime alias)
 Attrs = dict[str, AttrValue]
@@ -80,10 +81,25 @@ TypeName = Annotated[str, Strict(), StringConstraints(pattern=TYPE_PATTERN)]
 NodeName = Annotated[str, Strict(), StringConstraints(pattern=NAME_PATTERN)]
 AttrKey = Annotated[str, Strict(), StringConstraints(pattern=ATTR_KEY_PATTERN)]
 AgentName = Annotated[str, Strict(), StringConstraints(pattern=AGENT_PATTERN)]
+def _int64_only(value: Any) -> Any:
+    """JSON integers must fit in int64 (the float branch would otherwise take them)."""
+    if type(value) is int and not INT64_MIN <= value <= INT64_MAX:
+        raise ValueError(f"integer {value} does not fit in int64")
+    return value
+
+
+def _int64_items(value: Any) -> Any:
+    if type(value) is list:
+        for item in value:
+            _int64_only(item)
+    return _int64_only(value)
+
+
 FloatList = Annotated[list[Union[Int64, FiniteFloat]], AfterValidator(_floats)]  # noqa: UP007
 StrList = list[Annotated[str, Strict()]]
-AttrValueSchema = Union[Annotated[bool, Strict()], Int64, FiniteFloat,  # noqa: UP007
-                        Annotated[str, Strict()], FloatList, StrList]
+AttrValueSchema = Annotated[Union[Annotated[bool, Strict()], Int64, FiniteFloat,  # noqa: UP007
+                                  Annotated[str, Strict()], FloatList, StrList],
+                            BeforeValidator(_int64_items)]
 
 
 # ---- fast checks for the local API (hot path: no pydantic object per call) ------------------
@@ -117,10 +133,20 @@ def check_node_id(value: Any) -> int:
     return value
 
 
+def _too_large(key: str, value: AttrValue) -> InvalidAttributeError:
+    return InvalidAttributeError(
+        f"attribute {key!r}: value of {value_bytes(value)} bytes exceeds the limit of "
+        f"{LIMITS.max_value_bytes} bytes per value (CHRONAV_DSR_MAX_VALUE_BYTES)")
+
+
 def check_attr_value(key: str, value: Any) -> AttrValue:
     """Return `value` normalised to a DSR attribute type, or raise naming `key`."""
     kind = type(value)
-    if kind is str or kind is bool:
+    if kind is bool:
+        return value
+    if kind is str:
+        if len(value) * 4 > LIMITS.max_value_bytes and value_bytes(value) > LIMITS.max_value_bytes:
+            raise _too_large(key, value)
         return value
     if kind is float:
         if not math.isfinite(value):
@@ -135,7 +161,11 @@ def check_attr_value(key: str, value: Any) -> AttrValue:
         if not isinstance(items, list):  # numpy scalar
             return check_attr_value(key, items)
         if items and all(type(item) is str for item in items):
+            if value_bytes(items) > LIMITS.max_value_bytes:
+                raise _too_large(key, items)
             return items
+        if 8 * len(items) > LIMITS.max_value_bytes:
+            raise _too_large(key, [0.0] * len(items))
         out: list[float] = []
         for item in items:
             if isinstance(item, bool) or not isinstance(item, (int, float)):

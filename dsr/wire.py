@@ -15,6 +15,7 @@ import orjson
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
 
 from dsr.crdt import ElementState
+from dsr.limits import LIMITS, value_bytes
 from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
                        AttrKey, AttrValueSchema, NodeId, NodeName, TypeName, UInt63)
 
@@ -51,16 +52,22 @@ class EdgeEntry(_Entry):
 
 
 class Message(BaseModel):
-    """One delta (kind "delta", published on the delta key) or a full state (query reply)."""
+    """One delta (kind "delta", published on the delta key), a full state (query reply), or a
+    digest (kind "digest", on the delta key: the sender's clock and what it has seen)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
     format: Literal["chronav-dsr/1"]
-    kind: Literal["delta", "state"]
+    kind: Literal["delta", "state", "digest"]
     graph: AgentName
     agent: AgentName
     replica: ReplicaId
     #: state replies only: which agent wrote with which replica id (decimal string keys)
     writers: dict[ReplicaKey, AgentName] = {}
+    #: states and digests: the sender's HLC when it sent the message (every write it made up to
+    #: this time was published before it, on the same key)
+    clock: UInt63 = 0
+    #: states and digests: per writer replica, the sender holds every write it stamped up to hlc
+    seen: dict[ReplicaKey, UInt63] = {}
     nodes: list[NodeEntry] = []
     edges: list[EdgeEntry] = []
 
@@ -128,6 +135,12 @@ class DeltaEncoder:
     def encode(self, nodes: list[dict[str, object]], edges: list[dict[str, object]]) -> bytes:
         return self._prefix + orjson.dumps(nodes) + b',"edges":' + orjson.dumps(edges) + b"}"
 
+    def digest(self, clock: int, seen: dict[int, int]) -> bytes:
+        """A digest: this replica's clock and watermarks, on the delta key (docs: "Digests")."""
+        return (self._prefix.replace(b'"kind":"delta"', b'"kind":"digest"')
+                + b'[],"edges":[],"clock":' + str(clock).encode() + b',"seen":'
+                + orjson.dumps({str(r): h for r, h in seen.items()}) + b"}")
+
     def node_attrs(self, node_id: int, attrs: dict[str, tuple[int, int, object]]) -> bytes:
         return (self._prefix + b'[{"id":' + str(node_id).encode() + b',"attrs":'
                 + orjson.dumps(attrs) + b'}],"edges":[]}')
@@ -135,11 +148,16 @@ class DeltaEncoder:
 
 def encode(*, kind: str, graph: str, agent: str, replica: int,
            nodes: Iterable[tuple[int, ElementState]], edges: Iterable[tuple[EdgeKey, ElementState]],
-           writers: dict[int, str] | None = None) -> bytes:
+           writers: dict[int, str] | None = None, clock: int = 0,
+           seen: dict[int, int] | None = None) -> bytes:
     message: dict[str, object] = {"format": FORMAT, "kind": kind, "graph": graph,
                                   "agent": agent, "replica": replica}
     if writers:
         message["writers"] = {str(r): a for r, a in writers.items()}
+    if clock:
+        message["clock"] = clock
+    if seen:
+        message["seen"] = {str(r): h for r, h in seen.items()}
     message["nodes"] = [node_entry(i, s) for i, s in nodes]
     message["edges"] = [edge_entry(k, s) for k, s in edges]
     return orjson.dumps(message)
@@ -161,13 +179,18 @@ class Decoded:
     ((src, dst, type), ElementState) pairs, so that merging a state into an empty graph is
     just installing the decoded elements.  `top_hlc` is the largest timestamp it mentions."""
 
-    __slots__ = ("agent", "edges", "graph", "kind", "nodes", "replica", "top_hlc", "writers")
+    __slots__ = ("agent", "clock", "edges", "graph", "kind", "nodes", "replica", "seen",
+                 "top_hlc", "writers")
 
     def __init__(self, kind: str, graph: str, agent: str, replica: int, writers: dict[str, str],
                  nodes: list[tuple[int, ElementState]],
-                 edges: list[tuple[EdgeKey, ElementState]], top_hlc: int) -> None:
+                 edges: list[tuple[EdgeKey, ElementState]], top_hlc: int, clock: int = 0,
+                 seen: dict[int, int] | None = None) -> None:
         self.kind, self.graph, self.agent, self.replica = kind, graph, agent, replica
         self.writers, self.nodes, self.edges, self.top_hlc = writers, nodes, edges, top_hlc
+        self.clock, self.seen = clock, seen or {}
+        if clock > top_hlc:
+            self.top_hlc = clock
 
 
 def _state_of(entry: _Entry, meta: tuple[int, int, str, str] | None) -> ElementState:
@@ -186,8 +209,17 @@ def _state_of(entry: _Entry, meta: tuple[int, int, str, str] | None) -> ElementS
 def _from_model(message: Message) -> Decoded:
     nodes = [(n.id, _state_of(n, n.meta)) for n in message.nodes]
     edges = [((e.src, e.dst, e.type), _state_of(e, None)) for e in message.edges]
+    for entries in (nodes, edges):
+        for _, state in entries:
+            for key, reg in state.attrs.items():
+                if type(reg[2]) in (str, list) and value_bytes(reg[2]) > LIMITS.max_value_bytes:
+                    from dsr.errors import WireError
+                    raise WireError(f"invalid DSR message: attribute {key!r}: value of "
+                                    f"{value_bytes(reg[2])} bytes exceeds the limit of "
+                                    f"{LIMITS.max_value_bytes} bytes per value")
     return Decoded(message.kind, message.graph, message.agent, message.replica,
-                   dict(message.writers), nodes, edges, _top_hlc(nodes, edges))
+                   dict(message.writers), nodes, edges, _top_hlc(nodes, edges), message.clock,
+                   {int(r): h for r, h in message.seen.items()})
 
 
 def _top_hlc(nodes: list[tuple[int, ElementState]],
@@ -249,7 +281,9 @@ def max_hlc(message: Decoded) -> int:
 # ---- fast validator -------------------------------------------------------------------------
 
 _U63 = 2**63 - 1
-_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges"})
+_MAX_VALUE = LIMITS.max_value_bytes
+_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges",
+                       "clock", "seen"})
 _NODE_KEYS = frozenset({"id", "add", "rem", "cleared", "meta", "attrs"})
 _EDGE_KEYS = frozenset({"src", "dst", "type", "add", "rem", "cleared", "attrs"})
 _BIG = float(2**63)
@@ -336,9 +370,14 @@ def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
         elif kind is int:
             if not _INT64_MIN <= item <= _U63:
                 raise _Reject
+        elif kind is str:
+            if len(item) * 4 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
+                raise _Reject
         elif kind is list:
             item = _list_value(item)
-        elif kind is not str and kind is not bool:
+            if len(item) * 8 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
+                raise _Reject
+        elif kind is not bool:
             raise _Reject
         out[_attr_key(key)] = (hlc, replica, item)
     return out
@@ -370,7 +409,8 @@ def fast_decode(data: object) -> Decoded | None:
     """Validated message for the common well-formed cases, None to defer to pydantic."""
     try:
         if type(data) is not dict or not _MSG_KEYS.issuperset(data) \
-                or data.get("format") != FORMAT or data.get("kind") not in ("delta", "state"):
+                or data.get("format") != FORMAT \
+                or data.get("kind") not in ("delta", "state", "digest"):
             return None
         raw_nodes = data.get("nodes", [])
         raw_edges = data.get("edges", [])
@@ -407,8 +447,20 @@ def fast_decode(data: object) -> Decoded | None:
         replica = data.get("replica")
         if type(replica) is not int or not 1 <= replica <= _U63:
             return None
+        clock = data.get("clock", 0)
+        if type(clock) is not int or not 0 <= clock <= _U63:
+            return None
+        seen = {}
+        raw_seen = data.get("seen", {})
+        if type(raw_seen) is not dict:
+            return None
+        for replica_key, hlc in raw_seen.items():
+            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63 \
+                    or type(hlc) is not int or not 0 <= hlc <= _U63:
+                return None
+            seen[int(replica_key)] = hlc
         return Decoded(data["kind"], _agent_name(data.get("graph")),
                        _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
-                       _top_hlc(nodes, edges))
+                       _top_hlc(nodes, edges), clock, seen)
     except _Reject:
         return None
