@@ -124,6 +124,7 @@ class DSRGraph:
         self._version = 0
         self._snapshot_cache: tuple[int, bytes] | None = None
         self._writers: dict[int, str] = {self.replica_id: self.agent}
+        self._bound: dict[int, str] = {self.replica_id: self.agent}
         self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
         #: elements that are not present (removed, or only known from stray registers): the
         #: candidates of tombstone compaction (compact())
@@ -675,7 +676,21 @@ class DSRGraph:
         return state.meta[2][0] if state is not None and state.meta is not None else None
 
     def writer_agent(self, replica: int) -> str | None:
+        """The agent a replica id writes for, as far as this replica knows (first-hand or
+        relayed by a state's `writers` table)."""
         return self._writers.get(replica)
+
+    def bound_agent(self, replica: int) -> str | None:
+        """The agent of a replica id known first-hand: from a message on that agent's own key,
+        or vouched for by that agent's own state (dsr/state_trust.py)."""
+        return self._bound.get(replica)
+
+    def note_writer(self, replica: int, agent: str) -> None:
+        """Record a first-hand binding replica id -> agent."""
+        if self._bound.get(replica) != agent:
+            with self._lock:
+                self._bound.setdefault(replica, agent)
+                self._writers.setdefault(replica, agent)
 
     def state_message(self, seen: dict[int, int] | None = None) -> bytes:
         """Full CRDT state (uncompacted tombstones included) as a "state" message, stamped

@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal
 import orjson
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
 
-from dsr.crdt import ElementState
+from dsr.crdt import REMOVAL_RECEIPT, ElementState
 from dsr.limits import LIMITS, value_bytes
 from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
                        AttrKey, AttrValueSchema, NodeId, NodeName, TypeName, UInt63)
@@ -271,6 +271,23 @@ def foreign_writer(message: Decoded) -> str | None:
                     return f"attribute {key!r} written by replica {reg[1]}"
             if state.meta is not None and state.meta[1] != own:
                 return f"meta written by replica {state.meta[1]}"
+    return None
+
+
+def removal_problem(message: Decoded) -> str | None:
+    """The one rule for removals, in deltas and in state replies alike: an entry with `rem`
+    or `cleared` carries the receipt ``attrs["~removed"] = [cleared, remover, true]`` and no
+    `rem` dot newer than `cleared`.  Returns a description of the first violation, or None."""
+    for what, entries in (("node", message.nodes), ("edge", message.edges)):
+        for key, state in entries:
+            if not state.rem and not state.cleared:
+                continue
+            receipt = state.attrs.get(REMOVAL_RECEIPT)
+            if receipt is None or receipt[0] != state.cleared or receipt[2] is not True:
+                return (f"a removal of {what} {key} without a receipt naming its remover "
+                        f"(attrs[{REMOVAL_RECEIPT!r}] = [cleared, remover replica, true])")
+            if any(hlc > state.cleared for hlc in state.rem.values()):
+                return f"a removal of {what} {key} whose rem holds adds newer than cleared"
     return None
 
 
