@@ -387,6 +387,58 @@ class DSRGraph:
             if hlc > self.sent_hlc:
                 self.sent_hlc = hlc
 
+    def update_nodes(self, updates: dict[int, Attrs]) -> None:
+        """Set attributes of many visible nodes at once: one stamp, one delta, one lock.
+
+        How a writer batches (docs/dsr_wire_format.md): receivers apply the whole batch at
+        once, so thousands of updates cost them one message.  All-or-nothing: a missing node or
+        a refused write raises before anything changes.  Inside a transaction it joins it."""
+        checked = {node_id: check_attrs(attrs) for node_id, attrs in updates.items()}
+        if self.read_only:
+            raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
+        if self._tx is not None and self._tx.owner == threading.get_ident():
+            for node_id, values in checked.items():
+                self._update_node_tx(node_id, values)
+            return
+        payload = None
+        with self._lock:
+            if self._tx is not None:          # another thread's transaction: wait for it
+                for node_id, values in checked.items():
+                    self._update_node_tx(node_id, values)
+                return
+            view = self._view
+            for node_id, values in checked.items():
+                if node_id not in view:
+                    raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+                if self.local_policy is not None:
+                    self._check_local("node", node_id,
+                                      {"attrs": dict.fromkeys(values, (0, 0, 0))})
+            hlc = self.clock.tick()
+            me = self.replica_id
+            events: list[Event] = []
+            out: dict[int, ElementState] = {}
+            merge_attrs = crdt.merge_attrs
+            nodes = self._nodes
+            want = self._signals.wants("node_updated")
+            for node_id, values in checked.items():
+                regs = {k: (hlc, me, v) for k, v in values.items()}
+                _, keys = merge_attrs(nodes[node_id], regs)
+                if keys and want:
+                    events.append(("node_updated", (self._node(node_id), keys)))
+                out[node_id] = ElementState(attrs=regs)
+            if not out:
+                return
+            self._version += 1
+            outbox = self._outbox
+            if outbox is not None:
+                payload = outbox.add(out, {}, hlc)
+        self._signals.post(events)
+        publish = self._publish
+        if payload is not None and publish is not None:
+            publish(payload)
+            if hlc > self.sent_hlc:
+                self.sent_hlc = hlc
+
     def published_hlc(self) -> int:
         """Every local write stamped up to this HLC has been handed to the publisher."""
         outbox = self._outbox
@@ -633,6 +685,9 @@ class DSRGraph:
             events: list[Event] = []
             changed = 0
             nodes, edges = self._nodes, self._edges
+            view = self._view
+            want_updated = self._signals.wants("node_updated")
+            merge_attrs = crdt.merge_attrs
             for node_id, state in message.nodes:
                 current = nodes.get(node_id)
                 if current is None:        # unknown element: the decoded state is installed
@@ -641,8 +696,12 @@ class DSRGraph:
                     self._sync_node(node_id, [], events)
                     changed += 1
                 elif state.meta is None and not state.add and not state.rem \
-                        and not state.cleared:
-                    changed += self._merge_node(node_id, {"attrs": state.attrs}, events)
+                        and not state.cleared:        # an update: the hot path, inlined
+                    was_changed, keys = merge_attrs(current, state.attrs)
+                    if was_changed:
+                        changed += 1
+                        if keys and want_updated and node_id in view:
+                            events.append(("node_updated", (self._node(node_id), keys)))
                 else:
                     changed += self._merge_node(node_id, {
                         "add": state.add.items(), "rem": state.rem.items(),

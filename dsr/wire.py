@@ -369,10 +369,12 @@ def _list_value(value: list[object]) -> list[object]:
     return out
 
 
-def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
+def _attrs(value: object) -> tuple[dict[str, tuple[int, int, object]], int]:
+    """The registers, and the largest stamp among them."""
     if type(value) is not dict:
         raise _Reject
     out = {}
+    top = 0
     for key, reg in value.items():
         if type(reg) is not list or len(reg) != 3:
             raise _Reject
@@ -397,23 +399,33 @@ def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
         elif kind is not bool:
             raise _Reject
         out[_attr_key(key)] = (hlc, replica, item)
-    return out
+        if hlc > top:
+            top = hlc
+    return out, top
 
 
-def _entry(raw: dict[str, Any]) -> ElementState:
+def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
+    """The element state, and the largest stamp in it."""
     state = ElementState()
+    top = 0
     if "add" in raw:
         state.add = _dots(raw["add"])
+        top = max(state.add.values(), default=0)
     if "rem" in raw:
         state.rem = _dots(raw["rem"])
+        top = max(top, max(state.rem.values(), default=0))
     if "cleared" in raw:
         cleared = raw["cleared"]
         if type(cleared) is not int or not 0 <= cleared <= _U63:
             raise _Reject
         state.cleared = cleared
+        if cleared > top:
+            top = cleared
     if "attrs" in raw:
-        state.attrs = _attrs(raw["attrs"])
-    return state
+        state.attrs, attrs_top = _attrs(raw["attrs"])
+        if attrs_top > top:
+            top = attrs_top
+    return state, top
 
 
 def _node_id(value: object) -> int:
@@ -435,8 +447,17 @@ def fast_decode(data: object) -> Decoded | None:
         if type(raw_nodes) is not list or type(raw_edges) is not list or type(writers) is not dict:
             return None
         nodes = []
+        top = 0
         for raw in raw_nodes:
-            if type(raw) is not dict or "id" not in raw or not _NODE_KEYS.issuperset(raw):
+            if type(raw) is not dict or "id" not in raw:
+                return None
+            if len(raw) == 2 and "attrs" in raw:     # an update: the hot path
+                attrs, entry_top = _attrs(raw["attrs"])
+                nodes.append((_node_id(raw["id"]), ElementState(attrs=attrs)))
+                if entry_top > top:
+                    top = entry_top
+                continue
+            if not _NODE_KEYS.issuperset(raw):
                 return None
             meta = raw.get("meta")
             if meta is not None:
@@ -447,16 +468,23 @@ def fast_decode(data: object) -> Decoded | None:
                         or not 1 <= replica <= _U63:
                     return None
                 meta = (hlc, replica, (_type_name(type_), _node_name(name)))
-            state = _entry(raw)
+                if hlc > top:
+                    top = hlc
+            state, entry_top = _entry(raw)
             state.meta = meta
             nodes.append((_node_id(raw["id"]), state))
+            if entry_top > top:
+                top = entry_top
         edges = []
         for raw in raw_edges:
             if type(raw) is not dict or not _EDGE_KEYS.issuperset(raw) \
                     or "src" not in raw or "dst" not in raw or "type" not in raw:
                 return None
             key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
-            edges.append((key, _entry(raw)))
+            state, entry_top = _entry(raw)
+            edges.append((key, state))
+            if entry_top > top:
+                top = entry_top
         for replica_key, agent in writers.items():
             _agent_name(agent)
             if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63:
@@ -478,6 +506,6 @@ def fast_decode(data: object) -> Decoded | None:
             seen[int(replica_key)] = hlc
         return Decoded(data["kind"], _agent_name(data.get("graph")),
                        _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
-                       _top_hlc(nodes, edges), clock, seen)
+                       top, clock, seen)
     except _Reject:
         return None
