@@ -371,16 +371,19 @@ class DSRGraph:
                 hlc = self.clock.tick()
                 me = self.replica_id
                 regs = {k: (hlc, me, v) for k, v in values.items()}
-                events: list[Event] = []
-                self._merge_node(node_id, {"attrs": regs}, events)
+                _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
+                event = None
+                if keys and self._signals.wants("node_updated"):
+                    event = ("node_updated", (self._node(node_id), keys))
                 self._version += 1
                 outbox = self._outbox
                 if outbox is not None:
-                    payload = outbox.add({node_id: ElementState(attrs=regs)}, {}, hlc)
+                    payload = outbox.add_attrs(node_id, regs, hlc)
             else:
                 self._update_node_tx(node_id, values)
                 return
-        self._signals.post(events)
+        if event is not None:
+            self._signals.post([event])
         publish = self._publish
         if payload is not None and publish is not None:
             publish(payload)

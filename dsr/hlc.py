@@ -62,11 +62,14 @@ class HybridLogicalClock:
         return self._last
 
     def tick(self) -> int:
-        """A fresh timestamp for a local event."""
+        """A fresh timestamp for a local event (hot path: nothing but arithmetic)."""
+        now_ms = self._now_ms
         with self._lock:
-            candidate = pack(self._now_ms())
-            self._last = candidate if candidate > self._last else self._last + 1
-            return self._last
+            candidate = (time.time_ns() // 1_000_000 if now_ms is _now_ms else now_ms()) \
+                << LOGICAL_BITS
+            last = self._last
+            self._last = last = candidate if candidate > last else last + 1
+            return last
 
     def observe(self, remote: int) -> None:
         """Merge a remote timestamp so that our next tick orders after it."""

@@ -197,7 +197,23 @@ def check_attrs(attrs: Any) -> Attrs:
         raise InvalidAttributeError(f"attrs must be a dict, got {type(attrs).__name__}")
     out: Attrs = {}
     for key, value in attrs.items():
-        if type(key) is not str or not _ATTR_KEY_RE.fullmatch(key):
-            raise InvalidAttributeError(f"attribute key {key!r} must be a non-empty string")
-        out[key] = check_attr_value(key, value)
+        if key not in _GOOD_KEYS:
+            if type(key) is not str or not _ATTR_KEY_RE.fullmatch(key):
+                raise InvalidAttributeError(f"attribute key {key!r} must be a non-empty string")
+            if len(_GOOD_KEYS) < 4096:
+                _GOOD_KEYS.add(key)
+        kind = type(value)
+        if kind is bool or (kind is float and -_HUGE < value < _HUGE) \
+                or (kind is int and INT64_MIN <= value <= INT64_MAX) \
+                or (kind is str and len(value) <= _SHORT):
+            out[key] = value                    # the common cases, checked inline
+        else:
+            out[key] = check_attr_value(key, value)
     return out
+
+
+#: attribute keys already checked (agents use a small vocabulary)
+_GOOD_KEYS: set[str] = set()
+_HUGE = float("inf")
+#: strings this short are under any value limit (4 bytes per character at most)
+_SHORT = LIMITS.max_value_bytes // 4

@@ -74,6 +74,18 @@ class Outbox:
             self._wake.notify()
             return None
 
+    def add_attrs(self, node_id: int, regs: dict[str, tuple[int, int, object]],
+                  top: int) -> bytes | None:
+        """add() for one node's attribute update (the hot path: no intermediate objects)."""
+        now = time.perf_counter()
+        if not self._nodes and not self._edges and now - self._last_send >= self.linger_s:
+            with self._lock:
+                if not self._nodes and not self._edges:
+                    self._last_send = now
+                    self.messages += 1
+                    return self._encoder.node_attrs(node_id, regs)
+        return self.add({node_id: ElementState(attrs=regs)}, {}, top)
+
     def _encode(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState]) -> bytes:
         return self._encoder.encode([wire.node_entry(i, s) for i, s in nodes.items()],
                                     [wire.edge_entry(k, s) for k, s in edges.items()])

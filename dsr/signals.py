@@ -56,22 +56,18 @@ class SignalHub:
         (A C SimpleQueue of event batches: the hand-off from the Zenoh thread costs a few
         microseconds, against tens for a Python Condition.)
         """
-        batches: list[list[Event]] = []
-        get = self._queue.get_nowait
-        try:
-            batches.append(get())
-        except queue.Empty:
-            if timeout == 0:
-                return 0
+        source = self._queue
+        if source.qsize():
+            batches = [source.get_nowait()]
+        elif timeout == 0:
+            return 0
+        else:
             try:
-                batches.append(self._queue.get(timeout=timeout))
+                batches = [source.get(timeout=timeout)]
             except queue.Empty:
                 return 0
-        try:
-            while True:
-                batches.append(get())
-        except queue.Empty:
-            pass
+        while source.qsize():
+            batches.append(source.get_nowait())
         events = batches[0] if len(batches) == 1 else [e for batch in batches for e in batch]
         for signal, args in events:
             for callback in self._callbacks[signal]:

@@ -152,6 +152,7 @@ class Replica:
         self._member_key = wire.member_key(name, graph.agent)
         if not isinstance(self.policy, AllowAll) and hasattr(self.policy, "refusal"):
             graph.local_policy = self.policy
+        self._checks_deltas = not isinstance(self.policy, AllowAll)
 
     # ------------------------------------------------------------------ lifecycle
     def __enter__(self) -> Replica:
@@ -325,13 +326,27 @@ class Replica:
                 return "invalid", "a delta must not carry 'writers'"
             if message.kind == "digest" and (message.nodes or message.edges):
                 return "invalid", "a digest must not carry nodes or edges"
-            foreign = wire.foreign_writer(message)
-            if foreign is not None:
-                return "forged_writer", (f"forged writer: delta of replica {message.replica} "
-                                         f"carries {foreign}")
-        removal = wire.removal_problem(message)
-        if removal is not None:
-            return "removal_receipt", removal
+            if message.edges or any(state.add or state.meta is not None or state.rem
+                                    or state.cleared for _, state in message.nodes):
+                foreign = wire.foreign_writer(message)
+                if foreign is not None:
+                    return "forged_writer", (f"forged writer: delta of replica "
+                                             f"{message.replica} carries {foreign}")
+                removal = wire.removal_problem(message)
+                if removal is not None:
+                    return "removal_receipt", removal
+            else:                       # attribute updates only (the hot path)
+                own = message.replica
+                for _, state in message.nodes:
+                    for attr, reg in state.attrs.items():
+                        if reg[1] != own:
+                            return "forged_writer", (
+                                f"forged writer: delta of replica {own} carries attribute "
+                                f"{attr!r} written by replica {reg[1]}")
+        if kind == "state":
+            removal = wire.removal_problem(message)
+            if removal is not None:
+                return "removal_receipt", removal
         top = message.top_hlc
         if top and graph.clock.too_far_ahead(top):
             return "clock_ahead", (f"clock {top} is more than {graph.clock.max_offset_ms} ms "
@@ -355,12 +370,15 @@ class Replica:
             if message.kind == "digest":
                 self._on_digest(message)
                 return
-            problem_text = self.policy.check(message, self.graph)
-            if problem_text is not None:
-                self._reject(key, "policy", problem_text)
-                return
-            self.graph.note_writer(message.replica, message.agent)
-            self.graph.apply_message(message)
+            if self._checks_deltas:
+                problem_text = self.policy.check(message, self.graph)
+                if problem_text is not None:
+                    self._reject(key, "policy", problem_text)
+                    return
+            graph = self.graph
+            if graph._bound.get(message.replica) is None:
+                graph.note_writer(message.replica, message.agent)
+            graph.apply_message(message)
             self._advance(message.replica, message.top_hlc)
             self.stats.applied += 1
         except WireError as exc:
@@ -371,11 +389,9 @@ class Replica:
 
     def _advance(self, replica: int, hlc: int) -> None:
         """A writer's own messages arrive in order: we now hold all it stamped up to hlc."""
-        seen = self._seen
-        if hlc > seen.get(replica, 0):
-            with self._table_lock:
-                if hlc > seen.get(replica, 0):
-                    seen[replica] = hlc
+        seen = self._seen     # one writer thread per key: a plain store (a race with a state
+        if hlc > seen.get(replica, 0):  # merge can only leave a lower, still true, watermark)
+            seen[replica] = hlc
 
     def _on_digest(self, message: wire.Decoded) -> None:
         self.stats.digests_received += 1
