@@ -691,13 +691,36 @@ class DSRGraph:
             view = self._view
             want_updated = self._signals.wants("node_updated")
             merge_attrs = crdt.merge_attrs
+            types, names = self._types, self._names
+            wants_added = self._signals.wants("node_added")
+            out_index, in_index = self._out, self._in
             for node_id, state in message.nodes:
                 current = nodes.get(node_id)
                 if current is None:        # unknown element: the decoded state is installed
-                    state.prune()
+                    if state.cleared:
+                        state.prune()
                     nodes[node_id] = state
-                    self._sync_node(node_id, [], events)
                     changed += 1
+                    meta = state.meta
+                    if meta is None or not state.present():
+                        self._dead_nodes.add(node_id)
+                        continue
+                    hlc, _, (type_, name) = meta      # a new visible node (a join: 10^4 times)
+                    view[node_id] = _NodeView(type_, name, hlc)
+                    of_type = types.get(type_)
+                    if of_type is None:
+                        types[type_] = {node_id}
+                    else:
+                        of_type.add(node_id)
+                    renamed = names.add(name, node_id, hlc)
+                    if wants_added:
+                        events.append(("node_added", (self._node(node_id),)))
+                    if node_id in out_index or node_id in in_index:
+                        self._sync_incident(node_id, events)
+                    if renamed and self._signals.wants("node_updated"):
+                        for other in dict.fromkeys(renamed):
+                            if other in view:
+                                events.append(("node_updated", (self._node(other), ["name"])))
                 elif state.meta is None and not state.add and not state.rem \
                         and not state.cleared:        # an update: the hot path, inlined
                     was_changed, keys = merge_attrs(current, state.attrs)
@@ -712,10 +735,20 @@ class DSRGraph:
                         events)
             for key, state in message.edges:
                 if key not in edges:
-                    state.prune()
+                    if state.cleared:
+                        state.prune()
                     edges[key] = state
-                    self._out.setdefault(key[0], set()).add(key)
-                    self._in.setdefault(key[1], set()).add(key)
+                    src, dst = key[0], key[1]
+                    ends = out_index.get(src)
+                    if ends is None:
+                        out_index[src] = {key}
+                    else:
+                        ends.add(key)
+                    ends = in_index.get(dst)
+                    if ends is None:
+                        in_index[dst] = {key}
+                    else:
+                        ends.add(key)
                     self._sync_edge(key, [], events)
                     changed += 1
                 else:

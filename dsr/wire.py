@@ -336,6 +336,7 @@ _type_name = _Checked(_TYPE_RE)
 _node_name = _Checked(_NAME_RE, size=65536)
 _agent_name = _Checked(_AGENT_RE)
 _attr_key = _Checked(_ATTR_KEY_RE)
+_ATTR_OK = _attr_key._ok    # cleared in place when full: the reference stays valid
 
 
 def _dots(value: object) -> dict[int, int]:
@@ -398,10 +399,24 @@ def _attrs(value: object) -> tuple[dict[str, tuple[int, int, object]], int]:
                 raise _Reject
         elif kind is not bool:
             raise _Reject
-        out[_attr_key(key)] = (hlc, replica, item)
+        if key not in _ATTR_OK:
+            _attr_key(key)
+        out[key] = (hlc, replica, item)
         if hlc > top:
             top = hlc
     return out, top
+
+
+def _one_dot(value: object) -> tuple[dict[int, int], int] | None:
+    """The common `[[replica, hlc]]` list, or None for the general path."""
+    if type(value) is list and len(value) == 1:
+        dot = value[0]
+        if type(dot) is list and len(dot) == 2:
+            replica, hlc = dot
+            if type(replica) is int and type(hlc) is int and 1 <= replica <= _U63 \
+                    and 0 <= hlc <= _U63:
+                return {replica: hlc}, hlc
+    return None
 
 
 def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
@@ -409,8 +424,12 @@ def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
     state = ElementState()
     top = 0
     if "add" in raw:
-        state.add = _dots(raw["add"])
-        top = max(state.add.values(), default=0)
+        single = _one_dot(raw["add"])
+        if single is not None:
+            state.add, top = single
+        else:
+            state.add = _dots(raw["add"])
+            top = max(state.add.values(), default=0)
     if "rem" in raw:
         state.rem = _dots(raw["rem"])
         top = max(top, max(state.rem.values(), default=0))
