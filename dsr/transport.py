@@ -145,6 +145,8 @@ class Replica:
         self._table_lock = threading.Lock()
         #: seen[z]: this replica holds every write replica z stamped up to seen[z]
         self._seen: dict[int, int] = {}
+        #: replicas whose delta stream may have had a gap (see _advance)
+        self._gapped: set[int] = set()
         self._members: dict[str, Member] = {}
         name = graph.graph_name
         self._delta_key = wire.delta_key(name, graph.agent)
@@ -388,10 +390,23 @@ class Replica:
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
 
     def _advance(self, replica: int, hlc: int) -> None:
-        """A writer's own messages arrive in order: we now hold all it stamped up to hlc."""
+        """A writer's own messages arrive in order: we now hold all it stamped up to hlc
+        (unless its stream had a gap: its session broke, and the puts it made meanwhile were
+        lost; then only its own state restores the watermark)."""
+        if replica in self._gapped:
+            return
         seen = self._seen     # one writer thread per key: a plain store (a race with a state
         if hlc > seen.get(replica, 0):  # merge can only leave a lower, still true, watermark)
             seen[replica] = hlc
+
+    def _gap(self, agent: str | None) -> None:
+        """Deltas of `agent` (None: of everybody) may have been lost: forget its watermarks
+        until its own state has been merged again.  Caller holds _table_lock."""
+        me = self.graph.replica_id
+        for replica, owner in list(self.graph._bound.items()):
+            if replica != me and (agent is None or owner == agent):
+                self._gapped.add(replica)
+                self._seen.pop(replica, None)
 
     def _on_digest(self, message: wire.Decoded) -> None:
         self.stats.digests_received += 1
@@ -407,15 +422,22 @@ class Replica:
             mine = self.graph.replica_id
             # Anti-entropy: the member held writes we still lacked at its previous digest
             # (one digest period is far longer than any delta takes): fetch its state.
+            targets: set[str] = set()
             for replica, hlc in member.behind.items():
                 if hlc > self._seen.get(replica, 0):
-                    lagging = True
-                    break
+                    # fetch from the writer itself if it runs (only its own state is
+                    # trusted for its writes), else from the member that holds them
+                    owner = self.graph.bound_agent(replica)
+                    known = self._members.get(owner) if owner is not None else None
+                    targets.add(owner if known is not None and known.live
+                                else message.agent)   # type: ignore[arg-type]
+            lagging = bool(targets)
             member.behind = {r: h for r, h in message.seen.items()
                              if r != mine and h > self._seen.get(r, 0)}
         if lagging and not self.graph.read_only:
             self.stats.anti_entropy += 1
-            self._sync_requests.put(message.agent)
+            for target in sorted(targets):
+                self._sync_requests.put(target)
 
     def _on_query(self, query: Any) -> None:
         try:
@@ -453,6 +475,8 @@ class Replica:
                 member = self._members[agent] = Member(agent)
             member.live = live
             member.gone_at = 0.0 if live else time.monotonic()
+            if not live:
+                self._gap(agent)
         if live:
             self._sync_requests.put(agent)
 
@@ -502,16 +526,31 @@ class Replica:
                     # has nothing to be checked against and is trusted (state_trust.py)
                     if agent == message.agent or not self._joined:
                         self.graph.note_writer(int(replica), agent)
-                with self._table_lock:
-                    for replica, hlc in message.seen.items():
-                        if hlc > self._seen.get(replica, 0):
-                            self._seen[replica] = hlc
+                self._note_seen(message)
             self.stats.state_merged += 1
         except WireError as exc:
             self._reject(key, "invalid", str(exc))
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+
+    def _note_seen(self, message: wire.Decoded) -> None:
+        """After merging a state: we now hold what its sender held of its own writes (and,
+        for writers that are not running, of theirs; running writers' relayed stamps may have
+        been screened out, so their watermarks come only from their own messages)."""
+        sender = message.agent
+        live = self.live_agents()
+        graph = self.graph
+        with self._table_lock:
+            for replica, hlc in message.seen.items():
+                owner = graph.bound_agent(replica) or message.writers.get(str(replica))
+                own = replica == message.replica or owner == sender
+                if own:
+                    self._gapped.discard(replica)
+                elif self._joined and (owner in live or replica in self._gapped):
+                    continue
+                if hlc > self._seen.get(replica, 0):
+                    self._seen[replica] = hlc
 
     def _screen(self, key: str, message: wire.Decoded) -> wire.Decoded:
         from dsr.state_trust import screen_state
@@ -598,7 +637,7 @@ class Replica:
                 if connected and not self._connected:
                     log.info("DSR %s: connection back, resynchronising", self.graph.agent)
                     with self._table_lock:   # deltas were lost meanwhile: watermarks are void
-                        self._seen.clear()
+                        self._gap(None)
                     agent = _ALL
                 self._connected = connected
                 if agent:

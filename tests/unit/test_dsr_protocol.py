@@ -345,5 +345,31 @@ def test_a_member_ahead_of_us_triggers_anti_entropy():
     b.publish_digest()
     assert a._sync_requests.empty()           # one digest period of grace for deltas in flight
     b.publish_digest()
-    assert a._sync_requests.get_nowait() == "b" and a.stats.anti_entropy == 1
+    # the writer runs: its own state is fetched (only it is trusted for its writes)
+    assert a._sync_requests.get_nowait() == "c" and a.stats.anti_entropy == 1
     assert b._sync_requests.empty()
+    a._members["c"].live = False       # a writer that is gone: the member holding its writes
+    b.publish_digest()
+    assert a._sync_requests.get_nowait() == "b"
+
+
+def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
+    """Regression (netns partition test): b1's deltas made while its session was broken are
+    lost; its later deltas must not make a1 call the lost writes forged when b2 relays them."""
+    net = Net()
+    a1, b1, b2 = net.add("a1"), net.add("b1"), net.add("b2")
+    net.maintain()
+    node = b1.graph.insert_node("object", "n", {"k": 0})
+    lost = Publisher(lambda payload: b2._on_delta(Sample(wire.delta_key("chronav", "b1"),
+                                                         payload)))
+    b1._publisher = lost                       # partition: a1 gets none of these
+    b1.graph.update_node(node.id, {"k": 1})
+    a1._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "b1"),
+                                 "kind": __import__("zenoh").SampleKind.DELETE})())
+    b1._publisher = Publisher(lambda payload: net._deliver("b1", payload))   # healed
+    b1.graph.update_node(node.id, {"other": 2})
+    b1.publish_digest()
+    a1._merge_state(state_sample(b2))          # b2 relays k=1 before b1's own state arrives
+    assert a1.stats.rejects.get("forged_stamp") is None
+    a1._merge_state(state_sample(b1))
+    assert a1.graph.get_attr(node.id, "k") == 1 and a1.graph.digest() == b2.graph.digest()
