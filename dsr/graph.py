@@ -31,7 +31,7 @@ from dsr.errors import (DSRError, EdgeNotFoundError, InvalidAttributeError,
 from dsr.limits import LIMITS, value_bytes
 from dsr.hlc import HybridLogicalClock
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
-                       check_node_id, check_type_name)
+                       check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
 from dsr.outbox import Outbox
 from dsr.signals import Event, SignalHub
@@ -152,8 +152,8 @@ class DSRGraph:
 
     def _node(self, node_id: int) -> Node:
         view = self._view[node_id]
-        return Node(id=node_id, type=view.type, name=self._names.shown(view.name, node_id),
-                    attrs=self._nodes[node_id].visible_attrs())
+        return make_node(node_id, view.type, self._names.shown(view.name, node_id),
+                         self._nodes[node_id].visible_attrs())
 
     def _edge(self, key: EdgeKey) -> Edge:
         return Edge(src=key[0], dst=key[1], type=key[2], attrs=self._edges[key].visible_attrs())
@@ -419,22 +419,22 @@ class DSRGraph:
             hlc = self.clock.tick()
             me = self.replica_id
             events: list[Event] = []
-            out: dict[int, ElementState] = {}
             merge_attrs = crdt.merge_attrs
             nodes = self._nodes
             want = self._signals.wants("node_updated")
+            entries: list[dict[str, object]] = []
             for node_id, values in checked.items():
                 regs = {k: (hlc, me, v) for k, v in values.items()}
                 _, keys = merge_attrs(nodes[node_id], regs)
                 if keys and want:
                     events.append(("node_updated", (self._node(node_id), keys)))
-                out[node_id] = ElementState(attrs=regs)
-            if not out:
+                entries.append({"id": node_id, "attrs": regs})
+            if not entries:
                 return
             self._version += 1
             outbox = self._outbox
             if outbox is not None:
-                payload = outbox.add(out, {}, hlc)
+                payload = outbox.add_entries(entries, hlc)
         self._signals.post(events)
         publish = self._publish
         if payload is not None and publish is not None:

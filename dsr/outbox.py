@@ -86,6 +86,18 @@ class Outbox:
                     return self._encoder.node_attrs(node_id, regs)
         return self.add({node_id: ElementState(attrs=regs)}, {}, top)
 
+    def add_entries(self, entries: list[dict[str, object]], top: int) -> bytes | None:
+        """add() for a batch of node attribute updates already in wire form ({"id", "attrs"})."""
+        now = time.perf_counter()
+        with self._lock:   # a big batch is worth a sample of its own: no lingering for it
+            if not self._nodes and not self._edges and (
+                    len(entries) * 4 >= self.max_entries or now - self._last_send >= self.linger_s):
+                self._last_send = now
+                self.messages += 1
+                return self._encoder.encode(entries, [])
+        return self.add({entry["id"]: ElementState(attrs=entry["attrs"])  # type: ignore[misc]
+                         for entry in entries}, {}, top)
+
     def _encode(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState]) -> bytes:
         return self._encoder.encode([wire.node_entry(i, s) for i, s in nodes.items()],
                                     [wire.edge_entry(k, s) for k, s in edges.items()])

@@ -253,6 +253,7 @@ def throughput(ping: DsrPing, updates: int) -> dict[str, float]:
         batch = min(count, updates - 1 - done)
         graph.update_nodes({load_ids[k]: {"i": done + k} for k in range(batch)})
         done += batch
+        graph.dispatch()           # an agent's loop delivers its signals between writes
     graph.update_node(load_end.id, {"i": updates - 1, "last": True})
     local = time.perf_counter() - start
     ping.wait_for("load_done", updates - 1, timeout=120)
@@ -263,6 +264,8 @@ def throughput(ping: DsrPing, updates: int) -> dict[str, float]:
     start = time.perf_counter()
     for i in range(single - 1):
         graph.update_node(load_ids[i % count], {"i": i})
+        if i % count == count - 1:
+            graph.dispatch()
     graph.update_node(load_end.id, {"i": updates + single, "last": True})
     local = time.perf_counter() - start
     ping.wait_for("load_done", updates + single, timeout=120)
