@@ -40,6 +40,17 @@ def test_dump_reports_unreachable_router_on_stderr():
     assert result.stdout == ""
 
 
+def test_stats_without_a_running_graph_says_so_on_stderr(world):
+    result = CliRunner().invoke(app, ["dsr", "stats", "--json", "--connect", "tcp/127.0.0.1:1"])
+    assert result.exit_code == 1 and "cannot open Zenoh session" in result.stderr
+    assert result.stdout == ""
+    result = CliRunner().invoke(app, ["dsr", "stats", "--connect", world, "--graph", "nope",
+                                      "--timeout", "1"])
+    assert result.exit_code == 1 and "no member of graph 'nope'" in result.stderr
+    result = CliRunner().invoke(app, ["dsr", "stats", "--connect", world])
+    assert result.exit_code == 0 and "1 members" in result.stdout
+
+
 def test_dump_follow_prints_changes(world, procs, tmp_path):
     out = tmp_path / "follow.jsonl"
     proc = procs.spawn(["-m", "tools.cli", "dsr", "dump", "--follow", "--json", "--connect",
