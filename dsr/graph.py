@@ -123,6 +123,7 @@ class DSRGraph:
         self._tx_depth = 0
         self._version = 0
         self._snapshot_cache: tuple[int, bytes] | None = None
+        self._parts_cache: tuple[int, list[bytes]] | None = None
         self._writers: dict[int, str] = {self.replica_id: self.agent}
         self._bound: dict[int, str] = {self.replica_id: self.agent}
         self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
@@ -802,6 +803,51 @@ class DSRGraph:
                                   clock=clock, seen={**(seen or {}), self.replica_id: clock})
             self._snapshot_cache = (self._version, payload)
             return payload
+
+    def state_parts(self, seen: dict[int, int] | None = None,
+                    per_part: int = 2000) -> Iterator[bytes]:
+        """The state as several "state" messages of at most `per_part` elements (nodes
+        first), produced one by one: the transport replies each part as soon as it is encoded,
+        so encoding here, transfer and decoding at the joiner overlap (join time).  Each part
+        is a valid state (a join of element states); the last one carries `clock` and `seen`
+        (only once every part has been merged does the receiver hold what they describe).
+        The graph lock is held per part, not for the whole state.  Cached per version."""
+        with self._lock:
+            cache = self._parts_cache
+            if cache is not None and cache[0] == self._version:
+                parts: list[bytes] | None = cache[1]
+            else:
+                parts = None
+                version = self._version
+                clock = self.clock.last
+                node_ids, edge_keys = list(self._nodes), list(self._edges)
+                writers = dict(self._writers)
+        if parts is not None:
+            yield from parts
+            return
+        seen = {**(seen or {}), self.replica_id: clock}
+        chunks: list[tuple[list[int], list[EdgeKey]]] = []
+        for start in range(0, len(node_ids), per_part):
+            chunks.append((node_ids[start:start + per_part], []))
+        for start in range(0, len(edge_keys), per_part):
+            chunks.append(([], edge_keys[start:start + per_part]))
+        if not chunks:
+            chunks.append(([], []))
+        built: list[bytes] = []
+        for index, (ids, keys) in enumerate(chunks):
+            last = index == len(chunks) - 1
+            with self._lock:
+                nodes, edges = self._nodes, self._edges
+                payload = wire.encode(
+                    kind="state", graph=self.graph_name, agent=self.agent,
+                    replica=self.replica_id,
+                    nodes=[(i, nodes[i]) for i in ids if i in nodes],
+                    edges=[(k, edges[k]) for k in keys if k in edges], writers=writers,
+                    clock=clock if last else 0, seen=seen if last else None)
+            built.append(payload)
+            yield payload
+        with self._lock:
+            self._parts_cache = (version, built)
 
     def compact(self, acked: Callable[[int, int], bool]) -> int:
         """Forget removed elements whose removal every member has seen; returns how many.

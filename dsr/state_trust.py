@@ -11,7 +11,9 @@ running:
   or state reply; the router's ACL gives each agent's key space to that agent's credentials)
   says so, or when the agent's own state reply lists it (its previous incarnations);
 - a relayed table entry that gives a replica id to ANOTHER agent that is running, while that
-  agent never used or vouched for it, is a lie: its stamps are refused (reason forged_writer);
+  agent never used or vouched for it (its own state, merged here, lists its replica ids), is
+  a lie: its stamps are refused (reason forged_writer); before that agent's own state has been
+  merged here, such stamps are only deferred;
 - a running writer's deltas reach this replica directly, in order (one publisher, reliable);
   `seen[z]` says up to which stamp this replica holds every write of replica z.  A relayed
   stamp of a running writer z that would change this replica's state is either forged
@@ -55,8 +57,13 @@ def _stampers(state: ElementState) -> Iterator[int]:
 
 def screen_state(message: Decoded, *, local: Callable[[str, object], ElementState | None],
                  binding: Callable[[int], str | None], live: set[str],
-                 seen: dict[int, int]) -> Screened:
-    """The part of a state reply whose stamps are credible (see the module docstring)."""
+                 seen: dict[int, int], vouched: set[str] | None = None) -> Screened:
+    """The part of a state reply whose stamps are credible (see the module docstring).
+
+    `vouched`: running agents whose own state (current incarnation) this replica has merged,
+    so it knows every replica id they vouch for; a table entry for another of them is a lie.
+    For a running agent not in it the entry cannot be judged yet: its stamps are deferred."""
+    vouched = live if vouched is None else vouched
     sender = message.agent
     result = Screened(message)
     lying: dict[int, str] = {}
@@ -64,7 +71,8 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
     for key, agent in message.writers.items():
         replica = int(key)
         known = binding(replica)
-        if known is None and agent != sender and agent in live and replica != message.replica:
+        if known is None and agent != sender and agent in vouched and agent in live \
+                and replica != message.replica:
             lying[replica] = agent
             del writers[key]
             result.problems.append((

@@ -147,6 +147,8 @@ class Replica:
         self._seen: dict[int, int] = {}
         #: replicas whose delta stream may have had a gap (see _advance)
         self._gapped: set[int] = set()
+        #: agents whose own state (this incarnation) has been merged: their replica ids known
+        self._vouched: set[str] = set()
         self._members: dict[str, Member] = {}
         name = graph.graph_name
         self._delta_key = wire.delta_key(name, graph.agent)
@@ -445,8 +447,8 @@ class Replica:
                 query.reply(self._state_key, orjson.dumps(self.report()),
                             encoding=STATS_ENCODING)
             else:
-                query.reply(self._state_key, self.graph.state_message(self.seen()),
-                            encoding=wire.ENCODING)
+                for part in self.graph.state_parts(self.seen()):
+                    query.reply(self._state_key, part, encoding=wire.ENCODING)
                 self.stats.state_served += 1
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
@@ -477,6 +479,7 @@ class Replica:
             member.gone_at = 0.0 if live else time.monotonic()
             if not live:
                 self._gap(agent)
+                self._vouched.discard(agent)
         if live:
             self._sync_requests.put(agent)
 
@@ -542,6 +545,8 @@ class Replica:
         live = self.live_agents()
         graph = self.graph
         with self._table_lock:
+            if message.clock:                   # the last part of the state: all merged
+                self._vouched.add(sender)
             for replica, hlc in message.seen.items():
                 owner = graph.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
@@ -559,8 +564,10 @@ class Replica:
             seen = dict(self._seen)
         live = self.live_agents()
         live.add(graph.agent)
+        with self._table_lock:
+            vouched = set(self._vouched)
         screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
-                                live=live, seen=seen)
+                                live=live, seen=seen, vouched=vouched)
         self.stats.deferred += screened.deferred
         for reason, text in screened.problems:
             self._reject(key, reason, text)

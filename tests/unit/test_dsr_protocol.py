@@ -373,3 +373,23 @@ def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
     assert a1.stats.rejects.get("forged_stamp") is None
     a1._merge_state(state_sample(b1))
     assert a1.graph.get_attr(node.id, "k") == 1 and a1.graph.digest() == b2.graph.digest()
+
+
+def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forged():
+    """Regression (trust test): a member relays the replica id of an agent that has just
+    started, before that agent's own messages reach this replica: nothing is a lie yet."""
+    net = Net()
+    sim = net.add("sim_robot")
+    newcomer = DSRGraph("executive")
+    newcomer.insert_node("mission", "m1", {"state": "pending"})
+    sim._merge_state(Sample(wire.state_key("chronav", "executive"), newcomer.state_message()))
+    guard = Replica(DSRGraph("agenda"))
+    guard._joined = True
+    guard._members["executive"] = Member("executive")                 # its token is up
+    guard._members["sim_robot"] = Member("sim_robot")
+    guard._merge_state(state_sample(sim))
+    assert guard.stats.rejects == {} and guard.stats.deferred >= 1
+    assert guard.graph.get_node_by_name("m1") is None                 # left for executive
+    guard._merge_state(Sample(wire.state_key("chronav", "executive"),
+                              newcomer.state_message()))
+    assert guard.graph.get_node_by_name("m1") is not None
