@@ -149,6 +149,7 @@ class Replica:
         self._gapped: set[int] = set()
         #: agents whose own state (this incarnation) has been merged: their replica ids known
         self._vouched: set[str] = set()
+        self._pending_syncs: set[str] = set()
         self._members: dict[str, Member] = {}
         name = graph.graph_name
         self._delta_key = wire.delta_key(name, graph.agent)
@@ -439,7 +440,15 @@ class Replica:
         if lagging and not self.graph.read_only:
             self.stats.anti_entropy += 1
             for target in sorted(targets):
-                self._sync_requests.put(target)
+                self._request_sync(target)
+
+    def _request_sync(self, agent: str) -> None:
+        """Queue a state fetch, once: digests of several members may point at the same one."""
+        with self._table_lock:
+            if agent in self._pending_syncs:
+                return
+            self._pending_syncs.add(agent)
+        self._sync_requests.put(agent)
 
     def _on_query(self, query: Any) -> None:
         try:
@@ -477,11 +486,12 @@ class Replica:
                 member = self._members[agent] = Member(agent)
             member.live = live
             member.gone_at = 0.0 if live else time.monotonic()
-            if not live:
-                self._gap(agent)
-                self._vouched.discard(agent)
+            # either way its stream may have a gap (a broken session loses puts): until its
+            # own state is merged again, its watermarks and replica ids are not trusted
+            self._gap(agent)
+            self._vouched.discard(agent)
         if live:
-            self._sync_requests.put(agent)
+            self._request_sync(agent)
 
     def live_agents(self) -> set[str]:
         with self._table_lock:
@@ -550,10 +560,9 @@ class Replica:
             for replica, hlc in message.seen.items():
                 owner = graph.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
-                if own:
-                    self._gapped.discard(replica)
-                elif self._joined and (owner in live or replica in self._gapped):
-                    continue
+                if not own and self._joined and owner in live:
+                    continue    # a running writer: only its own messages set its watermark
+                self._gapped.discard(replica)   # (a writer that is not running sends nothing)
                 if hlc > self._seen.get(replica, 0):
                     self._seen[replica] = hlc
 
@@ -639,6 +648,9 @@ class Replica:
                 agent = ""
             if agent is None or self._closed.is_set():
                 return
+            if agent:
+                with self._table_lock:
+                    self._pending_syncs.discard(agent)
             try:
                 connected = self._is_connected()
                 if connected and not self._connected:

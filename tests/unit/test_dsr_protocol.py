@@ -393,3 +393,26 @@ def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forg
     guard._merge_state(Sample(wire.state_key("chronav", "executive"),
                               newcomer.state_message()))
     assert guard.graph.get_node_by_name("m1") is not None
+
+
+def test_anti_entropy_settles_for_a_writer_that_left():
+    """Regression: the watermark of a writer that is gone must be restored from the member
+    that relays its writes, or every digest of that member would trigger another state fetch."""
+    import zenoh
+    net = Net()
+    a, b, c = net.add("a"), net.add("b"), net.add("c")
+    net.maintain()
+    c._publisher = Publisher(lambda payload: b._on_delta(Sample(wire.delta_key("chronav", "c"),
+                                                                payload)))
+    c.graph.insert_node("object", "missed")
+    a._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "c"),
+                                "kind": zenoh.SampleKind.DELETE})())
+    b.publish_digest()
+    b.publish_digest()
+    assert a._sync_requests.get_nowait() == "b"
+    a._pending_syncs.discard("b")
+    a._merge_state(state_sample(b))                      # what the worker does
+    assert a.graph.get_node_by_name("missed") is not None
+    b.publish_digest()
+    b.publish_digest()
+    assert a._sync_requests.empty() and a.stats.anti_entropy == 1
