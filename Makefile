@@ -16,6 +16,7 @@ demo: $(STAMP)
 	$(BIN)/chronav demo
 
 test: $(STAMP)
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q -p no:cacheprovider
 
 bench: $(STAMP)

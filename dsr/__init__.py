@@ -11,7 +11,7 @@ from dsr.errors import (ConfigError, DSRError, EdgeNotFoundError, GraphFileError
                         TransactionError, WireError, WriteRefusedError)
 from dsr.graph import DSRGraph
 from dsr.model import Edge, Node
-from dsr.policy import AllowAll, WritePolicy, policy_from_env
+from dsr.policy import AllowAll, WritePolicy
 from dsr.signals import SIGNALS
 from dsr.transport import Replica, ReplicaStats, join
 
@@ -20,5 +20,5 @@ __all__ = [
     "GraphFileError", "InvalidAttributeError", "InvalidIdentifierError", "NameTakenError", "Node",
     "NodeNotFoundError", "PolicyError", "PoseError", "ReadOnlyGraphError", "Replica", "ReplicaStats",
     "SIGNALS", "TransactionError", "WireError", "WritePolicy", "ZenohSettings", "graph_name_from_env",
-    "WriteRefusedError", "join", "policy_from_env",
+    "WriteRefusedError", "join",
 ]

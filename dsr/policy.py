@@ -9,29 +9,21 @@ relays many writers, dsr/state_review.py).  Refusals are counted in
 
 Policies:
 - `AllowAll` (library default of `join()`): tools, tests, benchmarks.
-- `RulePolicy` (dsr/policy_rules.py): the declarative table, deploy/write_policy.yaml, which
-  every chronav agent and the launcher use (`policy_from_env()`).
+- `RulePolicy` (dsr/policy_rules.py): the declarative table; chronav's own table and its loader
+  (`agents/world/write_policy.py`, `policy_from_env()`) live above the DSR, which reads no files.
 - `DenyTypes`: a coarse per-type refusal, kept for simple tests.
 """
 
 from __future__ import annotations
 
-import os
-from collections.abc import Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING, Literal, Protocol
 
-from dsr.errors import PolicyError
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
     from dsr.writes import GraphLookup, Write
 
 ElementKind = Literal["node", "edge"]
-ENV_POLICY = "CHRONAV_WRITE_POLICY"
-#: the chronav table, shipped with the repository (override with CHRONAV_WRITE_POLICY)
-DEFAULT_POLICY_FILE = Path(__file__).resolve().parents[1] / "deploy" / "write_policy.yaml"
-_ALLOW_ALL_WORDS = ("allow-all", "off")
 
 
 class WritePolicy(Protocol):
@@ -105,20 +97,3 @@ class DenyTypes(TypePolicy):
         if self.agents is not None and agent not in self.agents:
             return True
         return type not in self.types
-
-
-def policy_from_env(environ: Mapping[str, str] | None = None) -> WritePolicy:
-    """The policy agents run with: CHRONAV_WRITE_POLICY = a YAML file, or `allow-all`/`off`;
-    unset = deploy/write_policy.yaml.  Raises PolicyError naming the file, line and key."""
-    from dsr.policy_rules import load_policy
-
-    env = os.environ if environ is None else environ
-    value = (env.get(ENV_POLICY) or "").strip()
-    if value.lower() in _ALLOW_ALL_WORDS:
-        return AllowAll()
-    path = Path(value) if value else DEFAULT_POLICY_FILE
-    if not path.is_file():
-        where = f"{ENV_POLICY}={value!r}" if value else f"default policy {path}"
-        raise PolicyError(f"{where}: no such file (set {ENV_POLICY} to a policy YAML file, "
-                          f"or to 'allow-all')")
-    return load_policy(path)

@@ -1,4 +1,4 @@
-"""The declarative write policy: a table of grants read from YAML (deploy/write_policy.yaml).
+"""The declarative write policy: a table of grants (chronav ships its own: agents/world/write_policy.yaml).
 
 Why a table of grants (default deny): the question an operator asks is "who may move the robot?",
 and the answer must be one place to read, not code.  Each rule grants some writers (agent names
@@ -36,7 +36,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from fnmatch import fnmatchcase
-from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
@@ -193,18 +192,3 @@ def explain(write: Write) -> str:
     if write.op == "init":
         return f"agent {write.writer!r} may not create a {what} with {write.attr!r}"
     return f"agent {write.writer!r} may not {write.op} a {what}"
-
-
-def load_policy(path: str | Path) -> RulePolicy:
-    """Read and validate a policy file; PolicyError says `file:line:col: key: problem`."""
-    from scenes.yamlio import SourceError, load_located_file, validate_located
-
-    try:
-        located = load_located_file(path)
-        if not isinstance(located.data, dict):
-            raise SourceError(str(path), 1, 1, "", "a write-policy file is a YAML mapping "
-                              "with `format` and `rules`")
-        document = validate_located(PolicyDocument, located)
-    except SourceError as exc:
-        raise PolicyError(str(exc)) from None
-    return RulePolicy(document.rules, source=str(path))

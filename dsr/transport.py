@@ -29,7 +29,7 @@ from typing import Any
 import orjson
 
 from dsr import wire
-from dsr.config import ZenohSettings, graph_name_from_env
+from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
 from dsr.limits import LIMITS
@@ -176,7 +176,8 @@ class Replica:
         try:
             self.session = zenoh.open(conf)
         except zenoh.ZError as exc:
-            raise TransportError(f"cannot open Zenoh session ({self.settings.describe()}): {exc}; "
+            raise TransportError(f"cannot open Zenoh session ({self.settings.describe()}): "
+                                 f"{clean_zenoh_error(exc)}; "
                                  "is a router running (python -m dsr.router --listen ...)?"
                                  ) from None
         register_atexit = getattr(threading, "_register_atexit", None)

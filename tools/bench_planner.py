@@ -57,7 +57,9 @@ T_S = 11 * 3600.0
 
 def bench_scene(seed: int = 7) -> dict[str, Any]:
     """A seeded random WORLD_M x WORLD_M centre: walls, people, objects, activities."""
-    from agents.social_navigation.types import ActivityWindow, Circle, Person, Rectangle, SocialObject, Trapezoid, Wall
+    from agents.lib.agenda.model import ActivityWindow
+    from agents.lib.socialmap.types import Person, SocialObject, Wall
+    from scenes.geometry import Circle, Rectangle, Trapezoid
 
     rng = np.random.default_rng(seed)
     size = WORLD_M
@@ -115,7 +117,7 @@ def median_ms_after(setup: Callable[[], Any], fn: Callable[[Any], Any], repeats:
 def numba_compile_seconds() -> float:
     """Compile the kernels in a subprocess with an empty numba cache directory."""
     code = ("import time; t = time.perf_counter(); "
-            "from agents.social_navigation.search import warm_up; warm_up(); "
+            "from agents.lib.socialmap.search import warm_up; warm_up(); "
             "print(time.perf_counter() - t)")
     with tempfile.TemporaryDirectory() as cache_dir:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir, PYTHONPATH=str(REPO_ROOT))
@@ -128,10 +130,10 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
     import pyastar2d
     from scipy.sparse.csgraph import dijkstra
 
-    from agents.social_navigation.reference_graph import grid_graph
-    from agents.social_navigation.search import SearchWorkspace
-    from agents.social_navigation.grid import GridParams
-    from agents.social_navigation.social_map import SocialMapParams, build_social_map, build_static_map, plan
+    from agents.lib.socialmap.reference_graph import grid_graph
+    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.socialmap.grid import GridParams
+    from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map, plan
 
     scene = bench_scene()
     params = SocialMapParams(grid=GridParams(resolution_m=WORLD_M / n_cells))
@@ -189,7 +191,7 @@ def main(argv: list[str] | None = None) -> None:
     if not options.skip_compile:
         results["numba_compile_s"] = round(numba_compile_seconds(), 2)
     start = time.perf_counter()
-    from agents.social_navigation.search import warm_up
+    from agents.lib.socialmap.search import warm_up
     warm_up()
     results["numba_cache_load_s"] = round(time.perf_counter() - start, 3)
     for size in (int(s) for s in options.sizes.split(",") if s):

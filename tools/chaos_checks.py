@@ -61,7 +61,7 @@ def lost_writes(graph: Any, loaded: Any, done_seen: set[str], accepted: list[str
     """Every acknowledged write that is not in the final graph, as a sentence each (empty: none).
 
     ``accepted``: change JSON texts whose requests were answered "accepted"."""
-    from agents.agenda.changes import AgendaChangeError, apply_change, parse_change
+    from agents.lib.agenda.changes import AgendaChangeError, apply_change, parse_change
 
     lost: list[str] = []
     for node in graph.nodes_of_type("mission"):
@@ -77,7 +77,7 @@ def lost_writes(graph: Any, loaded: Any, done_seen: set[str], accepted: list[str
         if count != 1:
             lost.append(f"accepted agenda change {text} is {count} times in the agenda's change log")
     scene = loaded.scene
-    day = loaded.agenda_day
+    day = loaded.agenda
     for text in log:
         try:
             day = apply_change(day, parse_change(text), known_objects={o.name for o in scene.objects},

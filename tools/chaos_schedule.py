@@ -63,14 +63,14 @@ def _hhmm(seconds: float) -> str:
 def clock_text(seconds: float | None) -> str:
     if seconds is None:
         return "-"
-    from scenes.model import format_clock
+    from scenes.clock import format_clock
 
     return format_clock(seconds)
 
 
 def random_agenda_change(rng: random.Random, scene: Any, known_ids: list[str], index: int, tag: str) -> str:
     """A plausible staff edit: add an activity on a scene object, move or cancel a known one."""
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     start_min = int(parse_clock(scene.clock.start) // 60)
     end_min = int(parse_clock(scene.clock.end) // 60)
@@ -96,7 +96,7 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
 
     Deterministic for a seed.  Kills and stops pick any agent or the router; stops last 0.3-3 s
     (either side of the 2 s link lease); agenda edits add, move or cancel activities."""
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     missions = [m.id for m in sorted(loaded.scene.missions, key=lambda m: parse_clock(m.time))]
     if faults < 0 or duration_s <= 0:
@@ -104,7 +104,7 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
     if faults and not missions:
         raise ChaosError(f"scene {loaded.scene.name!r} has no missions to inject faults into")
     rng = random.Random(seed)
-    known_ids = list(loaded.agenda_day.ids())
+    known_ids = list(loaded.agenda.ids())
     planned = sorted(((index * len(missions) // max(faults, 1), round(rng.uniform(0.0, duration_s), 2))
                       for index in range(faults)))
     out: list[Fault] = []

@@ -100,36 +100,55 @@ def _short(attrs: dict[str, Any]) -> str:
 def dump(
     json_output: bool = typer.Option(False, "--json", help="Print JSON instead of tables."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Keep printing changes live."),
-    graph_name: str = typer.Option("", "--graph", help="Graph name (default $CHRONAV_GRAPH or "
-                                   "'chronav')."),
-    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) to connect to "
-                                      "(default $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
+                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
+    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
+                                   "$CHRONAV_GRAPH or 'chronav')."),
+    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
+                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
     duration: float = typer.Option(0.0, "--duration", help="With --follow: stop after this many "
                                    "seconds (0 = until Ctrl-C)."),
-    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the state."),
+    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
+                                  "again for the state."),
+    output_format: str = typer.Option("table", "--format",
+                                      help="table, json, or agm-xml (RoboComp AGM world XML, for AGM "
+                                           "tools; not with --follow)."),
 ) -> None:
     """Join a running graph read-only and print it (table or JSON), or follow changes live."""
     import orjson
 
-    from dsr import SIGNALS, DSRError, ZenohSettings, graph_name_from_env, join
+    if output_format not in ("table", "json", "agm-xml"):
+        typer.echo(f"chronav dsr dump: --format {output_format!r}: use table, json or agm-xml", err=True)
+        raise typer.Exit(2)
+    if output_format == "agm-xml" and (follow or json_output):
+        typer.echo("chronav dsr dump: --format agm-xml writes one snapshot: drop --follow and --json", err=True)
+        raise typer.Exit(2)
+    json_output = json_output or output_format == "json"
+
+    from dsr import SIGNALS
     from dsr.process import exit_on_sigterm
+    from tools.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
+                                  resolve_target)
 
     try:
-        settings = ZenohSettings.from_env()
-        if connect:
-            settings = ZenohSettings(**{**settings.model_dump(exclude_unset=True),
-                                        "connect": connect})
-        name = graph_name or graph_name_from_env()
-    except (DSRError, ValueError) as exc:
+        check_timeout(timeout)
+        target = resolve_target(connect, graph_name, run, role="reader")
+    except ConnectionProblem as exc:
         typer.echo(f"chronav dsr dump: {exc}", err=True)
         raise typer.Exit(2) from None
     exit_on_sigterm()
+    name = target.graph
     try:
-        with join(f"dump-{os.getpid()}", graph=name, settings=settings,
-                  read_only=True, sync_timeout=timeout) as graph:
+        with open_replica(target, agent=f"dump-{os.getpid()}", read_only=True,
+                          timeout_s=timeout) as graph:
+            require_system(graph, target)
             document = {"graph": name, **graph.to_document(),
                         "stats": graph.replica.stats.as_dict()}
-            if json_output:
+            if output_format == "agm-xml":
+                from grammar.agm_world import agm_world_xml
+
+                sys.stdout.write(agm_world_xml(graph.to_networkx()))
+            elif json_output:
                 sys.stdout.write(orjson.dumps(document).decode() + "\n")
             else:
                 _print_tables(graph)
@@ -148,37 +167,30 @@ def dump(
             deadline = time.monotonic() + duration if duration > 0 else None
             while deadline is None or time.monotonic() < deadline:
                 graph.dispatch(timeout=0.2)
-    except DSRError as exc:
+    except ConnectionProblem as exc:
         typer.echo(f"chronav dsr dump: {exc}", err=True)
         raise typer.Exit(1) from None
     except KeyboardInterrupt:
         raise typer.Exit(130) from None
 
 
-def _settings(connect: list[str]) -> Any:
-    from dsr import ZenohSettings
-    settings = ZenohSettings.from_env()
-    if connect:
-        settings = ZenohSettings(**{**settings.model_dump(exclude_unset=True), "connect": connect})
-    return settings
-
-
-def collect_stats(settings: Any, graph_name: str, timeout: float) -> dict[str, Any]:
+def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
     """Every member's counters, by agent (members answer `chronav/<g>/state/<agent>?stats`)."""
     import orjson
     import zenoh
 
     from dsr import wire
-    from dsr.transport import STATS_FORMAT, TransportError
+    from dsr.transport import STATS_FORMAT
+    from tools.connection import ConnectionProblem, settings_for, unreachable_message
 
+    settings = settings_for(target, open_timeout_s=timeout)
     try:
         session = zenoh.open(settings.to_zenoh_config())
-    except zenoh.ZError as exc:
-        raise TransportError(f"cannot open Zenoh session ({settings.describe()}): {exc}; is "
-                             "the system running (chronav launch)?") from None
+    except zenoh.ZError:
+        raise ConnectionProblem(unreachable_message(target)) from None
     members: dict[str, Any] = {}
     try:
-        replies = session.get(wire.state_key(graph_name, "*") + "?stats",
+        replies = session.get(wire.state_key(target.graph, "*") + "?stats",
                               target=zenoh.QueryTarget.ALL,
                               consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
         for reply in replies:
@@ -192,41 +204,49 @@ def collect_stats(settings: Any, graph_name: str, timeout: float) -> dict[str, A
                 members[str(report.get("agent"))] = report
     finally:
         session.close()
-    return {"graph": graph_name, "members": dict(sorted(members.items()))}
+    return {"graph": target.graph, "members": dict(sorted(members.items()))}
 
 
 @dsr_app.command("stats")
 def stats(
     json_output: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
-    graph_name: str = typer.Option("", "--graph", help="Graph name (default $CHRONAV_GRAPH or "
-                                   "'chronav')."),
-    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) to connect to "
-                                      "(default $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
-    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the answers."),
+    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
+                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
+    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
+                                   "$CHRONAV_GRAPH or 'chronav')."),
+    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
+                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
+                                  "again for the answers."),
 ) -> None:
     """Every member's replica counters: deltas received and applied, refusals per reason,
     deferred relayed writes, digests, tombstones held and compacted."""
     import orjson
 
-    from dsr import DSRError, graph_name_from_env
+    from tools.connection import ConnectionProblem, check_timeout, resolve_target
 
     try:
-        settings = _settings(connect)
-        name = graph_name or graph_name_from_env()
-        document = collect_stats(settings, name, timeout)
-    except (DSRError, ValueError) as exc:
+        check_timeout(timeout)
+        target = resolve_target(connect, graph_name, run, role="reader")
+    except ConnectionProblem as exc:
+        typer.echo(f"chronav dsr stats: {exc}", err=True)
+        raise typer.Exit(2) from None
+    try:
+        document = collect_stats(target, timeout)
+    except ConnectionProblem as exc:
         typer.echo(f"chronav dsr stats: {exc}", err=True)
         raise typer.Exit(1) from None
     if not document["members"]:
-        typer.echo(f"chronav dsr stats: no member of graph {name!r} answered within {timeout} s "
-                   "(is the system running, and is --graph right?)", err=True)
+        typer.echo(f"chronav dsr stats: no member of graph {target.graph!r} answered within "
+                   f"{timeout:g} s ({target.describe()}): is the system running, and is --graph "
+                   "right?", err=True)
         raise typer.Exit(1)
     if json_output:
         sys.stdout.write(orjson.dumps(document).decode() + "\n")
         return
     from rich.console import Console
     from rich.table import Table
-    table = Table(title=f"DSR graph {name!r}: {len(document['members'])} members")
+    table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
                    "policy", "deferred", "tombstones", "compacted"):
         table.add_column(column, overflow="fold")

@@ -25,14 +25,15 @@ def _xy(text: str, option: str) -> tuple[float, float]:
 
 
 def _clock(text: str | None, option: str) -> float | None:
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     if text is None:
         return None
     try:
         return parse_clock(text)
     except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint=option) from None
+        _fail(f"{option}: {exc}")  # the same words as `chronav plan --at` (one clock parser)
+    return None
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -53,7 +54,7 @@ def register(app: typer.Typer) -> None:
                      method: str = typer.Option("astar", help="astar or dijkstra"),
                      as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
         """Plan one path on SCENE's social map at a given time and score it."""
-        from agents.social_navigation.offline import OfflineError, plan_offline
+        from agents.world.offline import OfflineError, plan_offline
 
         t_s = _clock(at, "--at")
         assert t_s is not None
@@ -91,8 +92,8 @@ def register(app: typer.Typer) -> None:
                                                                   "first sample if >= 1 h, else the scene's start)"),
                         as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
         """Social-navigation metrics of a trajectory: d_min, d_t, tau, CHC, Psi zones and spaces."""
-        from agents.social_navigation.metrics import MetricsInputError
-        from agents.social_navigation.offline import OfflineError, metrics_offline
+        from agents.lib.socialmap.metrics import MetricsInputError
+        from agents.world.offline import OfflineError, metrics_offline
 
         try:
             report = metrics_offline(scene, trajectory, _clock(at, "--at"))

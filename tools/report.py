@@ -23,17 +23,21 @@ def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -
 
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
-    from agents.social_navigation.metrics import read_trajectory_csv
-    from agents.social_navigation.offline import OfflineError, SceneMaps, path_as_trajectory
-    from agents.social_navigation.search import PlanningError
-    from agents.social_navigation.social_map import plan
+    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_trajectory_csv
+    from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
+    from agents.lib.socialmap.search import PlanningError
+    from agents.lib.socialmap.social_map import plan
 
     traj_path = Path(run_dir) / "trajectory.csv"
     report: dict[str, Any] = {"scene": Path(scene).stem, "missions": {}}
     if not traj_path.exists():
         report["error"] = "no trajectory was recorded"
         return report
-    trajectory = read_trajectory_csv(traj_path)
+    try:
+        trajectory = read_trajectory_csv(traj_path)
+    except TrajectoryFormatError as exc:   # e.g. stopped before the robot's first sample
+        report["error"] = f"no usable trajectory was recorded ({exc})"
+        return report
     try:
         maps = SceneMaps.load(scene)
     except OfflineError as exc:
@@ -82,7 +86,7 @@ def log_report(recorder: Any, report: dict[str, Any], missions: dict[str, dict[s
 
 
 def _rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
-    from agents.social_navigation.metrics import MetricsReport
+    from agents.lib.socialmap.metrics import MetricsReport
 
     return MetricsReport(**metrics).to_table()
 

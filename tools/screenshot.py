@@ -23,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     import rerun_cli
     from rerun.experimental import ViewerClient
 
-    from scenes.model import parse_clock
+    from scenes.clock import parse_clock
 
     binary = str(Path(rerun_cli.__file__).parent / "rerun")
     os.environ.setdefault("WGPU_BACKEND", "vulkan")

@@ -13,18 +13,15 @@ Request protocol: a client inserts ``agenda_request/<uuid>`` (type ``agenda_requ
 
 from __future__ import annotations
 
-import json
-
-from agents.agenda.changes import AgendaChangeError, apply_change, parse_change
-from agents.agenda.expand import expand_day
-from agents.agenda.model import Activity, AgendaDay, AgendaError, format_clock
-from agents.agenda.yaml_source import load_scene_agenda
+from agents.lib.agenda.changes import AgendaChangeError, apply_change, parse_change
+from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S, ChronemicsParams
+from agents.lib.agenda.model import AgendaDay
 from agents.runtime.base import Agent
-from agents.runtime.freshness import mark_observed
 from agents.runtime.recording import Recorder
-from agents.social_navigation.chronemics import ChronemicsParams, r_band, r_of_t
-
-R_EPSILON = 1e-3
+from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
+from agents.world.freshness import mark_observed
+from agents.world.vocabulary import ClockView
+from scenes.clock import format_clock
 
 
 class AgendaAgent(Agent):
@@ -34,42 +31,25 @@ class AgendaAgent(Agent):
         self.graph = graph
         self.rec = recorder
         self.params = ChronemicsParams()
-        self.upcoming_window_s = self.params.ramp_before_s  # "upcoming" = R(t) already rising
-        clock = self.scene.clock
-        self.objects = {o.name for o in self.scene.objects}
-        self.rooms = {r.name for r in self.scene.rooms}
-        try:
-            sources = load_scene_agenda(self.config.scene)
-            self.day = expand_day(sources, clock.date, clock.timezone, self.objects, known_rooms=self.rooms)
-        except AgendaError as exc:
-            # A broken agenda must not take the robot down: run with an empty day, say why loudly.
-            self.log.error("agenda of %s could not be loaded, starting empty:\n%s", self.config.scene, exc)
-            self.rec.event(f"agenda not loaded: {exc}", level="ERROR")
-            self.day = AgendaDay(date=clock.date, tz=clock.timezone)
+        self.day = self.world.agenda  # validated when the scene was loaded (agents/world/scene_world.py)
         self._restore_runtime_changes()
-        self._published: dict[str, dict[str, object]] = {}
-        self._dirty = True
+        self._complete = False
+        self._published: AgendaDay | None = None
 
     # ----------------------------------------------------------------- restart safety
-    def _agenda_node(self):  # noqa: ANN202
-        g = self.graph
-        node = g.get_node_by_name("agenda")
-        if node is None:
-            node = g.insert_node(type="agenda", name="agenda", attrs={"applied": [], "changes": []})
-        return node
-
     def _restore_runtime_changes(self) -> None:
         """Replay the accepted changes recorded in the DSR (a restarted agent keeps staff edits)."""
-        node = self._agenda_node()
+        node = agenda_log(self.graph)
         for text in node.attrs.get("changes", []):
             try:
-                self.day = apply_change(self.day, parse_change(text), known_objects=self.objects,
-                                        known_rooms=self.rooms)
+                self.day = apply_change(self.day, parse_change(text), known_objects=self.world.object_names,
+                                        known_rooms=self.world.room_names,
+                                        known_people=self.world.person_names)
             except AgendaChangeError as exc:
                 self.log.warning("could not replay a recorded change: %s", exc)
 
     def _remember(self, change_json: str, scripted_key: str | None = None) -> None:
-        node = self._agenda_node()
+        node = agenda_log(self.graph)
         attrs: dict[str, object] = {"changes": [*node.attrs.get("changes", []), change_json]}
         if scripted_key is not None:
             attrs["applied"] = [*node.attrs.get("applied", []), scripted_key]
@@ -78,10 +58,10 @@ class AgendaAgent(Agent):
     # ----------------------------------------------------------------- loop
     def step(self) -> None:
         g = self.graph
-        clock = g.get_node_by_name("clock")
+        clock = ClockView.of(g)
         if clock is None:
             return
-        now_s = float(clock.attrs["now_s"])
+        now_s = clock.now_s
         self.rec.set_time(now_s)
         self._scripted_changes(now_s)
         self._requests(now_s)
@@ -92,7 +72,8 @@ class AgendaAgent(Agent):
     def _apply(self, change_json: str, now_s: float, origin: str) -> tuple[bool, str]:
         try:
             change = parse_change(change_json)
-            new_day = apply_change(self.day, change, known_objects=self.objects, known_rooms=self.rooms)
+            new_day = apply_change(self.day, change, known_objects=self.world.object_names,
+                                   known_rooms=self.world.room_names, known_people=self.world.person_names)
         except AgendaChangeError as exc:
             self.rec.event(f"{format_clock(now_s)} agenda change from {origin} refused: {exc}", level="WARN")
             return False, str(exc)
@@ -101,7 +82,7 @@ class AgendaAgent(Agent):
         changed = [a for a in new_day.activities if before.get(a.id) != a]
         removed = sorted(set(before) - {a.id for a in new_day.activities})
         summary = ", ".join(f"{a.id} {a.object} {format_clock(a.start_s)}-{format_clock(a.end_s)} "
-                            f"{a.at(now_s, self.upcoming_window_s).state.value}"
+                            f"{a.at(now_s, UPCOMING_WINDOW_S).state.value}"
                             for a in changed) or "no change"
         if removed:
             summary += f"; removed {', '.join(removed)}"
@@ -111,24 +92,20 @@ class AgendaAgent(Agent):
         return True, message
 
     def _scripted_changes(self, now_s: float) -> None:
-        """Scene ``agenda_changes``: staff edits scripted at a sim time (applied once, restart-safe)."""
-        from agents.agenda.model import parse_clock
-
-        applied = set(self._agenda_node().attrs.get("applied", []))
-        for index, change in enumerate(self.scene.agenda_changes):
-            key = f"scene#{index}"
-            if key in applied or parse_clock(change.at) > now_s:
+        """Scene ``agenda_changes``: staff edits scripted at a sim time (applied once, restart-safe),
+        in the order agents/world/timeline.py applies them offline."""
+        applied = set(agenda_log(self.graph).attrs.get("applied", []))
+        for change in self.world.scripted:
+            if change.key in applied or change.at_s > now_s:
                 continue
-            payload = {k: v for k, v in change.model_dump().items() if k != "at" and v is not None}
-            text = json.dumps(payload)
-            ok, _ = self._apply(text, now_s, origin=f"scene agenda_changes[{index}]")
+            ok, _ = self._apply(change.text, now_s, origin=f"scene agenda_changes[{change.index}]")
             if ok:
-                self._remember(text, scripted_key=key)
+                self._remember(change.text, scripted_key=change.key)
             else:
-                self._remember_skip(key)
+                self._remember_skip(change.key)
 
     def _remember_skip(self, key: str) -> None:
-        node = self._agenda_node()
+        node = agenda_log(self.graph)
         self.graph.update_node(node.id, attrs={"applied": [*node.attrs.get("applied", []), key]})
 
     def _requests(self, now_s: float) -> None:
@@ -149,48 +126,14 @@ class AgendaAgent(Agent):
                     self.graph.update_node(request.id, attrs={"state": "accepted" if ok else "refused",
                                                               "message": message, "answered_s": now_s})
 
-    def _activity_attrs(self, activity: Activity, now_s: float) -> dict[str, object]:
-        current = activity.at(now_s, self.upcoming_window_s)
-        return {"activity_id": activity.id, "name": activity.name, "object": activity.object,
-                "room": activity.room or "", "start_s": activity.start_s, "end_s": activity.end_s,
-                "participants": list(activity.participants), "state": current.state.value,
-                "source": activity.source}
-
     def _publish_activities(self, now_s: float) -> None:
-        g = self.graph
-        wanted = {a.id: self._activity_attrs(a, now_s) for a in self.day.activities}
-        if wanted == self._published and not self._dirty:
+        day_now = self.day.at(now_s, UPCOMING_WINDOW_S)
+        if day_now == self._published and self._complete:
             return
-        with g.transaction():
-            for activity_id, attrs in wanted.items():
-                name = f"activity/{activity_id}"
-                node = g.get_node_by_name(name)
-                if node is None:
-                    node = g.insert_node(type="activity", name=name, attrs=attrs)
-                elif self._published.get(activity_id) != attrs:
-                    g.update_node(node.id, attrs=attrs)
-                obj = g.get_node_by_name(str(attrs["object"]))
-                if obj is not None:
-                    g.insert_or_assign_edge(node.id, obj.id, "has", attrs={})
-                for person_name in attrs["participants"]:  # type: ignore[union-attr]
-                    person = g.get_node_by_name(str(person_name))
-                    if person is not None and person.type == "person":
-                        g.insert_or_assign_edge(person.id, node.id, "participant", attrs={})
-            for node in g.nodes_of_type("activity"):
-                if str(node.attrs.get("activity_id")) not in wanted:
-                    g.delete_node(node.id)
-        # Edges to objects/people that were not yet in the graph: try again next time.
-        self._dirty = any(g.get_node_by_name(str(a["object"])) is None for a in wanted.values())
-        self._published = wanted
+        # Edges to objects/people not yet in the graph are written on a later call.
+        self._complete = write_activities(self.graph, day_now)
+        self._published = day_now
 
     def _publish_r(self, now_s: float) -> None:
-        g = self.graph
-        windows = self.day.windows()
-        with g.transaction():
-            for node in g.nodes_of_type("object"):
-                own = [w for w in windows if w.object == node.name]
-                r = r_of_t(now_s, own, self.params)
-                running = any(w.start_s <= now_s < w.end_s and not w.cancelled for w in own)
-                if abs(float(node.attrs.get("R", -1.0)) - r) > R_EPSILON or node.attrs.get("active") != running:
-                    g.update_node(node.id, attrs={"R": r, "R_band": r_band(r, self.params), "active": running})
-                self.rec.scalar(f"metrics/objects/{node.name}", r)
+        for name, r in write_object_r(self.graph, self.day, now_s, self.params).items():
+            self.rec.scalar(f"metrics/objects/{name}", r)

@@ -12,10 +12,10 @@ The executive writes missions and intentions; social navigation only flips an in
 
 from __future__ import annotations
 
-from agents.executive.planning import MissionPlanner, PlanStep, StepFailed
+from agents.missions.planning import MissionPlanner, PlanStep, StepFailed
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
-from scenes.model import format_clock, parse_clock
+from scenes.clock import format_clock, parse_clock
 
 MAX_REPLANS = 4
 

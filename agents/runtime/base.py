@@ -4,7 +4,10 @@ Why the split (after py_trees' Behaviour): an Agent holds the behaviour (``setup
 ``teardown``) and never opens sessions itself; ``run_agent`` owns the middleware, the loop, the
 signals and the cleanup.  That makes every agent constructible offline in a unit test, and makes
 shutdown uniform: SIGINT/SIGTERM end the loop, the recording gets its footer, the Zenoh session is
-closed (an unclosed session hangs the interpreter at exit).
+closed (an unclosed session hangs the interpreter at exit).  The loop also stamps the agent's
+heartbeat in the DSR (agents/runtime/heartbeat.py), so a launcher can tell a stuck agent from a
+busy one.  Credentials come from the environment like every Zenoh setting
+(``CHRONAV_ZENOH_USER`` + ``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
 """
 
 from __future__ import annotations
@@ -19,8 +22,9 @@ from abc import ABC, abstractmethod
 from typing import ClassVar
 
 from agents.runtime.config import AgentConfig, parse_agent_args
+from agents.runtime.heartbeat import Heartbeat
 from agents.runtime.recording import Recorder
-from scenes.loader import load_scene
+from agents.world.scene_world import SceneWorld, load_world
 from scenes.model import Scene
 
 log = logging.getLogger("chronav.agent")
@@ -33,7 +37,8 @@ class Agent(ABC):
 
     def __init__(self, config: AgentConfig) -> None:
         self.config = config
-        self.scene: Scene = load_scene(config.scene).scene
+        self.world: SceneWorld = load_world(config.scene)
+        self.scene: Scene = self.world.scene
         self.log = logging.getLogger(f"chronav.{config.name}")
 
     @abstractmethod
@@ -57,7 +62,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.config import ZenohSettings
-    from dsr.policy import policy_from_env
+    from agents.world.write_policy import policy_from_env
 
     config = parse_agent_args(agent_cls.kind, argv)
     configure_logging(config.name)
@@ -75,11 +80,12 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     agent = agent_cls(config)
     recorder = Recorder(config.name, config.run_dir, config.recording_id)
     settings = ZenohSettings.from_env()
-    policy = policy_from_env()  # deploy/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
+    policy = policy_from_env()  # agents/world/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
     try:
         with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as graph:
             agent.setup(graph, recorder)
             log.info("%s joined graph %r", config.name, config.graph)
+            heartbeat = Heartbeat(graph, config.name)
             try:
                 while not stop.is_set():
                     if parent is not None and os.getppid() != parent:
@@ -88,6 +94,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                     started = time.monotonic()
                     graph.dispatch(timeout=0.0)
                     agent.step()
+                    heartbeat.maybe_beat()
                     remaining = config.period_s - (time.monotonic() - started)
                     if remaining > 0:
                         # Wait for signals (DSR changes) rather than sleeping blind.

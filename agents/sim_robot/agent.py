@@ -20,12 +20,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from agents.runtime.base import Agent
+from agents.runtime.drawing.bodies import log_robot
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
-from agents.world_model import door_segment, footprint_polygons
-from scenes.model import parse_clock
-from scenes.motion import people_at
+from agents.world.building import closed_door_walls, footprint_polygons
+from agents.world.dsr_readers import closed_doors
+from agents.world.dsr_writers import set_doors, write_building, write_clock, write_robot
+from agents.world.motion import people_at
+from agents.world.timeline import doors_at
+from agents.world.vocabulary import CLOCK, WORLD
+from scenes.geometry import project_on_segments
 
 CONTROL_DT_S = 0.1
 WATCHDOG_WALL_S = 1.0
@@ -71,74 +76,38 @@ class SimRobotAgent(Agent):
 
     # ----------------------------------------------------------------- world setup
     def _write_static_world(self) -> None:
-        """World root, rooms, doors, the clock and the robot: what the simulated building is."""
+        """World root, rooms, doors and the clock: what the simulated building is."""
         g, scene = self.graph, self.scene
         with g.transaction():
-            world = g.get_node_by_name("world") or g.insert_node(type="world", name="world", attrs={})
-            for room in scene.rooms:
-                if g.get_node_by_name(room.name) is None:
-                    xs, ys = zip(*room.polygon, strict=True)
-                    node = g.insert_node(type="room", name=room.name,
-                                         attrs={"polygon_x": list(map(float, xs)), "polygon_y": list(map(float, ys))})
-                    g.insert_or_assign_edge(world.id, node.id, "RT", attrs={"x": 0.0, "y": 0.0, "theta": 0.0})
-            for door in scene.doors:
-                a, b = (g.get_node_by_name(name) for name in door.between)
-                if g.get_node_by_name(door.name) is None:
-                    # The `connected` edges name this node in their `door` attribute (grammar changeRoom).
-                    g.insert_node(type="door", name=door.name,
-                                  attrs={"x": door.position[0], "y": door.position[1], "width": door.width,
-                                         "rooms": list(door.between), "open": True})
-                # One `connected` edge per room pair (edges are keyed by type): it lists all their doors.
-                doors = [d.name for d in scene.doors if set(d.between) == set(door.between)]
-                g.insert_or_assign_edge(a.id, b.id, "connected", attrs={"door": doors[0], "doors": doors})
-                g.insert_or_assign_edge(b.id, a.id, "connected", attrs={"door": doors[0], "doors": doors})
-            if g.get_node_by_name("clock") is None:
-                g.insert_node(type="clock", name="clock",
-                              attrs={"now_s": scene.clock.start_s, "start_s": scene.clock.start_s,
-                                     "end_s": scene.clock.end_s, "rate": self.rate, "mode": "idle",
-                                     "finished": False})
+            write_building(g, scene, doors_at(scene, scene.clock.start_s))
+            if g.get_node_by_name(CLOCK) is None:
+                write_clock(g, scene, scene.clock.start_s, self.rate)
 
     def _resume_or_start(self) -> tuple[RobotState, float]:
         """A restarted simulator continues from the replicated pose and clock, not from the scene."""
         g, spec = self.graph, self.scene.robot
-        clock = g.get_node_by_name("clock")
-        now_s = float(clock.attrs.get("now_s", self.scene.clock.start_s))
+        now_s = float(g.get_node_by_name(CLOCK).attrs.get("now_s", self.scene.clock.start_s))
         node = g.get_node_by_name(spec.name)
-        world = g.get_node_by_name("world")
-        if node is not None:
-            edge = g.get_edge(world.id, node.id, "RT")
-            if edge is not None:
-                self.log.info("resuming robot at (%.2f, %.2f) t=%.1f", edge.attrs["x"], edge.attrs["y"], now_s)
-                return RobotState(edge.attrs["x"], edge.attrs["y"], edge.attrs["theta"], Velocity()), now_s
-        with g.transaction():
-            if node is None:
-                node = g.insert_node(type="robot", name=spec.name,
-                                     attrs={"radius": spec.radius, "kinematics": spec.kinematics,
-                                            "max_speed": spec.max_speed, "nav_active": False,
-                                            "laser_angles": self.laser.angles.tolist()})
-            room = self.scene.room_at(spec.pose.x, spec.pose.y)
-            if room is not None:
-                g.insert_or_assign_edge(node.id, g.get_node_by_name(room).id, "in", attrs={})
-        return RobotState(spec.pose.x, spec.pose.y, spec.pose.theta, Velocity()), now_s
+        world = g.get_node_by_name(WORLD)
+        edge = g.get_edge(world.id, node.id, "RT") if node is not None else None
+        if edge is not None:
+            self.log.info("resuming robot at (%.2f, %.2f) t=%.1f", edge.attrs["x"], edge.attrs["y"], now_s)
+            return RobotState(edge.attrs["x"], edge.attrs["y"], edge.attrs["theta"], Velocity()), now_s
+        pose = (spec.pose.x, spec.pose.y, spec.pose.theta)
+        write_robot(g, spec, pose, self.scene.room_at(spec.pose.x, spec.pose.y), self.laser.angles.tolist())
+        return RobotState(*pose, Velocity()), now_s
 
     # ----------------------------------------------------------------- loop
     def _doors(self) -> None:
         """Scripted door events: each door takes the state of its latest due change (restart-safe),
         and a closed door blocks the laser and the base like a wall."""
         g = self.graph
-        due: dict[str, bool] = {}
-        for change in sorted(self.scene.door_changes, key=lambda c: parse_clock(c.at)):
-            if parse_clock(change.at) <= self.now_s:
-                due[change.door] = change.open
-        for name, is_open in due.items():
-            node = g.get_node_by_name(name)
-            if node is not None and node.attrs.get("open") != is_open:
-                g.update_node(node.id, attrs={"open": is_open})
-                self.rec.event(f"door {name} {'opened' if is_open else 'closed'}")
-        closed = frozenset(n.name for n in g.nodes_of_type("door") if n.attrs.get("open") is False)
+        for name, is_open in set_doors(g, doors_at(self.scene, self.now_s)):
+            self.rec.event(f"door {name} {'opened' if is_open else 'closed'}")
+        closed = frozenset(closed_doors(g))
         if closed != self._closed_doors:
             self._closed_doors = closed
-            leaves = [door_segment(self.scene, name) for name in sorted(closed)]
+            leaves = [wall.points for wall in closed_door_walls(self.scene, closed)]
             self.laser.segments = np.vstack([self._fixed_segments, polyline_segments(leaves)])
 
     def step(self) -> None:
@@ -175,14 +144,20 @@ class SimRobotAgent(Agent):
         else:
             target = self._next_deadline()
             if self.scene.clock.skip_idle and target is not None and target > self.now_s:
-                self.now_s = min(target, end_s)
-                self._reanchor()
-                self._publish()
+                self.skip_to(min(target, end_s))
                 self.rec.event(f"idle: clock skipped to {target:.0f} s")
             else:
                 dt = (wall_now - self._wall_anchor) * self.rate - (self.now_s - self._sim_anchor)
                 if dt > 0:
                     self._advance(min(dt, 5.0), Velocity())
+
+    def skip_to(self, t_s: float) -> None:
+        """Jump the sim clock to ``t_s`` with the robot at rest, and carry out what is due by then
+        (scripted doors), as the idle mode does when nothing is due before ``t_s``."""
+        self.now_s = t_s
+        self._doors()
+        self._reanchor()
+        self._publish()
 
     def _rate_allows(self, wall_now: float, dt: float) -> bool:
         return (self.now_s + dt - self._sim_anchor) <= (wall_now - self._wall_anchor) * self.rate + dt
@@ -243,11 +218,7 @@ class SimRobotAgent(Agent):
             nearest = min(nearest, math.hypot(p.x - x, p.y - y) - PERSON_RADIUS_M)
         segs = self.laser.segments
         if len(segs):
-            a, b = segs[:, :2], segs[:, 2:]
-            ab = b - a
-            t = np.clip(((np.array([x, y]) - a) * ab).sum(axis=1) / np.maximum((ab**2).sum(axis=1), 1e-12), 0, 1)
-            closest = a + t[:, None] * ab
-            nearest = min(nearest, float(np.min(np.hypot(closest[:, 0] - x, closest[:, 1] - y))))
+            nearest = min(nearest, float(np.min(project_on_segments((x, y), segs[:, :2], segs[:, 2:]).distance)))
         return nearest
 
     def _open_trajectory(self):  # noqa: ANN202 - text file or None
@@ -272,7 +243,7 @@ class SimRobotAgent(Agent):
         people_xy = np.array([[p.x, p.y] for p in people]).reshape(-1, 2)
         ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
         robot = g.get_node_by_name(self.scene.robot.name)
-        world = g.get_node_by_name("world")
+        world = g.get_node_by_name(WORLD)
         room = self._room_change(s.x, s.y)
         with g.transaction():
             g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
@@ -282,7 +253,7 @@ class SimRobotAgent(Agent):
                 g.insert_or_assign_edge(robot.id, room.id, "in", attrs={})
             g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
                                             "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
-            g.update_node(g.get_node_by_name("clock").id, attrs={"now_s": self.now_s})
+            g.update_node(g.get_node_by_name(CLOCK).id, attrs={"now_s": self.now_s})
         self.rec.set_time(self.now_s)
         self._log_frame(ranges)
 
@@ -295,22 +266,11 @@ class SimRobotAgent(Agent):
         return self.graph.get_node_by_name(name)
 
     def _set_clock(self, **attrs: object) -> None:
-        clock = self.graph.get_node_by_name("clock")
+        clock = self.graph.get_node_by_name(CLOCK)
         if any(clock.attrs.get(k) != v for k, v in attrs.items()):
             self.graph.update_node(clock.id, attrs=dict(attrs))
 
     def _log_frame(self, ranges: np.ndarray) -> None:
-        if not self.rec.enabled:
-            return
-        import rerun as rr
-
         s = self.state
-        self.rec.log("world/robot/pose", rr.Points2D([[s.x, s.y]], radii=self.scene.robot.radius,
-                                                    colors=[[30, 120, 255]], labels=[self.scene.robot.name]))
-        heading = [[s.x, s.y], [s.x + 0.5 * math.cos(s.theta), s.y + 0.5 * math.sin(s.theta)]]
-        self.rec.log("world/robot/heading", rr.LineStrips2D([heading], colors=[[30, 120, 255]], radii=0.03))
-        self.rec.log("world/robot/laser", rr.Points2D(self.laser.points(s.x, s.y, s.theta, ranges),
-                                                      radii=0.03, colors=[[255, 60, 60]]))
-        self.rec.scalar("metrics/robot/speed_m_s", math.hypot(s.velocity.vx, s.velocity.vy))
-        if self._trail and len(self._trail) % 10 == 0:
-            self.rec.line_strip("world/robot/trajectory", self._trail, color=[30, 120, 255], radius=0.02)
+        log_robot(self.rec, self.scene.robot.name, self.scene.robot.radius, (s.x, s.y, s.theta),
+                  math.hypot(s.velocity.vx, s.velocity.vy), self.laser.points(s.x, s.y, s.theta, ranges), self._trail)

@@ -19,17 +19,16 @@ from typing import Any
 import numpy as np
 
 from agents.runtime.base import Agent
-from agents.runtime.freshness import observed_up_to
+from agents.world.freshness import observed_up_to
 from agents.runtime.recording import Recorder
-from agents.social_navigation import elastic_band as eb
-from agents.social_navigation.control import BandFollower, ControlParams, DiffCommand
-from agents.social_navigation.grid import GridParams
-from agents.social_navigation.search import GoalOccupied, PlanningError, SearchWorkspace, StartOccupied
-from agents.social_navigation.social_map import SocialMap, SocialMapParams, build_social_map, build_static_map, plan
-from agents.social_navigation.view import log_social_map
-from agents.world_model import (PLANNING_MARGIN_M, closed_door_walls, dsr_activity_windows, dsr_objects,
-                                dsr_people, scene_rooms, scene_walls)
-from scenes.model import format_clock
+from agents.lib.socialmap import elastic_band as eb
+from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
+from agents.lib.socialmap.search import GoalOccupied, PlanningError, SearchWorkspace, StartOccupied
+from agents.lib.socialmap.social_map import SocialMap, plan
+from agents.runtime.drawing.social_map import log_social_map
+from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
+from agents.world.vocabulary import now_s as now_of
+from scenes.clock import format_clock
 
 REPLAN_PERIOD_S = 1.0
 SLOW_ZONE_M = 0.5
@@ -86,18 +85,15 @@ class SocialNavigationAgent(Agent):
     def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
         self.graph = graph
         self.rec = recorder
-        scene, robot = self.scene, self.scene.robot
+        robot = self.scene.robot
         # Plan with a clearance margin beyond the body: the controller cuts corners a little.
         margin = float(self.config.option("clearance_margin", str(PLANNING_MARGIN_M)))
-        self.params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution,
-                                                      robot_radius_m=robot.radius + margin))
-        self.walls, self.rooms = scene_walls(scene), scene_rooms(scene)
-        self.bounds = scene.bounds
+        self.maps = NavigationMaps.for_scene(self.scene, margin)
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
                                      max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
         self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
-        self.cruise = 0.7 * robot.max_speed
+        self.cruise = self.maps.cruise_speed_mps
         self.control_dt = float(self.config.option("control_dt", "0.1"))
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
@@ -111,30 +107,16 @@ class SocialNavigationAgent(Agent):
         self.map: SocialMap | None = None
         self.workspace = SearchWorkspace()
         self.route_rooms: tuple[str, ...] = ()
-        # Static maps per (route rooms, closed doors): rasterising the building is the costly part.
-        self._statics: dict[tuple[tuple[str, ...], tuple[str, ...]], Any] = {}
         self._last_map_log_s = -math.inf
 
     # ----------------------------------------------------------------- helpers
     def _robot(self) -> Any:
         return self.graph.get_node_by_name(self.scene.robot.name)
 
-    def _now(self) -> float | None:
-        clock = self.graph.get_node_by_name("clock")
-        return None if clock is None else float(clock.attrs["now_s"])
-
     def _build_map(self, now_s: float) -> SocialMap:
-        """The social map; confined to the intention's ``rooms`` when the executive's symbolic plan
-        fixed the route's rooms (cells of other rooms become walls, so the metric planner picks the
-        doors and the way, but never cuts through a room the plan avoided)."""
-        g = self.graph
-        rooms = [room for room in self.rooms if room.name in self.route_rooms] if self.route_rooms else self.rooms
-        walls = [*self.walls, *closed_door_walls(self.scene, g)]  # a closed door is a wall
-        key = (tuple(sorted(self.route_rooms)), tuple(w.name for w in walls[len(self.walls):]))
-        if key not in self._statics:
-            self._statics[key] = build_static_map(self.bounds, walls, rooms, self.params)
-        return build_social_map(self.bounds, walls, dsr_people(g), dsr_objects(g), dsr_activity_windows(g),
-                                now_s, self.params, rooms=rooms, static=self._statics[key])
+        """The social map, confined to the intention's ``rooms`` when the executive's symbolic plan
+        fixed the route's rooms (agents/world/navigation.py)."""
+        return self.maps.build(self.graph, now_s, self.route_rooms)
 
     def _active_intention(self) -> Any:
         for node in self.graph.nodes_of_type("intention"):
@@ -154,7 +136,7 @@ class SocialNavigationAgent(Agent):
 
     # ----------------------------------------------------------------- loop
     def step(self) -> None:
-        now_s = self._now()
+        now_s = now_of(self.graph)
         robot = self._robot()
         if now_s is None or robot is None:
             return

@@ -29,7 +29,7 @@ import orjson
 
 from dsr.config import ZenohSettings
 from dsr.graph import DSRGraph
-from dsr.policy import policy_from_env
+from agents.world.write_policy import policy_from_env
 from dsr.process import exit_on_sigterm
 from dsr.transport import join
 

@@ -1,4 +1,4 @@
-"""The write policy in real processes over real Zenoh (shipped deploy/write_policy.yaml).
+"""The write policy in real processes over real Zenoh (shipped agents/world/write_policy.yaml).
 
 Legit writers (sim_robot, agenda, executive) build a small world; a rogue process — once with a
 name that holds no grant, once with a real agent's name (object_recognition) doing what it may

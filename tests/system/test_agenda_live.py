@@ -24,12 +24,15 @@ from typing import Any
 import numpy as np
 import shapely
 
-from agents.social_navigation.objects import object_geometry
-from agents.world_model import scene_objects
+from agents.lib.socialmap.objects import object_geometry
+from agents.world.dsr_readers import dsr_objects
+from agents.world.offline import graph_at
+from agents.world.scene_world import load_world
 from dsr import ZenohSettings, join
 from scenes.loader import load_scene
-from scenes.model import format_clock
+from scenes.clock import format_clock
 from tests.support import REPO_ROOT, ProcessGroup, wait_until
+from tools.runs import read_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 RATE = 1.0                      # sim s per wall s while driving: the mission takes ~20 s wall
@@ -69,7 +72,8 @@ def launched(procs: ProcessGroup, runs: Path, log: Path) -> Iterator[subprocess.
 
 
 def _tv_space() -> shapely.Polygon:
-    (tv,) = [o for o in scene_objects(load_scene(SCENE).scene) if o.name == "tv"]
+    world = load_world(SCENE)
+    (tv,) = [o for o in dsr_objects(graph_at(world, world.scene.clock.start_s)) if o.name == "tv"]
     return object_geometry(tv).interaction
 
 
@@ -102,9 +106,10 @@ def test_added_activity_makes_the_driving_robot_go_round_the_tv(procs: ProcessGr
                    message="connect.json of the run")
         assert launcher.poll() is None, (tmp_path / "launcher.log").read_text()
         run_dir = next(runs.glob("*/connect.json")).parent
-        connect = json.loads((run_dir / "connect.json").read_text())
-        with join("agenda_live_test", graph=connect["graph"], settings=ZenohSettings(connect=[connect["endpoint"]]),
-                  read_only=True) as graph:
+        run = read_connect_file(run_dir)        # the run's reader identity: its router requires one
+        reader = run.identity("reader")
+        settings = ZenohSettings(connect=[run.endpoint], user=reader.user, password=reader.password)
+        with join("agenda_live_test", graph=run.graph, settings=settings, read_only=True) as graph:
             def robot() -> Any:
                 return graph.get_node_by_name("robot")
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 import shapely
 
-from agents.social_navigation.metrics import read_trajectory_csv
-from agents.social_navigation.offline import SceneMaps
-from scenes.model import parse_clock
+from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.world.offline import SceneMaps
+from scenes.clock import parse_clock
 from tests.system.launch_helpers import launch_json
 from tests.system.recording import load_store, strips_over_time, texts
 
@@ -55,7 +55,7 @@ def test_agenda_change_mid_mission_causes_a_replan(run: dict) -> None:
 
 def test_a_door_closing_mid_mission_makes_the_robot_go_round(tmp_path_factory: pytest.TempPathFactory) -> None:
     """The world diverges: the north door the robot was heading for closes; it replans via the south one."""
-    from agents.world_model import door_segment
+    from agents.world.building import door_segment
     from scenes.loader import SCENES_DIR, load_scene
 
     folder = tmp_path_factory.mktemp("door")

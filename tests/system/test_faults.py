@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agents.social_navigation.metrics import read_trajectory_csv
+from agents.lib.socialmap.metrics import read_trajectory_csv
 from dsr import DSRGraph
+from agents.world.scene_world import load_world
 from scenes.loader import load_scene
-from scenes.model import parse_clock
+from scenes.clock import parse_clock
 from tests.system.launch_helpers import run_json
 from tools.chaos import ChaosError, Fault, load_schedule, lost_writes, random_schedule
 from tools.launch import AGENTS
@@ -44,7 +45,7 @@ KILLS: list[dict[str, Any]] = [
 
 # ----------------------------------------------------------------------------- offline parts
 def test_random_schedules_are_reproducible_and_hit_every_mission() -> None:
-    loaded = load_scene("icra_usecase")
+    loaded = load_world("icra_usecase")
     first = random_schedule(loaded, seed=3, faults=12, duration_s=3)
     assert first == random_schedule(loaded, seed=3, faults=12, duration_s=3)
     assert first != random_schedule(loaded, seed=4, faults=12, duration_s=3)
@@ -79,10 +80,10 @@ def test_schedule_files_round_trip_and_name_bad_faults(tmp_path: Path) -> None:
 
 def _final_graph(loaded: Any, changes: list[str]) -> DSRGraph:
     """What a healthy run leaves: missions done, the agenda log replayed into activity nodes."""
-    from agents.agenda.changes import apply_change, parse_change
+    from agents.lib.agenda.changes import apply_change, parse_change
 
     graph = DSRGraph("test", graph="faults")
-    day = loaded.agenda_day
+    day = loaded.agenda
     for text in changes:
         day = apply_change(day, parse_change(text), known_objects={o.name for o in loaded.scene.objects})
     graph.insert_node("agenda", "agenda", {"changes": changes, "applied": []})
@@ -96,7 +97,7 @@ def _final_graph(loaded: Any, changes: list[str]) -> DSRGraph:
 
 
 def test_lost_writes_finds_each_kind_of_loss() -> None:
-    loaded = load_scene("icra_usecase")
+    loaded = load_world("icra_usecase")
     change = json.dumps(EXTRA)
     graph = _final_graph(loaded, [change])
     assert lost_writes(graph, loaded, set(MISSIONS), [change]) == []

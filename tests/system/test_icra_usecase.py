@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.social_navigation.metrics import read_trajectory_csv
-from agents.social_navigation.offline import SceneMaps
-from scenes.model import parse_clock
+from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.world.offline import SceneMaps
+from scenes.clock import parse_clock
 from tests.system.launch_helpers import launch_json
 from tests.system.recording import load_store, strips_over_time, texts
 

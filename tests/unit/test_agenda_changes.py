@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from agents.agenda import (ActivitySpec, ActivityState, AgendaChangeError, AgendaDay, AddChange,
+from agents.lib.agenda import (ActivitySpec, ActivityState, AgendaChangeError, AgendaDay, AddChange,
                            CancelChange, LoadChange, MoveChange, add_activity, apply_change,
                            cancel_activity, expand_day, load_activities, load_ics_file, move_activity,
                            parse_change)

@@ -26,14 +26,15 @@ from typer.testing import CliRunner
 from agents.agenda.agent import AgendaAgent
 from agents.runtime.config import AgentConfig
 from agents.runtime.recording import Recorder
-from agents.social_navigation.chronemics import ChronemicsParams, r_of_t
-from agents.social_navigation.types import ActivityWindow
-from agents.world_model import object_attrs
+from agents.lib.agenda.chronemics import ChronemicsParams, r_of_t
+from agents.lib.agenda.model import ActivityWindow
+from agents.world.dsr_writers import object_attrs
 from dsr import DSRGraph, ZenohSettings, join
 from scenes.loader import load_scene
 from tests.support import REPO_ROOT, free_port, wait_until
 from tools import agenda as tool
 from tools.cli import app
+from tools.runs import RunSecurity, prepare_run_security, write_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 NOW_S = 9 * 3600 + 5 * 60.0          # 09:05 on the sim clock
@@ -63,8 +64,11 @@ def router() -> Iterator[str]:
         session.close()
 
 
-def _client(endpoint: str) -> ZenohSettings:
-    return ZenohSettings(connect=[endpoint])
+def _client(endpoint: str, security: RunSecurity | None = None, agent: str = "") -> ZenohSettings:
+    if security is None:
+        return ZenohSettings(connect=[endpoint])
+    identity = security.agents[agent]
+    return ZenohSettings(connect=[endpoint], user=identity.user, password=identity.password)
 
 
 @dataclass
@@ -73,6 +77,7 @@ class LiveSystem:
     graph: str
     world: DSRGraph
     errors: list[BaseException] = field(default_factory=list)
+    security: RunSecurity | None = None
 
     @property
     def env(self) -> dict[str, str]:
@@ -112,7 +117,7 @@ def world_only(router: str) -> Iterator[LiveSystem]:
 def _agent_loop(system: LiveSystem, ready: threading.Event, stop: threading.Event, step: bool) -> None:
     try:
         agent = AgendaAgent(AgentConfig(name="agenda", scene=SCENE, graph=system.graph))
-        with join("agenda", graph=system.graph, settings=_client(system.endpoint)) as graph:
+        with join("agenda", graph=system.graph, settings=_client(system.endpoint, system.security, "agenda")) as graph:
             agent.setup(graph, Recorder("agenda", None, None))
             ready.set()
             while not stop.wait(0.01):
@@ -257,7 +262,7 @@ def nobody_env() -> dict[str, str]:
     (["add", "tv", "25:00", "26:00"], "start: '25:00' is not a valid clock time (00:00 to 24:00)"),
     (["add", "tv", "10:00", "09:00"], "end: end '09:00' is not after start '10:00'"),
     (["add", "tv", "10", "11:00"], "start: '10' is not a time: use HH:MM"),
-    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: String should match pattern"),
+    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: an id is one word without spaces, got 'my game'"),
     (["move", "tv-0908"], "say the new time: --start HH:MM and/or --end HH:MM"),
     (["move", "tv-0908", "--start", "10:00", "--end", "09:30"], "--end '09:30' is not after --start '10:00'"),
     (["move", "tv-0908", "--end", "half past"], "--end: 'half past' is not a time"),
@@ -275,8 +280,8 @@ def test_load_reports_file_errors_with_lines_before_sending(nobody_env: dict[str
                    '  - {name: Quiz, objet: tv, start: "10:00", end: "11:00"}\n')
     result = runner.invoke(app, ["agenda", "load", str(bad)], env=nobody_env)
     assert result.exit_code == 1
-    assert f"{bad}:4: activities[0].start: '25:00' is not a valid clock time" in result.stderr
-    assert f"{bad}:6: activities[1].objet: unknown key; did you mean 'object'?" in result.stderr
+    assert f"{bad}:4:5: activities[0].start: '25:00' is not a valid clock time" in result.stderr
+    assert f"{bad}:6:18: activities[1].objet: unknown key 'objet' (did you mean 'object'?)" in result.stderr
 
     ics = tmp_path / "bad.ics"
     ics.write_text((REPO_ROOT / "tests" / "data" / "agenda_bad.ics").read_text())
@@ -300,7 +305,8 @@ def test_unreachable_router_exits_2(nobody_env: dict[str, str]) -> None:
     for args in (["add", "tv", "09:08", "09:40"], ["list"], ["watch", "--timeout", "1"]):
         result = runner.invoke(app, ["agenda", *args], env=nobody_env)
         assert result.exit_code == 2, result.output
-        assert f"cannot reach a chronav system at {endpoint} (from CHRONAV_ZENOH_CONNECT" in result.stderr
+        assert f"cannot reach a chronav system: nothing listens at {endpoint} (from CHRONAV_ZENOH_CONNECT" \
+            in result.stderr
         assert "chronav launch" in result.stderr and "--run latest" in result.stderr
 
 
@@ -327,72 +333,46 @@ def test_no_answer_times_out_exits_2_and_withdraws_the_request(silent: LiveSyste
 
 
 # ---------------------------------------------------------------------------------------------
-# Finding the system: options, --run, environment.
+# Finding the system: --run latest of this user, with the run's credentials.
 # ---------------------------------------------------------------------------------------------
 
-def _dead_pid() -> int:
-    """The pid of a process that has exited (and been reaped)."""
-    child = subprocess.Popen([sys.executable, "-c", "pass"])
-    child.wait()
-    return child.pid
+@pytest.fixture
+def secured_run(tmp_path: Path) -> Iterator[LiveSystem]:
+    """A run as `chronav launch` leaves it: a router requiring the run's credentials and ACL, the
+    world and the agenda agent each with their own user, and the owner-only connect file."""
+    import zenoh
+
+    graph = f"agenda_cli_secured_{os.getpid()}"
+    run_dir = tmp_path / "recordings" / graph
+    security = prepare_run_security(run_dir, graph, ("sim_robot", "agenda"))
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    router = zenoh.open(ZenohSettings(mode="router", listen=[endpoint], credentials_file=security.credentials_file,
+                                      acl_file=security.acl_file).to_zenoh_config())
+    try:
+        write_connect_file(run_dir, run_id=graph, endpoint=endpoint, graph=graph, security=security)
+        with join("sim_robot", graph=graph, settings=_client(endpoint, security, "sim_robot")) as world:
+            _populate_world(world)
+            yield from _with_agent(LiveSystem(endpoint, graph, world, security=security), step=True)
+    finally:
+        router.close()
 
 
-def _make_run(runs: Path, name: str, *, pid: int, endpoint: str = "tcp/127.0.0.1:1", graph: str | None = None,
-              finished: bool = False, mtime: float | None = None) -> Path:
-    run = runs / name
-    run.mkdir(parents=True)
-    connect = run / "connect.json"
-    connect.write_text(json.dumps({"endpoint": endpoint, "graph": graph or name.replace(".", "_"),
-                                   "launcher_pid": pid}))
-    if finished:
-        (run / "result.json").write_text("{}")
-    if mtime is not None:
-        os.utime(connect, (mtime, mtime))
-    return run
-
-
-def test_run_resolution(tmp_path: Path) -> None:
-    runs = tmp_path / "recordings"
-    live = _make_run(runs, "live", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", mtime=1000)
-    _make_run(runs, "dead", pid=_dead_pid(), mtime=2000)
-    done = _make_run(runs, "done", pid=os.getpid(), finished=True, mtime=3000)
-    assert tool.find_run_dir("latest", runs) == live
-    assert tool.find_run_dir("live", runs) == live and tool.find_run_dir(str(done), runs) == done
-    address = tool.address_from_run(live)
-    assert address.connect == ("tcp/127.0.0.1:7001",) and address.graph == "live" and address.run_dir == live
-    with pytest.raises(tool.NoSystemError, match="has finished"):
-        tool.address_from_run(done)
-    with pytest.raises(tool.NoSystemError, match="no such run directory"):
-        tool.find_run_dir("nope", runs)
-    (live / "connect.json").unlink()
-    with pytest.raises(tool.NoSystemError, match=r"no live run under .*chronav launch"):
-        tool.find_run_dir("latest", runs)
-
-
-def test_address_precedence(tmp_path: Path) -> None:
-    runs = tmp_path / "recordings"
-    _make_run(runs, "run1", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", graph="run1")
-    env = {"CHRONAV_ZENOH_CONNECT": "tcp/127.0.0.1:7002", "CHRONAV_GRAPH": "envgraph"}
-    default = tool.resolve_address(None, None, None, environ={})
-    assert default.connect == ("tcp/127.0.0.1:7447",) and default.graph == "chronav"
-    assert "CHRONAV_ZENOH_CONNECT is not set" in default.origin
-    from_env = tool.resolve_address(None, None, None, environ=env)
-    assert (from_env.connect, from_env.graph) == (("tcp/127.0.0.1:7002",), "envgraph")
-    from_run = tool.resolve_address(None, None, "latest", environ=env, runs_dir=runs)
-    assert (from_run.connect, from_run.graph) == (("tcp/127.0.0.1:7001",), "run1")
-    explicit = tool.resolve_address(["tcp/127.0.0.1:7003"], "g3", "latest", environ=env, runs_dir=runs)
-    assert (explicit.connect, explicit.graph) == (("tcp/127.0.0.1:7003",), "g3")
-    assert tool.resolve_address(None, "g4", None, environ=env).connect == ("tcp/127.0.0.1:7002",)
-
-
-def test_run_latest_through_the_cli(live: LiveSystem, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    runs = tmp_path / "recordings"
-    _make_run(runs, "the_run", pid=os.getpid(), endpoint=live.endpoint, graph=live.graph)
-    monkeypatch.setattr(tool, "RUNS_DIR", runs)
-    result = runner.invoke(app, ["agenda", "add", "tv", "09:08", "09:40", "--run", "latest", "--json"], env={
-        "CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "wrong"})
+def test_run_latest_joins_with_the_runs_credentials(secured_run: LiveSystem, tmp_path: Path) -> None:
+    env = {"CHRONAV_RUNS": str(tmp_path / "recordings"),
+           "CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "wrong"}
+    result = runner.invoke(app, ["agenda", "add", "tv", "09:08", "09:40", "--run", "latest", "--json"], env=env)
     assert result.exit_code == 0, result.output
-    assert json.loads(result.stdout)["graph"] == live.graph
+    assert json.loads(result.stdout)["graph"] == secured_run.graph and json.loads(result.stdout)["accepted"]
+    listed = runner.invoke(app, ["agenda", "list", "--run", "latest", "--json"], env=env)
+    assert listed.exit_code == 0 and [a["id"] for a in json.loads(listed.stdout)["activities"]] == ["tv-0908"]
+
+    # The same router and graph, without the run's credentials: refused before anything is sent.
+    bare = runner.invoke(app, ["agenda", "cancel", "tv-0908", "--connect", secured_run.endpoint,
+                               "--graph", secured_run.graph], env={"CHRONAV_RUNS": env["CHRONAV_RUNS"]})
+    assert bare.exit_code == 2
+    assert f"something listens at {secured_run.endpoint} but refused a chronav session" in bare.stderr
+    assert "requires credentials" in bare.stderr and "--run latest" in bare.stderr
+    assert secured_run.world.get_node_by_name("activity/tv-0908").attrs["state"] != "cancelled"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -449,3 +429,40 @@ def test_watch_follows_a_change_live(live: LiveSystem) -> None:
     assert by_kind["object"]["object"]["R"] == pytest.approx(expected_r())
     assert by_kind["request"]["event"] == "accepted" and "add: tv-0908" in by_kind["request"]["text"]
     assert all(e["time"] == "09:05" for e in events)
+
+
+# ---------------------------------------------------------------------------------------------
+# Hostile input to the live agent (issue 12): refused fast, the agent keeps answering.
+# ---------------------------------------------------------------------------------------------
+
+HOSTILE = REPO_ROOT / "tests" / "data" / "hostile"
+
+
+def test_secondly_recurrence_is_refused_and_the_agent_keeps_answering(live: LiveSystem) -> None:
+    result = live.invoke("load", str(HOSTILE / "secondly.ics"), "--timeout", "20")
+    assert result.exit_code == 1, result.output
+    assert "RRULE:FREQ=SECONDLY" in result.stderr and "CHRONAV_LIMIT_RECURRENCE_STEPS" in result.stderr
+    assert live.world.nodes_of_type("activity") == []
+    after = live.invoke("add", "tv", "09:08", "09:40")
+    assert after.exit_code == 0, after.output
+
+
+def test_participant_not_in_the_scene_is_refused(live: LiveSystem) -> None:
+    result = live.invoke("add", "tv", "09:08", "09:40", "--participants", "senior_1, bob")
+    assert result.exit_code == 1, result.output
+    assert "participant 'bob' is not a person of the scene" in result.stderr
+    assert "people: senior_1, therapist" in result.stderr
+    assert live.world.nodes_of_type("activity") == []
+
+
+def test_names_from_the_graph_are_shown_without_terminal_escapes() -> None:
+    hostile = "\x1b[2J\x1b]0;pwned\x07[bold]x"
+    data = {"graph": "g", "now": "09:05", "activities": [
+        {"id": "a", "name": hostile, "object": "tv", "start": "09:08", "end": "09:40", "state": "upcoming",
+         "participants": [hostile], "object_R": 1.5}],
+        "objects": [{"name": hostile, "R": 1.5, "band": "green", "active": False}]}
+    out = StringIO()
+    tool.print_snapshot(data, out)
+    text = out.getvalue()
+    assert "\x1b" not in text and "\x07" not in text
+    assert "\\x1b[2J" in text and "[bold]x" in text  # shown, escaped, not interpreted as markup

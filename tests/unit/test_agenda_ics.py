@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from agents.agenda import (ActivityState, AgendaDay, IcsAgenda, AgendaSourceError, AgendaValidationError, expand_day,
+from agents.lib.agenda import (ActivityState, AgendaDay, IcsAgenda, AgendaSourceError, AgendaValidationError, expand_day,
                            load_agenda_file, load_ics_file, parse_ics)
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -9,9 +9,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pydantic import ValidationError
 
-from agents.agenda import (Activity, ActivitySpec, ActivityState, AgendaDay, UnknownActivityError,
-                           activity_state, format_clock, parse_clock)
-from agents.agenda.model import AgendaError, load_zone, parse_when, wall_seconds
+from agents.lib.agenda import (Activity, ActivitySpec, ActivityState, AgendaDay, UnknownActivityError,
+                               activity_state)
+from scenes.clock import format_clock, parse_clock
+from agents.lib.agenda.model import AgendaError, load_zone, parse_when, wall_seconds
 
 H = 3600.0
 

@@ -6,9 +6,9 @@ import datetime as dt
 
 import pytest
 
-from agents.agenda import (ActivitySpec, AgendaValidationError, Severity, expand_day,
+from agents.lib.agenda import (ActivitySpec, AgendaValidationError, Severity, expand_day,
                            validate_activities, validate_day)
-from agents.agenda.expand import Draft
+from agents.lib.agenda.expand import Draft
 
 H = 3600.0
 DAY = dt.date(2026, 11, 25)

@@ -21,7 +21,7 @@ from agents.runtime.recording import Recorder
 from agents.sim_robot.agent import SimRobotAgent
 from dsr import DSRGraph
 from scenes.loader import SCENES_DIR
-from scenes.model import parse_clock
+from scenes.clock import parse_clock
 
 AGENTS = (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent, ExecutiveAgent)
 
@@ -103,7 +103,7 @@ def test_agenda_request_round_trip(tmp_path: Path) -> None:
 
 def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> None:
     from agents.social_navigation.agent import SocialNavigationAgent
-    from agents.social_navigation.social_map import plan
+    from agents.lib.socialmap.social_map import plan
 
     text = (SCENES_DIR / "center_b.yaml").read_text()
     scene = tmp_path / "center_b_door.yaml"

@@ -17,7 +17,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from dsr import DSRGraph, wire
-from dsr.policy import AllowAll, policy_from_env
+from agents.world.write_policy import policy_from_env
+from dsr.policy import AllowAll
 from dsr.transport import Replica
 from tests.fuzz_payloads import FUZZER, VALID, mutated_messages, payloads
 

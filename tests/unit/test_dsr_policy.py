@@ -1,4 +1,4 @@
-"""The write policy (deploy/write_policy.yaml) as every replica enforces it on receipt.
+"""The write policy (agents/world/write_policy.yaml) as every replica enforces it on receipt.
 
 Offline and in-process: each agent is a DSRGraph whose deltas are captured; a "guard" replica
 runs the real transport hook (`Replica._on_delta` / `_merge_state`, no network) with the shipped
@@ -18,8 +18,9 @@ from hypothesis import strategies as st
 
 from dsr import DSRGraph, wire
 from dsr.errors import DSRError, PolicyError
-from dsr.policy import AllowAll, DenyTypes, policy_from_env
-from dsr.policy_rules import RulePolicy, load_policy
+from agents.world.write_policy import load_policy, policy_from_env
+from dsr.policy import AllowAll, DenyTypes
+from dsr.policy_rules import RulePolicy
 from dsr.transport import Replica
 
 POLICY = policy_from_env({})

@@ -19,7 +19,8 @@ from dsr import DSRGraph, InvalidAttributeError, WireError, WriteRefusedError, w
 from dsr.crdt import REMOVAL_RECEIPT
 from dsr.hlc import pack
 from dsr.limits import LIMITS, Limits
-from dsr.policy import AllowAll, policy_from_env
+from agents.world.write_policy import policy_from_env
+from dsr.policy import AllowAll
 from dsr.transport import Member, Replica
 
 POLICY = policy_from_env({})
@@ -238,7 +239,7 @@ def test_a_lying_writers_table_cannot_lend_a_running_agents_rights():
     # sim_robot itself may vouch for its previous incarnations in its own state
     document = orjson.loads(sim.graph.state_message(sim.seen()))
     document["writers"][str(fake)] = "sim_robot"
-    document["nodes"].append({"id": 98, "add": [[fake, hlc]], "meta": [hlc, fake, "laser", "l2"]})
+    document["nodes"].append({"id": 98, "add": [[fake, hlc]], "meta": [hlc, fake, "room", "l2"]})
     guard._merge_state(state_sample(sim, orjson.dumps(document)))
     assert guard.graph.get_node_by_name("l2") is not None
 

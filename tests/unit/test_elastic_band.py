@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agents.social_navigation.elastic_band import (
+from agents.lib.socialmap.elastic_band import (
     BandInputError,
     ElasticBand,
     ElasticBandParams,

@@ -14,9 +14,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from agents.agenda import (AgendaChangeError, AgendaError, AgendaSourceError, apply_change, expand_day, parse_ics,
+from agents.lib.agenda import (AgendaChangeError, AgendaError, AgendaSourceError, apply_change, expand_day, parse_ics,
                            load_agenda_file, parse_agenda_text, parse_change)
-from scenes.loader import SCENES_DIR, load_scene
+from agents.world.scene_world import load_world
+from scenes.loader import SCENES_DIR
 from tests.support import REPO_ROOT
 from tests.unit.fuzz_mutations import NASTY_VALUES, fuzz_settings, mutated_bytes, mutated_text, token_soup
 
@@ -42,7 +43,7 @@ activities:
     start: "23:30"
     end: "24:00"
 """
-SCENE = load_scene("icra_usecase")
+SCENE = load_world("icra_usecase")
 OBJECTS = {o.name for o in SCENE.scene.objects}
 ROOMS = {r.name for r in SCENE.scene.rooms}
 # The scene's day, and the two days the clocks change in the centre's zone.
@@ -125,7 +126,7 @@ def test_mutated_agenda_changes_are_refused_not_crashing(data: st.DataObject) ->
                                    st.sampled_from(NASTY_VALUES).map(lambda v, c=change: json.dumps({**c, "id": v}))),
                          label="json")
     try:
-        apply_change(SCENE.agenda_day, parse_change(text), known_objects=OBJECTS, known_rooms=ROOMS)
+        apply_change(SCENE.agenda, parse_change(text), known_objects=OBJECTS, known_rooms=ROOMS)
     except AgendaChangeError as exc:
         assert str(exc).strip()
 
@@ -153,6 +154,6 @@ def test_a_crash_inside_icalendar_is_an_agenda_error() -> None:
     with pytest.raises(AgendaSourceError, match="not a valid iCalendar file"):
         parse_ics(text, "two_tzids.ics")
     with pytest.raises(AgendaChangeError, match="two_tzids.ics"):
-        apply_change(SCENE.agenda_day, parse_change(json.dumps({"op": "load", "mode": "merge", "format": "ics",
+        apply_change(SCENE.agenda, parse_change(json.dumps({"op": "load", "mode": "merge", "format": "ics",
                                                                 "text": text, "source": "two_tzids.ics"})),
                      known_objects=OBJECTS, known_rooms=ROOMS)

@@ -96,12 +96,6 @@ def test_change_room_enters_a_busy_room_when_the_mission_targets_it_or_something
     assert steps(grammar, graph, "changeRoom", mission="room:lounge") == []
 
 
-def test_change_room_also_honours_activities_placed_in_the_room_itself(grammar: Grammar) -> None:
-    nodes, edges = group_activity("gym")
-    edges = [("therapy", "gym", "in") if e[2] == "has" else e for e in edges]
-    assert steps(grammar, centre(nodes, edges), "changeRoom") == []
-
-
 def test_change_room_forgets_near_and_facing(grammar: Grammar) -> None:
     graph = centre({"ann": {"type": "person"}}, [("ann", "hall", "in"), ("robot", "ann", "near"),
                                                  ("robot", "ann", "facing")])

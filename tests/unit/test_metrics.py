@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon, box
 
-from agents.social_navigation.metrics import (
+from agents.lib.socialmap.metrics import (
     MetricsInputError,
     TrajectoryFormatError,
     compute_metrics,
@@ -152,5 +152,5 @@ def test_read_trajectory_csv_errors_name_file_and_line(tmp_path: Path, text: str
 
 
 def test_missing_csv_file_is_a_clear_error(tmp_path: Path) -> None:
-    with pytest.raises(TrajectoryFormatError, match="cannot read"):
+    with pytest.raises(TrajectoryFormatError, match="absent.csv: no such file"):
         read_trajectory_csv(tmp_path / "absent.csv")

@@ -9,9 +9,11 @@ import pytest
 from typer.testing import CliRunner
 
 from scenes.loader import SCENES_DIR, load_scene
-from scenes.model import parse_clock
-from scenes.motion import people_at
-from scenes.symbolic import symbolic_graph
+from scenes.clock import parse_clock
+from agents.world.motion import people_at
+from agents.world.dsr_readers import symbolic_view
+from agents.world.offline import graph_at
+from agents.world.scene_world import load_world
 from scenes.yamlio import SourceError
 from tools.cli import app
 
@@ -73,7 +75,8 @@ def test_mission_to_unknown_room_is_refused(tmp_path: Path) -> None:
     text = BASE + "missions:\n  - {id: m, time: '10:00', goal: {room: kitchen}}\n"
     with pytest.raises(SourceError) as info:
         load_scene(_write(tmp_path, text))
-    assert "unknown room 'kitchen'" in info.value.message
+    assert info.value.key == "missions[0].goal.room" and info.value.line == 8
+    assert "no room named 'kitchen'" in info.value.message
 
 
 def test_yaml_syntax_error_has_position(tmp_path: Path) -> None:
@@ -103,17 +106,17 @@ def test_people_follow_waypoints_and_face_their_way() -> None:
 
 
 def test_symbolic_graph_has_the_shared_vocabulary() -> None:
-    loaded = load_scene("center_a")
-    graph = symbolic_graph(loaded.scene, at_s=parse_clock("11:30"), activities=loaded.agenda_day.activities)
-    assert graph.nodes["corridor"]["type"] == "room"
-    assert graph.has_edge("corridor", "occupational_therapy", key="connected")
-    assert graph.has_edge("robot", "corridor", key="in")
-    assert graph.nodes["activity/tv_therapy"]["state"] == "running"
-    assert graph.has_edge("activity/tv_therapy", "ot_tv", key="has")
+    view = symbolic_view(graph_at(load_world("center_a"), parse_clock("11:30")))
+    key = {data["name"]: node for node, data in view.nodes(data=True)}
+    assert view.nodes[key["corridor"]]["type"] == "room"
+    assert view.has_edge(key["corridor"], key["occupational_therapy"], key="connected")
+    assert view.has_edge(key["robot"], key["corridor"], key="in")
+    assert view.nodes[key["activity/tv_therapy"]]["state"] == "running"
+    assert view.has_edge(key["activity/tv_therapy"], key["ot_tv"], key="has")
 
 
 def test_agenda_errors_fail_the_scene_with_the_line(tmp_path: Path) -> None:
     text = BASE + "agenda:\n  - {name: Game, object: piano, start: '11:00', end: '12:00'}\n"
     with pytest.raises(SourceError) as info:
-        load_scene(_write(tmp_path, text))
+        load_world(_write(tmp_path, text))
     assert info.value.line == 8 and "piano" in info.value.message

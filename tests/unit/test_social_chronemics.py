@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from agents.social_navigation.chronemics import (
+from agents.lib.agenda.chronemics import (
     ChronemicsParams,
     interaction_cost_profile,
     is_active,
@@ -16,7 +16,7 @@ from agents.social_navigation.chronemics import (
     r_of_t,
     r_profile,
 )
-from agents.social_navigation.types import ActivityWindow, SocialMapInputError
+from agents.lib.agenda.model import ActivityWindow, AgendaError
 
 P = ChronemicsParams()
 H = 3600.0
@@ -74,5 +74,5 @@ def test_colour_bands() -> None:
 
 
 def test_activity_window_validation() -> None:
-    with pytest.raises(SocialMapInputError, match="activity on 'tv': end_s"):
+    with pytest.raises(AgendaError, match="activity on 'tv': end_s"):
         ActivityWindow("tv", 10.0, 5.0)

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.social_navigation.adaptive import AdaptiveParams
-from agents.social_navigation.grid import CostPatch, GridParams, GridSpec, compose, static_grid
-from agents.social_navigation.search import NoPathFound, warm_up
-from agents.social_navigation.social_map import SocialMapParams, build_social_map, plan
-from agents.social_navigation.types import Person, Room, Wall
+from agents.lib.socialmap.adaptive import AdaptiveParams
+from agents.lib.socialmap.grid import CostPatch, GridParams, GridSpec, compose, static_grid
+from agents.lib.socialmap.search import NoPathFound, warm_up
+from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, plan
+from agents.lib.socialmap.types import Person, Room, Wall
 
 RES = 0.05
 

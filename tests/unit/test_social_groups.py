@@ -6,16 +6,16 @@ import math
 
 import pytest
 
-from agents.social_navigation.groups import (
+from agents.lib.socialmap.groups import (
     GroupParams,
     are_neighbours,
     density_contribution,
     group_people,
     group_threshold,
 )
-from agents.social_navigation.personal_space import PersonalSpace, PersonalSpaceParams
-from agents.social_navigation.social_map import SocialMapParams, build_social_map
-from agents.social_navigation.types import Person
+from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
+from agents.lib.socialmap.social_map import SocialMapParams, build_social_map
+from agents.lib.socialmap.types import Person
 
 SPACE = PersonalSpace.from_params(PersonalSpaceParams())
 PARAMS = GroupParams()

@@ -8,25 +8,19 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.social_navigation.chronemics import ChronemicsParams
-from agents.social_navigation.grid import GridParams
-from agents.social_navigation.search import GoalOccupied, NoPathFound, SearchWorkspace, StartOccupied, warm_up
-from agents.social_navigation.social_map import (
+from agents.lib.agenda.chronemics import ChronemicsParams
+from agents.lib.socialmap.grid import GridParams
+from agents.lib.socialmap.search import GoalOccupied, NoPathFound, SearchWorkspace, StartOccupied, warm_up
+from agents.lib.socialmap.social_map import (
     PlannerParams,
     SocialMapParams,
     build_social_map,
     build_static_map,
     plan,
 )
-from agents.social_navigation.types import (
-    ActivityWindow,
-    Person,
-    Rectangle,
-    SocialMapInputError,
-    SocialObject,
-    Trapezoid,
-    Wall,
-)
+from agents.lib.agenda.model import ActivityWindow
+from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject, Wall
+from scenes.geometry import Rectangle, Trapezoid
 
 H = 3600.0
 

@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.social_navigation.grid import GridSpec
-from agents.social_navigation.layers import shape_mask
-from agents.social_navigation.objects import local_contains, object_geometry, posed_polygon
-from agents.social_navigation.types import Circle, Rectangle, SocialMapInputError, SocialObject, Trapezoid, shape_from_spec
+from agents.lib.socialmap.grid import GridSpec
+from agents.lib.socialmap.layers import shape_mask
+from agents.lib.socialmap.objects import local_contains, object_geometry
+from scenes.geometry import posed_polygon
+from agents.lib.socialmap.types import SocialMapInputError, SocialObject
+from scenes.geometry import Circle, GeometryError, Rectangle, Trapezoid, shape_from_spec
 
 
 def test_areas_follow_the_seed_equations() -> None:
@@ -60,11 +62,11 @@ def test_local_contains_boundary_is_inside() -> None:
 
 def test_shape_from_spec_errors_name_the_key() -> None:
     assert shape_from_spec({"shape": "circle", "radius": 1.5}) == Circle(1.5)
-    with pytest.raises(SocialMapInputError, match="tv interaction: trapezoid needs key 'far_width'"):
+    with pytest.raises(GeometryError, match="tv interaction: trapezoid needs key 'far_width'"):
         shape_from_spec({"shape": "trapezoid", "height": 1, "near_width": 1}, "tv interaction")
-    with pytest.raises(SocialMapInputError, match="unknown key"):
+    with pytest.raises(GeometryError, match="unknown key"):
         shape_from_spec({"shape": "circle", "radius": 1.5, "radiuss": 2})
-    with pytest.raises(SocialMapInputError, match="'shape' must be one of"):
+    with pytest.raises(GeometryError, match="'shape' must be one of"):
         shape_from_spec({"shape": "hexagon"})
     with pytest.raises(SocialMapInputError, match="object 'bed' footprint: rectangle: width must be > 0"):
         SocialObject("bed", "bed", 0, 0, 0, {"shape": "rectangle", "length": 2, "width": 0}, Circle(1))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from agents.social_navigation.personal_space import (
+from agents.lib.socialmap.personal_space import (
     PersonalSpace,
     PersonalSpaceParams,
     asymmetric_gaussian,
@@ -16,9 +16,9 @@ from agents.social_navigation.personal_space import (
     gaussian_coefficients,
     sigma_for_contour,
 )
-from agents.social_navigation.roles import RoleParams, role_scale
-from agents.social_navigation.social_map import SocialMapParams
-from agents.social_navigation.types import Person, SocialMapInputError
+from agents.lib.socialmap.roles import RoleParams, role_scale
+from agents.lib.socialmap.social_map import SocialMapParams
+from agents.lib.socialmap.types import Person, SocialMapInputError
 
 
 def test_default_sigmas_in_metres() -> None:

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agents.social_navigation.grid import GridSpec
-from agents.social_navigation.reference_graph import grid_graph, reference_cost
-from agents.social_navigation.search import (
+from agents.lib.socialmap.grid import GridSpec
+from agents.lib.socialmap.reference_graph import grid_graph, reference_cost
+from agents.lib.socialmap.search import (
     GoalOccupied,
     NoPathFound,
     OutsideMap,

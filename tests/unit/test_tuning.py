@@ -11,8 +11,8 @@ import pytest
 import shapely
 from pydantic import ValidationError
 
-from agents.social_navigation.elastic_band import ElasticBandParams
-from agents.social_navigation.tuning import (
+from agents.lib.socialmap.elastic_band import ElasticBandParams
+from agents.lib.socialmap.tuning import (
     CostTerms,
     CostWeights,
     Scenario,

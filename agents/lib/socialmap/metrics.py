@@ -1,0 +1,293 @@
+"""Navigation quality metrics of the seed's Tables 1, 2 and 4, computed from a recorded trajectory.
+
+Why one entry point (`compute_metrics`): the CLI (`chronav metrics SCENE TRAJ.csv`), the gain tuner
+and the tests must all measure a run the same way, so the definitions live here and nowhere else.
+
+Definitions (all on the piecewise-linear path through the recorded samples):
+
+* ``d_t`` (m): sum of the straight segment lengths between consecutive samples.
+* ``tau`` (s): ``t[-1] - t[0]``.
+* ``CHC`` (rad): cumulative heading change, ``sum_k |wrap(theta[k+1] - theta[k])|`` with ``wrap``
+  mapping to ``[-pi, pi)``. It uses the recorded robot heading (the ``theta`` column), not the
+  direction of travel, so an omnidirectional robot that strafes without turning scores 0 and a
+  robot turning on the spot is counted. It is the discrete form of the seed's Eq. 18.
+* ``d_min`` (m): for each person, the smallest distance from the path to the person's (x, y); for
+  each object, the smallest distance from the path to the object's footprint (0 if the path
+  touches or crosses it).
+* ``Psi`` (%): share of the **path length** inside each exclusive proxemic band: intimate;
+  personal minus intimate; social minus personal and intimate; public is the rest. Also, for each
+  object, the share of the path length inside its interaction space (these may overlap each
+  other, so they need not sum to 100).
+
+Why Psi is by path length and not by time: it then describes where the path goes, independent of
+the speed profile and of the sampling rate, so a slow social planner and a fast baseline are
+compared on the same footing (the seed's tables report it next to ``d_t``, as a share of the path).
+The price is that a robot standing still inside a zone adds nothing; ``tau`` and ``d_min`` show
+that case. A run that never moves (zero length) is classified by its first sample: 100 % in the
+band that contains it.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import shapely
+from numpy.typing import ArrayLike, NDArray
+from pydantic import BaseModel, ConfigDict
+from shapely.geometry.base import BaseGeometry
+
+from scenes.limits import TRAJECTORY_SAMPLES
+from scenes.yamlio import SourceError, read_text_file
+
+FloatArray = NDArray[np.float64]
+
+ZONE_NAMES: tuple[str, ...] = ("intimate", "personal", "social")
+PSI_BANDS: tuple[str, ...] = ("intimate", "personal", "social", "public")
+TRAJECTORY_HEADER: tuple[str, ...] = ("t", "x", "y", "theta")
+# A trajectory's times are seconds on the sim clock (since midnight, up to the end of the next day)
+# or relative to its start; anything beyond is a unit mistake (ms, epoch seconds) or garbage.
+MAX_TRAJECTORY_TIME_S = 2 * 86400.0
+# Positions are metres in a building's frame; farther than this is not a building.
+MAX_COORDINATE_M = 100_000.0
+
+
+class MetricsInputError(ValueError):
+    """Bad trajectory or scene input; the message names the argument, key or sample."""
+
+
+class TrajectoryFormatError(MetricsInputError):
+    """A trajectory CSV file that cannot be read; the message names the file and line."""
+
+
+class MetricsReport(BaseModel):
+    """Everything the seed's result tables report for one run. ``model_dump()`` gives the JSON."""
+
+    model_config = ConfigDict(frozen=True)
+
+    samples: int
+    distance_travelled_m: float
+    duration_s: float
+    cumulative_heading_change_rad: float
+    d_min_person_m: dict[str, float]
+    d_min_object_m: dict[str, float]
+    psi_zone_percent: dict[str, float]
+    psi_object_percent: dict[str, float]
+    psi_basis: str = "path_length"
+
+    def to_table(self) -> list[tuple[str, str]]:
+        """(parameter, value) rows in the order of the seed's tables, ready to print."""
+        rows: list[tuple[str, str]] = [
+            ("d_t (m)", f"{self.distance_travelled_m:.2f}"),
+            ("tau (s)", f"{self.duration_s:.2f}"),
+            ("CHC (rad)", f"{self.cumulative_heading_change_rad:.2f}"),
+        ]
+        rows += [(f"d_min {name} (m)", f"{value:.2f}") for name, value in self.d_min_person_m.items()]
+        rows += [(f"d_min {name} (m)", f"{value:.2f}") for name, value in self.d_min_object_m.items()]
+        rows += [(f"Psi {band} (%)", f"{self.psi_zone_percent[band]:.1f}") for band in PSI_BANDS]
+        rows += [(f"Psi {name} (%)", f"{value:.1f}") for name, value in self.psi_object_percent.items()]
+        return rows
+
+
+def compute_metrics(
+    trajectory: ArrayLike,
+    people: Mapping[str, tuple[float, float]] | None = None,
+    objects: Mapping[str, BaseGeometry] | None = None,
+    zones: Mapping[str, BaseGeometry | None] | None = None,
+    interaction_spaces: Mapping[str, BaseGeometry] | None = None,
+) -> MetricsReport:
+    """Measure one run.
+
+    ``trajectory``: (N, 4) rows of (t [s], x [m], y [m], theta [rad]), time non-decreasing.
+    ``people``: name -> (x, y). ``objects``: name -> footprint geometry. ``zones``: any of
+    "intimate", "personal", "social" -> (multi)polygon of that contour (missing or None = empty).
+    ``interaction_spaces``: object name -> polygon.
+    """
+    traj = validate_trajectory(trajectory)
+    zone_geoms = _validate_zones(zones or {})
+    people = dict(people or {})
+    objects = dict(objects or {})
+    interaction_spaces = dict(interaction_spaces or {})
+    _check_geometries("objects", objects)
+    _check_geometries("interaction_spaces", interaction_spaces)
+    path = path_geometry(traj)
+    return MetricsReport(
+        samples=int(traj.shape[0]),
+        distance_travelled_m=distance_travelled(traj),
+        duration_s=float(traj[-1, 0] - traj[0, 0]),
+        cumulative_heading_change_rad=cumulative_heading_change(traj),
+        d_min_person_m={name: _person_distance(path, name, pos) for name, pos in people.items()},
+        d_min_object_m={name: float(path.distance(geom)) for name, geom in objects.items()},
+        psi_zone_percent=psi_zone_percent(path, zone_geoms),
+        psi_object_percent={name: _share_inside(path, geom) for name, geom in interaction_spaces.items()},
+    )
+
+
+def validate_trajectory(trajectory: ArrayLike) -> FloatArray:
+    """Return the trajectory as a float (N, 4) array or raise MetricsInputError naming the sample."""
+    try:
+        traj = np.asarray(trajectory, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise MetricsInputError(f"trajectory: not numeric ({exc})") from exc
+    if traj.ndim != 2 or traj.shape[1] != 4:
+        raise MetricsInputError(f"trajectory: expected shape (N, 4) of t,x,y,theta, got {traj.shape}")
+    if traj.shape[0] == 0:
+        raise MetricsInputError("trajectory: no samples")
+    bad = np.flatnonzero(~np.isfinite(traj).all(axis=1))
+    if bad.size:
+        raise MetricsInputError(f"trajectory: sample {int(bad[0])} is not finite: {traj[bad[0]].tolist()}")
+    back = np.flatnonzero(np.diff(traj[:, 0]) < 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise MetricsInputError(f"trajectory: time goes backwards at sample {k} "
+                                f"({traj[k - 1, 0]} -> {traj[k, 0]})")
+    return traj
+
+
+def path_geometry(traj: FloatArray) -> BaseGeometry:
+    """The driven path as a LineString (a Point when the robot never moved)."""
+    xy = traj[:, 1:3]
+    keep = np.ones(len(xy), dtype=bool)
+    keep[1:] = np.any(np.diff(xy, axis=0) != 0.0, axis=1)
+    xy = xy[keep]
+    if len(xy) < 2:
+        return shapely.Point(xy[0])
+    return shapely.LineString(xy)
+
+
+def distance_travelled(traj: FloatArray) -> float:
+    """d_t: length of the polyline through the samples (m)."""
+    return float(np.hypot(*np.diff(traj[:, 1:3], axis=0).T).sum()) if len(traj) > 1 else 0.0
+
+
+def cumulative_heading_change(traj: FloatArray) -> float:
+    """CHC: sum of |heading change| between consecutive samples, each wrapped to [-pi, pi) (rad)."""
+    if len(traj) < 2:
+        return 0.0
+    dtheta = np.diff(traj[:, 3])
+    wrapped = (dtheta + math.pi) % (2.0 * math.pi) - math.pi
+    return float(np.abs(wrapped).sum())
+
+
+def psi_zone_percent(path: BaseGeometry, zones: Mapping[str, BaseGeometry]) -> dict[str, float]:
+    """Share (%) of the path in the exclusive bands intimate / personal / social / public."""
+    empty = shapely.Polygon()
+    intimate = zones.get("intimate", empty)
+    personal = shapely.difference(zones.get("personal", empty), intimate)
+    inner = shapely.union(intimate, zones.get("personal", empty))
+    social = shapely.difference(zones.get("social", empty), inner)
+    shares = {"intimate": _share_inside(path, intimate),
+              "personal": _share_inside(path, personal),
+              "social": _share_inside(path, social)}
+    shares["public"] = max(0.0, 100.0 - sum(shares.values()))
+    return shares
+
+
+def _share_inside(path: BaseGeometry, area: BaseGeometry) -> float:
+    """Percentage of ``path``'s length inside ``area`` (a point path counts 0 or 100)."""
+    if area.is_empty:
+        return 0.0
+    if path.geom_type == "Point":
+        return 100.0 if area.covers(path) else 0.0
+    return 100.0 * float(path.intersection(area).length) / float(path.length)
+
+
+def _person_distance(path: BaseGeometry, name: str, pos: tuple[float, float]) -> float:
+    try:
+        x, y = (float(v) for v in pos)
+    except (TypeError, ValueError) as exc:
+        raise MetricsInputError(f"people[{name!r}]: expected (x, y), got {pos!r}") from exc
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise MetricsInputError(f"people[{name!r}]: position is not finite: {pos!r}")
+    return float(path.distance(shapely.Point(x, y)))
+
+
+def _validate_zones(zones: Mapping[str, BaseGeometry | None]) -> dict[str, BaseGeometry]:
+    out: dict[str, BaseGeometry] = {}
+    for key, geom in zones.items():
+        if key not in ZONE_NAMES:
+            raise MetricsInputError(f"zones: unknown key {key!r}; expected some of {list(ZONE_NAMES)}")
+        if geom is None:
+            continue
+        _check_geometries("zones", {key: geom})
+        out[key] = geom
+    return out
+
+
+def _check_geometries(argument: str, geoms: Mapping[str, object]) -> None:
+    for name, geom in geoms.items():
+        if not isinstance(geom, BaseGeometry):
+            raise MetricsInputError(f"{argument}[{name!r}]: expected a shapely geometry, "
+                                    f"got {type(geom).__name__}")
+        if not geom.is_empty and not geom.is_valid:
+            raise MetricsInputError(f"{argument}[{name!r}]: invalid geometry "
+                                    f"({shapely.is_valid_reason(geom)})")
+
+
+def read_trajectory_csv(path: str | Path) -> FloatArray:
+    """Read a ``t,x,y,theta`` CSV (s, m, m, rad) into an (N, 4) array.
+
+    Blank lines are skipped. Any other problem raises TrajectoryFormatError("FILE:LINE: ...").
+    """
+    path = Path(path)
+    max_rows = TRAJECTORY_SAMPLES.value()
+    try:
+        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env,
+                              what="trajectory CSV")  # a UTF-8 byte-order mark is dropped
+    except SourceError as exc:
+        raise TrajectoryFormatError(str(exc)) from None
+    rows: list[list[float]] = []
+    header_seen = False
+    last_t = -math.inf
+    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
+        if not fields or all(not f.strip() for f in fields):
+            continue
+        cells = [f.strip() for f in fields]
+        if not header_seen:
+            if tuple(c.lower() for c in cells) != TRAJECTORY_HEADER:
+                raise TrajectoryFormatError(f"{path}:{lineno}: expected header 't,x,y,theta', "
+                                            f"got {','.join(cells)!r}")
+            header_seen = True
+            continue
+        if len(cells) != 4:
+            raise TrajectoryFormatError(f"{path}:{lineno}: expected 4 values (t,x,y,theta), "
+                                        f"got {len(cells)}")
+        values: list[float] = []
+        for column, cell in zip(TRAJECTORY_HEADER, cells, strict=True):
+            try:
+                value = float(cell)
+            except ValueError:
+                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: "
+                                            f"{cell!r} is not a number") from None
+            if not math.isfinite(value):
+                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell!r} is not finite")
+            values.append(value)
+        if not 0.0 <= values[0] <= MAX_TRAJECTORY_TIME_S:
+            raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(cells[0])} s is not a time of the "
+                                        f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s, i.e. up to 48:00)")
+        if max(abs(values[1]), abs(values[2])) > MAX_COORDINATE_M:
+            raise TrajectoryFormatError(f"{path}:{lineno}: position ({cell_text(cells[1])}, {cell_text(cells[2])}) "
+                                        f"is more than {MAX_COORDINATE_M:,.0f} m from the origin; positions are "
+                                        "metres in the scene's frame")
+        if values[0] < last_t:
+            raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
+        last_t = values[0]
+        rows.append(values)
+        if len(rows) > max_rows:
+            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} samples ({TRAJECTORY_SAMPLES.env})")
+    if not header_seen:
+        raise TrajectoryFormatError(f"{path}:1: empty file, expected header 't,x,y,theta'")
+    if not rows:
+        raise TrajectoryFormatError(f"{path}: header only, no samples")
+    if rows[-1][0] - rows[0][0] <= 0.0:
+        raise TrajectoryFormatError(f"{path}: the trajectory lasts 0 s ({len(rows)} sample(s), all at "
+                                    f"t = {rows[0][0]:g} s); metrics need at least two samples at different times")
+    return np.asarray(rows, dtype=np.float64)
+
+
+def cell_text(cell: str) -> str:
+    """A CSV cell as quoted in a message, cut short (a cell may be megabytes long)."""
+    return cell if len(cell) <= 30 else cell[:27] + "..."

@@ -1,0 +1,414 @@
+"""The time-dependent social map and the global planner: one entry point for the agent, the tools
+and the tests.
+
+    static = build_static_map(bounds, walls, rooms, params)          # once per building
+    smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
+    path = plan(smap, start_xy, goal_xy)                               # social, arrival-time R
+    base = plan(smap, start_xy, goal_xy, baseline=True)                # non-social baseline
+
+Layers (Nav2 style, composed by cell-wise maximum, grid.py):
+  static  walls inflated by the robot radius, outside the rooms          -> ``static``
+  + bodies (person radius + robot radius) and object footprints           -> ``physical`` (baseline)
+  + people's zones: social 2, personal 4, intimate forbidden              -> ``people_cost``
+  + interaction spaces at R(t_s) (or forbidden while active)              -> ``cost`` (departure-time)
+With ``arrival_time=True`` the planner replaces the last layer by R at each cell's arrival time.
+
+Default parameters and where they come from ("seed" = time-dependent-social-navigation-framework,
+"affordance" = time-dependent-affordance-spaces, "adaptive" = adaptive-personal-space):
+
+=============================================  ==========  ==============================================
+parameter                                      default     source
+=============================================  ==========  ==============================================
+personal_space.sigma_h / sigma_r / sigma_s     2, 1, 4/3   seed 4.1 (after Eq. 4); affordance IV-B
+personal_space.sigma_unit_m                    0.5 m       ours: fits seed Tables 1-2 (personal_space.py);
+                                                           so 1.0 m ahead, 0.5 m behind, 0.67 m sides
+zones.intimate / personal / social levels      0.8/0.4/0.1 RoboComp code of the seeds' experiments (zones.py)
+grid.free_cost / social_cost / personal_cost   1 / 2 / 4   seed 5.1, 5.2.1; affordance V-B
+intimate zone                                  forbidden   seed 5.2.1; affordance V-B
+grid.resolution_m                              0.05 m      issue 3 (the seeds do not state one)
+grid.robot_radius_m                            0.3 m       scene schema default (scenes/model.py)
+grid.person_radius_m                           0.25 m      ours; body + robot = 0.55 m, near the seed
+                                                           baseline's 0.51 m closest approach (Table 1)
+grid.inflate_footprints                        True        ours (footprints are obstacles, seed 5.2.2)
+groups.omega_d_m / omega_theta_rad             2 m, pi/2   ours; seed 4.1 defers to its ref. 37
+groups.composition                             max         ours; "sum" is seed Eq. 5 literally (groups.py)
+group threshold phi                            1 + k delta seed Eqs. 6-8
+roles.scales                                   resident 1, new_resident 1.25, staff/therapist 0.75,
+                                                           visitor 1: ours (seed section 7 future work)
+adaptive.enabled                               True        adaptive seed
+adaptive.margin_m / d_min_m / d_max_m          0.1/0.45/1.2 ours (adaptive seed gives no numbers)
+adaptive.zone (contour moved to d_s)           personal    adaptive seed ("distance to the personal space")
+chronemics.r_min / r_max                       1.5 / 3.5   seed 5.2.2, Fig. 8; affordance V-B, Fig. 6
+chronemics.ramp_before_s / ramp_after_s        2700 s      seed 5.2.2 (45 minutes, same after the end)
+chronemics.band_edges                          1.5 2 2.5 3 3.5  affordance V-B (four colour intervals)
+forbidden_while_active (per object)            False       affordance IV-A ("cannot use this space")
+planner.cruise_speed_mps                       0.25 m/s    ours: mean speeds (d_t / tau) in seed
+                                                           Tables 1-2 are 0.13-0.26 m/s
+planner.arrival_time                           True        ours (beyond the seeds; False = seed)
+planner.time_step_s                            1 s         ours (R changes over minutes)
+planner.horizon_factor                         3           ours: arrival table covers 3 (width + height)
+search: 8-connected, step L (c_a + c_b) / 2    -           /work/shared/notes/planner.md (seed: Dijkstra,
+                                                           sum of node costs)
+=============================================  ==========  ==============================================
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+from pydantic import BaseModel, ConfigDict, Field
+from shapely.geometry.base import BaseGeometry
+
+from agents.lib.socialmap.adaptive import Adaptation, AdaptiveParams, adapt_spaces
+from agents.lib.socialmap.arrival import time_costs
+from agents.lib.agenda.chronemics import (
+    ChronemicsParams,
+    interaction_cost_profile,
+    is_active,
+    r_band,
+    r_of_t,
+)
+from agents.lib.socialmap.grid import (
+    CostArray,
+    CostPatch,
+    GridParams,
+    GridSpec,
+    compose,
+    static_grid,
+    walls_geometry,
+)
+from agents.lib.socialmap.groups import Group, GroupParams, group_people, social_density
+from agents.lib.socialmap.layers import (
+    CellMask,
+    body_patches,
+    footprint_patches,
+    interaction_masks,
+    interaction_patches,
+)
+from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
+from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
+from agents.lib.socialmap.roles import RoleParams, role_scale
+from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
+from agents.lib.agenda.model import ActivityWindow
+from agents.lib.socialmap.types import Person, Room, SocialMapInputError, SocialObject, Wall
+from agents.lib.socialmap.zones import (
+    ZONE_NAMES,
+    DensityWindow,
+    GroupZones,
+    ZoneParams,
+    band_patches,
+    contour_zones,
+    density_windows,
+)
+
+
+class PlannerParams(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    cruise_speed_mps: float = Field(0.25, gt=0, description="converts distance travelled to arrival time")
+    arrival_time: bool = Field(True, description="R at arrival time (False: at departure, as the seeds)")
+    time_step_s: float = Field(1.0, gt=0, description="time resolution of the arrival-time table")
+    horizon_factor: float = Field(3.0, gt=0, description="table covers trips up to this x (width + height)")
+
+
+class SocialMapParams(BaseModel):
+    """Every tunable of the social map and planner (defaults: table in the module doc)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    grid: GridParams = GridParams()
+    personal_space: PersonalSpaceParams = PersonalSpaceParams()
+    roles: RoleParams = RoleParams()
+    zones: ZoneParams = ZoneParams()
+    groups: GroupParams = GroupParams()
+    adaptive: AdaptiveParams = AdaptiveParams()
+    chronemics: ChronemicsParams = ChronemicsParams()
+    planner: PlannerParams = PlannerParams()
+
+
+@dataclass(frozen=True, slots=True)
+class StaticMap:
+    """The building part of the map (walls, rooms), reused across rebuilds."""
+
+    spec: GridSpec
+    grid: CostArray
+    walls: BaseGeometry | None
+    key: tuple[Any, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectSpace:
+    """An object's polygons and the state of its interaction space at the map's time."""
+
+    name: str
+    kind: str
+    footprint: BaseGeometry
+    interaction: BaseGeometry
+    r: float                  # R(t_s)
+    band: int                 # colour band of r (chronemics.BAND_NAMES)
+    active: bool              # an activity runs at t_s
+    forbidden: bool           # active and forbidden_while_active: an obstacle now
+    cost: float               # what the grid holds: r, or inf when forbidden
+
+
+@dataclass(frozen=True, slots=True)
+class PersonSpace:
+    """A person's final personal space (role-scaled, then adapted) and what the adaptation did."""
+
+    name: str
+    space: PersonalSpace
+    adaptation: Adaptation
+
+
+@dataclass(frozen=True, slots=True)
+class SocialMap:
+    """Everything a planner, a visualiser or a metric needs about the social map at time ``t_s``."""
+
+    spec: GridSpec
+    params: SocialMapParams
+    t_s: float
+    people: tuple[Person, ...]
+    objects: tuple[SocialObject, ...]
+    activities: tuple[ActivityWindow, ...]
+    unmatched_activities: tuple[ActivityWindow, ...]   # name an object not in the map: ignored
+    person_spaces: tuple[PersonSpace, ...]
+    groups: tuple[Group, ...]
+    object_spaces: tuple[ObjectSpace, ...]
+    static: CostArray          # walls and rooms (shared with the StaticMap, never written)
+    obstacle_patches: tuple[CostPatch, ...]      # bodies and footprints
+    zone_patches: tuple[CostPatch, ...]          # people's cost bands
+    interaction_patches: tuple[CostPatch, ...]   # interaction spaces at R(t_s)
+    density: tuple[DensityWindow, ...]
+    interaction_cells: tuple[CellMask | None, ...]
+    _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    # The three grids are composed on first use: a rebuild followed by the default (arrival-time)
+    # plan needs only ``people_cost``, and each full-grid copy costs milliseconds at 1000^2.
+    @property
+    def physical(self) -> CostArray:
+        """Walls, rooms, bodies and footprints: the grid of the non-social baseline."""
+        if "physical" not in self._cache:
+            self._cache["physical"] = compose(self.static, self.obstacle_patches)
+        return self._cache["physical"]
+
+    @property
+    def people_cost(self) -> CostArray:
+        """``physical`` plus the people's zones (the arrival-time planner's static part)."""
+        if "people_cost" not in self._cache:
+            self._cache["people_cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches))
+        return self._cache["people_cost"]
+
+    @property
+    def cost(self) -> CostArray:
+        """``people_cost`` plus the interaction spaces at R(t_s): the departure-time social grid."""
+        if "cost" not in self._cache:
+            self._cache["cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
+                                                        *self.interaction_patches))
+        return self._cache["cost"]
+
+    def zones(self) -> list[GroupZones]:
+        """Zone polygons per group (contoured on first use, then cached)."""
+        if "zones" not in self._cache:
+            self._cache["zones"] = contour_zones(self.spec, self.density, self.params.zones)
+        return self._cache["zones"]
+
+    def zone_polygons(self) -> dict[str, BaseGeometry]:
+        """Union over groups of each zone (nested regions), e.g. for metrics.compute_metrics."""
+        zones = self.zones()
+        return {name: shapely.union_all([z.zone(name) for z in zones]) if zones else shapely.MultiPolygon()
+                for name in ZONE_NAMES}
+
+    def interaction_polygons(self) -> dict[str, BaseGeometry]:
+        return {space.name: space.interaction for space in self.object_spaces}
+
+    def density_at(self, xs: Any, ys: Any) -> np.ndarray:
+        """The people's density (groups summed, groups combined by max) at arbitrary points."""
+        spaces = [ps.space for ps in self.person_spaces]
+        return social_density(self.people, spaces, self.groups, xs, ys)
+
+    def zone_at(self, x: float, y: float) -> str:
+        """'intimate', 'personal', 'social' or 'public' at a point (from the density, not the grid)."""
+        value = float(self.density_at(x, y))
+        for name in ZONE_NAMES:
+            if value >= self.params.zones.level(name):
+                return name
+        return "public"
+
+    def layer(self, name: str) -> CostArray:
+        """One layer alone on a free grid, for display: walls, bodies, footprints, people, objects."""
+        free = np.full(self.spec.shape, self.params.grid.free_cost, dtype=self.cost.dtype)
+        if name == "walls":
+            return self.static
+        if name == "people":
+            return compose(free, self.zone_patches)
+        if name == "objects":
+            return compose(free, self.interaction_patches)
+        raise ValueError(f"unknown layer {name!r}; expected walls, people or objects")
+
+    def time_costs(self, cruise_speed_mps: float) -> TimeCosts | None:
+        """``people_cost`` with the interaction spaces priced at arrival time (None without any)."""
+        if not any(m is not None for m in self.interaction_cells):
+            return None
+        key = ("time_costs", cruise_speed_mps)
+        if key not in self._cache:
+            by_object: dict[str, list[ActivityWindow]] = {}
+            for window in self.activities:
+                by_object.setdefault(window.object, []).append(window)
+            chron = self.params.chronemics
+            profiles = [(lambda times, w=tuple(by_object.get(o.name, ())), f=o.forbidden_while_active:
+                         interaction_cost_profile(times, w, chron, f)) for o in self.objects]
+            xmin, ymin, xmax, ymax = self.spec.bounds
+            horizon = self.params.planner.horizon_factor * ((xmax - xmin) + (ymax - ymin))
+            cached = "people_cost" in self._cache
+            base = self.people_cost if cached else compose(self.static, (*self.obstacle_patches, *self.zone_patches))
+            self._cache[key] = time_costs(base, self.interaction_cells, profiles, self.t_s, cruise_speed_mps,
+                                          self.spec.resolution, self.params.planner.time_step_s, horizon,
+                                          in_place=not cached)
+        return self._cache[key]
+
+
+def _check_unique(kind: str, names: Sequence[str]) -> None:
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise SocialMapInputError(f"duplicate {kind} name {name!r}")
+        seen.add(name)
+
+
+def build_static_map(bounds: Sequence[float], walls: Sequence[Wall], rooms: Sequence[Room] = (),
+                     params: SocialMapParams | None = None) -> StaticMap:
+    """Rasterise the building once: walls inflated by the robot radius, outside the rooms blocked."""
+    params = params or SocialMapParams()
+    spec = GridSpec.from_bounds(bounds, params.grid.resolution_m)
+    key = (tuple(bounds), tuple(walls), tuple(rooms), params.grid.resolution_m, params.grid.robot_radius_m,
+           params.grid.free_cost)
+    return StaticMap(spec=spec, grid=static_grid(spec, walls, rooms, params.grid), walls=walls_geometry(walls), key=key)
+
+
+def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Sequence[Person],
+                     objects: Sequence[SocialObject], activities: Sequence[ActivityWindow], t_s: float,
+                     params: SocialMapParams | None = None, *, rooms: Sequence[Room] = (),
+                     static: StaticMap | None = None) -> SocialMap:
+    """Compose the social map at time ``t_s`` (seconds since local midnight).
+
+    Pass ``static`` (from build_static_map with the same bounds, walls, rooms and grid params) to
+    skip rasterising the building on every rebuild; a mismatching one is an error."""
+    params = params or SocialMapParams()
+    if not math.isfinite(t_s):
+        raise SocialMapInputError(f"t_s must be finite, got {t_s!r}")
+    _check_unique("person", [p.name for p in people])
+    _check_unique("object", [o.name for o in objects])
+    if static is None:
+        static = build_static_map(bounds, walls, rooms, params)
+    else:
+        expected = (tuple(bounds), tuple(walls), tuple(rooms), params.grid.resolution_m,
+                    params.grid.robot_radius_m, params.grid.free_cost)
+        if static.key != expected:
+            raise SocialMapInputError("static map was built for other bounds, walls, rooms or grid parameters")
+    spec = static.spec
+    grid_params = params.grid
+    people = tuple(people)
+    objects = tuple(objects)
+
+    # People: role-scaled spaces, adapted to walls, grouped, densities on windows, cost bands.
+    base_spaces = [PersonalSpace.from_params(params.personal_space, role_scale(p, params.roles)) for p in people]
+    adaptations = adapt_spaces(people, base_spaces, static.walls, params.zones.level(params.adaptive.zone),
+                               2.0 * grid_params.robot_radius_m, params.adaptive)
+    spaces = [a.space for a in adaptations]
+    groups = group_people(people, spaces, params.groups)
+    windows = density_windows(spec, people, spaces, groups, params.zones)
+
+    # Objects: polygons, R(t_s), footprints and interaction cells.
+    known = {o.name for o in objects}
+    matched = tuple(a for a in activities if a.object in known)
+    unmatched = tuple(a for a in activities if a.object not in known)
+    geometries: list[ObjectGeometry] = [object_geometry(o) for o in objects]
+    object_spaces = []
+    for obj, geometry in zip(objects, geometries, strict=True):
+        own = [a for a in matched if a.object == obj.name]
+        r = r_of_t(t_s, own, params.chronemics)
+        active = is_active(t_s, own)
+        forbidden = active and obj.forbidden_while_active
+        object_spaces.append(ObjectSpace(name=obj.name, kind=obj.kind, footprint=geometry.footprint,
+                                         interaction=geometry.interaction, r=r, band=r_band(r, params.chronemics),
+                                         active=active, forbidden=forbidden,
+                                         cost=math.inf if forbidden else r))
+    masks = interaction_masks(spec, objects, geometries)
+
+    inflate = grid_params.robot_radius_m if grid_params.inflate_footprints else 0.0
+    obstacles = (*footprint_patches(spec, objects, geometries, inflate),
+                 *body_patches(spec, people, grid_params.person_radius_m + grid_params.robot_radius_m))
+    zone_costs = band_patches(windows, params.zones, grid_params.social_cost, grid_params.personal_cost)
+    return SocialMap(spec=spec, params=params, t_s=float(t_s), people=people, objects=objects,
+                     activities=matched, unmatched_activities=unmatched,
+                     person_spaces=tuple(PersonSpace(p.name, a.space, a) for p, a in zip(people, adaptations,
+                                                                                          strict=True)),
+                     groups=tuple(groups), object_spaces=tuple(object_spaces), static=static.grid,
+                     obstacle_patches=obstacles, zone_patches=tuple(zone_costs),
+                     interaction_patches=tuple(interaction_patches(masks, [s.cost for s in object_spaces])),
+                     density=tuple(windows), interaction_cells=tuple(masks))
+
+
+def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,
+         method: str = "astar", baseline: bool = False, arrival_time: bool | None = None,
+         cruise_speed_mps: float | None = None, workspace: SearchWorkspace | None = None) -> Path:
+    """Plan on the social map (A* or Dijkstra).
+
+    ``baseline=True`` plans on the physical grid (walls, bodies, footprints; no social cost).
+    ``arrival_time`` (default from params) prices each interaction space at the time the robot
+    would reach it at ``cruise_speed_mps``; False prices it at the map's time (the seeds).
+    Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py)."""
+    planner = social_map.params.planner
+    if arrival_time is None:
+        arrival_time = planner.arrival_time
+    speed = planner.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
+    if not speed > 0.0:
+        raise ValueError(f"cruise speed must be > 0, got {speed}")
+    grid_params = social_map.params.grid
+    try:
+        return _plan(social_map, start_xy, goal_xy, method=method, baseline=baseline, arrival_time=arrival_time,
+                     speed=speed, workspace=workspace)
+    except (StartOccupied, GoalOccupied) as exc:
+        xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
+        raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
+
+
+def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
+    """Why a point is not traversable, in metres and in the map's own terms."""
+    x, y = xy
+    grid = social_map.params.grid
+    point = shapely.Point(x, y)
+    static = social_map.static[social_map.spec.cell_of(x, y)]
+    if not np.isfinite(static):
+        return (f"it is outside every room or within {grid.robot_radius_m:.2f} m (the robot's radius plus "
+                "margin) of a wall")
+    for space in social_map.object_spaces:
+        if space.footprint.distance(point) <= grid.robot_radius_m:
+            return f"it is {space.footprint.distance(point):.2f} m from the footprint of object {space.name!r}"
+    for person in social_map.people:
+        distance = math.hypot(person.x - x, person.y - y)
+        if distance <= grid.person_radius_m + grid.robot_radius_m + 0.5:
+            return f"it is {distance:.2f} m from {person.name!r} (a body or intimate zone)"
+    for space in social_map.object_spaces:
+        if space.interaction.covers(point):
+            return f"it is in the interaction space of {space.name!r}, forbidden while its activity runs"
+    return "a person's or an object's space covers it"
+
+
+def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *, method: str,
+          baseline: bool, arrival_time: bool, speed: float, workspace: SearchWorkspace | None) -> Path:
+    grid_params = social_map.params.grid
+    if baseline:
+        return plan_on_grid(social_map.physical, social_map.spec, start_xy, goal_xy, method=method,
+                            c_min=grid_params.free_cost, workspace=workspace)
+    # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
+    c_min = min(grid_params.free_cost, grid_params.social_cost, grid_params.personal_cost,
+                social_map.params.chronemics.r_min)
+    costs = social_map.time_costs(speed) if arrival_time else None
+    grid = social_map.cost if costs is None else costs
+    return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace)

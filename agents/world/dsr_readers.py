@@ -1,0 +1,105 @@
+"""The world read back from the DSR: social-map inputs and the symbolic graph.
+
+Why here: the navigation agent and the executive read the DSR; the offline commands read a DSR
+built by ``agents/world/offline.py``.  Both call these functions, so they see the same people,
+objects, activities and doors.  Malformed elements (a peer on another version, a half-written
+node) are skipped rather than crashing the reader.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import networkx as nx
+
+from agents.lib.agenda.model import ActivityWindow, AgendaError
+from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
+from agents.world.vocabulary import EdgeType, NodeType
+from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
+
+
+def shape_from_attrs(prefix: str, attrs: dict[str, Any], where: str) -> Shape:
+    kind = attrs.get(f"{prefix}_shape")
+    dims = attrs.get(f"{prefix}_dims")
+    if kind not in SHAPE_FIELDS or not isinstance(dims, list) or len(dims) != len(shape_keys(kind)):
+        raise GeometryError(f"{where}: attributes {prefix}_shape/{prefix}_dims are missing or malformed")
+    return shape_from_spec({"shape": kind, **dict(zip(shape_keys(kind), dims, strict=True))}, where)
+
+
+def dsr_objects(graph: Any) -> list[SocialObject]:
+    """Objects as the DSR holds them."""
+    out: list[SocialObject] = []
+    for node in graph.nodes_of_type(NodeType.OBJECT):
+        try:
+            x, y, theta = graph.world_pose(node.id)
+            out.append(SocialObject(name=node.name, kind=str(node.attrs.get("kind", "object")), x=x, y=y,
+                                    theta=theta, footprint=shape_from_attrs("footprint", node.attrs, node.name),
+                                    interaction=shape_from_attrs("interaction", node.attrs, node.name),
+                                    forbidden_while_active=bool(node.attrs.get("forbidden_while_active", False))))
+        except (GeometryError, KeyError, LookupError):
+            continue
+    return out
+
+
+def dsr_people(graph: Any) -> list[Person]:
+    """People with their poses and the people they interact with (``interacting`` edges)."""
+    out: list[Person] = []
+    interacting: dict[int, list[str]] = {}
+    for edge in graph.edges_of_type(EdgeType.INTERACTING):
+        other = graph.get_node(edge.dst)
+        if other is not None and other.type == NodeType.PERSON:
+            interacting.setdefault(edge.src, []).append(other.name)
+    for node in graph.nodes_of_type(NodeType.PERSON):
+        try:
+            x, y, theta = graph.world_pose(node.id)
+            out.append(Person(name=node.name, x=x, y=y, theta=theta, role=str(node.attrs.get("role", "resident")),
+                              interacting_with=tuple(sorted(interacting.get(node.id, ())))))
+        except (SocialMapInputError, KeyError, LookupError, ValueError):
+            continue
+    return out
+
+
+def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
+    out: list[ActivityWindow] = []
+    for node in graph.nodes_of_type(NodeType.ACTIVITY):
+        attrs = node.attrs
+        try:
+            out.append(ActivityWindow(object=str(attrs["object"]), start_s=float(attrs["start_s"]),
+                                      end_s=float(attrs["end_s"]), cancelled=attrs.get("state") == "cancelled"))
+        except (KeyError, ValueError, TypeError, AgendaError):
+            continue
+    return out
+
+
+def closed_doors(graph: Any) -> list[str]:
+    """Names of the doors the DSR says are closed."""
+    return sorted(node.name for node in graph.nodes_of_type(NodeType.DOOR) if node.attrs.get("open") is False)
+
+
+SYMBOLIC_TYPES = frozenset({NodeType.ROOM, NodeType.DOOR, NodeType.ROBOT, NodeType.PERSON, NodeType.OBJECT,
+                            NodeType.ACTIVITY})
+
+
+def symbolic_view(graph: Any) -> nx.MultiDiGraph:
+    """The part of the DSR the grammar reasons about (no clock, missions, intentions, requests):
+    nodes keyed by id with ``type``, ``name`` and their attributes; edges keyed by their type."""
+    full = graph.to_networkx()
+    keep = [n for n, data in full.nodes(data=True) if data.get("type") in SYMBOLIC_TYPES]
+    return full.subgraph(keep).copy()
+
+
+def running_activities(graph: Any) -> list[tuple[str, tuple[float, float], tuple[str, ...]]]:
+    """(object, object position, participants) of every activity the DSR says is running."""
+    out = []
+    for node in graph.nodes_of_type(NodeType.ACTIVITY):
+        if node.attrs.get("state") != "running":
+            continue
+        obj = graph.get_node_by_name(str(node.attrs.get("object", "")))
+        if obj is None:
+            continue
+        try:
+            x, y, _ = graph.world_pose(obj.id)
+        except (KeyError, LookupError, ValueError):
+            continue
+        out.append((obj.name, (x, y), tuple(str(p) for p in node.attrs.get("participants", []))))
+    return out

@@ -1,0 +1,66 @@
+"""The navigation's view of a scene: map parameters, static maps, and the social map from the DSR.
+
+Why one class for the agent and the offline commands: ``chronav path`` promises the map the
+navigation agent sees.  Both build it here, from a DSR graph, with the same parameters (grid
+resolution, the robot's radius plus a clearance margin, the cruise speed the arrival-time pricing
+assumes), so the margin or the cruise factor cannot drift between them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from agents.lib.socialmap.grid import GridParams
+from agents.lib.socialmap.types import Room, Wall
+from agents.lib.socialmap.social_map import SocialMap, SocialMapParams, StaticMap, build_social_map, build_static_map
+from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_rooms, scene_walls
+from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
+from scenes.model import Scene
+
+# PLANNING_MARGIN_M (building.py, where the scene check reads it without importing the planner).
+# The navigation expects to average this fraction of the robot's top speed (arrival-time R(t)).
+CRUISE_FRACTION = 0.7
+
+
+@dataclass
+class NavigationMaps:
+    """Everything needed to build the robot's social map of one scene; static maps are cached per
+    (rooms the route is confined to, closed doors), since rasterising the building is the costly part."""
+
+    scene: Scene
+    params: SocialMapParams
+    cruise_speed_mps: float
+    _statics: dict[tuple[tuple[str, ...], tuple[str, ...]], StaticMap] = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M) -> NavigationMaps:
+        robot = scene.robot
+        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m))
+        return cls(scene, params, CRUISE_FRACTION * robot.max_speed)
+
+    def __post_init__(self) -> None:
+        self._walls = scene_walls(self.scene)
+        self._rooms = scene_rooms(self.scene)
+
+    def _layout(self, route_rooms: Sequence[str], closed: Sequence[str]) -> tuple[list[Wall], list[Room]]:
+        rooms = [room for room in self._rooms if room.name in route_rooms] if route_rooms else self._rooms
+        return [*self._walls, *closed_door_walls(self.scene, closed)], rooms
+
+    def static(self, route_rooms: Sequence[str] = (), closed: Sequence[str] = ()) -> StaticMap:
+        key = (tuple(sorted(route_rooms)), tuple(sorted(closed)))
+        if key not in self._statics:
+            walls, rooms = self._layout(route_rooms, closed)
+            self._statics[key] = build_static_map(self.scene.bounds, walls, rooms, self.params)
+        return self._statics[key]
+
+    def build(self, graph: Any, now_s: float, route_rooms: Sequence[str] = ()) -> SocialMap:
+        """The social map at ``now_s`` from the DSR: people, objects, activities and closed doors
+        (a closed door is a wall).  With ``route_rooms`` (the symbolic plan's rooms) other rooms are
+        walls, so the metric planner picks doors and way but never crosses a room the plan avoided."""
+        closed = closed_doors(graph)
+        walls, rooms = self._layout(route_rooms, closed)
+        return build_social_map(self.scene.bounds, walls, dsr_people(graph), dsr_objects(graph),
+                                dsr_activity_windows(graph), now_s, self.params, rooms=rooms,
+                                static=self.static(route_rooms, closed))

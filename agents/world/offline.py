@@ -1,0 +1,169 @@
+"""The world the agents would hold at a sim time, built without any process: the offline commands.
+
+Why through a DSR graph: `chronav path`, `plan` and `metrics --at t` must see exactly what the
+live agents see.  So this module does not derive a map from the scene itself; it writes the
+scripted world at ``t`` (``agents/world/timeline.py``) into an in-memory DSR with the agents' own
+writer functions (``agents/world/dsr_writers.py``, perception without noise), then reads it back
+with the agents' own readers: the navigation's map (``navigation.py``) and the executive's
+symbolic graph (``dsr_readers.symbolic_view``).  ``tests/unit/test_world_parity.py`` checks that
+the result equals, cell for cell and edge for edge, what the agents hold at that time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+
+from agents.lib.agenda.chronemics import ChronemicsParams
+from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_trajectory_csv
+from agents.lib.socialmap.search import PlanningError
+from agents.lib.socialmap.social_map import SocialMap, plan
+from agents.world.dsr_readers import running_activities, symbolic_view
+from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_interactions,
+                                      write_object, write_object_r, write_person, write_robot)
+from agents.world.interactions import interaction_pairs, scene_conversations
+from agents.world.navigation import NavigationMaps
+from agents.world.scene_world import SceneWorld, load_world
+from agents.world.timeline import world_at
+from dsr import DSRGraph
+from scenes.clock import format_clock
+from scenes.loader import LoadedScene
+from scenes.yamlio import SourceError
+
+
+class OfflineError(Exception):
+    """A scene or request that cannot be planned or measured; ``no_path`` when only the plan failed."""
+
+    def __init__(self, message: str, no_path: bool = False) -> None:
+        super().__init__(message)
+        self.no_path = no_path
+
+
+def graph_at(world: SceneWorld, t_s: float, robot_pose: tuple[float, float, float] | None = None) -> DSRGraph:
+    """The DSR at ``t_s`` as the perceiving agents write it (people without sensor noise).
+
+    ``robot_pose`` puts the robot elsewhere than its scene pose (where a plan starts)."""
+    scene = world.scene
+    state = world_at(world, t_s)
+    graph = DSRGraph(agent="offline")
+    write_building(graph, scene, state.doors_open)
+    write_clock(graph, scene, t_s, scene.clock.rate)
+    spec = scene.robot
+    pose = robot_pose or (spec.pose.x, spec.pose.y, spec.pose.theta)
+    write_robot(graph, spec, pose, scene.room_at(pose[0], pose[1]), laser_angles=[])
+    for obj in scene.objects:
+        write_object(graph, obj, scene.room_at(obj.pose.x, obj.pose.y))
+    for person in state.people:
+        write_person(graph, person.name, person.role, (person.x, person.y, person.theta),
+                     scene.room_at(person.x, person.y), t_s)
+    write_activities(graph, state.agenda)
+    write_object_r(graph, state.agenda, t_s, ChronemicsParams())
+    positions = {p.name: (p.x, p.y) for p in state.people}
+    write_interactions(graph, interaction_pairs(positions, running_activities(graph), scene_conversations(scene)))
+    return graph
+
+
+@dataclass
+class SceneMaps:
+    """A scene and its navigation maps, reused across many times (reports, tests)."""
+
+    world: SceneWorld
+    nav: NavigationMaps
+    _graphs: dict[float, DSRGraph] = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def load(cls, scene: str | Path | LoadedScene | SceneWorld) -> SceneMaps:
+        try:
+            world = scene if isinstance(scene, SceneWorld) else load_world(scene)
+        except SourceError as exc:
+            raise OfflineError(str(exc)) from None
+        return cls(world, NavigationMaps.for_scene(world.scene))
+
+    @property
+    def cruise_speed(self) -> float:
+        return self.nav.cruise_speed_mps
+
+    def graph(self, t_s: float) -> DSRGraph:
+        if t_s not in self._graphs:
+            self._graphs[t_s] = graph_at(self.world, t_s)
+        return self._graphs[t_s]
+
+    def at(self, t_s: float) -> SocialMap:
+        return self.nav.build(self.graph(t_s), t_s)
+
+    def symbolic(self, t_s: float) -> Any:
+        return symbolic_view(self.graph(t_s))
+
+    def measure(self, trajectory: np.ndarray, t_s: float) -> MetricsReport:
+        """Seed-table metrics of a trajectory against the people and agenda at ``t_s``."""
+        smap = self.at(t_s)
+        return compute_metrics(trajectory,
+                               people={p.name: (p.x, p.y) for p in smap.people},
+                               objects={s.name: s.footprint for s in smap.object_spaces},
+                               zones=smap.zone_polygons(),
+                               interaction_spaces=smap.interaction_polygons())
+
+
+def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.ndarray:
+    """A planned polyline driven at constant speed, heading along each segment (for metrics)."""
+    seg = np.diff(points, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    t = t0_s + np.concatenate([[0.0], np.cumsum(lengths)]) / speed_mps
+    heading = np.arctan2(seg[:, 1], seg[:, 0]) if len(seg) else np.zeros(0)
+    theta = np.concatenate([heading[:1], heading]) if len(heading) else np.zeros(len(points))
+    return np.column_stack([t, points[:, 0], points[:, 1], theta])
+
+
+def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal: tuple[float, float], *,
+                 baseline: bool = False, arrival_time: bool = True, method: str = "astar") -> dict[str, Any]:
+    """One plan plus its metrics, as a JSON-ready dict."""
+    maps = SceneMaps.load(scene)
+    smap = maps.at(t_s)
+    try:
+        path = plan(smap, start, goal, method=method, baseline=baseline, arrival_time=arrival_time,
+                    cruise_speed_mps=maps.cruise_speed)
+    except PlanningError as exc:
+        raise OfflineError(f"no path from ({start[0]:g}, {start[1]:g}) to ({goal[0]:g}, {goal[1]:g}) m at "
+                           f"{format_clock(t_s)}: {exc}", no_path=True) from None
+    points = np.vstack([path.points_m])
+    report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
+    return {
+        "scene": maps.world.scene.name, "t_s": t_s, "baseline": baseline, "arrival_time": arrival_time,
+        "method": method, "cost": path.cost, "length_m": path.length_m, "expanded": path.expanded,
+        "points": points.round(3).tolist(),
+        "objects": {s.name: {"R": s.r, "band": s.band, "active": s.active} for s in smap.object_spaces},
+        "metrics": {"psi_percent": report.psi_zone_percent, "psi_interaction_percent": report.psi_object_percent,
+                    "d_min_person_m": report.d_min_person_m, "d_min_object_m": report.d_min_object_m},
+    }
+
+
+def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
+    """A trajectory none of whose samples is in the scene's rooms belongs to another scene (or
+    another frame): measuring it would report distances to people it never met."""
+    scene = world.scene
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    inside = shapely.intersects_xy(building, traj[:, 1], traj[:, 2])
+    if not inside.any():
+        xmin, ymin, xmax, ymax = scene.bounds
+        raise OfflineError(f"{source}: no sample of the trajectory lies in a room of {scene.name!r} (samples span "
+                           f"x {traj[:, 1].min():g}..{traj[:, 1].max():g} m, y {traj[:, 2].min():g}.."
+                           f"{traj[:, 2].max():g} m; the building spans x {xmin:g}..{xmax:g} m, y {ymin:g}..{ymax:g} m); "
+                           "is it a trajectory of this scene?")
+
+
+def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None) -> dict[str, Any]:
+    maps = SceneMaps.load(scene)
+    traj = read_trajectory_csv(trajectory_csv)
+    _check_on_map(maps.world, traj, trajectory_csv)
+    if at_s is None:
+        first = float(traj[0, 0])
+        at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s
+    if not math.isfinite(at_s):
+        raise OfflineError("--at must be a finite time")
+    report = maps.measure(traj, at_s)
+    return {"scene": maps.world.scene.name, "at_s": at_s, "metrics": report.model_dump(), "table": report.to_table()}

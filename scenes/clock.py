@@ -1,0 +1,48 @@
+"""Clock times: one syntax for scenes, agendas, missions and the command line.
+
+Why one module: "HH:MM" is typed by staff in scene files, agenda files and on the command line
+(`chronav path --at 11:15`), and written back in every message; a second parser that accepted
+``9`` where the first refused it is exactly the kind of drift users trip over.  Times are seconds
+since local midnight of the sim day (float); ``"24:00"`` is the end of the day.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated
+
+from pydantic import AfterValidator, Field
+
+CLOCK_PATTERN = re.compile(r"^(\d{1,2}):(\d{2})(?::(\d{2}))?$")
+SECONDS_PER_DAY = 86400.0
+
+
+def parse_clock(text: str) -> float:
+    """``"HH:MM"`` or ``"HH:MM:SS"`` -> seconds since midnight; ``"24:00"`` is the end of the day."""
+    match = CLOCK_PATTERN.match(text.strip()) if isinstance(text, str) else None
+    if not match:
+        shown = text if isinstance(text, str) and len(text) <= 40 else f"{str(text)[:40]}..."
+        raise ValueError(f"{shown!r} is not a clock time (use HH:MM or HH:MM:SS, e.g. 09:30)")
+    hours, minutes, seconds = int(match[1]), int(match[2]), int(match[3] or 0)
+    if (hours, minutes, seconds) != (24, 0, 0) and (hours > 23 or minutes > 59 or seconds > 59):
+        raise ValueError(f"{text!r} is not a valid clock time (00:00 to 24:00)")
+    return float(hours * 3600 + minutes * 60 + seconds)
+
+
+def format_clock(seconds: float) -> str:
+    """Seconds since midnight -> ``"HH:MM"`` (``"HH:MM:SS"`` when not whole minutes), for messages."""
+    whole = int(round(seconds))
+    sign = "-" if whole < 0 else ""
+    whole = abs(whole)
+    hours, rest = divmod(whole, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{sign}{hours:02d}:{minutes:02d}" + (f":{secs:02d}" if secs else "")
+
+
+def _checked_clock(value: str) -> str:
+    parse_clock(value)
+    return value
+
+
+# A clock time checked where it is declared, so every model that uses one validates it the same way.
+ClockTime = Annotated[str, AfterValidator(_checked_clock), Field(description="local clock time HH:MM[:SS]")]
