@@ -88,7 +88,8 @@ class Member:
     seen: dict[int, int] = field(default_factory=dict)
     live: bool = True
     gone_at: float = 0.0
-    behind: dict[int, int] = field(default_factory=dict)
+    #: writer replica -> (stamp this member holds and we lacked, since when)
+    behind: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 class _LogBudget:
@@ -131,6 +132,8 @@ class Replica:
         #: a member that left still counts for tombstone compaction this long (a partitioned
         #: member must not come back with elements everybody else forgot)
         self.member_retention_s = member_retention_s
+        #: how long a member must hold writes we lack before we fetch a state for them
+        self.lag_grace_s = 4 * digest_interval
         self.stats = ReplicaStats()
         self._log_budget = _LogBudget()
         self.session: Any = None
@@ -424,20 +427,27 @@ class Replica:
                 member = self._members[message.agent] = Member(message.agent, message.replica)
             member.clock, member.seen, member.live = message.clock, message.seen, True
             mine = self.graph.replica_id
-            # Anti-entropy: the member held writes we still lacked at its previous digest
-            # (one digest period is far longer than any delta takes): fetch its state.
+            # Anti-entropy: the member holds writes we lack.  Deltas in flight, or a backlog
+            # on a loaded machine, look the same for a while: only a lag that lasts
+            # lag_grace_s (and at most once per lag_grace_s per writer) fetches a state.
+            now = time.monotonic()
+            since = member.behind
+            for replica, hlc in message.seen.items():
+                if replica != mine and hlc > self._seen.get(replica, 0) and replica not in since:
+                    since[replica] = (hlc, now)
             targets: set[str] = set()
-            for replica, hlc in member.behind.items():
-                if hlc > self._seen.get(replica, 0):
+            for replica, (hlc, at) in list(since.items()):
+                if self._seen.get(replica, 0) >= hlc:
+                    del since[replica]
+                elif now - at >= self.lag_grace_s:
                     # fetch from the writer itself if it runs (only its own state is
                     # trusted for its writes), else from the member that holds them
                     owner = self.graph.bound_agent(replica)
                     known = self._members.get(owner) if owner is not None else None
                     targets.add(owner if known is not None and known.live
                                 else message.agent)   # type: ignore[arg-type]
+                    since[replica] = (message.seen.get(replica, hlc), now)
             lagging = bool(targets)
-            member.behind = {r: h for r, h in message.seen.items()
-                             if r != mine and h > self._seen.get(r, 0)}
         if lagging and not self.graph.read_only:
             self.stats.anti_entropy += 1
             for target in sorted(targets):
