@@ -8,7 +8,7 @@ from dsr.config import ZenohSettings, graph_name_from_env
 from dsr.errors import (ConfigError, DSRError, EdgeNotFoundError, GraphFileError,
                         InvalidAttributeError, InvalidIdentifierError, NameTakenError,
                         NodeNotFoundError, PolicyError, PoseError, ReadOnlyGraphError,
-                        TransactionError, WireError)
+                        TransactionError, WireError, WriteRefusedError)
 from dsr.graph import DSRGraph
 from dsr.model import Edge, Node
 from dsr.policy import AllowAll, WritePolicy
@@ -20,5 +20,5 @@ __all__ = [
     "GraphFileError", "InvalidAttributeError", "InvalidIdentifierError", "NameTakenError", "Node",
     "NodeNotFoundError", "PolicyError", "PoseError", "ReadOnlyGraphError", "Replica", "ReplicaStats",
     "SIGNALS", "TransactionError", "WireError", "WritePolicy", "ZenohSettings", "graph_name_from_env",
-    "join",
+    "WriteRefusedError", "join",
 ]

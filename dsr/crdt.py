@@ -11,7 +11,10 @@ just a small state.  Per element:
   concurrent with a remove was not observed by it, so it survives).
 - ``cleared``: hlc of the latest remove; registers written at or before it are hidden, so a
   re-added element does not resurrect attributes of its previous life.  An HLC of a causally
-  later write is always larger, so only concurrent writes can land on either side.
+  later write is always larger, so only concurrent writes can land on either side.  Hidden
+  registers can never become visible again (``cleared`` only grows), so they are not kept:
+  the join drops them (deleted values cost no memory and are never relayed), except the
+  removal receipt, which proves who removed the element.
 - ``meta``: nodes' (type, name) as one LWW register; ``attrs``: one LWW register per key.
   Registers are ordered by (hlc, replica); equal stamps with different values (only a buggy or
   forged writer does that) are ordered by the value's JSON bytes, keeping the join total.
@@ -62,6 +65,15 @@ class ElementState:
         if reg is None or reg[0] <= self.cleared:
             return _MISSING
         return list(reg[2]) if type(reg[2]) is list else reg[2]
+
+    def prune(self) -> None:
+        """Drop the registers hidden by `cleared` (not the removal receipt)."""
+        cleared = self.cleared
+        if cleared and self.attrs:
+            attrs = self.attrs
+            for key in [k for k, reg in attrs.items() if reg[0] <= cleared
+                        and k != REMOVAL_RECEIPT]:
+                del attrs[key]
 
     def copy(self) -> ElementState:
         return ElementState(dict(self.add), dict(self.rem), self.cleared, self.meta,
@@ -123,8 +135,10 @@ def merge_into(state: ElementState, *, add: Any = None, rem: Any = None, cleared
         old_cleared = state.cleared
         state.cleared = cleared
         changed = True
-        for key, reg in state.attrs.items():
-            if old_cleared < reg[0] <= cleared:
+        hidden = [key for key, reg in state.attrs.items() if reg[0] <= cleared
+                  and key != REMOVAL_RECEIPT]
+        for key in hidden:
+            if state.attrs.pop(key)[0] > old_cleared:
                 keys.append(key)
     if meta is not None and register_wins(meta, state.meta):
         state.meta = meta
@@ -133,6 +147,8 @@ def merge_into(state: ElementState, *, add: Any = None, rem: Any = None, cleared
         current = state.attrs
         floor = state.cleared
         for key, reg in attrs.items():
+            if reg[0] <= floor and key != REMOVAL_RECEIPT:
+                continue            # hidden for ever: not kept
             old = current.get(key)
             if register_wins(reg, old):
                 current[key] = reg
@@ -155,6 +171,8 @@ def merge_attrs(state: ElementState, attrs: dict[str, Register]) -> tuple[bool, 
     changed = False
     keys: list[str] = []
     for key, reg in attrs.items():
+        if reg[0] <= floor and key != REMOVAL_RECEIPT:
+            continue                # hidden for ever: not kept
         old = current.get(key)
         if old is None or register_wins(reg, old):
             current[key] = reg

@@ -63,3 +63,8 @@ class ConfigError(DSRError, ValueError):
 
 class PolicyError(DSRError, ValueError):
     """A write-policy file is invalid; the message names the file, line and key."""
+
+
+class WriteRefusedError(DSRError, PermissionError):
+    """A local write the write policy refuses; the message names the writer, the operation, the
+    element type, the attribute and the policy file.  Every other replica would drop it."""

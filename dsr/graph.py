@@ -25,11 +25,13 @@ import orjson
 
 from dsr import crdt, poses, wire
 from dsr.crdt import ElementState
-from dsr.errors import (DSRError, EdgeNotFoundError, InvalidIdentifierError, NameTakenError,
-                        NodeNotFoundError, PoseError, ReadOnlyGraphError, TransactionError)
+from dsr.errors import (DSRError, EdgeNotFoundError, InvalidAttributeError,
+                        InvalidIdentifierError, NameTakenError, NodeNotFoundError, PoseError,
+                        ReadOnlyGraphError, TransactionError, WriteRefusedError)
+from dsr.limits import LIMITS, value_bytes
 from dsr.hlc import HybridLogicalClock
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
-                       check_node_id, check_type_name)
+                       check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
 from dsr.outbox import Outbox
 from dsr.signals import Event, SignalHub
@@ -82,6 +84,15 @@ class IdAllocator:
                 return node_id
 
 
+def _settled(state: ElementState, acked: Callable[[int, int], bool]) -> bool:
+    for replica, hlc in state.add.items():
+        if not acked(replica, hlc):
+            return False
+    if state.meta is not None and not acked(state.meta[1], state.meta[0]):
+        return False
+    return all(acked(reg[1], reg[0]) for reg in state.attrs.values())
+
+
 class DSRGraph:
     """A full replica of a DSR graph.  Offline until a transport (dsr.transport.join) attaches."""
 
@@ -112,8 +123,21 @@ class DSRGraph:
         self._tx_depth = 0
         self._version = 0
         self._snapshot_cache: tuple[int, bytes] | None = None
+        self._parts_cache: tuple[int, list[bytes]] | None = None
         self._writers: dict[int, str] = {self.replica_id: self.agent}
+        self._bound: dict[int, str] = {self.replica_id: self.agent}
         self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
+        #: elements that are not present (removed, or only known from stray registers): the
+        #: candidates of tombstone compaction (compact())
+        self._dead_nodes: set[int] = set()
+        self._dead_edges: set[EdgeKey] = set()
+        #: write policy checked on local writes (set by the transport when join() has one;
+        #: None: every local write is allowed, as in library use)
+        self.local_policy: Any = None
+        #: largest HLC of the local deltas handed to the publisher so far
+        self.sent_hlc = 0
+        #: type of the node whose delete_node() is removing its edges (local policy checks)
+        self._cascade: str | None = None
 
     # ------------------------------------------------------------------ reads
     def __len__(self) -> int:
@@ -129,8 +153,8 @@ class DSRGraph:
 
     def _node(self, node_id: int) -> Node:
         view = self._view[node_id]
-        return Node(id=node_id, type=view.type, name=self._names.shown(view.name, node_id),
-                    attrs=self._nodes[node_id].visible_attrs())
+        return make_node(node_id, view.type, self._names.shown(view.name, node_id),
+                         self._nodes[node_id].visible_attrs())
 
     def _edge(self, key: EdgeKey) -> Edge:
         return Edge(src=key[0], dst=key[1], type=key[2], attrs=self._edges[key].visible_attrs())
@@ -243,14 +267,38 @@ class DSRGraph:
                 raise
             self._tx_depth -= 1
             payload = None
+            top = 0
             if outer:
                 self._tx = None
+                if tx.out_nodes or tx.out_edges:
+                    self._check_size(tx)
                 payload = self._commit(tx)
+                top = self.clock.last
         finally:
             self._lock.release()
         publish = self._publish
         if payload is not None and publish is not None:
             publish(payload)
+            if top > self.sent_hlc:
+                self.sent_hlc = top
+
+    def _check_size(self, tx: _Transaction) -> None:
+        """Refuse (and undo) a write whose delta receivers would drop as too large."""
+        limit = LIMITS.max_delta_bytes
+        estimate = 0
+        for state in (*tx.out_nodes.values(), *tx.out_edges.values()):
+            estimate += 200 + sum(value_bytes(reg[2]) + 60 for reg in state.attrs.values())
+        if estimate * 2 < limit:
+            return
+        size = len(self._encoder.encode(
+            [wire.node_entry(i, st) for i, st in tx.out_nodes.items()],
+            [wire.edge_entry(k, st) for k, st in tx.out_edges.items()]))
+        if size > limit:
+            self._undo(tx)
+            raise InvalidAttributeError(
+                f"this write would make a delta of {size} bytes, over the limit of {limit} "
+                "bytes per message (CHRONAV_DSR_MAX_DELTA_BYTES): split it into smaller "
+                "transactions")
 
     def _commit(self, tx: _Transaction) -> bytes | None:
         self._signals.post(tx.events)
@@ -258,7 +306,8 @@ class DSRGraph:
             return None
         self._version += 1
         outbox = self._outbox
-        return outbox.add(tx.out_nodes, tx.out_edges) if outbox is not None else None
+        return outbox.add(tx.out_nodes, tx.out_edges, self.clock.last) \
+            if outbox is not None else None
 
     def _undo(self, tx: _Transaction) -> None:
         for node_id, before in tx.undo_nodes.items():
@@ -318,22 +367,86 @@ class DSRGraph:
             if self._tx is None:
                 if node_id not in self._view:
                     raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+                if self.local_policy is not None:
+                    self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
                 hlc = self.clock.tick()
                 me = self.replica_id
                 regs = {k: (hlc, me, v) for k, v in values.items()}
-                events: list[Event] = []
-                self._merge_node(node_id, {"attrs": regs}, events)
+                _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
+                event = None
+                if keys and self._signals.wants("node_updated"):
+                    event = ("node_updated", (self._node(node_id), keys))
                 self._version += 1
                 outbox = self._outbox
                 if outbox is not None:
-                    payload = outbox.add({node_id: ElementState(attrs=regs)}, {})
+                    payload = outbox.add_attrs(node_id, regs, hlc)
             else:
                 self._update_node_tx(node_id, values)
                 return
+        if event is not None:
+            self._signals.post([event])
+        publish = self._publish
+        if payload is not None and publish is not None:
+            publish(payload)
+            if hlc > self.sent_hlc:
+                self.sent_hlc = hlc
+
+    def update_nodes(self, updates: dict[int, Attrs]) -> None:
+        """Set attributes of many visible nodes at once: one stamp, one delta, one lock.
+
+        How a writer batches (docs/dsr_wire_format.md): receivers apply the whole batch at
+        once, so thousands of updates cost them one message.  All-or-nothing: a missing node or
+        a refused write raises before anything changes.  Inside a transaction it joins it."""
+        checked = {node_id: check_attrs(attrs) for node_id, attrs in updates.items()}
+        if self.read_only:
+            raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
+        if self._tx is not None and self._tx.owner == threading.get_ident():
+            for node_id, values in checked.items():
+                self._update_node_tx(node_id, values)
+            return
+        payload = None
+        with self._lock:
+            if self._tx is not None:          # another thread's transaction: wait for it
+                for node_id, values in checked.items():
+                    self._update_node_tx(node_id, values)
+                return
+            view = self._view
+            for node_id, values in checked.items():
+                if node_id not in view:
+                    raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+                if self.local_policy is not None:
+                    self._check_local("node", node_id,
+                                      {"attrs": dict.fromkeys(values, (0, 0, 0))})
+            hlc = self.clock.tick()
+            me = self.replica_id
+            events: list[Event] = []
+            merge_attrs = crdt.merge_attrs
+            nodes = self._nodes
+            want = self._signals.wants("node_updated")
+            entries: list[dict[str, object]] = []
+            for node_id, values in checked.items():
+                regs = {k: (hlc, me, v) for k, v in values.items()}
+                _, keys = merge_attrs(nodes[node_id], regs)
+                if keys and want:
+                    events.append(("node_updated", (self._node(node_id), keys)))
+                entries.append({"id": node_id, "attrs": regs})
+            if not entries:
+                return
+            self._version += 1
+            outbox = self._outbox
+            if outbox is not None:
+                payload = outbox.add_entries(entries, hlc)
         self._signals.post(events)
         publish = self._publish
         if payload is not None and publish is not None:
             publish(payload)
+            if hlc > self.sent_hlc:
+                self.sent_hlc = hlc
+
+    def published_hlc(self) -> int:
+        """Every local write stamped up to this HLC has been handed to the publisher."""
+        outbox = self._outbox
+        return max(self.sent_hlc, outbox.sent_top if outbox is not None else 0)
 
     def _update_node_tx(self, node_id: int, values: Attrs) -> None:
         with self._write(rollback=False) as tx:
@@ -348,13 +461,19 @@ class DSRGraph:
         with self._write(rollback=False) as tx:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot delete node {node_id}: not in the graph")
+            if self.local_policy is not None:       # refuse before its edges are touched
+                self._check_local("node", node_id, {"cleared": 1})
             hlc = self.clock.tick()
             receipt = crdt.removal_receipt(hlc, self.replica_id)
-            for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
-                edge = self._edges[key]
-                if edge.present():
-                    self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc,
-                                     attrs=receipt)
+            self._cascade = self._view[node_id].type
+            try:
+                for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
+                    edge = self._edges[key]
+                    if edge.present():
+                        self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc,
+                                         attrs=receipt)
+            finally:
+                self._cascade = None
             node = self._nodes[node_id]
             self._local_node(tx, node_id, rem=tuple(node.add.items()), cleared=hlc,
                              attrs=receipt)
@@ -389,7 +508,9 @@ class DSRGraph:
                              attrs=crdt.removal_receipt(hlc, self.replica_id))
 
     def _local_node(self, tx: _Transaction, node_id: int, **delta: Any) -> None:
-        if tx.rollback and node_id not in tx.undo_nodes:
+        if self.local_policy is not None:
+            self._check_local("node", node_id, delta)
+        if node_id not in tx.undo_nodes:
             before = self._nodes.get(node_id)
             tx.undo_nodes[node_id] = before.copy() if before is not None else None
         self._merge_node(node_id, delta, tx.events)
@@ -399,7 +520,9 @@ class DSRGraph:
         crdt.merge_into(out, **delta)
 
     def _local_edge(self, tx: _Transaction, key: EdgeKey, **delta: Any) -> None:
-        if tx.rollback and key not in tx.undo_edges:
+        if self.local_policy is not None:
+            self._check_local("edge", key, delta)
+        if key not in tx.undo_edges:
             before = self._edges.get(key)
             tx.undo_edges[key] = before.copy() if before is not None else None
         self._merge_edge(key, delta, tx.events)
@@ -408,11 +531,22 @@ class DSRGraph:
             out = tx.out_edges[key] = ElementState()
         crdt.merge_into(out, **delta)
 
+    def _check_local(self, element: str, key: Any, delta: dict[str, Any]) -> None:
+        """Ask the write policy about a local write before it changes anything; a refusal
+        raises WriteRefusedError naming the write (what every other replica would refuse)."""
+        from dsr.writes import local_writes
+        refusal = self.local_policy.refusal
+        for write in local_writes(self, self.agent, element, key, delta, self._cascade):
+            problem = refusal(write)
+            if problem is not None:
+                raise WriteRefusedError(problem)
+
     # ------------------------------------------------------------------ merge + derived view
     def _merge_node(self, node_id: int, delta: dict[str, Any], events: list[Event] | None) -> bool:
         state = self._nodes.get(node_id)
         if state is None:
             state = self._nodes[node_id] = ElementState()
+            self._dead_nodes.add(node_id)
         if len(delta) == 1 and "attrs" in delta:   # attribute-only: visibility cannot change
             changed, keys = crdt.merge_attrs(state, delta["attrs"])
             if keys and events is not None and node_id in self._view \
@@ -449,9 +583,14 @@ class DSRGraph:
         state = self._nodes.get(node_id)
         old = self._view.get(node_id)
         new = None
-        if state is not None and state.meta is not None and state.present():
-            hlc, _, (type_, name) = state.meta
-            new = _NodeView(type_, name, hlc)
+        if state is not None:
+            if state.present():
+                self._dead_nodes.discard(node_id)
+                if state.meta is not None:
+                    hlc, _, (type_, name) = state.meta
+                    new = _NodeView(type_, name, hlc)
+            else:
+                self._dead_nodes.add(node_id)
         renamed: list[int] = []
         if old is not None and (new is None or new != old):
             self._types[old.type].discard(node_id)
@@ -493,8 +632,13 @@ class DSRGraph:
     def _sync_edge(self, key: EdgeKey, keys: list[str], events: list[Event] | None) -> None:
         state = self._edges.get(key)
         was = key in self._visible_edges
-        now = (state is not None and key[0] in self._view and key[1] in self._view
-               and state.present())
+        present = state is not None and state.present()
+        if state is not None:
+            if present:
+                self._dead_edges.discard(key)
+            else:
+                self._dead_edges.add(key)
+        now = present and key[0] in self._view and key[1] in self._view
         if was and not now:
             self._visible_edges.discard(key)
             self._edge_types[key[2]].discard(key)
@@ -545,15 +689,46 @@ class DSRGraph:
             events: list[Event] = []
             changed = 0
             nodes, edges = self._nodes, self._edges
+            view = self._view
+            want_updated = self._signals.wants("node_updated")
+            merge_attrs = crdt.merge_attrs
+            types, names = self._types, self._names
+            wants_added = self._signals.wants("node_added")
+            out_index, in_index = self._out, self._in
             for node_id, state in message.nodes:
                 current = nodes.get(node_id)
                 if current is None:        # unknown element: the decoded state is installed
+                    if state.cleared:
+                        state.prune()
                     nodes[node_id] = state
-                    self._sync_node(node_id, [], events)
                     changed += 1
+                    meta = state.meta
+                    if meta is None or not state.present():
+                        self._dead_nodes.add(node_id)
+                        continue
+                    hlc, _, (type_, name) = meta      # a new visible node (a join: 10^4 times)
+                    view[node_id] = _NodeView(type_, name, hlc)
+                    of_type = types.get(type_)
+                    if of_type is None:
+                        types[type_] = {node_id}
+                    else:
+                        of_type.add(node_id)
+                    renamed = names.add(name, node_id, hlc)
+                    if wants_added:
+                        events.append(("node_added", (self._node(node_id),)))
+                    if node_id in out_index or node_id in in_index:
+                        self._sync_incident(node_id, events)
+                    if renamed and self._signals.wants("node_updated"):
+                        for other in dict.fromkeys(renamed):
+                            if other in view:
+                                events.append(("node_updated", (self._node(other), ["name"])))
                 elif state.meta is None and not state.add and not state.rem \
-                        and not state.cleared:
-                    changed += self._merge_node(node_id, {"attrs": state.attrs}, events)
+                        and not state.cleared:        # an update: the hot path, inlined
+                    was_changed, keys = merge_attrs(current, state.attrs)
+                    if was_changed:
+                        changed += 1
+                        if keys and want_updated and node_id in view:
+                            events.append(("node_updated", (self._node(node_id), keys)))
                 else:
                     changed += self._merge_node(node_id, {
                         "add": state.add.items(), "rem": state.rem.items(),
@@ -561,9 +736,20 @@ class DSRGraph:
                         events)
             for key, state in message.edges:
                 if key not in edges:
+                    if state.cleared:
+                        state.prune()
                     edges[key] = state
-                    self._out.setdefault(key[0], set()).add(key)
-                    self._in.setdefault(key[1], set()).add(key)
+                    src, dst = key[0], key[1]
+                    ends = out_index.get(src)
+                    if ends is None:
+                        out_index[src] = {key}
+                    else:
+                        ends.add(key)
+                    ends = in_index.get(dst)
+                    if ends is None:
+                        in_index[dst] = {key}
+                    else:
+                        ends.add(key)
                     self._sync_edge(key, [], events)
                     changed += 1
                 else:
@@ -586,19 +772,124 @@ class DSRGraph:
         return state.meta[2][0] if state is not None and state.meta is not None else None
 
     def writer_agent(self, replica: int) -> str | None:
+        """The agent a replica id writes for, as far as this replica knows (first-hand or
+        relayed by a state's `writers` table)."""
         return self._writers.get(replica)
 
-    def state_message(self) -> bytes:
-        """Full CRDT state (tombstones included) as a "state" message; cached per version."""
+    def bound_agent(self, replica: int) -> str | None:
+        """The agent of a replica id known first-hand: from a message on that agent's own key,
+        or vouched for by that agent's own state (dsr/state_trust.py)."""
+        return self._bound.get(replica)
+
+    def note_writer(self, replica: int, agent: str) -> None:
+        """Record a first-hand binding replica id -> agent."""
+        if self._bound.get(replica) != agent:
+            with self._lock:
+                self._bound.setdefault(replica, agent)
+                self._writers.setdefault(replica, agent)
+
+    def state_message(self, seen: dict[int, int] | None = None) -> bytes:
+        """Full CRDT state (uncompacted tombstones included) as a "state" message, stamped
+        with this replica's clock and watermarks `seen` (see dsr/transport.py); cached per
+        version (a cached reply's clock and watermarks are older, hence still true)."""
         with self._lock:
             cache = self._snapshot_cache
             if cache is not None and cache[0] == self._version:
                 return cache[1]
+            clock = self.clock.last
             payload = wire.encode(kind="state", graph=self.graph_name, agent=self.agent,
                                   replica=self.replica_id, nodes=self._nodes.items(),
-                                  edges=self._edges.items(), writers=self._writers)
+                                  edges=self._edges.items(), writers=self._writers,
+                                  clock=clock, seen={**(seen or {}), self.replica_id: clock})
             self._snapshot_cache = (self._version, payload)
             return payload
+
+    def state_parts(self, seen: dict[int, int] | None = None,
+                    per_part: int = 2000) -> Iterator[bytes]:
+        """The state as several "state" messages of at most `per_part` elements (nodes
+        first), produced one by one: the transport replies each part as soon as it is encoded,
+        so encoding here, transfer and decoding at the joiner overlap (join time).  Each part
+        is a valid state (a join of element states); the last one carries `clock` and `seen`
+        (only once every part has been merged does the receiver hold what they describe).
+        The graph lock is held per part, not for the whole state.  Cached per version."""
+        with self._lock:
+            cache = self._parts_cache
+            if cache is not None and cache[0] == self._version:
+                parts: list[bytes] | None = cache[1]
+            else:
+                parts = None
+                version = self._version
+                clock = self.clock.last
+                node_ids, edge_keys = list(self._nodes), list(self._edges)
+                writers = dict(self._writers)
+        if parts is not None:
+            yield from parts
+            return
+        seen = {**(seen or {}), self.replica_id: clock}
+        chunks: list[tuple[list[int], list[EdgeKey]]] = []
+        for start in range(0, len(node_ids), per_part):
+            chunks.append((node_ids[start:start + per_part], []))
+        for start in range(0, len(edge_keys), per_part):
+            chunks.append(([], edge_keys[start:start + per_part]))
+        if not chunks:
+            chunks.append(([], []))
+        built: list[bytes] = []
+        for index, (ids, keys) in enumerate(chunks):
+            last = index == len(chunks) - 1
+            with self._lock:
+                nodes, edges = self._nodes, self._edges
+                payload = wire.encode(
+                    kind="state", graph=self.graph_name, agent=self.agent,
+                    replica=self.replica_id,
+                    nodes=[(i, nodes[i]) for i in ids if i in nodes],
+                    edges=[(k, edges[k]) for k in keys if k in edges], writers=writers,
+                    clock=clock if last else 0, seen=seen if last else None)
+            built.append(payload)
+            yield payload
+        with self._lock:
+            self._parts_cache = (version, built)
+
+    def compact(self, acked: Callable[[int, int], bool]) -> int:
+        """Forget removed elements whose removal every member has seen; returns how many.
+
+        `acked(replica, hlc)` says whether every member holds every write `replica` stamped up
+        to `hlc`.  An element is forgotten when it is not present, carries a removal, and every
+        stamp in it (adds, type/name, registers, the removal receipt) is acknowledged: no
+        member can then send an add the removal did not observe, so forgetting it changes no
+        replica's view (docs/dsr_wire_format.md, "Tombstones")."""
+        with self._lock:
+            if self._tx is not None:
+                return 0
+            removed = 0
+            for node_id in list(self._dead_nodes):
+                state = self._nodes.get(node_id)
+                if state is None or state.present():
+                    self._dead_nodes.discard(node_id)
+                elif state.cleared and _settled(state, acked):
+                    del self._nodes[node_id]
+                    self._dead_nodes.discard(node_id)
+                    removed += 1
+            for key in list(self._dead_edges):
+                edge = self._edges.get(key)
+                if edge is None or edge.present():
+                    self._dead_edges.discard(key)
+                elif edge.cleared and _settled(edge, acked):
+                    del self._edges[key]
+                    self._dead_edges.discard(key)
+                    for index, end in ((self._out, key[0]), (self._in, key[1])):
+                        keys = index.get(end)
+                        if keys is not None:
+                            keys.discard(key)
+                            if not keys:
+                                del index[end]
+                    removed += 1
+            if removed:
+                self._version += 1
+            return removed
+
+    def tombstones(self) -> int:
+        """How many removed elements this replica still remembers."""
+        return len(self._dead_nodes) + len(self._dead_edges)
 
     def state_equals(self, other: DSRGraph) -> bool:
         """True if both replicas hold the same CRDT state (tests)."""

@@ -13,9 +13,10 @@ import re
 from dataclasses import dataclass, field
 from typing import Annotated, Any, Union
 
-from pydantic import AfterValidator, AllowInfNan, Field, Strict, StringConstraints
+from pydantic import AfterValidator, AllowInfNan, BeforeValidator, Field, Strict, StringConstraints
 
 from dsr.errors import InvalidAttributeError, InvalidIdentifierError
+from dsr.limits import LIMITS, value_bytes
 
 AttrValue = Union[bool, int, float, str, list[float], list[str]]  # noqa: UP007 (runtime alias)
 Attrs = dict[str, AttrValue]
@@ -66,6 +67,22 @@ class Edge:
         return (self.src, self.dst, self.type)
 
 
+_new = object.__new__
+_set_id, _set_type = Node.id.__set__, Node.type.__set__  # type: ignore[attr-defined]
+_set_name, _set_attrs = Node.name.__set__, Node.attrs.__set__  # type: ignore[attr-defined]
+
+
+def make_node(node_id: int, type_: str, name: str, attrs: Attrs) -> Node:
+    """Node(...) without the frozen dataclass's __init__ (a snapshot is built for every
+    signal: this halves its cost); same object, same equality."""
+    node = _new(Node)
+    _set_id(node, node_id)
+    _set_type(node, type_)
+    _set_name(node, name)
+    _set_attrs(node, attrs)
+    return node
+
+
 # ---- pydantic annotations shared by the file and wire schemas -------------------------------
 
 def _floats(values: list[int | float]) -> list[float]:
@@ -80,10 +97,25 @@ TypeName = Annotated[str, Strict(), StringConstraints(pattern=TYPE_PATTERN)]
 NodeName = Annotated[str, Strict(), StringConstraints(pattern=NAME_PATTERN)]
 AttrKey = Annotated[str, Strict(), StringConstraints(pattern=ATTR_KEY_PATTERN)]
 AgentName = Annotated[str, Strict(), StringConstraints(pattern=AGENT_PATTERN)]
+def _int64_only(value: Any) -> Any:
+    """JSON integers must fit in int64 (the float branch would otherwise take them)."""
+    if type(value) is int and not INT64_MIN <= value <= INT64_MAX:
+        raise ValueError(f"integer {value} does not fit in int64")
+    return value
+
+
+def _int64_items(value: Any) -> Any:
+    if type(value) is list:
+        for item in value:
+            _int64_only(item)
+    return _int64_only(value)
+
+
 FloatList = Annotated[list[Union[Int64, FiniteFloat]], AfterValidator(_floats)]  # noqa: UP007
 StrList = list[Annotated[str, Strict()]]
-AttrValueSchema = Union[Annotated[bool, Strict()], Int64, FiniteFloat,  # noqa: UP007
-                        Annotated[str, Strict()], FloatList, StrList]
+AttrValueSchema = Annotated[Union[Annotated[bool, Strict()], Int64, FiniteFloat,  # noqa: UP007
+                                  Annotated[str, Strict()], FloatList, StrList],
+                            BeforeValidator(_int64_items)]
 
 
 # ---- fast checks for the local API (hot path: no pydantic object per call) ------------------
@@ -117,10 +149,20 @@ def check_node_id(value: Any) -> int:
     return value
 
 
+def _too_large(key: str, value: AttrValue) -> InvalidAttributeError:
+    return InvalidAttributeError(
+        f"attribute {key!r}: value of {value_bytes(value)} bytes exceeds the limit of "
+        f"{LIMITS.max_value_bytes} bytes per value (CHRONAV_DSR_MAX_VALUE_BYTES)")
+
+
 def check_attr_value(key: str, value: Any) -> AttrValue:
     """Return `value` normalised to a DSR attribute type, or raise naming `key`."""
     kind = type(value)
-    if kind is str or kind is bool:
+    if kind is bool:
+        return value
+    if kind is str:
+        if len(value) * 4 > LIMITS.max_value_bytes and value_bytes(value) > LIMITS.max_value_bytes:
+            raise _too_large(key, value)
         return value
     if kind is float:
         if not math.isfinite(value):
@@ -135,7 +177,11 @@ def check_attr_value(key: str, value: Any) -> AttrValue:
         if not isinstance(items, list):  # numpy scalar
             return check_attr_value(key, items)
         if items and all(type(item) is str for item in items):
+            if value_bytes(items) > LIMITS.max_value_bytes:
+                raise _too_large(key, items)
             return items
+        if 8 * len(items) > LIMITS.max_value_bytes:
+            raise _too_large(key, [0.0] * len(items))
         out: list[float] = []
         for item in items:
             if isinstance(item, bool) or not isinstance(item, (int, float)):
@@ -167,7 +213,23 @@ def check_attrs(attrs: Any) -> Attrs:
         raise InvalidAttributeError(f"attrs must be a dict, got {type(attrs).__name__}")
     out: Attrs = {}
     for key, value in attrs.items():
-        if type(key) is not str or not _ATTR_KEY_RE.fullmatch(key):
-            raise InvalidAttributeError(f"attribute key {key!r} must be a non-empty string")
-        out[key] = check_attr_value(key, value)
+        if key not in _GOOD_KEYS:
+            if type(key) is not str or not _ATTR_KEY_RE.fullmatch(key):
+                raise InvalidAttributeError(f"attribute key {key!r} must be a non-empty string")
+            if len(_GOOD_KEYS) < 4096:
+                _GOOD_KEYS.add(key)
+        kind = type(value)
+        if kind is bool or (kind is float and -_HUGE < value < _HUGE) \
+                or (kind is int and INT64_MIN <= value <= INT64_MAX) \
+                or (kind is str and len(value) <= _SHORT):
+            out[key] = value                    # the common cases, checked inline
+        else:
+            out[key] = check_attr_value(key, value)
     return out
+
+
+#: attribute keys already checked (agents use a small vocabulary)
+_GOOD_KEYS: set[str] = set()
+_HUGE = float("inf")
+#: strings this short are under any value limit (4 bytes per character at most)
+_SHORT = LIMITS.max_value_bytes // 4

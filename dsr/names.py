@@ -27,8 +27,13 @@ class NameIndex:
 
     def add(self, name: str, node_id: int, created: int) -> list[int]:
         """Register a holder; returns OTHER node ids whose shown name changed."""
+        holders = self._holders.get(name)
+        if holders is None:                 # the common case: a name nobody holds
+            self._holders[name] = {node_id: created}
+            self._winner[name] = node_id
+            return []
         before = self._winner.get(name)
-        self._holders.setdefault(name, {})[node_id] = created
+        holders[node_id] = created
         after = self._elect(name)
         return [i for i in (before, after) if i is not None and i != node_id and before != after]
 

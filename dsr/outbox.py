@@ -34,18 +34,25 @@ class Outbox:
         self._nodes: dict[int, ElementState] = {}
         self._edges: dict[EdgeKey, ElementState] = {}
         self._last_send = 0.0
+        self._pending_top = 0
+        #: largest HLC of the deltas this outbox has published (see DSRGraph.published_hlc)
+        self.sent_top = 0
         self._closed = False
         self._thread: threading.Thread | None = None
         self.messages = 0
 
-    def add(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState]) -> bytes | None:
-        """Queue a delta; returns a payload the caller must publish now (or None if queued)."""
+    def add(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState],
+            top: int = 0) -> bytes | None:
+        """Queue a delta whose stamps are at most `top`; returns a payload the caller must
+        publish now (or None if queued)."""
         with self._lock:
             now = time.perf_counter()
             if not self._nodes and not self._edges and now - self._last_send >= self.linger_s:
                 self._last_send = now
                 self.messages += 1
                 return self._encode(nodes, edges)
+            if top > self._pending_top:
+                self._pending_top = top
             for node_id, state in nodes.items():
                 pending = self._nodes.get(node_id)
                 if pending is None:
@@ -59,33 +66,62 @@ class Outbox:
                 else:
                     crdt.join_states(pending, edge)
             if len(self._nodes) + len(self._edges) >= self.max_entries:
-                return self._take(now)
+                taken = self._take(now)
+                return taken[0] if taken is not None else None
             if self._thread is None:
                 self._thread = threading.Thread(target=self._run, name="dsr-outbox", daemon=True)
                 self._thread.start()
             self._wake.notify()
             return None
 
+    def add_attrs(self, node_id: int, regs: dict[str, tuple[int, int, object]],
+                  top: int) -> bytes | None:
+        """add() for one node's attribute update (the hot path: no intermediate objects)."""
+        now = time.perf_counter()
+        if not self._nodes and not self._edges and now - self._last_send >= self.linger_s:
+            with self._lock:
+                if not self._nodes and not self._edges:
+                    self._last_send = now
+                    self.messages += 1
+                    return self._encoder.node_attrs(node_id, regs)
+        return self.add({node_id: ElementState(attrs=regs)}, {}, top)
+
+    def add_entries(self, entries: list[dict[str, object]], top: int) -> bytes | None:
+        """add() for a batch of node attribute updates already in wire form ({"id", "attrs"})."""
+        now = time.perf_counter()
+        with self._lock:   # a big batch is worth a sample of its own: no lingering for it
+            if not self._nodes and not self._edges and (
+                    len(entries) * 4 >= self.max_entries or now - self._last_send >= self.linger_s):
+                self._last_send = now
+                self.messages += 1
+                return self._encoder.encode(entries, [])
+        return self.add({entry["id"]: ElementState(attrs=entry["attrs"])  # type: ignore[misc]
+                         for entry in entries}, {}, top)
+
     def _encode(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState]) -> bytes:
         return self._encoder.encode([wire.node_entry(i, s) for i, s in nodes.items()],
                                     [wire.edge_entry(k, s) for k, s in edges.items()])
 
-    def _take(self, now: float) -> bytes | None:
+    def _take(self, now: float) -> tuple[bytes, int] | None:
         if not self._nodes and not self._edges:
             return None
         nodes, edges = self._nodes, self._edges
         self._nodes, self._edges = {}, {}
+        top, self._pending_top = self._pending_top, 0
         self._last_send = now
         self.messages += 1
-        return self._encode(nodes, edges)
+        return self._encode(nodes, edges), top
 
-    def _send(self, payload: bytes | None) -> None:
-        if payload is None:
+    def _send(self, taken: tuple[bytes, int] | None) -> None:
+        if taken is None:
             return
         try:
-            self._publish(payload)
+            self._publish(taken[0])
         except Exception:  # noqa: BLE001 - session closing under us; state stays for anti-entropy
             log.warning("DSR outbox: publish failed", exc_info=True)
+            return
+        if taken[1] > self.sent_top:
+            self.sent_top = taken[1]
 
     def _run(self) -> None:
         while True:

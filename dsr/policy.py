@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Literal, Protocol
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
-    from dsr.writes import GraphLookup
+    from dsr.writes import GraphLookup, Write
 
 ElementKind = Literal["node", "edge"]
 
@@ -36,6 +36,13 @@ class WritePolicy(Protocol):
                      ) -> tuple[Decoded | None, str | None]:
         """For a validated state reply: (what to merge, or None to refuse it whole; what was
         dropped and why, or None)."""
+        ...
+
+
+class LocalCheck(Protocol):
+    def refusal(self, write: Write) -> str | None:
+        """For a local write (DSRGraph.local_policy): None if allowed, else the sentence of
+        WriteRefusedError (writer, operation, element type, attribute, policy source)."""
         ...
 
 
@@ -62,6 +69,11 @@ class TypePolicy:
     def review_state(self, message: Decoded, graph: GraphLookup
                      ) -> tuple[Decoded | None, str | None]:
         return message, None
+
+    def refusal(self, write: Write) -> str | None:
+        if self.allows(agent=write.writer or "", kind=write.element, type=write.type):
+            return None
+        return f"policy refuses {write.element} type {write.type!r} from agent {write.writer!r}"
 
 
 class AllowAll(TypePolicy):

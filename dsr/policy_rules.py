@@ -164,6 +164,13 @@ class RulePolicy:
                 return f"{explain(write)} ({self.source})"
         return None
 
+    def refusal(self, write: Write) -> str | None:
+        """For local writes: the refusal naming the grant the writer lacks, or None."""
+        if self.allowed(write):
+            return None
+        return (f"{explain(write)}: no rule of {self.source} grants it (the other replicas "
+                "would drop this write)")
+
     def review_state(self, message: Decoded, graph: GraphLookup
                      ) -> tuple[Decoded | None, str | None]:
         problem = self._no_grant(message.agent)

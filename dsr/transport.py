@@ -22,41 +22,96 @@ import random
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+import time
+from dataclasses import asdict, dataclass, field
 from typing import Any
+
+import orjson
 
 from dsr import wire
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
+from dsr.limits import LIMITS
 from dsr.policy import AllowAll, WritePolicy
 
 log = logging.getLogger(__name__)
 _ALL = "*"
 _LOG_FIRST_REJECTS = 20
+STATS_FORMAT = "chronav-dsr-stats/1"
+STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
 
 class TransportError(DSRError, ConnectionError):
     """The Zenoh session could not be opened (router not reachable, bad endpoint...)."""
 
 
+#: reasons a received message (or part of a state) is refused; counted one by one
+REASONS = ("invalid", "too_large", "wrong_graph", "wrong_kind", "forged_writer", "forged_stamp",
+           "clock_ahead", "removal_receipt", "policy")
+
+
 @dataclass
 class ReplicaStats:
     """Counters of one replica; written by Zenoh callback threads, read by anyone."""
 
-    received: int = 0           # remote delta samples received
+    received: int = 0           # remote delta (and digest) samples received
     applied: int = 0            # remote deltas merged
     rejected: int = 0           # invalid messages dropped (schema, forged writer, clock...)
-    rejected_policy: int = 0    # valid deltas/states refused by the write policy
+    rejected_policy: int = 0    # valid deltas/states refused (in part) by the write policy
     published: int = 0          # local deltas published
     state_served: int = 0       # state queries answered
     state_merged: int = 0       # state replies merged
     syncs: int = 0              # anti-entropy rounds (initial join included)
     errors: int = 0             # unexpected exceptions inside callbacks
     last_reject: str = ""
+    #: refusals per reason (see REASONS); each reason has its own log budget
+    rejects: dict[str, int] = field(default_factory=dict)
+    deferred: int = 0           # relayed stamps of running writers left for the writer itself
+    digests_sent: int = 0
+    digests_received: int = 0
+    anti_entropy: int = 0       # syncs started because a member's digest showed we lag
+    compacted: int = 0          # tombstones forgotten once every member had seen the removal
+    tombstones: int = 0         # tombstones held (at the last digest)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+
+@dataclass
+class Member:
+    """What this replica knows of another writable member, from its digests."""
+
+    agent: str
+    replica: int = 0
+    clock: int = 0
+    seen: dict[int, int] = field(default_factory=dict)
+    live: bool = True
+    gone_at: float = 0.0
+    #: writer replica -> (stamp this member holds and we lacked, since when)
+    behind: dict[int, tuple[int, float]] = field(default_factory=dict)
+
+
+class _LogBudget:
+    """Per-reason log rate limit: the first `burst` refusals of a reason are logged, then at
+    most one line per `period_s` saying how many were not logged in between."""
+
+    def __init__(self, burst: int = _LOG_FIRST_REJECTS, period_s: float = 10.0) -> None:
+        self.burst, self.period_s = burst, period_s
+        self._count: dict[str, int] = {}
+        self._last: dict[str, float] = {}
+        self._quiet: dict[str, int] = {}
+
+    def allow(self, reason: str) -> tuple[bool, int]:
+        """(log this one?, how many of this reason went unlogged since the last line)"""
+        count = self._count.get(reason, 0) + 1
+        self._count[reason] = count
+        now = time.monotonic()
+        if count <= self.burst or now - self._last.get(reason, 0.0) >= self.period_s:
+            self._last[reason] = now
+            return True, self._quiet.pop(reason, 0)
+        self._quiet[reason] = self._quiet.get(reason, 0) + 1
+        return False, 0
 
 
 class Replica:
@@ -64,15 +119,23 @@ class Replica:
 
     def __init__(self, graph: DSRGraph, settings: ZenohSettings | None = None, *,
                  policy: WritePolicy | None = None, sync_timeout: float = 10.0,
-                 watch_interval: float = 0.5, linger_s: float = 0.0003) -> None:
+                 watch_interval: float = 0.5, linger_s: float = 0.0003,
+                 digest_interval: float = 0.5, member_retention_s: float = 60.0) -> None:
         self.graph = graph
         self.settings = settings or ZenohSettings.from_env()
         self.policy: WritePolicy = policy or AllowAll()
         self.sync_timeout = sync_timeout
         self.watch_interval = watch_interval
         self.linger_s = linger_s
+        #: how often a digest is published, tombstones compacted and lags checked
+        self.digest_interval = digest_interval
+        #: a member that left still counts for tombstone compaction this long (a partitioned
+        #: member must not come back with elements everybody else forgot)
+        self.member_retention_s = member_retention_s
+        #: how long a member must hold writes we lack before we fetch a state for them
+        self.lag_grace_s = 4 * digest_interval
         self.stats = ReplicaStats()
-        self._rejects_by_kind: dict[str, int] = {}
+        self._log_budget = _LogBudget()
         self.session: Any = None
         self._publisher: Any = None
         self._token: Any = None
@@ -81,10 +144,23 @@ class Replica:
         self._worker: threading.Thread | None = None
         self._closed = threading.Event()
         self._connected = False
+        self._joined = False
+        self._table_lock = threading.Lock()
+        #: seen[z]: this replica holds every write replica z stamped up to seen[z]
+        self._seen: dict[int, int] = {}
+        #: replicas whose delta stream may have had a gap (see _advance)
+        self._gapped: set[int] = set()
+        #: agents whose own state (this incarnation) has been merged: their replica ids known
+        self._vouched: set[str] = set()
+        self._pending_syncs: set[str] = set()
+        self._members: dict[str, Member] = {}
         name = graph.graph_name
         self._delta_key = wire.delta_key(name, graph.agent)
         self._state_key = wire.state_key(name, graph.agent)
         self._member_key = wire.member_key(name, graph.agent)
+        if not isinstance(self.policy, AllowAll) and hasattr(self.policy, "refusal"):
+            graph.local_policy = self.policy
+        self._checks_deltas = not isinstance(self.policy, AllowAll)
 
     # ------------------------------------------------------------------ lifecycle
     def __enter__(self) -> Replica:
@@ -99,6 +175,7 @@ class Replica:
         import zenoh
 
         conf = self.settings.to_zenoh_config()
+        self._tune(conf)
         try:
             self.session = zenoh.open(conf)
         except zenoh.ZError as exc:
@@ -117,16 +194,28 @@ class Replica:
             # merges every other replica's state, which covers deltas that were in flight
             # while the answer was built and anything the first member lacked.
             self._initial_sync()
+            self._joined = True
             self._sync_requests.put(_ALL)
+            if not self.graph.read_only:
+                self.graph.attach(self._publish, linger_s=self.linger_s)
             self._worker = threading.Thread(target=self._work, name=f"dsr-sync-{self.graph.agent}",
                                             daemon=True)
             self._worker.start()
-            if not self.graph.read_only:
-                self.graph.attach(self._publish, linger_s=self.linger_s)
         except BaseException:
             self.close()
             raise
         self.graph.replica = self
+
+    def _tune(self, conf: Any) -> None:
+        """Reconnect fast after a partition heals (Zenoh's client backoff grows to 4 s)."""
+        import json
+        if self.settings.config_file is not None:
+            return                      # an operator's config file decides
+        try:
+            conf.insert_json5("connect/retry", json.dumps(
+                {"period_init_ms": 200, "period_max_ms": 500, "period_increase_factor": 1.5}))
+        except Exception:  # noqa: BLE001 - an older Zenoh without the key: keep its default
+            log.debug("connect/retry not supported", exc_info=True)
 
     def _declare(self, zenoh: Any) -> None:
         session = self.session
@@ -183,112 +272,326 @@ class Replica:
         publisher.put(payload)
         self.stats.published += 1
 
+    def seen(self) -> dict[int, int]:
+        """This replica's watermarks: own replica -> what it has published."""
+        with self._table_lock:
+            seen = dict(self._seen)
+        graph = self.graph
+        seen[graph.replica_id] = graph.published_hlc() if not graph.read_only else 0
+        return seen
+
+    def publish_digest(self) -> None:
+        """Flush coalesced deltas, then publish this replica's digest on its delta key (after
+        every delta it describes: same publisher, so receivers get it in order)."""
+        if self._publisher is None or self._closed.is_set():
+            return
+        self.graph.flush()
+        seen = self.seen()
+        payload = self.graph._encoder.digest(seen[self.graph.replica_id], seen)
+        self._publisher.put(payload)
+        self.stats.digests_sent += 1
+
     # ------------------------------------------------------------------ incoming
-    def _reject(self, source: str, reason: str, policy: bool = False) -> None:
+    def _reject(self, source: str, reason: str, text: str, count: int = 1) -> None:
         stats = self.stats
-        if policy:
+        if reason == "policy":
             stats.rejected_policy += 1
         else:
             stats.rejected += 1
-        stats.last_reject = f"{source}: {reason}"
-        # One log budget per kind of refusal, so that a flood of garbage on the delta keys
-        # cannot hide policy violations or bad state replies from the log.
-        kind = f"{'state' if '/state/' in source else 'delta'}-{'policy' if policy else 'invalid'}"
-        seen = self._rejects_by_kind.get(kind, 0) + 1
-        self._rejects_by_kind[kind] = seen
-        if seen <= _LOG_FIRST_REJECTS or seen % 1000 == 0:
-            log.warning("DSR %s dropped message from %s: %s (rejected so far: %d, %d of this "
-                        "kind; logging the first %d and every 1000th)", self.graph.agent, source,
-                        reason, stats.rejected + stats.rejected_policy, seen, _LOG_FIRST_REJECTS)
+        stats.rejects[reason] = stats.rejects.get(reason, 0) + count
+        stats.last_reject = f"{source}: {text}"
+        # One log budget per reason, so that a flood of garbage on the delta keys cannot hide
+        # policy violations or forged states from the log.
+        show, quiet = self._log_budget.allow(reason)
+        if show:
+            log.warning("DSR %s dropped message from %s [%s]: %s (%d refused for this reason%s)",
+                        self.graph.agent, source, reason, text, stats.rejects[reason],
+                        f"; {quiet} not logged since the last line" if quiet else "")
 
-    def _problem(self, message: wire.Decoded, claimed: str, kind: str) -> str | None:
+    def _problem(self, message: wire.Decoded, claimed: str, kind: str) -> tuple[str, str] | None:
         graph = self.graph
-        if message.kind != kind:
-            return f"a {message.kind!r} message on a {kind} key"
+        if message.kind != kind and not (kind == "delta" and message.kind == "digest"):
+            return "wrong_kind", f"a {message.kind!r} message on a {kind} key"
         if message.graph != graph.graph_name:
-            return f"message for graph {message.graph!r}, this is {graph.graph_name!r}"
+            return "wrong_graph", (f"message for graph {message.graph!r}, this is "
+                                   f"{graph.graph_name!r}")
         if message.agent != claimed:
-            return f"forged writer: claims agent {message.agent!r} on the key of {claimed!r}"
+            return "forged_writer", (f"forged writer: claims agent {message.agent!r} on the "
+                                     f"key of {claimed!r}")
         if message.replica == graph.replica_id:
-            return f"forged writer: uses this replica's id {message.replica}"
+            return "forged_writer", f"forged writer: uses this replica's id {message.replica}"
         owner = graph.writer_agent(message.replica)
         if owner is not None and owner != message.agent:
-            return f"forged writer: replica id {message.replica} belongs to agent {owner!r}"
+            return "forged_writer", (f"forged writer: replica id {message.replica} belongs to "
+                                     f"agent {owner!r}")
         if kind == "state":
             for replica, agent in message.writers.items():
                 known = graph.writer_agent(int(replica))
                 if known is not None and known != agent:
-                    return (f"forged writer: state says replica {replica} is {agent!r}, "
-                            f"it is {known!r}")
-        if kind == "delta":
+                    return "forged_writer", (f"forged writer: state says replica {replica} is "
+                                             f"{agent!r}, it is {known!r}")
+        else:
             if message.writers:
-                return "a delta must not carry 'writers'"
-            foreign = wire.foreign_writer(message)
-            if foreign is not None:
-                return f"forged writer: delta of replica {message.replica} carries {foreign}"
+                return "invalid", "a delta must not carry 'writers'"
+            if message.kind == "digest" and (message.nodes or message.edges):
+                return "invalid", "a digest must not carry nodes or edges"
+            if message.edges or any(state.add or state.meta is not None or state.rem
+                                    or state.cleared for _, state in message.nodes):
+                foreign = wire.foreign_writer(message)
+                if foreign is not None:
+                    return "forged_writer", (f"forged writer: delta of replica "
+                                             f"{message.replica} carries {foreign}")
+                removal = wire.removal_problem(message)
+                if removal is not None:
+                    return "removal_receipt", removal
+            else:                       # attribute updates only (the hot path)
+                own = message.replica
+                for _, state in message.nodes:
+                    for attr, reg in state.attrs.items():
+                        if reg[1] != own:
+                            return "forged_writer", (
+                                f"forged writer: delta of replica {own} carries attribute "
+                                f"{attr!r} written by replica {reg[1]}")
+        if kind == "state":
+            removal = wire.removal_problem(message)
+            if removal is not None:
+                return "removal_receipt", removal
         top = message.top_hlc
         if top and graph.clock.too_far_ahead(top):
-            return f"clock {top} is too far in the future"
+            return "clock_ahead", (f"clock {top} is more than {graph.clock.max_offset_ms} ms "
+                                   "ahead of this replica's wall clock")
         return None
 
     def _on_delta(self, sample: Any) -> None:
         self.stats.received += 1
         key = str(sample.key_expr)
         try:
-            message = wire.decode(sample.payload.to_bytes())
+            payload = sample.payload.to_bytes()
+            if len(payload) > LIMITS.max_delta_bytes:
+                self._reject(key, "too_large", f"delta of {len(payload)} bytes, over the limit "
+                             f"of {LIMITS.max_delta_bytes} (CHRONAV_DSR_MAX_DELTA_BYTES)")
+                return
+            message = wire.decode(payload)
             problem = self._problem(message, wire.last_chunk(key), "delta")
             if problem is not None:
-                self._reject(key, problem)
+                self._reject(key, *problem)
                 return
-            problem = self.policy.check(message, self.graph)
-            if problem is not None:
-                self._reject(key, problem, policy=True)
+            if message.kind == "digest":
+                self._on_digest(message)
                 return
-            self.graph.apply_message(message)
+            if self._checks_deltas:
+                problem_text = self.policy.check(message, self.graph)
+                if problem_text is not None:
+                    self._reject(key, "policy", problem_text)
+                    return
+            graph = self.graph
+            if graph._bound.get(message.replica) is None:
+                graph.note_writer(message.replica, message.agent)
+            graph.apply_message(message)
+            self._advance(message.replica, message.top_hlc)
             self.stats.applied += 1
         except WireError as exc:
-            self._reject(key, str(exc))
+            self._reject(key, "invalid", str(exc))
         except Exception:  # noqa: BLE001 - never kill Zenoh's callback thread
             self.stats.errors += 1
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
 
+    def _advance(self, replica: int, hlc: int) -> None:
+        """A writer's own messages arrive in order: we now hold all it stamped up to hlc
+        (unless its stream had a gap: its session broke, and the puts it made meanwhile were
+        lost; then only its own state restores the watermark)."""
+        if replica in self._gapped:
+            return
+        seen = self._seen     # one writer thread per key: a plain store (a race with a state
+        if hlc > seen.get(replica, 0):  # merge can only leave a lower, still true, watermark)
+            seen[replica] = hlc
+
+    def _gap(self, agent: str | None) -> None:
+        """Deltas of `agent` (None: of everybody) may have been lost: forget its watermarks
+        until its own state has been merged again.  Caller holds _table_lock."""
+        me = self.graph.replica_id
+        for replica, owner in list(self.graph._bound.items()):
+            if replica != me and (agent is None or owner == agent):
+                self._gapped.add(replica)
+                self._seen.pop(replica, None)
+
+    def _on_digest(self, message: wire.Decoded) -> None:
+        self.stats.digests_received += 1
+        self.graph.note_writer(message.replica, message.agent)
+        self.graph.clock.observe(message.clock)
+        self._advance(message.replica, message.clock)
+        lagging = False
+        with self._table_lock:
+            member = self._members.get(message.agent)
+            if member is None or member.replica != message.replica:
+                member = self._members[message.agent] = Member(message.agent, message.replica)
+            member.clock, member.seen, member.live = message.clock, message.seen, True
+            mine = self.graph.replica_id
+            # Anti-entropy: the member holds writes we lack.  Deltas in flight, or a backlog
+            # on a loaded machine, look the same for a while: only a lag that lasts
+            # lag_grace_s (and at most once per lag_grace_s per writer) fetches a state.
+            now = time.monotonic()
+            since = member.behind
+            for replica, hlc in message.seen.items():
+                if replica != mine and hlc > self._seen.get(replica, 0) and replica not in since:
+                    since[replica] = (hlc, now)
+            targets: set[str] = set()
+            for replica, (hlc, at) in list(since.items()):
+                if self._seen.get(replica, 0) >= hlc:
+                    del since[replica]
+                elif now - at >= self.lag_grace_s:
+                    # fetch from the writer itself if it runs (only its own state is
+                    # trusted for its writes), else from the member that holds them
+                    owner = self.graph.bound_agent(replica)
+                    known = self._members.get(owner) if owner is not None else None
+                    targets.add(owner if known is not None and known.live
+                                else message.agent)   # type: ignore[arg-type]
+                    since[replica] = (message.seen.get(replica, hlc), now)
+            lagging = bool(targets)
+        if lagging and not self.graph.read_only:
+            self.stats.anti_entropy += 1
+            for target in sorted(targets):
+                self._request_sync(target)
+
+    def _request_sync(self, agent: str) -> None:
+        """Queue a state fetch, once: digests of several members may point at the same one."""
+        with self._table_lock:
+            if agent in self._pending_syncs:
+                return
+            self._pending_syncs.add(agent)
+        self._sync_requests.put(agent)
+
     def _on_query(self, query: Any) -> None:
         try:
-            query.reply(self._state_key, self.graph.state_message(), encoding=wire.ENCODING)
-            self.stats.state_served += 1
+            if "stats" in str(query.parameters):
+                query.reply(self._state_key, orjson.dumps(self.report()),
+                            encoding=STATS_ENCODING)
+            else:
+                for part in self.graph.state_parts(self.seen()):
+                    query.reply(self._state_key, part, encoding=wire.ENCODING)
+                self.stats.state_served += 1
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to answer a state query", self.graph.agent)
 
+    def report(self) -> dict[str, Any]:
+        """What `chronav dsr stats` shows for this member."""
+        graph = self.graph
+        with self._table_lock:
+            members = {m.agent: {"replica": m.replica, "live": m.live} for m in
+                       self._members.values()}
+        return {"format": STATS_FORMAT, "agent": graph.agent, "graph": graph.graph_name,
+                "replica": graph.replica_id, "nodes": len(graph),
+                "tombstones": graph.tombstones(), "stats": self.stats.as_dict(),
+                "members": members}
+
     def _on_member(self, sample: Any) -> None:
         import zenoh
         agent = wire.last_chunk(str(sample.key_expr))
-        if sample.kind == zenoh.SampleKind.PUT and agent != self.graph.agent:
-            self._sync_requests.put(agent)
+        if agent == self.graph.agent:
+            return
+        live = sample.kind == zenoh.SampleKind.PUT
+        with self._table_lock:
+            member = self._members.get(agent)
+            if member is None:
+                member = self._members[agent] = Member(agent)
+            member.live = live
+            member.gone_at = 0.0 if live else time.monotonic()
+            # either way its stream may have a gap (a broken session loses puts): until its
+            # own state is merged again, its watermarks and replica ids are not trusted
+            self._gap(agent)
+            self._vouched.discard(agent)
+        if live:
+            self._request_sync(agent)
+
+    def live_agents(self) -> set[str]:
+        with self._table_lock:
+            return {m.agent for m in self._members.values() if m.live}
+
+    def acked(self, replica: int, hlc: int) -> bool:
+        """Every member (running, or gone less than member_retention_s ago) has told us, in
+        its digest, that it holds every write of `replica` up to `hlc`."""
+        now = time.monotonic()
+        with self._table_lock:
+            for member in self._members.values():
+                if not member.live and now - member.gone_at > self.member_retention_s:
+                    continue
+                if member.seen.get(replica, 0) < hlc:
+                    return False
+        return True
 
     def _merge_state(self, sample: Any) -> None:
-        """Validate, check against the policy, merge.  Never raises: one bad reply must not
-        abort the anti-entropy round that carries the good ones."""
+        """Validate, screen, check against the policy, merge.  Never raises: one bad reply
+        must not abort the anti-entropy round that carries the good ones."""
         key = str(sample.key_expr)
         try:
+            payload = sample.payload.to_bytes()
+            if len(payload) > LIMITS.max_state_bytes:
+                self._reject(key, "too_large", f"state of {len(payload)} bytes, over the limit "
+                             f"of {LIMITS.max_state_bytes} (CHRONAV_DSR_MAX_STATE_BYTES)")
+                return
             with _gc_paused():
-                message = wire.decode(sample.payload.to_bytes())
+                message = wire.decode(payload)
                 problem = self._problem(message, wire.last_chunk(key), "state")
                 if problem is not None:
-                    self._reject(key, problem)
+                    self._reject(key, *problem)
                     return
-                kept, problem = self.policy.review_state(message, self.graph)
-                if problem is not None:    # refused whole (kept is None), or in part
-                    self._reject(key, problem, policy=True)
+                self.graph.note_writer(message.replica, message.agent)
+                if self._joined:
+                    message = self._screen(key, message)
+                kept, text = self.policy.review_state(message, self.graph)
+                if text is not None:    # refused whole (kept is None), or in part
+                    self._reject(key, "policy", text)
                 if kept is None:
                     return
                 self.graph.apply_message(kept)
+                for replica, agent in kept.writers.items():
+                    # an agent vouches for its own incarnations; the first state of a join
+                    # has nothing to be checked against and is trusted (state_trust.py)
+                    if agent == message.agent or not self._joined:
+                        self.graph.note_writer(int(replica), agent)
+                self._note_seen(message)
             self.stats.state_merged += 1
         except WireError as exc:
-            self._reject(key, str(exc))
+            self._reject(key, "invalid", str(exc))
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+
+    def _note_seen(self, message: wire.Decoded) -> None:
+        """After merging a state: we now hold what its sender held of its own writes (and,
+        for writers that are not running, of theirs; running writers' relayed stamps may have
+        been screened out, so their watermarks come only from their own messages)."""
+        sender = message.agent
+        live = self.live_agents()
+        graph = self.graph
+        with self._table_lock:
+            if message.clock:                   # the last part of the state: all merged
+                self._vouched.add(sender)
+            for replica, hlc in message.seen.items():
+                owner = graph.bound_agent(replica) or message.writers.get(str(replica))
+                own = replica == message.replica or owner == sender
+                if not own and self._joined and owner in live:
+                    continue    # a running writer: only its own messages set its watermark
+                self._gapped.discard(replica)   # (a writer that is not running sends nothing)
+                if hlc > self._seen.get(replica, 0):
+                    self._seen[replica] = hlc
+
+    def _screen(self, key: str, message: wire.Decoded) -> wire.Decoded:
+        from dsr.state_trust import screen_state
+        graph = self.graph
+        with self._table_lock:
+            seen = dict(self._seen)
+        live = self.live_agents()
+        live.add(graph.agent)
+        with self._table_lock:
+            vouched = set(self._vouched)
+        screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
+                                live=live, seen=seen, vouched=vouched)
+        self.stats.deferred += screened.deferred
+        for reason, text in screened.problems:
+            self._reject(key, reason, text)
+        return screened.message
 
     # ------------------------------------------------------------------ anti-entropy
     def _initial_sync(self) -> None:
@@ -297,6 +600,9 @@ class Replica:
                               wire.member_key(self.graph.graph_name, _ALL),
                               timeout=self.sync_timeout) if reply.ok is not None}
                          - {self.graph.agent})
+        with self._table_lock:
+            for member in members:
+                self._members.setdefault(member, Member(member))
         random.shuffle(members)          # spread the load when many agents start together
         for member in members:
             if self._sync(member):
@@ -334,22 +640,42 @@ class Replica:
         info = self.session.info
         return bool(info.routers_zid() or info.peers_zid())
 
+    def maintain(self) -> None:
+        """One round of upkeep: digest out, tombstones compacted (also called by tests)."""
+        if self.graph.read_only:
+            return
+        self.publish_digest()
+        forgotten = self.graph.compact(self.acked)
+        self.stats.compacted += forgotten
+        self.stats.tombstones = self.graph.tombstones()
+
     def _work(self) -> None:
+        next_digest = time.monotonic()
         while not self._closed.is_set():
+            timeout = max(0.0, min(self.watch_interval, next_digest - time.monotonic()))
             try:
-                agent = self._sync_requests.get(timeout=self.watch_interval)
+                agent = self._sync_requests.get(timeout=timeout)
             except queue.Empty:
                 agent = ""
             if agent is None or self._closed.is_set():
                 return
+            if agent:
+                with self._table_lock:
+                    self._pending_syncs.discard(agent)
             try:
                 connected = self._is_connected()
                 if connected and not self._connected:
                     log.info("DSR %s: connection back, resynchronising", self.graph.agent)
+                    with self._table_lock:   # deltas were lost meanwhile: watermarks are void
+                        self._gap(None)
                     agent = _ALL
                 self._connected = connected
                 if agent:
                     self._sync(agent)
+                if time.monotonic() >= next_digest:
+                    next_digest = time.monotonic() + self.digest_interval
+                    if connected:
+                        self.maintain()
             except Exception:  # noqa: BLE001 - session closed under us, or a bad reply
                 if self._closed.is_set():
                     return

@@ -14,7 +14,8 @@ from typing import Annotated, Any, Literal
 import orjson
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
 
-from dsr.crdt import ElementState
+from dsr.crdt import REMOVAL_RECEIPT, ElementState
+from dsr.limits import LIMITS, value_bytes
 from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
                        AttrKey, AttrValueSchema, NodeId, NodeName, TypeName, UInt63)
 
@@ -51,16 +52,22 @@ class EdgeEntry(_Entry):
 
 
 class Message(BaseModel):
-    """One delta (kind "delta", published on the delta key) or a full state (query reply)."""
+    """One delta (kind "delta", published on the delta key), a full state (query reply), or a
+    digest (kind "digest", on the delta key: the sender's clock and what it has seen)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
     format: Literal["chronav-dsr/1"]
-    kind: Literal["delta", "state"]
+    kind: Literal["delta", "state", "digest"]
     graph: AgentName
     agent: AgentName
     replica: ReplicaId
     #: state replies only: which agent wrote with which replica id (decimal string keys)
     writers: dict[ReplicaKey, AgentName] = {}
+    #: states and digests: the sender's HLC when it sent the message (every write it made up to
+    #: this time was published before it, on the same key)
+    clock: UInt63 = 0
+    #: states and digests: per writer replica, the sender holds every write it stamped up to hlc
+    seen: dict[ReplicaKey, UInt63] = {}
     nodes: list[NodeEntry] = []
     edges: list[EdgeEntry] = []
 
@@ -128,6 +135,12 @@ class DeltaEncoder:
     def encode(self, nodes: list[dict[str, object]], edges: list[dict[str, object]]) -> bytes:
         return self._prefix + orjson.dumps(nodes) + b',"edges":' + orjson.dumps(edges) + b"}"
 
+    def digest(self, clock: int, seen: dict[int, int]) -> bytes:
+        """A digest: this replica's clock and watermarks, on the delta key (docs: "Digests")."""
+        return (self._prefix.replace(b'"kind":"delta"', b'"kind":"digest"')
+                + b'[],"edges":[],"clock":' + str(clock).encode() + b',"seen":'
+                + orjson.dumps({str(r): h for r, h in seen.items()}) + b"}")
+
     def node_attrs(self, node_id: int, attrs: dict[str, tuple[int, int, object]]) -> bytes:
         return (self._prefix + b'[{"id":' + str(node_id).encode() + b',"attrs":'
                 + orjson.dumps(attrs) + b'}],"edges":[]}')
@@ -135,11 +148,16 @@ class DeltaEncoder:
 
 def encode(*, kind: str, graph: str, agent: str, replica: int,
            nodes: Iterable[tuple[int, ElementState]], edges: Iterable[tuple[EdgeKey, ElementState]],
-           writers: dict[int, str] | None = None) -> bytes:
+           writers: dict[int, str] | None = None, clock: int = 0,
+           seen: dict[int, int] | None = None) -> bytes:
     message: dict[str, object] = {"format": FORMAT, "kind": kind, "graph": graph,
                                   "agent": agent, "replica": replica}
     if writers:
         message["writers"] = {str(r): a for r, a in writers.items()}
+    if clock:
+        message["clock"] = clock
+    if seen:
+        message["seen"] = {str(r): h for r, h in seen.items()}
     message["nodes"] = [node_entry(i, s) for i, s in nodes]
     message["edges"] = [edge_entry(k, s) for k, s in edges]
     return orjson.dumps(message)
@@ -161,13 +179,18 @@ class Decoded:
     ((src, dst, type), ElementState) pairs, so that merging a state into an empty graph is
     just installing the decoded elements.  `top_hlc` is the largest timestamp it mentions."""
 
-    __slots__ = ("agent", "edges", "graph", "kind", "nodes", "replica", "top_hlc", "writers")
+    __slots__ = ("agent", "clock", "edges", "graph", "kind", "nodes", "replica", "seen",
+                 "top_hlc", "writers")
 
     def __init__(self, kind: str, graph: str, agent: str, replica: int, writers: dict[str, str],
                  nodes: list[tuple[int, ElementState]],
-                 edges: list[tuple[EdgeKey, ElementState]], top_hlc: int) -> None:
+                 edges: list[tuple[EdgeKey, ElementState]], top_hlc: int, clock: int = 0,
+                 seen: dict[int, int] | None = None) -> None:
         self.kind, self.graph, self.agent, self.replica = kind, graph, agent, replica
         self.writers, self.nodes, self.edges, self.top_hlc = writers, nodes, edges, top_hlc
+        self.clock, self.seen = clock, seen or {}
+        if clock > top_hlc:
+            self.top_hlc = clock
 
 
 def _state_of(entry: _Entry, meta: tuple[int, int, str, str] | None) -> ElementState:
@@ -186,8 +209,17 @@ def _state_of(entry: _Entry, meta: tuple[int, int, str, str] | None) -> ElementS
 def _from_model(message: Message) -> Decoded:
     nodes = [(n.id, _state_of(n, n.meta)) for n in message.nodes]
     edges = [((e.src, e.dst, e.type), _state_of(e, None)) for e in message.edges]
+    for entries in (nodes, edges):
+        for _, state in entries:
+            for key, reg in state.attrs.items():
+                if type(reg[2]) in (str, list) and value_bytes(reg[2]) > LIMITS.max_value_bytes:
+                    from dsr.errors import WireError
+                    raise WireError(f"invalid DSR message: attribute {key!r}: value of "
+                                    f"{value_bytes(reg[2])} bytes exceeds the limit of "
+                                    f"{LIMITS.max_value_bytes} bytes per value")
     return Decoded(message.kind, message.graph, message.agent, message.replica,
-                   dict(message.writers), nodes, edges, _top_hlc(nodes, edges))
+                   dict(message.writers), nodes, edges, _top_hlc(nodes, edges), message.clock,
+                   {int(r): h for r, h in message.seen.items()})
 
 
 def _top_hlc(nodes: list[tuple[int, ElementState]],
@@ -242,6 +274,23 @@ def foreign_writer(message: Decoded) -> str | None:
     return None
 
 
+def removal_problem(message: Decoded) -> str | None:
+    """The one rule for removals, in deltas and in state replies alike: an entry with `rem`
+    or `cleared` carries the receipt ``attrs["~removed"] = [cleared, remover, true]`` and no
+    `rem` dot newer than `cleared`.  Returns a description of the first violation, or None."""
+    for what, entries in (("node", message.nodes), ("edge", message.edges)):
+        for key, state in entries:
+            if not state.rem and not state.cleared:
+                continue
+            receipt = state.attrs.get(REMOVAL_RECEIPT)
+            if receipt is None or receipt[0] != state.cleared or receipt[2] is not True:
+                return (f"a removal of {what} {key} without a receipt naming its remover "
+                        f"(attrs[{REMOVAL_RECEIPT!r}] = [cleared, remover replica, true])")
+            if any(hlc > state.cleared for hlc in state.rem.values()):
+                return f"a removal of {what} {key} whose rem holds adds newer than cleared"
+    return None
+
+
 def max_hlc(message: Decoded) -> int:
     return message.top_hlc
 
@@ -249,7 +298,9 @@ def max_hlc(message: Decoded) -> int:
 # ---- fast validator -------------------------------------------------------------------------
 
 _U63 = 2**63 - 1
-_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges"})
+_MAX_VALUE = LIMITS.max_value_bytes
+_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges",
+                       "clock", "seen"})
 _NODE_KEYS = frozenset({"id", "add", "rem", "cleared", "meta", "attrs"})
 _EDGE_KEYS = frozenset({"src", "dst", "type", "add", "rem", "cleared", "attrs"})
 _BIG = float(2**63)
@@ -285,6 +336,7 @@ _type_name = _Checked(_TYPE_RE)
 _node_name = _Checked(_NAME_RE, size=65536)
 _agent_name = _Checked(_AGENT_RE)
 _attr_key = _Checked(_ATTR_KEY_RE)
+_ATTR_OK = _attr_key._ok    # cleared in place when full: the reference stays valid
 
 
 def _dots(value: object) -> dict[int, int]:
@@ -318,10 +370,12 @@ def _list_value(value: list[object]) -> list[object]:
     return out
 
 
-def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
+def _attrs(value: object) -> tuple[dict[str, tuple[int, int, object]], int]:
+    """The registers, and the largest stamp among them."""
     if type(value) is not dict:
         raise _Reject
     out = {}
+    top = 0
     for key, reg in value.items():
         if type(reg) is not list or len(reg) != 3:
             raise _Reject
@@ -336,28 +390,61 @@ def _attrs(value: object) -> dict[str, tuple[int, int, object]]:
         elif kind is int:
             if not _INT64_MIN <= item <= _U63:
                 raise _Reject
+        elif kind is str:
+            if len(item) * 4 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
+                raise _Reject
         elif kind is list:
             item = _list_value(item)
-        elif kind is not str and kind is not bool:
+            if len(item) * 8 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
+                raise _Reject
+        elif kind is not bool:
             raise _Reject
-        out[_attr_key(key)] = (hlc, replica, item)
-    return out
+        if key not in _ATTR_OK:
+            _attr_key(key)
+        out[key] = (hlc, replica, item)
+        if hlc > top:
+            top = hlc
+    return out, top
 
 
-def _entry(raw: dict[str, Any]) -> ElementState:
+def _one_dot(value: object) -> tuple[dict[int, int], int] | None:
+    """The common `[[replica, hlc]]` list, or None for the general path."""
+    if type(value) is list and len(value) == 1:
+        dot = value[0]
+        if type(dot) is list and len(dot) == 2:
+            replica, hlc = dot
+            if type(replica) is int and type(hlc) is int and 1 <= replica <= _U63 \
+                    and 0 <= hlc <= _U63:
+                return {replica: hlc}, hlc
+    return None
+
+
+def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
+    """The element state, and the largest stamp in it."""
     state = ElementState()
+    top = 0
     if "add" in raw:
-        state.add = _dots(raw["add"])
+        single = _one_dot(raw["add"])
+        if single is not None:
+            state.add, top = single
+        else:
+            state.add = _dots(raw["add"])
+            top = max(state.add.values(), default=0)
     if "rem" in raw:
         state.rem = _dots(raw["rem"])
+        top = max(top, max(state.rem.values(), default=0))
     if "cleared" in raw:
         cleared = raw["cleared"]
         if type(cleared) is not int or not 0 <= cleared <= _U63:
             raise _Reject
         state.cleared = cleared
+        if cleared > top:
+            top = cleared
     if "attrs" in raw:
-        state.attrs = _attrs(raw["attrs"])
-    return state
+        state.attrs, attrs_top = _attrs(raw["attrs"])
+        if attrs_top > top:
+            top = attrs_top
+    return state, top
 
 
 def _node_id(value: object) -> int:
@@ -370,7 +457,8 @@ def fast_decode(data: object) -> Decoded | None:
     """Validated message for the common well-formed cases, None to defer to pydantic."""
     try:
         if type(data) is not dict or not _MSG_KEYS.issuperset(data) \
-                or data.get("format") != FORMAT or data.get("kind") not in ("delta", "state"):
+                or data.get("format") != FORMAT \
+                or data.get("kind") not in ("delta", "state", "digest"):
             return None
         raw_nodes = data.get("nodes", [])
         raw_edges = data.get("edges", [])
@@ -378,8 +466,17 @@ def fast_decode(data: object) -> Decoded | None:
         if type(raw_nodes) is not list or type(raw_edges) is not list or type(writers) is not dict:
             return None
         nodes = []
+        top = 0
         for raw in raw_nodes:
-            if type(raw) is not dict or "id" not in raw or not _NODE_KEYS.issuperset(raw):
+            if type(raw) is not dict or "id" not in raw:
+                return None
+            if len(raw) == 2 and "attrs" in raw:     # an update: the hot path
+                attrs, entry_top = _attrs(raw["attrs"])
+                nodes.append((_node_id(raw["id"]), ElementState(attrs=attrs)))
+                if entry_top > top:
+                    top = entry_top
+                continue
+            if not _NODE_KEYS.issuperset(raw):
                 return None
             meta = raw.get("meta")
             if meta is not None:
@@ -390,16 +487,23 @@ def fast_decode(data: object) -> Decoded | None:
                         or not 1 <= replica <= _U63:
                     return None
                 meta = (hlc, replica, (_type_name(type_), _node_name(name)))
-            state = _entry(raw)
+                if hlc > top:
+                    top = hlc
+            state, entry_top = _entry(raw)
             state.meta = meta
             nodes.append((_node_id(raw["id"]), state))
+            if entry_top > top:
+                top = entry_top
         edges = []
         for raw in raw_edges:
             if type(raw) is not dict or not _EDGE_KEYS.issuperset(raw) \
                     or "src" not in raw or "dst" not in raw or "type" not in raw:
                 return None
             key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
-            edges.append((key, _entry(raw)))
+            state, entry_top = _entry(raw)
+            edges.append((key, state))
+            if entry_top > top:
+                top = entry_top
         for replica_key, agent in writers.items():
             _agent_name(agent)
             if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63:
@@ -407,8 +511,20 @@ def fast_decode(data: object) -> Decoded | None:
         replica = data.get("replica")
         if type(replica) is not int or not 1 <= replica <= _U63:
             return None
+        clock = data.get("clock", 0)
+        if type(clock) is not int or not 0 <= clock <= _U63:
+            return None
+        seen = {}
+        raw_seen = data.get("seen", {})
+        if type(raw_seen) is not dict:
+            return None
+        for replica_key, hlc in raw_seen.items():
+            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63 \
+                    or type(hlc) is not int or not 0 <= hlc <= _U63:
+                return None
+            seen[int(replica_key)] = hlc
         return Decoded(data["kind"], _agent_name(data.get("graph")),
                        _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
-                       _top_hlc(nodes, edges))
+                       top, clock, seen)
     except _Reject:
         return None

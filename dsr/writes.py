@@ -106,3 +106,23 @@ def _element_writes(agent: str, state: ElementState, element: Element, type_: st
             continue
         op: Op = "init" if add.get(replica) == hlc else "attr"
         yield Write(agent, element, type_, op, key, src, dst)
+
+
+def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tuple[int, int, str],
+                 delta: dict[str, object], cascade: str | None = None) -> Iterator[Write]:
+    """The writes of one local change (the keyword pieces of a delta) before it is applied:
+    the same questions receivers will ask about the delta (see delta_writes)."""
+    from dsr.crdt import ElementState
+
+    state = ElementState(add=dict(delta.get("add") or ()),  # type: ignore[arg-type]
+                         rem=dict(delta.get("rem") or ()),  # type: ignore[arg-type]
+                         cleared=int(delta.get("cleared") or 0),  # type: ignore[arg-type]
+                         meta=delta.get("meta"),  # type: ignore[arg-type]
+                         attrs=dict(delta.get("attrs") or {}))  # type: ignore[arg-type]
+    if element == "node":
+        for type_ in node_types(key, state, graph):  # type: ignore[arg-type]
+            yield from _element_writes(agent, state, "node", type_, None, None, None)
+    else:
+        src, dst, edge_type = key  # type: ignore[misc]
+        yield from _element_writes(agent, state, "edge", edge_type, graph.node_type_of(src),
+                                   graph.node_type_of(dst), cascade)

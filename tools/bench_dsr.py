@@ -6,14 +6,23 @@ here on a free loopback port:
 - dsr_p50_ms / dsr_p99_ms: DSR round trip: driver updates node "ping"; the echo replica gets the
   node_updated signal in its dispatch() loop and updates node "pong"; the driver waits for that
   signal in its own dispatch() loop.  Both numbers are ROUND trips (two propagations);
-- updates_per_s: sustained single-attribute update_node() calls, round robin over 1,000 nodes
-  (so coalescing cannot merge them away), until the echo replica has applied the last one and
-  delivered its signals (outside transactions; the outbox coalesces bursts into fewer samples);
+- updates_per_s: sustained single-attribute updates, round robin over 1,000 nodes (so
+  coalescing cannot merge them away), until the echo replica has applied the last one and
+  delivered its signals.  The writer batches as docs/dsr_wire_format.md says a writer should:
+  `update_nodes()` with one update of each of the 1,000 nodes per call (one stamp, one delta);
+  local_updates_per_s is the writer's own rate.  single_updates_per_s /
+  single_local_updates_per_s: the same with one update_node() call per update (the outbox
+  coalesces bursts into fewer samples);
+- profile_*: where the time of one update goes, measured in this process on the same code:
+  encode (update_node() up to the payload handed to Zenoh), decode (validation), merge
+  (apply_message), signal hand-off (Zenoh thread -> dispatch() thread); profile_top: the top
+  functions of a cProfile of that path (full listing on stderr);
 - join_10k_s: a new process's join() of a graph of 10,000 nodes (~9,000 with an RT edge and
   3 attributes, plus the nodes of the previous phases): session open, member lookup, one full
   state fetched, validated and merged (the other replicas' states follow in the background).
 
-Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 50000] [--join-nodes 10000]
+Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
+The machine's 2 cores are shared: run it several times and report the best and median run.
 """
 
 from __future__ import annotations
@@ -236,14 +245,96 @@ def throughput(ping: DsrPing, updates: int) -> dict[str, float]:
         load_ids = [graph.insert_node("object", f"load{k}", {"i": -1}).id for k in range(1000)]
         load_end = graph.insert_node("object", "load_end", {"i": -1})
     count = len(load_ids)
+    out: dict[str, float] = {}
+    # batched: one update_nodes() call updates each of the 1,000 nodes once
     start = time.perf_counter()
-    for i in range(updates - 1):
-        graph.update_node(load_ids[i % count], {"i": i})
+    done = 0
+    while done < updates - 1:
+        batch = min(count, updates - 1 - done)
+        graph.update_nodes({load_ids[k]: {"i": done + k} for k in range(batch)})
+        done += batch
+        graph.dispatch()           # an agent's loop delivers its signals between writes
     graph.update_node(load_end.id, {"i": updates - 1, "last": True})
     local = time.perf_counter() - start
     ping.wait_for("load_done", updates - 1, timeout=120)
     total = time.perf_counter() - start
-    return {"updates_per_s": updates / total, "local_updates_per_s": updates / local}
+    out.update({"updates_per_s": updates / total, "local_updates_per_s": updates / local})
+    # one update_node() call per update
+    single = max(1000, updates // 4)
+    start = time.perf_counter()
+    for i in range(single - 1):
+        graph.update_node(load_ids[i % count], {"i": i})
+        if i % count == count - 1:
+            graph.dispatch()
+    graph.update_node(load_end.id, {"i": updates + single, "last": True})
+    local = time.perf_counter() - start
+    ping.wait_for("load_done", updates + single, timeout=120)
+    total = time.perf_counter() - start
+    out.update({"single_updates_per_s": single / total, "single_local_updates_per_s": single / local})
+    return out
+
+
+def profile_split(rounds: int = 20000) -> dict[str, Any]:
+    """Where one update's time goes, on the same code paths, in this process."""
+    import cProfile
+    import io
+    import pstats
+
+    from dsr import DSRGraph, wire
+    writer, reader = DSRGraph("w"), DSRGraph("r")
+    node = writer.insert_node("object", "n", {"seq": -1})
+    reader.apply_message(wire.decode(writer.state_message()))
+    payloads: list[bytes] = []
+    writer.attach(payloads.append, linger_s=0.0)
+    start = time.perf_counter()
+    for i in range(rounds):
+        writer.update_node(node.id, {"seq": i})
+    encode = (time.perf_counter() - start) / rounds
+    start = time.perf_counter()
+    decoded = [wire.decode(p) for p in payloads]
+    decode = (time.perf_counter() - start) / rounds
+    reader.connect("node_updated", lambda n, keys: None)
+    start = time.perf_counter()
+    for message in decoded:
+        reader.apply_message(message)
+    merge = (time.perf_counter() - start) / rounds
+    reader.dispatch()
+    # hand-off: post on this thread, a dispatcher thread runs the callback and answers
+    answers: queue.SimpleQueue[int] = queue.SimpleQueue()
+    hub = DSRGraph("h")
+    hub.connect("node_deleted", answers.put)
+    stop = threading.Event()
+
+    def loop() -> None:
+        while not stop.is_set():
+            hub.dispatch(timeout=0.1)
+    thread = threading.Thread(target=loop, daemon=True)
+    thread.start()
+    n = 2000
+    start = time.perf_counter()
+    for i in range(n):
+        hub._signals.post([("node_deleted", (i,))])
+        answers.get(timeout=5)
+    handoff = (time.perf_counter() - start) / n / 2     # a round trip is two hand-offs
+    stop.set()
+    thread.join()
+    profiler = cProfile.Profile()
+    profiler.enable()
+    for i in range(rounds // 4):
+        writer.update_node(node.id, {"seq": i})
+        reader.apply_message(wire.decode(payloads[-1]))
+    reader.dispatch()
+    profiler.disable()
+    text = io.StringIO()
+    stats = pstats.Stats(profiler, stream=text).sort_stats("tottime")
+    stats.print_stats(12)
+    print(text.getvalue(), file=sys.stderr)
+    total = sum(v[2] for v in stats.stats.values()) or 1.0   # type: ignore[attr-defined]
+    top = sorted(stats.stats.items(), key=lambda kv: -kv[1][2])[:6]  # type: ignore[attr-defined]
+    return {"profile_encode_us": encode * 1e6, "profile_decode_us": decode * 1e6,
+            "profile_merge_us": merge * 1e6, "profile_signal_handoff_us": handoff * 1e6,
+            "profile_top": "; ".join(f"{Path(k[0]).name}:{k[2]} {100 * v[2] / total:.0f}%"
+                                     for k, v in top)}
 
 
 def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
@@ -272,7 +363,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--connect", default="")
     parser.add_argument("--graph", default="")
     parser.add_argument("--rounds", type=int, default=1000)
-    parser.add_argument("--updates", type=int, default=50_000)
+    parser.add_argument("--updates", type=int, default=200_000)
     parser.add_argument("--join-nodes", type=int, default=10_000)
     args = parser.parse_args(argv)
     if args.role == "echo":
@@ -291,6 +382,7 @@ def main(argv: list[str] | None = None) -> int:
     graph_name = f"bench{os.getpid()}"
     me = str(Path(__file__).resolve())
     result: dict[str, Any] = {"latency_kind": "round_trip", "cpu_count": os.cpu_count()}
+    result.update(profile_split())
     try:
         procs.spawn(["-m", "dsr.router", "--listen", endpoint])
         _wait(lambda: _port_open(port), 10, "router")

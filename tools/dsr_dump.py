@@ -1,4 +1,8 @@
-"""`chronav dsr dump`: join a running graph read-only and print it, or follow its changes.
+"""`chronav dsr dump` / `chronav dsr stats`: inspect a running graph from outside.
+
+`dump` joins a running graph read-only and prints it, or follows its changes.  `stats` asks
+every member for its replica counters (received, applied, refusals per reason, tombstones...):
+the dump's own short-lived replica has received nothing worth counting.
 
 Read-only replicas declare no publisher, queryable or liveliness token: the dump is invisible
 to the agents and can never write.  Output: a rich table, or with --json one JSON object (the
@@ -168,3 +172,90 @@ def dump(
         raise typer.Exit(1) from None
     except KeyboardInterrupt:
         raise typer.Exit(130) from None
+
+
+def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
+    """Every member's counters, by agent (members answer `chronav/<g>/state/<agent>?stats`)."""
+    import orjson
+    import zenoh
+
+    from dsr import wire
+    from dsr.transport import STATS_FORMAT
+    from tools.connection import ConnectionProblem, settings_for, unreachable_message
+
+    settings = settings_for(target, open_timeout_s=timeout)
+    try:
+        session = zenoh.open(settings.to_zenoh_config())
+    except zenoh.ZError:
+        raise ConnectionProblem(unreachable_message(target)) from None
+    members: dict[str, Any] = {}
+    try:
+        replies = session.get(wire.state_key(target.graph, "*") + "?stats",
+                              target=zenoh.QueryTarget.ALL,
+                              consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
+        for reply in replies:
+            if reply.ok is None:
+                continue
+            try:
+                report = orjson.loads(reply.ok.payload.to_bytes())
+            except orjson.JSONDecodeError:
+                continue
+            if isinstance(report, dict) and report.get("format") == STATS_FORMAT:
+                members[str(report.get("agent"))] = report
+    finally:
+        session.close()
+    return {"graph": target.graph, "members": dict(sorted(members.items()))}
+
+
+@dsr_app.command("stats")
+def stats(
+    json_output: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
+    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
+                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
+    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
+                                   "$CHRONAV_GRAPH or 'chronav')."),
+    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
+                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
+                                  "again for the answers."),
+) -> None:
+    """Every member's replica counters: deltas received and applied, refusals per reason,
+    deferred relayed writes, digests, tombstones held and compacted."""
+    import orjson
+
+    from tools.connection import ConnectionProblem, check_timeout, resolve_target
+
+    try:
+        check_timeout(timeout)
+        target = resolve_target(connect, graph_name, run, role="reader")
+    except ConnectionProblem as exc:
+        typer.echo(f"chronav dsr stats: {exc}", err=True)
+        raise typer.Exit(2) from None
+    try:
+        document = collect_stats(target, timeout)
+    except ConnectionProblem as exc:
+        typer.echo(f"chronav dsr stats: {exc}", err=True)
+        raise typer.Exit(1) from None
+    if not document["members"]:
+        typer.echo(f"chronav dsr stats: no member of graph {target.graph!r} answered within "
+                   f"{timeout:g} s ({target.describe()}): is the system running, and is --graph "
+                   "right?", err=True)
+        raise typer.Exit(1)
+    if json_output:
+        sys.stdout.write(orjson.dumps(document).decode() + "\n")
+        return
+    from rich.console import Console
+    from rich.table import Table
+    table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
+    for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
+                   "policy", "deferred", "tombstones", "compacted"):
+        table.add_column(column, overflow="fold")
+    for agent, report in document["members"].items():
+        counters = report.get("stats", {})
+        reasons = ", ".join(f"{k}={v}" for k, v in sorted((counters.get("rejects") or {}).items()))
+        table.add_row(agent, str(report.get("nodes")), str(counters.get("received")),
+                      str(counters.get("applied")), str(counters.get("published")),
+                      reasons or "0", str(counters.get("rejected_policy")),
+                      str(counters.get("deferred")), str(report.get("tombstones")),
+                      str(counters.get("compacted")))
+    Console().print(table)

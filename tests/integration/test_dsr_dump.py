@@ -96,6 +96,17 @@ def test_timeout_bounds_the_connection_to_a_listener_that_is_not_zenoh(tmp_path)
         in result.stderr
 
 
+def test_stats_without_a_running_graph_says_so_on_stderr(world):
+    result = CliRunner().invoke(app, ["dsr", "stats", "--json", "--connect", "tcp/127.0.0.1:1"])
+    assert result.exit_code == 1 and "cannot reach a chronav system" in result.stderr
+    assert result.stdout == ""
+    result = CliRunner().invoke(app, ["dsr", "stats", "--connect", world, "--graph", "nope",
+                                      "--timeout", "1"])
+    assert result.exit_code == 1 and "no member of graph 'nope'" in result.stderr
+    result = CliRunner().invoke(app, ["dsr", "stats", "--connect", world])
+    assert result.exit_code == 0 and "1 members" in result.stdout
+
+
 def test_dump_follow_prints_changes(world, procs, tmp_path):
     out = tmp_path / "follow.jsonl"
     proc = procs.spawn(["-m", "tools.cli", "dsr", "dump", "--follow", "--json", "--connect",

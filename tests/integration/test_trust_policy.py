@@ -57,7 +57,10 @@ def test_rogue_writes_are_refused_by_every_replica(procs, tmp_path, rogue_name):
     for path in paths.values():
         assert status_of(path)["stats"]["rejected_policy"] == 0, status_of(path)["stats"]
 
-    _, rogue = spawn_script(procs, tmp_path, rogue_name, connect=endpoint, env=env,
+    # A hostile process does not check its own writes: it runs without the policy (an agent
+    # that does gets WriteRefusedError at once, tests/unit/test_dsr_policy.py).
+    _, rogue = spawn_script(procs, tmp_path, rogue_name, connect=endpoint,
+                            env={**env, "CHRONAV_WRITE_POLICY": "allow-all"},
                             script=ROGUE, tag="-rogue")
     wait_until(lambda: status_of(rogue).get("script_done"), 20, message="rogue wrote")
     assert "activity/fake" in status_of(rogue)["names"]          # it did write, locally

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from dsr import ConfigError, ZenohSettings, graph_name_from_env
-from dsr.hlc import MAX_DRIFT_MS, HybridLogicalClock, pack, wall_ms
+from dsr.hlc import MAX_OFFSET_MS, HybridLogicalClock, pack, wall_ms
 
 
 def get(conf, key):
@@ -86,5 +86,5 @@ def test_hlc_is_monotonic_and_follows_remote_clocks():
     assert clock.tick() == pack(5000, 8)
     now[0] = 6000
     assert clock.tick() == pack(6000) and wall_ms(clock.last) == 6000
-    assert clock.too_far_ahead(pack(6000 + MAX_DRIFT_MS + 1))
-    assert not clock.too_far_ahead(pack(6000 + MAX_DRIFT_MS - 1))
+    assert clock.too_far_ahead(pack(6000 + MAX_OFFSET_MS + 1))
+    assert not clock.too_far_ahead(pack(6000 + MAX_OFFSET_MS - 1))

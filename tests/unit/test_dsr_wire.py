@@ -104,12 +104,12 @@ _PATHS = [("format",), ("kind",), ("graph",), ("agent",), ("replica",), ("writer
           ("nodes", 0, "meta", 3), ("nodes", 0, "attrs"), ("nodes", 0, "attrs", "x"),
           ("nodes", 0, "attrs", "x", 2), ("nodes", 0, "attrs", "x", 1), ("nodes", 0, "extra"),
           ("edges", 0, "src"), ("edges", 0, "type"), ("edges", 0, "attrs", "w", 2),
-          ("edges", 0, "rem", 0, 0), ("writers", "5")]
+          ("edges", 0, "rem", 0, 0), ("writers", "5"), ("clock",), ("seen",), ("seen", "5")]
 
 
 def _template() -> dict:
     return {"format": "chronav-dsr/1", "kind": "state", "graph": "g", "agent": "a", "replica": 5,
-            "writers": {"5": "a"},
+            "writers": {"5": "a"}, "clock": 200, "seen": {"5": 200, "6": 50},
             "nodes": [{"id": 9, "add": [[5, 100]], "rem": [[6, 50]], "cleared": 60,
                        "meta": [100, 5, "room", "r"],
                        "attrs": {"x": [100, 5, 1.5], "l": [100, 5, [1, 2.5]]}}],
@@ -133,7 +133,8 @@ def _put(document: dict, path: tuple, value: object) -> None:
 
 def _same(a: wire.Decoded, b: wire.Decoded) -> bool:
     return all(getattr(a, f) == getattr(b, f) for f in
-               ("kind", "graph", "agent", "replica", "writers", "nodes", "edges", "top_hlc"))
+               ("kind", "graph", "agent", "replica", "writers", "nodes", "edges", "top_hlc",
+                "clock", "seen"))
 
 
 @settings(max_examples=400, deadline=None)

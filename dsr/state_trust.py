@@ -1,0 +1,166 @@
+"""Who really wrote what a state reply relays: refuse forged stamps and lying `writers` tables.
+
+Why: a state reply from member S relays the writes of every agent S ever merged, each stamped
+with the replica id of its writer, and a `writers` table mapping replica ids to agents.  Nothing
+signs them, so S could stamp a register with sim_robot's replica id, or claim in its table that
+a fresh replica id belongs to sim_robot, and the write policy would then judge the write as
+sim_robot's.  What this replica knows first-hand closes that hole for every writer that is
+running:
+
+- a replica id belongs to an agent when a message on that agent's own key (its deltas, digests
+  or state reply; the router's ACL gives each agent's key space to that agent's credentials)
+  says so, or when the agent's own state reply lists it (its previous incarnations);
+- a relayed table entry that gives a replica id to ANOTHER agent that is running, while that
+  agent never used or vouched for it (its own state, merged here, lists its replica ids), is
+  a lie: its stamps are refused (reason forged_writer); before that agent's own state has been
+  merged here, such stamps are only deferred;
+- a running writer's deltas reach this replica directly, in order (one publisher, reliable);
+  `seen[z]` says up to which stamp this replica holds every write of replica z.  A relayed
+  stamp of a running writer z that would change this replica's state is either forged
+  (stamp <= seen[z]: z published everything up to there, and not this; reason forged_stamp) or
+  not yet arrived from z itself (stamp > seen[z]: dropped here, z's own delta or state brings
+  it; counted as `deferred`).
+
+Writes of agents that are not running (a previous incarnation, a tool that has exited) can
+only come relayed: they are attributed through the table and judged by the write policy.  The
+first state a replica merges when it joins has nothing to be checked against and is trusted
+this way (documented limit, docs/dsr_wire_format.md "Trust").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+from dsr.crdt import REMOVAL_RECEIPT, ElementState, register_wins
+from dsr.wire import Decoded
+
+#: (reason code, sentence)
+Problem = tuple[str, str]
+
+
+@dataclass
+class Screened:
+    message: Decoded
+    problems: list[Problem] = field(default_factory=list)
+    refused: int = 0
+    deferred: int = 0
+
+
+def _stampers(state: ElementState) -> Iterator[int]:
+    yield from state.add
+    if state.meta is not None:
+        yield state.meta[1]
+    for reg in state.attrs.values():
+        yield reg[1]
+
+
+def screen_state(message: Decoded, *, local: Callable[[str, object], ElementState | None],
+                 binding: Callable[[int], str | None], live: set[str],
+                 seen: dict[int, int], vouched: set[str] | None = None) -> Screened:
+    """The part of a state reply whose stamps are credible (see the module docstring).
+
+    `vouched`: running agents whose own state (current incarnation) this replica has merged,
+    so it knows every replica id they vouch for; a table entry for another of them is a lie.
+    For a running agent not in it the entry cannot be judged yet: its stamps are deferred."""
+    vouched = live if vouched is None else vouched
+    sender = message.agent
+    result = Screened(message)
+    lying: dict[int, str] = {}
+    writers = dict(message.writers)
+    for key, agent in message.writers.items():
+        replica = int(key)
+        known = binding(replica)
+        if known is None and agent != sender and agent in vouched and agent in live \
+                and replica != message.replica:
+            lying[replica] = agent
+            del writers[key]
+            result.problems.append((
+                "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
+                f"but {agent!r} is running and never used or vouched for that replica"))
+
+    def agent_of(replica: int) -> str | None:
+        return binding(replica) or writers.get(str(replica))
+
+    # replicas whose relayed stamps must be checked: running agents other than the sender
+    suspects: dict[int, str] = {}
+    for entries in (message.nodes, message.edges):
+        for _, state in entries:
+            for replica in _stampers(state):
+                if replica in suspects or replica == message.replica:
+                    continue
+                agent = lying.get(replica) or agent_of(replica)
+                if agent is not None and agent != sender and (agent in live or replica in lying):
+                    suspects[replica] = agent
+    if not suspects:
+        if lying or writers != message.writers:
+            result.message = _with(message, message.nodes, message.edges, writers)
+        return result
+    nodes = [(k, _screen(result, "node", k, s, local(("node"), k), suspects, lying, seen))
+             for k, s in message.nodes]
+    edges = [(k, _screen(result, "edge", k, s, local("edge", k), suspects, lying, seen))
+             for k, s in message.edges]
+    result.message = _with(message, nodes, edges, writers)
+    return result
+
+
+def _with(message: Decoded, nodes: list[tuple[int, ElementState]],
+          edges: list[tuple[tuple[int, int, str], ElementState]], writers: dict[str, str]
+          ) -> Decoded:
+    return Decoded(message.kind, message.graph, message.agent, message.replica, writers, nodes,
+                   edges, message.top_hlc, message.clock, message.seen)
+
+
+def _screen(result: Screened, element: str, key: object, state: ElementState,
+            held: ElementState | None, suspects: dict[int, str], lying: dict[int, str],
+            seen: dict[int, int]) -> ElementState:
+    """`state` minus the suspect stamps that would change `held` (this replica's element)."""
+    if not any(r in suspects for r in _stampers(state)):
+        return state
+    if held is None and not state.present():
+        return state     # an unknown tombstone changes no view; the policy judges its receipt
+    bad: set[tuple[str, object]] = set()
+
+    def judge(what: tuple[str, object], replica: int, hlc: int, new: bool) -> None:
+        if replica not in suspects or not new:
+            return
+        agent = suspects[replica]
+        bad.add(what)
+        if replica in lying:
+            result.refused += 1
+            return
+        if hlc <= seen.get(replica, 0):
+            result.refused += 1
+            if len(result.problems) < 5:
+                result.problems.append((
+                    "forged_stamp", f"state of {result.message.agent!r} carries a write "
+                    f"stamped by {agent!r} (replica {replica}, hlc {hlc}) on {element} {key} "
+                    f"that {agent!r} never published"))
+        else:
+            result.deferred += 1
+
+    held_add = held.add if held is not None else {}
+    held_rem = held.rem if held is not None else {}
+    floor = held.cleared if held is not None else 0
+    for replica, hlc in state.add.items():
+        judge(("add", replica), replica, hlc,
+              hlc > held_add.get(replica, 0) and hlc > held_rem.get(replica, 0))
+    if state.meta is not None:
+        judge(("meta", None), state.meta[1], state.meta[0],
+              register_wins(state.meta, held.meta if held is not None else None))
+    for attr, reg in state.attrs.items():
+        if attr == REMOVAL_RECEIPT:
+            judge(("removal", None), reg[1], reg[0], reg[0] > floor)
+        else:
+            judge(("attr", attr), reg[1], reg[0], reg[0] > floor and register_wins(
+                reg, held.attrs.get(attr) if held is not None else None))
+    if not bad:
+        return state
+    kept = ElementState(add={r: h for r, h in state.add.items() if ("add", r) not in bad},
+                        meta=None if ("meta", None) in bad else state.meta,
+                        attrs={k: v for k, v in state.attrs.items() if ("attr", k) not in bad})
+    if ("removal", None) in bad:
+        kept.attrs.pop(REMOVAL_RECEIPT, None)
+    else:
+        kept.rem, kept.cleared = dict(state.rem), state.cleared
+    return kept

@@ -1,0 +1,421 @@
+"""The DSR protocol rules of docs/dsr_wire_format.md, through the real transport hooks.
+
+Each replica here is a `Replica` that is never opened: samples are handed to its Zenoh
+callbacks (`_on_delta`, `_merge_state`) directly, and its publisher is a function, so the rules
+(limits, clock offset, removals, trust in states, digests, compaction, per-reason counters,
+local policy checks) are exercised exactly as over Zenoh, without processes.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import orjson
+import pytest
+
+from dsr import DSRGraph, InvalidAttributeError, WireError, WriteRefusedError, wire
+from dsr.crdt import REMOVAL_RECEIPT
+from dsr.hlc import pack
+from dsr.limits import LIMITS, Limits
+from agents.world.write_policy import policy_from_env
+from dsr.policy import AllowAll
+from dsr.transport import Member, Replica
+
+POLICY = policy_from_env({})
+
+
+@dataclass
+class Sample:
+    key_expr: str
+    data: bytes
+
+    @property
+    def payload(self) -> Sample:
+        return self
+
+    def to_bytes(self) -> bytes:
+        return self.data
+
+
+class Publisher:
+    def __init__(self, deliver) -> None:  # noqa: ANN001
+        self.deliver = deliver
+
+    def put(self, payload: bytes) -> None:
+        self.deliver(payload)
+
+
+class Net:
+    """Replicas wired together in memory: every published delta or digest reaches the others'
+    `_on_delta`, in order (like one Zenoh publisher per replica)."""
+
+    def __init__(self, policy: object = None) -> None:
+        self.replicas: dict[str, Replica] = {}
+        self.policy = policy
+
+    def add(self, agent: str, joined: bool = True) -> Replica:
+        graph = DSRGraph(agent)
+        replica = Replica(graph, policy=self.policy)  # type: ignore[arg-type]
+        replica._joined = joined
+        for other in self.replicas.values():   # a joiner starts from someone's state
+            replica._merge_state(state_sample(other))
+            break
+        replica._publisher = Publisher(lambda payload, a=agent: self._deliver(a, payload))
+        graph.attach(replica._publish, linger_s=0.0)
+        for name, other in self.replicas.items():
+            other._members[agent] = Member(agent)
+            replica._members[name] = Member(name)
+        self.replicas[agent] = replica
+        return replica
+
+    def _deliver(self, sender: str, payload: bytes) -> None:
+        for name, replica in self.replicas.items():
+            if name != sender:
+                replica._on_delta(Sample(wire.delta_key("chronav", sender), payload))
+
+    def maintain(self) -> None:
+        for replica in self.replicas.values():
+            replica.maintain()
+
+
+def state_sample(replica: Replica, payload: bytes | None = None) -> Sample:
+    graph = replica.graph
+    return Sample(wire.state_key("chronav", graph.agent),
+                  payload if payload is not None else graph.state_message(replica.seen()))
+
+
+def delta_sample(agent: str, message: dict) -> Sample:
+    return Sample(wire.delta_key("chronav", agent), orjson.dumps(message))
+
+
+def raw_delta(graph: DSRGraph, nodes: list[dict], edges: list[dict] | None = None) -> dict:
+    return {"format": wire.FORMAT, "kind": "delta", "graph": "chronav", "agent": graph.agent,
+            "replica": graph.replica_id, "nodes": nodes, "edges": edges or []}
+
+
+# ---------------------------------------------------------------------------- integers, sizes
+@pytest.mark.parametrize("literal", [b"9223372036854775808", b"18446744073709551616",
+                                     b"-9223372036854775809", b"[1, 18446744073709551616]"])
+def test_integers_beyond_int64_are_refused_not_turned_into_floats(literal):
+    payload = (b'{"format":"chronav-dsr/1","kind":"delta","graph":"g","agent":"a","replica":5,'
+               b'"nodes":[{"id":9,"attrs":{"x":[1,5,' + literal + b']}}]}')
+    with pytest.raises(WireError, match="int64"):
+        wire.decode(payload)
+
+
+def test_large_floats_written_as_floats_are_still_floats():
+    payload = (b'{"format":"chronav-dsr/1","kind":"delta","graph":"g","agent":"a","replica":5,'
+               b'"nodes":[{"id":9,"attrs":{"x":[1,5,1e19],"l":[1,5,[2.5e30]]}}]}')
+    state = wire.decode(payload).nodes[0][1]
+    assert state.attrs["x"][2] == 1e19 and state.attrs["l"][2] == [2.5e30]
+
+
+def test_value_and_message_limits_on_local_writes_and_on_receipt():
+    graph = DSRGraph("a")
+    big = "x" * (LIMITS.max_value_bytes + 1)
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_VALUE_BYTES"):
+        graph.insert_node("object", "o", {"blob": big})
+    with pytest.raises(InvalidAttributeError, match="per value"):
+        graph.insert_node("object", "o", {"l": [0.0] * (LIMITS.max_value_bytes // 8 + 1)})
+    assert len(graph) == 0
+    node = graph.insert_node("object", "o", {"ok": "y" * 1000})
+    chunk = "z" * (LIMITS.max_value_bytes - 10)
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_DELTA_BYTES"), \
+            graph.transaction():
+        for i in range(LIMITS.max_delta_bytes // LIMITS.max_value_bytes + 1):
+            graph.update_node(node.id, {f"k{i}": chunk})
+    assert graph.get_node(node.id).attrs == {"ok": "y" * 1000}     # undone whole
+    message = raw_delta(graph, [{"id": node.id, "attrs": {"blob": [1, graph.replica_id, big]}}])
+    with pytest.raises(WireError, match="per value"):
+        wire.decode(orjson.dumps(message))
+    guard = Replica(DSRGraph("guard"))
+    huge = orjson.dumps(raw_delta(graph, [])) + b" " * LIMITS.max_delta_bytes
+    guard._on_delta(Sample(wire.delta_key("chronav", "a"), huge))
+    assert guard.stats.rejects == {"too_large": 1}
+
+
+def test_limits_come_from_the_environment_and_bad_values_name_the_variable():
+    assert Limits.from_env({"CHRONAV_DSR_MAX_VALUE_BYTES": "1_000"}).max_value_bytes == 1000
+    with pytest.raises(ValueError, match="CHRONAV_DSR_MAX_CLOCK_OFFSET_MS"):
+        Limits.from_env({"CHRONAV_DSR_MAX_CLOCK_OFFSET_MS": "soon"})
+
+
+# ---------------------------------------------------------------------------- clock
+def test_a_stamp_beyond_the_maximum_offset_is_refused_and_does_not_drag_the_clock():
+    writer, guard = DSRGraph("w"), Replica(DSRGraph("guard"))
+    now = guard.graph.clock.tick() >> 16
+    ahead = pack(now + 55_000)
+    node = {"id": 77, "add": [[writer.replica_id, ahead]],
+            "meta": [ahead, writer.replica_id, "object", "future"]}
+    guard._on_delta(delta_sample("w", raw_delta(writer, [node])))
+    assert guard.stats.rejects == {"clock_ahead": 1} and len(guard.graph) == 0
+    assert guard.graph.clock.tick() >> 16 < now + 1000
+    near = pack(now + LIMITS.max_clock_offset_ms // 2)
+    node = {"id": 78, "add": [[writer.replica_id, near]],
+            "meta": [near, writer.replica_id, "object", "soon"]}
+    guard._on_delta(delta_sample("w", raw_delta(writer, [node])))
+    assert guard.stats.applied == 1 and guard.graph.get_node_by_name("soon") is not None
+
+
+# ---------------------------------------------------------------------------- removals
+def test_one_rule_for_removals_in_deltas_and_in_states():
+    net = Net(POLICY)
+    tool = net.add("agenda_tool-ward")
+    other = net.add("executive")
+    request = tool.graph.insert_node("agenda_request", "agenda_request/1",
+                                     {"change": "{}", "requested_by": "ward"})
+    state = tool.graph.element_state("node", request.id)
+    # A removal as a foreign client might write it, without the receipt: refused as a delta...
+    hlc = tool.graph.clock.tick()
+    bare = {"id": request.id, "rem": list(state.add.items()), "cleared": hlc}
+    other._on_delta(delta_sample(tool.graph.agent, raw_delta(tool.graph, [bare])))
+    assert other.stats.rejects == {"removal_receipt": 1}
+    assert other.graph.get_node(request.id) is not None
+    # ... and the same removal relayed in a state is refused for the same reason.
+    document = orjson.loads(tool.graph.state_message())
+    document["nodes"] = [{**n, "rem": bare["rem"], "cleared": hlc} for n in document["nodes"]]
+    other._merge_state(state_sample(tool, orjson.dumps(document)))
+    assert other.stats.rejects == {"removal_receipt": 2}
+    assert other.graph.get_node(request.id) is not None
+    # With the receipt (what DSRGraph.delete_node sends) it passes both ways, and an agent that
+    # restarts and joins from a state keeps the node deleted (the divergence of issue 13).
+    tool.graph.delete_node(request.id)
+    assert other.graph.get_node(request.id) is None and other.stats.rejected_policy == 0
+    restarted = Replica(DSRGraph("executive"), policy=POLICY)
+    restarted._merge_state(state_sample(tool))
+    assert restarted.graph.get_node(request.id) is None
+    assert restarted.stats.rejected == restarted.stats.rejected_policy == 0
+    assert restarted.graph.digest() == other.graph.digest()
+
+
+# ---------------------------------------------------------------------------- trust in states
+def forge_world() -> tuple[Net, Replica, Replica, Replica, int]:
+    net = Net(POLICY)
+    sim = net.add("sim_robot")
+    with sim.graph.transaction():
+        world = sim.graph.insert_node("world", "world")
+        clock = sim.graph.insert_node("clock", "clock", {"now_s": 100.0})
+        room = sim.graph.insert_node("room", "hall")
+        sim.graph.insert_or_assign_edge(world.id, room.id, "RT", {"x": 0.0, "y": 0.0, "theta": 0.0})
+    guard = net.add("executive")
+    tool = net.add("agenda_tool-x")
+    net.maintain()
+    return net, sim, guard, tool, clock.id
+
+
+def test_a_state_stamping_a_running_agents_replica_is_refused_and_logged(caplog):
+    _net, sim, guard, tool, clock_id = forge_world()
+    document = orjson.loads(tool.graph.state_message(tool.seen()))
+    entry = next(n for n in document["nodes"] if n["id"] == clock_id)
+    stamp = entry["attrs"]["now_s"][0] + 1
+    sim.graph.update_node(clock_id, {"mode": "running"})   # sim_robot has published past stamp
+    entry["attrs"]["now_s"] = [stamp, sim.graph.replica_id, 0.0]
+    with caplog.at_level(logging.WARNING):
+        guard._merge_state(state_sample(tool, orjson.dumps(document)))
+    assert guard.graph.get_attr(clock_id, "now_s") == 100.0
+    assert guard.stats.rejects.get("forged_stamp") == 1
+    assert "never published" in guard.stats.last_reject
+    assert any("forged_stamp" in r.message for r in caplog.records)
+    # a stamp beyond what sim_robot has published yet is left for sim_robot itself
+    entry["attrs"]["now_s"] = [guard.graph.clock.tick() + 10, sim.graph.replica_id, 0.0]
+    guard._merge_state(state_sample(tool, orjson.dumps(document)))
+    assert guard.graph.get_attr(clock_id, "now_s") == 100.0 and guard.stats.deferred == 1
+
+
+def test_a_lying_writers_table_cannot_lend_a_running_agents_rights():
+    _net, sim, guard, tool, _ = forge_world()
+    fake = 4242424242
+    hlc = tool.graph.clock.tick()
+    document = orjson.loads(tool.graph.state_message(tool.seen()))
+    document["writers"][str(fake)] = "sim_robot"
+    document["nodes"].append({"id": 99, "add": [[fake, hlc]], "meta": [hlc, fake, "laser", "laser"],
+                              "attrs": {"ranges": [hlc, fake, [1.0, 2.0]]}})
+    guard._merge_state(state_sample(tool, orjson.dumps(document)))
+    assert guard.graph.get_node_by_name("laser") is None
+    assert guard.stats.rejects.get("forged_writer") == 1
+    assert "never used or vouched" in guard.stats.last_reject
+    # sim_robot itself may vouch for its previous incarnations in its own state
+    document = orjson.loads(sim.graph.state_message(sim.seen()))
+    document["writers"][str(fake)] = "sim_robot"
+    document["nodes"].append({"id": 98, "add": [[fake, hlc]], "meta": [hlc, fake, "room", "l2"]})
+    guard._merge_state(state_sample(sim, orjson.dumps(document)))
+    assert guard.graph.get_node_by_name("l2") is not None
+
+
+# ---------------------------------------------------------------------------- observability
+def test_refusals_are_counted_and_logged_per_reason(caplog):
+    guard = Replica(DSRGraph("guard"), policy=POLICY)
+    with caplog.at_level(logging.WARNING):
+        for _ in range(30):
+            guard._on_delta(Sample(wire.delta_key("chronav", "x"), b"junk"))
+        rogue = DSRGraph("rogue")
+        rogue.attach(lambda p: guard._on_delta(Sample(wire.delta_key("chronav", "rogue"), p)))
+        rogue.insert_node("robot", "robot")
+    assert guard.stats.rejects == {"invalid": 30, "policy": 1}
+    lines = [r.message for r in caplog.records]
+    assert sum("[invalid]" in line for line in lines) == 20     # its own budget ran out...
+    assert any("[policy]" in line for line in lines)              # ...not the policy's
+
+
+# ---------------------------------------------------------------------------- local policy
+def test_local_writes_outside_the_grant_raise_naming_the_rule():
+    net = Net(POLICY)
+    sim = net.add("sim_robot")
+    robot = sim.graph.insert_node("robot", "robot", {"pose_stamp": 1.0})
+    nav = net.add("social_navigation")
+    nav.graph.update_node(robot.id, {"cmd_vx": 0.2})                      # granted
+    with pytest.raises(WriteRefusedError) as refused:
+        nav.graph.update_node(robot.id, {"pose_stamp": 2.0})
+    text = str(refused.value)
+    assert "'social_navigation'" in text and "'pose_stamp'" in text and "'robot' node" in text
+    assert "write_policy.yaml" in text
+    with pytest.raises(WriteRefusedError, match="may not delete a 'robot' node"):
+        nav.graph.delete_node(robot.id)
+    with pytest.raises(WriteRefusedError, match="may not create a 'mission' node"), \
+            nav.graph.transaction():
+        nav.graph.insert_node("mission", "m")
+    assert nav.graph.get_attr(robot.id, "pose_stamp") == 1.0 and len(nav.graph) == 1
+    assert nav.graph.digest() == sim.graph.digest()                     # no divergence
+    free = DSRGraph("social_navigation")                                 # library use
+    Replica(free, policy=AllowAll())
+    free.insert_node("robot", "robot", {"pose_stamp": 1.0})
+
+
+# ---------------------------------------------------------------------------- memory
+def test_deleted_values_are_not_kept_and_not_relayed():
+    graph = DSRGraph("a")
+    blob = "b" * 200_000
+    node = graph.insert_node("object", "o", {"blob": blob})
+    graph.delete_node(node.id)
+    assert len(graph.state_message()) < 2_000
+    assert set(graph.element_state("node", node.id).attrs) == {REMOVAL_RECEIPT}
+
+
+def test_tombstones_are_compacted_once_every_member_has_seen_the_removal():
+    """100,000 insert/delete cycles leave a state reply within 10% of the live content."""
+    net = Net()
+    a, b = net.add("a"), net.add("b")
+    live = [a.graph.insert_node("object", f"live{i}", {"x": float(i)}) for i in range(50)]
+    graph = a.graph
+    for batch in range(1000):             # 100 cycles per delta, to keep the test fast
+        with graph.transaction():
+            for cycle in range(batch * 100, batch * 100 + 100):
+                node = graph.insert_node("object", f"tmp{cycle % 7}", {"v": cycle, "s": "x"})
+                graph.delete_node(node.id)
+        if batch % 200 == 199:
+            net.maintain()
+    assert graph.tombstones() > 0            # b's last digest predates the last removals
+    net.maintain()
+    net.maintain()
+    assert graph.tombstones() == 0 and b.graph.tombstones() == 0
+    assert a.stats.compacted >= 100_000 and a.graph.digest() == b.graph.digest()
+    reference = DSRGraph("a")
+    with reference.transaction():
+        for node in live:
+            reference.insert_node("object", node.name, node.attrs, id=node.id)
+    for replica in (a, b):
+        size = len(replica.graph.state_message(replica.seen()))
+        assert size <= 1.1 * len(reference.state_message()), size
+
+
+def test_a_member_that_left_holds_compaction_back_until_its_retention_ends():
+    net = Net()
+    a, b = net.add("a"), net.add("b")
+    net.maintain()
+    node = a.graph.insert_node("object", "o")
+    a.graph.delete_node(node.id)
+    a._members["b"].live, a._members["b"].gone_at = False, time.monotonic()   # b cut off
+    b.graph.attach(None)                                             # its digests stop
+    a.maintain()
+    assert a.graph.tombstones() == 1
+    a.member_retention_s = -1.0
+    a.maintain()
+    assert a.graph.tombstones() == 0
+
+
+def test_a_member_ahead_of_us_triggers_anti_entropy():
+    net = Net()
+    a, b, c = net.add("a"), net.add("b"), net.add("c")
+    net.maintain()
+    # c writes; the delta reaches b but is lost on its way to a; then b's digests show it
+    c._publisher = Publisher(lambda payload: b._on_delta(Sample(wire.delta_key("chronav", "c"),
+                                                                payload)))
+    c.graph.insert_node("object", "missed")
+    b.publish_digest()
+    b.publish_digest()
+    assert a._sync_requests.empty()           # a grace period for deltas in flight, backlogs
+    a.lag_grace_s = 0.0
+    b.publish_digest()
+    # the writer runs: its own state is fetched (only it is trusted for its writes)
+    assert a._sync_requests.get_nowait() == "c" and a.stats.anti_entropy == 1
+    assert b._sync_requests.empty()
+    a._members["c"].live = False       # a writer that is gone: the member holding its writes
+    b.publish_digest()
+    assert a._sync_requests.get_nowait() == "b"
+
+
+def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
+    """Regression (netns partition test): b1's deltas made while its session was broken are
+    lost; its later deltas must not make a1 call the lost writes forged when b2 relays them."""
+    net = Net()
+    a1, b1, b2 = net.add("a1"), net.add("b1"), net.add("b2")
+    net.maintain()
+    node = b1.graph.insert_node("object", "n", {"k": 0})
+    lost = Publisher(lambda payload: b2._on_delta(Sample(wire.delta_key("chronav", "b1"),
+                                                         payload)))
+    b1._publisher = lost                       # partition: a1 gets none of these
+    b1.graph.update_node(node.id, {"k": 1})
+    a1._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "b1"),
+                                 "kind": __import__("zenoh").SampleKind.DELETE})())
+    b1._publisher = Publisher(lambda payload: net._deliver("b1", payload))   # healed
+    b1.graph.update_node(node.id, {"other": 2})
+    b1.publish_digest()
+    a1._merge_state(state_sample(b2))          # b2 relays k=1 before b1's own state arrives
+    assert a1.stats.rejects.get("forged_stamp") is None
+    a1._merge_state(state_sample(b1))
+    assert a1.graph.get_attr(node.id, "k") == 1 and a1.graph.digest() == b2.graph.digest()
+
+
+def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forged():
+    """Regression (trust test): a member relays the replica id of an agent that has just
+    started, before that agent's own messages reach this replica: nothing is a lie yet."""
+    net = Net()
+    sim = net.add("sim_robot")
+    newcomer = DSRGraph("executive")
+    newcomer.insert_node("mission", "m1", {"state": "pending"})
+    sim._merge_state(Sample(wire.state_key("chronav", "executive"), newcomer.state_message()))
+    guard = Replica(DSRGraph("agenda"))
+    guard._joined = True
+    guard._members["executive"] = Member("executive")                 # its token is up
+    guard._members["sim_robot"] = Member("sim_robot")
+    guard._merge_state(state_sample(sim))
+    assert guard.stats.rejects == {} and guard.stats.deferred >= 1
+    assert guard.graph.get_node_by_name("m1") is None                 # left for executive
+    guard._merge_state(Sample(wire.state_key("chronav", "executive"),
+                              newcomer.state_message()))
+    assert guard.graph.get_node_by_name("m1") is not None
+
+
+def test_anti_entropy_settles_for_a_writer_that_left():
+    """Regression: the watermark of a writer that is gone must be restored from the member
+    that relays its writes, or every digest of that member would trigger another state fetch."""
+    import zenoh
+    net = Net()
+    a, b, c = net.add("a"), net.add("b"), net.add("c")
+    net.maintain()
+    c._publisher = Publisher(lambda payload: b._on_delta(Sample(wire.delta_key("chronav", "c"),
+                                                                payload)))
+    c.graph.insert_node("object", "missed")
+    a._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "c"),
+                                "kind": zenoh.SampleKind.DELETE})())
+    a.lag_grace_s = 0.0
+    b.publish_digest()
+    assert a._sync_requests.get_nowait() == "b"
+    a._pending_syncs.discard("b")
+    a._merge_state(state_sample(b))                      # what the worker does
+    assert a.graph.get_node_by_name("missed") is not None
+    b.publish_digest()
+    b.publish_digest()
+    assert a._sync_requests.empty() and a.stats.anti_entropy == 1
