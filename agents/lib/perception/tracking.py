@@ -77,16 +77,14 @@ class Tracker:
             self._predict(self.tracks[name], gap)
         unmatched = list(range(len(detections)))
         if names and detections:
-            cost = np.full((len(names), len(detections)), 1e6)
-            for r, name in enumerate(names):
-                track = self.tracks[name]
-                s = track.cov[:2, :2] + np.eye(2) * self.measurement_sigma ** 2
-                inv = np.linalg.inv(s)
-                for c, det in enumerate(detections):
-                    innovation = np.array([det.x, det.y]) - track.state[:2]
-                    d2 = float(innovation @ inv @ innovation)
-                    if d2 <= GATE_CHI2:
-                        cost[r, c] = d2
+            # Squared Mahalanobis distance of every detection to every predicted track, at once.
+            predicted = np.array([self.tracks[n].state[:2] for n in names])                   # (T, 2)
+            inv = np.linalg.inv(np.array([self.tracks[n].cov[:2, :2] for n in names])
+                                + np.eye(2) * self.measurement_sigma ** 2)                      # (T, 2, 2)
+            measured = np.array([[d.x, d.y] for d in detections])                              # (D, 2)
+            innovation = measured[None, :, :] - predicted[:, None, :]                          # (T, D, 2)
+            d2 = np.einsum("tdi,tij,tdj->td", innovation, inv, innovation)
+            cost = np.where(d2 <= GATE_CHI2, d2, 1e6)
             rows, cols = linear_sum_assignment(cost)
             for r, c in zip(rows, cols, strict=True):
                 if cost[r, c] >= 1e6:
