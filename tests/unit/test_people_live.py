@@ -1,0 +1,71 @@
+"""The simulator's people live the agenda as the DSR holds it: a change staff make with `chronav
+agenda` (an agenda_request the agenda agent accepts) moves them at once; what the simulator
+writes for the observer and into people.csv."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from agents.agenda.agent import AgendaAgent
+from agents.runtime.config import AgentConfig
+from agents.runtime.recording import Recorder
+from agents.sim_robot.agent import PEOPLE_HEADER, SimRobotAgent
+from agents.world.vocabulary import GROUND_TRUTH_PEOPLE
+from dsr import DSRGraph
+from scenes.clock import parse_clock
+
+SCENE = Path(__file__).resolve().parents[1] / "data" / "crowd_small.yaml"
+
+
+def agents(tmp_path: Path) -> tuple[DSRGraph, SimRobotAgent, AgendaAgent]:
+    graph = DSRGraph(agent="test")
+    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path))
+    sim.setup(graph, Recorder("sim_robot", None, None))
+    agenda = AgendaAgent(AgentConfig(name="agenda", scene=SCENE))
+    agenda.setup(graph, Recorder("agenda", None, None))
+    return graph, sim, agenda
+
+
+def truth(graph: DSRGraph) -> dict[str, dict[str, object]]:
+    node = graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
+    a = node.attrs
+    return {name: {"x": x, "y": y, "group": g} for name, x, y, g in zip(a["names"], a["x"], a["y"], a["groups"],
+                                                                         strict=True)}
+
+
+def test_a_cancel_through_the_dsr_sends_the_participants_away_at_once(tmp_path: Path) -> None:
+    graph, sim, agenda = agents(tmp_path)
+    sim.skip_to(parse_clock("09:45"))
+    agenda.step()
+    assert truth(graph)["ana"]["group"] == "activity/game"
+    graph.insert_node(type="agenda_request", name="agenda_request/cancel-game",
+                      attrs={"state": "pending", "change": '{"op": "cancel", "id": "game"}'})
+    agenda.step()
+    assert graph.get_node_by_name("agenda_request/cancel-game").attrs["state"] == "accepted"
+    sim.skip_to(parse_clock("09:45") + 0.5)
+    assert truth(graph)["ana"]["group"] == "", "she no longer stands at the cancelled game"
+    sim.skip_to(parse_clock("09:46"))
+    offline_like = next(p for p in sim.crowd.at(sim.now_s) if p.name == "ana")
+    assert offline_like.goal == "", "nor is she walking to it"
+
+
+def test_people_csv_rows_go_with_the_trajectory_while_driving(tmp_path: Path) -> None:
+    graph, sim, _ = agents(tmp_path)
+    robot = graph.get_node_by_name("robot")
+    graph.update_node(robot.id, attrs={"nav_active": True})
+    for _ in range(3):
+        graph.update_node(robot.id, attrs={"cmd_vx": 0.2, "cmd_vy": 0.0, "cmd_omega": 0.0,
+                                           "cmd_stamp": float(graph.get_node_by_name("robot").attrs["pose_stamp"])})
+        sim._rate_allows = lambda *_: True  # type: ignore[method-assign]  # no wall-clock pacing in a test
+        sim.step()
+    sim.teardown()
+    with (tmp_path / "trajectory.csv").open() as handle:
+        robot_times = [row["t"] for row in csv.DictReader(handle)]
+    with (tmp_path / "people.csv").open() as handle:
+        reader = csv.DictReader(handle)
+        assert tuple(reader.fieldnames or ()) == PEOPLE_HEADER
+        rows = list(reader)
+    assert robot_times and sorted({row["t"] for row in rows}) == sorted(set(robot_times))
+    assert len(rows) == len(robot_times) * len(sim.scene.people)
+    assert {row["name"] for row in rows} == {p.name for p in sim.scene.people}
