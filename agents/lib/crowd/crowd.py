@@ -42,6 +42,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import shapely
+from shapely.geometry.polygon import orient
 
 from agents.lib.crowd.formations import CHAT_RADIUS_M, chat_place, join_circle, ring_places, screen_places
 from agents.lib.crowd.model import Agenda, Appointment, Building, PersonTruth, RobotBody, Walker
@@ -245,7 +246,7 @@ class Crowd:
         obstacles = [[tuple(a), tuple(b)] for w in self.building.walls for a, b in zip(w, w[1:], strict=False)
                      if tuple(a) != tuple(b)]
         for thing in self.building.things.values():
-            ring = shapely.geometry.polygon.orient(thing.footprint, 1.0).exterior.coords[:-1]
+            ring = orient(thing.footprint, 1.0).exterior.coords[:-1]   # RVO2 wants counter-clockwise
             obstacles.append([tuple(c) for c in ring])
         for name in sorted(closed):
             leaf = self.building.door_leaves.get(name)

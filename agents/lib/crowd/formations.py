@@ -17,8 +17,8 @@ import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
-import shapely
 from shapely.geometry.base import BaseGeometry
+from shapely.ops import nearest_points
 
 RING_M = 0.5                 # a participant's centre from the object's edge (a chair's depth)
 PLACE_SPACING_M = 0.7        # shoulder to shoulder at a table
@@ -73,7 +73,7 @@ def ring_places(footprint: BaseGeometry, count: int, fits: Callable[[float, floa
     places = []
     for d in chosen:
         p = ring.interpolate(float(d))
-        near = shapely.ops.nearest_points(footprint, p)[0]
+        near = nearest_points(footprint, p)[0]
         places.append((p.x, p.y, _facing(p.x, p.y, near.x, near.y)))
     return places
 
