@@ -171,7 +171,15 @@ class PersonGoal(Strict):
     person: str
 
 
-Goal = PoseGoal | RoomGoal | ObjectGoal | PersonGoal
+class GroupGoal(Strict):
+    group: list[str] = Field(min_length=2, description="people the robot faces together (takeTheAttention)")
+
+
+class WaitGoal(Strict):
+    wait: str = Field(min_length=1, description="agenda activity id: the mission ends when that activity has")
+
+
+Goal = PoseGoal | RoomGoal | ObjectGoal | PersonGoal | GroupGoal | WaitGoal
 
 
 class Mission(Strict):
@@ -182,7 +190,8 @@ class Mission(Strict):
 
 
     def goal_text(self) -> str:
-        """The mission string of the executive (`room:X`, `object:X`, `person:X`, `pose:x,y,theta`)."""
+        """The mission string of the executive (`room:X`, `object:X`, `person:X`, `group:P1+P2`,
+        `wait:ACTIVITY`, `pose:x,y,theta`; agents/missions/kinds.py)."""
         goal = self.goal
         if isinstance(goal, PoseGoal):
             return f"pose:{goal.pose.x},{goal.pose.y},{goal.pose.theta}"
@@ -190,6 +199,10 @@ class Mission(Strict):
             return f"room:{goal.room}"
         if isinstance(goal, ObjectGoal):
             return f"object:{goal.object}"
+        if isinstance(goal, GroupGoal):
+            return "group:" + "+".join(goal.group)
+        if isinstance(goal, WaitGoal):
+            return f"wait:{goal.wait}"
         return f"person:{goal.person}"
 
 
@@ -267,6 +280,12 @@ class Scene(Strict):
                 raise ValueError(f"mission {mission.id!r} targets unknown object {goal.object!r}")
             if isinstance(goal, PersonGoal) and goal.person not in people:
                 raise ValueError(f"mission {mission.id!r} targets unknown person {goal.person!r}")
+            if isinstance(goal, GroupGoal):
+                unknown = [p for p in goal.group if p not in people]
+                if unknown:
+                    raise ValueError(f"mission {mission.id!r}: group names unknown person {unknown[0]!r}")
+                if len(set(goal.group)) != len(goal.group):
+                    raise ValueError(f"mission {mission.id!r}: group names someone twice")
         ids = [m.id for m in self.missions]
         if len(ids) != len(set(ids)):
             raise ValueError("mission ids must be unique")

@@ -106,7 +106,8 @@ def _load_world(scene: Path, at_s: float | None) -> Any:
 
 def plan_command(scene: Path = typer.Argument(..., help="scene file, or a .json node-link symbolic graph"),
                  mission: str = typer.Option(..., "--mission", "-m",
-                                             help="room:NAME, object:NAME, person:NAME, group:P1+P2, wait:ACTIVITY"),
+                                             help="room:NAME, object:NAME, person:NAME, group:P1+P2, wait:ACTIVITY, "
+                                                  "pose:X,Y,THETA (pose and agenda ids on scenes)"),
                  grammar_file: Optional[Path] = typer.Option(None, "--grammar", "-g",
                                                              help="grammar file (default: shipped social_navigation.aggl)"),
                  robot: Optional[str] = typer.Option(None, "--robot", help="robot node name if there are several"),
@@ -114,7 +115,14 @@ def plan_command(scene: Path = typer.Argument(..., help="scene file, or a .json 
                                                   help="time of day (HH:MM) for the activities' state"),
                  max_expansions: int = typer.Option(20_000, "--max-expansions", min=1),
                  as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
-    """Plan a mission on a scene and print each step with its variable bindings."""
+    """Plan a mission on a scene and print each step with its variable bindings.
+
+    On a scene: the executive's own planning on the world at --at (tools/mission_plan.py)."""
+    if scene.suffix.lower() not in (".json", ".xml"):  # a scene file or name, not a symbolic world file
+        from tools.mission_plan import plan_scene
+
+        plan_scene(scene, mission, _parse_time(at), grammar_file, robot, max_expansions, as_json)
+        return
     from grammar.errors import GrammarError, MissionError, PlanningError
     from grammar.missions import plan_mission
     from grammar.parser import default_grammar_path, load_grammar

@@ -180,9 +180,13 @@ class SimRobotAgent(Agent):
         return "idle"
 
     def _next_deadline(self) -> float | None:
-        """Earliest future time something is due: a pending mission, the end of a wait."""
-        times = [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
-                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
+        """Earliest future time something is due: a pending mission, the end of a wait.
+
+        While a mission is active (waiting for an activity), pending missions cannot start, so
+        their times are not deadlines: the clock skips straight to the end of the wait."""
+        busy = any(n.attrs.get("state") == "active" for n in self.graph.nodes_of_type("mission"))
+        times = [] if busy else [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
+                                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
         times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type("intention")
                   if n.attrs.get("state") == "active" and n.attrs.get("kind") == "wait" and "until_s" in n.attrs]
         future = [t for t in times if t > self.now_s]
