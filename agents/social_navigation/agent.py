@@ -27,6 +27,7 @@ from agents.lib.socialmap.search import GoalOccupied, PlanningError, SearchWorks
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.runtime.drawing.social_map import log_social_map
 from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
+from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
 
@@ -118,11 +119,10 @@ class SocialNavigationAgent(Agent):
         fixed the route's rooms (agents/world/navigation.py)."""
         return self.maps.build(self.graph, now_s, self.route_rooms)
 
-    def _active_intention(self) -> Any:
-        for node in self.graph.nodes_of_type("intention"):
-            if node.attrs.get("state") == "active" and node.attrs.get("kind") == "navigate":
-                return node
-        return None
+    def _active_intention(self) -> IntentionView | None:
+        """The navigate intention to carry out (one at a time: the executive cancels the previous)."""
+        return next((i for i in intentions(self.graph)
+                     if i.active and i.kind == IntentionKind.NAVIGATE and i.goal is not None), None)
 
     def _laser_points(self, robot: Any, pose: tuple[float, float, float]) -> np.ndarray:
         ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
@@ -147,7 +147,7 @@ class SocialNavigationAgent(Agent):
                 self._stop(robot, None, None)
             self._maybe_log_map(now_s)
             return
-        if intention.id != self.intention_id:
+        if intention.node_id != self.intention_id:
             if observed_up_to(self.graph, now_s):  # after a clock skip, plan on today's people
                 self._start(intention, robot, now_s)
             return
@@ -157,12 +157,10 @@ class SocialNavigationAgent(Agent):
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
 
-    def _start(self, intention: Any, robot: Any, now_s: float) -> None:
-        self.intention_id = intention.id
-        attrs = intention.attrs
-        theta = float(attrs["goal_theta"]) if attrs.get("goal_has_theta", True) else None
-        self.goal = (float(attrs["goal_x"]), float(attrs["goal_y"]), theta)
-        self.route_rooms = tuple(str(r) for r in attrs.get("rooms", []))
+    def _start(self, intention: IntentionView, robot: Any, now_s: float) -> None:
+        self.intention_id = intention.node_id
+        self.goal = intention.goal
+        self.route_rooms = intention.rooms
         self.started_s = now_s
         self.follower.reset()
         pose = self.graph.world_pose(robot.id)
@@ -220,7 +218,7 @@ class SocialNavigationAgent(Agent):
                 goal = nearest_free(smap.cost, smap.spec, goal, max_m=GOAL_TOLERANCE_M)
         return plan(smap, start, goal, cruise_speed_mps=self.cruise, workspace=self.workspace)
 
-    def _replan(self, intention: Any, robot: Any, now_s: float) -> None:
+    def _replan(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         del intention
         if self.band is None or self.goal is None:
             return
@@ -240,7 +238,7 @@ class SocialNavigationAgent(Agent):
             points = self._route(pose, new_path)
             self._adopt(points, now_s, f"replanned ({why})", new_path.cost)
 
-    def _control(self, intention: Any, robot: Any, now_s: float, pose_stamp: float) -> None:
+    def _control(self, intention: IntentionView, robot: Any, now_s: float, pose_stamp: float) -> None:
         assert self.band is not None and self.goal is not None
         pose = self.graph.world_pose(robot.id)
         obstacles = self._laser_points(robot, pose)
@@ -257,9 +255,9 @@ class SocialNavigationAgent(Agent):
         if contact:  # pressed against something ahead: back off slowly while turning to the path
             vx, vy = -BACK_OFF_MPS * math.cos(math.atan2(vy, vx)), -BACK_OFF_MPS * math.sin(math.atan2(vy, vx))
         self.last_answered = pose_stamp
-        passed = bool(intention.attrs.get("pass_through")) and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
+        passed = intention.pass_through and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
         if out.reached or passed:
-            self._stop(robot, intention, "done")
+            self._stop(robot, intention.node_id, IntentionState.DONE)
             self.rec.event(f"{format_clock(now_s)} reached goal of {intention.name} "
                            f"({now_s - self.started_s:.0f} s)")
             return
@@ -306,13 +304,13 @@ class SocialNavigationAgent(Agent):
         free = float(np.min(ranges[ahead])) - self.scene.robot.radius
         return float(np.clip(free / SLOW_ZONE_M, 0.15, 1.0)), free < CONTACT_M
 
-    def _stop(self, robot: Any, intention: Any, state: str | None, reason: str = "") -> None:
+    def _stop(self, robot: Any, intention_id: int | None, state: str | None, reason: str = "") -> None:
         g = self.graph
         with g.transaction():
             g.update_node(robot.id, attrs={"nav_active": False, "cmd_vx": 0.0, "cmd_vy": 0.0, "cmd_omega": 0.0,
                                            "cmd_stamp": float(robot.attrs.get("pose_stamp", 0.0))})
-            if intention is not None and state is not None:
-                g.update_node(intention.id, attrs={"state": state, "reason": reason})
+            if intention_id is not None and state is not None and g.get_node(intention_id) is not None:
+                g.update_node(intention_id, attrs={"state": state, "reason": reason})
         self.intention_id = None
         self.band = None
         self.goal = None
@@ -320,10 +318,9 @@ class SocialNavigationAgent(Agent):
 
     def _fail(self, reason: str) -> None:
         robot = self._robot()
-        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
         self.log.warning("navigation failed: %s", reason)
         self.rec.event(f"navigation failed: {reason}", level="ERROR")
-        self._stop(robot, intention, "failed", reason)
+        self._stop(robot, self.intention_id, IntentionState.FAILED, reason)
 
     # ----------------------------------------------------------------- outputs
     def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:

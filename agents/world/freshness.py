@@ -22,6 +22,17 @@ def mark_observed(graph: Any, agent: str, now_s: float) -> None:
         graph.update_node(node.id, attrs={"observed_s": now_s})
 
 
+def observed_s(graph: Any, agent: str) -> float | None:
+    """The sim time ``agent`` last stamped, or None before its first stamp."""
+    node = graph.get_node_by_name(f"sensor/{agent}")
+    if node is None:
+        return None
+    try:
+        return float(node.attrs.get("observed_s"))
+    except (TypeError, ValueError):
+        return None
+
+
 def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
     """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
     for agent in agents:
