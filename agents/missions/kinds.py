@@ -23,6 +23,7 @@ SYNTAX = ("room:NAME, object:NAME, person:NAME, group:P1+P2[+...], wait:ACTIVITY
 _NODE_TYPE = {ROOM: NodeType.ROOM, OBJECT: NodeType.OBJECT, PERSON: NodeType.PERSON, GROUP: NodeType.PERSON,
               WAIT: NodeType.ACTIVITY}
 _LISTED = 12   # names listed in an error message, at most
+_PLURAL = {NodeType.PERSON: "people"}
 
 
 class MissionStringError(ValueError):
@@ -114,5 +115,5 @@ def check_names(request: MissionRequest, graph: Any) -> str | None:
                     f"{_listing([activity_id_of(k) for k in known])}")
         if node is not None:
             return f"{name!r} is a {node.type}, not a {node_type}"
-        return f"no {node_type} named {name!r}; {node_type}s: {_listing(known)}"
+        return f"no {node_type} named {name!r}; {_PLURAL.get(node_type, node_type + 's')}: {_listing(known)}"
     return None
