@@ -177,7 +177,7 @@ class SocialNavigationAgent(Agent):
             self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
             return False
         points = self._route(pose, path)
-        self._adopt(points, now_s, reason, path.cost)
+        self._adopt(points, now_s, reason, path.cost, replan=False)
         return True
 
     def _route(self, pose: tuple[float, float, float], path: Any) -> np.ndarray:
@@ -185,12 +185,12 @@ class SocialNavigationAgent(Agent):
         assert self.goal is not None
         return np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
 
-    def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+    def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool = True) -> None:
         self.global_points = points
         self._best_distance, self._progress_s = math.inf, now_s  # a new path: measure progress afresh
         self.band = eb.band_from_path(points, (), self.band_params)
         self.last_replan_s = now_s
-        self._publish_path(points, now_s, reason, cost)
+        self._publish_path(points, now_s, reason, cost, replan)
 
     def _remaining_global(self, pose: tuple[float, float, float]) -> np.ndarray:
         """The global path from the point nearest the robot on (the band may cut inflated corners,
@@ -323,7 +323,7 @@ class SocialNavigationAgent(Agent):
         self._stop(robot, self.intention_id, IntentionState.FAILED, reason)
 
     # ----------------------------------------------------------------- outputs
-    def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+    def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool) -> None:
         robot = self._robot()
         intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
         with self.graph.transaction():
@@ -332,7 +332,7 @@ class SocialNavigationAgent(Agent):
             self.graph.update_node(robot.id, attrs=attrs)
             if intention is not None:
                 self.graph.update_node(intention.id, attrs={**attrs, "replans": int(intention.attrs.get("replans", 0))
-                                                            + (0 if reason.startswith("intention") else 1)})
+                                                            + int(replan)})
         self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
         self.rec.line_strip("world/navigation/global_path", points.tolist(), color=[255, 255, 255], radius=0.03)
         self._maybe_log_map(now_s, force=True)
