@@ -27,7 +27,7 @@ from agents.lib.socialmap.search import GoalOccupied, PlanningError, SearchWorks
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.runtime.drawing.social_map import log_social_map
 from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
-from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, intentions
+from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
 
@@ -125,8 +125,8 @@ class SocialNavigationAgent(Agent):
                      if i.active and i.kind == IntentionKind.NAVIGATE and i.goal is not None), None)
 
     def _laser_points(self, robot: Any, pose: tuple[float, float, float]) -> np.ndarray:
-        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
-        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        view = RobotView.from_node(robot)
+        ranges, angles = np.asarray(view.laser_ranges, dtype=float), np.asarray(view.laser_angles, dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles):
             return np.empty((0, 2))
         hit = ranges < self.scene.robot.laser_range - 1e-6  # a ray at max range hit nothing
@@ -143,7 +143,7 @@ class SocialNavigationAgent(Agent):
         self.rec.set_time(now_s)
         intention = self._active_intention()
         if intention is None:
-            if self.intention_id is not None or robot.attrs.get("nav_active"):
+            if self.intention_id is not None or RobotView.from_node(robot).nav_active:
                 self._stop(robot, None, None)
             self._maybe_log_map(now_s)
             return
@@ -153,7 +153,7 @@ class SocialNavigationAgent(Agent):
             return
         if now_s - self.last_replan_s >= REPLAN_PERIOD_S:
             self._replan(intention, robot, now_s)
-        pose_stamp = float(robot.attrs.get("pose_stamp", -1.0))
+        pose_stamp = RobotView.from_node(robot).pose_stamp
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
 
@@ -293,8 +293,8 @@ class SocialNavigationAgent(Agent):
     def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
         """Speed factor from the free space ahead in the direction of motion (laser), and whether
         the robot is in contact with something ahead."""
-        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
-        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        view = RobotView.from_node(robot)
+        ranges, angles = np.asarray(view.laser_ranges, dtype=float), np.asarray(view.laser_angles, dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
             return 1.0, False
         heading = math.atan2(vy, vx)
@@ -308,7 +308,7 @@ class SocialNavigationAgent(Agent):
         g = self.graph
         with g.transaction():
             g.update_node(robot.id, attrs={"nav_active": False, "cmd_vx": 0.0, "cmd_vy": 0.0, "cmd_omega": 0.0,
-                                           "cmd_stamp": float(robot.attrs.get("pose_stamp", 0.0))})
+                                           "cmd_stamp": max(0.0, RobotView.from_node(robot).pose_stamp)})
             if intention_id is not None and state is not None and g.get_node(intention_id) is not None:
                 g.update_node(intention_id, attrs={"state": state, "reason": reason})
         self.intention_id = None
@@ -325,14 +325,14 @@ class SocialNavigationAgent(Agent):
     # ----------------------------------------------------------------- outputs
     def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool) -> None:
         robot = self._robot()
-        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
+        node = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
         with self.graph.transaction():
             attrs = {"path_x": points[:, 0].tolist(), "path_y": points[:, 1].tolist(), "path_cost": float(cost),
                      "planned_s": now_s}
             self.graph.update_node(robot.id, attrs=attrs)
-            if intention is not None:
-                self.graph.update_node(intention.id, attrs={**attrs, "replans": int(intention.attrs.get("replans", 0))
-                                                            + int(replan)})
+            if node is not None:
+                intention = IntentionView.from_node(node)
+                self.graph.update_node(intention.node_id, attrs={**attrs, "replans": intention.replans + int(replan)})
         self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
         self.rec.line_strip("world/navigation/global_path", points.tolist(), color=[255, 255, 255], radius=0.03)
         self._maybe_log_map(now_s, force=True)

@@ -269,6 +269,25 @@ def now_s(graph: Any) -> float | None:
 
 
 @dataclass(frozen=True)
+class RobotView:
+    """What the simulator and the navigation publish on the robot node."""
+
+    node_id: int
+    name: str
+    pose_stamp: float
+    nav_active: bool
+    laser_ranges: tuple[float, ...]
+    laser_angles: tuple[float, ...]
+
+    @classmethod
+    def from_node(cls, node: Any) -> RobotView:
+        a = node.attrs
+        return cls(node.id, node.name, float(_get(a, "pose_stamp", -1.0)), bool(_get(a, "nav_active", False)),
+                   tuple(float(v) for v in _get(a, "laser_ranges", [])),
+                   tuple(float(v) for v in _get(a, "laser_angles", [])))
+
+
+@dataclass(frozen=True)
 class ActivityView:
     id: str
     name: str
@@ -370,6 +389,7 @@ class IntentionView:
     rooms: tuple[str, ...] = ()
     pass_through: bool = False
     reason: str = ""
+    replans: int = 0                                        # paths the navigation adopted after the first
 
     @classmethod
     def from_node(cls, node: Any) -> IntentionView:
@@ -384,7 +404,7 @@ class IntentionView:
                    float(_get(a, "issued_s", 0.0)), str(_get(a, "rule", "")), goal,
                    None if until is None else float(until), str(_get(a, "target", "")),
                    tuple(str(r) for r in _get(a, "rooms", [])), bool(_get(a, "pass_through", False)),
-                   str(_get(a, "reason", "")))
+                   str(_get(a, "reason", "")), int(_get(a, "replans", 0)))
 
     @property
     def active(self) -> bool:
