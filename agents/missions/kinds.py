@@ -56,7 +56,11 @@ class MissionRequest:
 
 def parse_mission(text: str) -> MissionRequest:
     """``"wait:tv_game"`` -> MissionRequest(kind="wait", names=("activity/tv_game",)); MissionStringError
-    (naming the accepted forms) for anything else."""
+    (naming the accepted forms) for anything else.  The grammar's own forms are checked by the
+    grammar's parser (grammar/missions.py), so both read them alike."""
+    from grammar import MissionError
+    from grammar import parse_mission as parse_grammar_mission
+
     if not isinstance(text, str) or ":" not in text:
         raise MissionStringError(f"mission {text!r} is not KIND:ARGUMENT; missions are {SYNTAX}")
     kind, _, arg = (part.strip() for part in text.partition(":"))
@@ -70,15 +74,12 @@ def parse_mission(text: str) -> MissionRequest:
         activity = arg.removeprefix(ACTIVITY_PREFIX).strip()
         if not activity:
             raise MissionStringError(f"mission {text!r} names no activity")
-        return MissionRequest(text, kind, (activity_name(activity),))
-    names = tuple(n.strip() for n in arg.split("+")) if kind == GROUP else (arg,)
-    if not all(names):
-        raise MissionStringError(f"mission {text!r} has an empty name")
-    if kind == GROUP and len(names) < 2:
-        raise MissionStringError(f"group mission {text!r} needs at least two people: group:P1+P2")
-    if len(set(names)) != len(names):
-        raise MissionStringError(f"mission {text!r} names someone twice")
-    return MissionRequest(text, kind, names)
+        arg = activity_name(activity)
+    try:
+        parsed = parse_grammar_mission(f"{kind}:{arg}")
+    except MissionError as exc:
+        raise MissionStringError(str(exc).replace(f"{kind}:{arg}", text)) from None
+    return MissionRequest(text, kind, parsed.names)
 
 
 def _pose(text: str, arg: str) -> tuple[float, float, float | None]:
