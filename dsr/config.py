@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import (BaseModel, ConfigDict, Field, SecretStr, StringConstraints, ValidationError,
+from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, SecretStr, ValidationError,
                       field_validator, model_validator)
 
 from dsr.errors import ConfigError
@@ -47,8 +48,47 @@ ENV_GRAPH = "CHRONAV_GRAPH"
 DEFAULT_ROUTER = "tcp/127.0.0.1:7447"
 DEFAULT_GRAPH = "chronav"
 
+ENDPOINT_FORM = "PROTOCOL/HOST:PORT, e.g. tcp/127.0.0.1:7447"
+#: protocols whose address is HOST:PORT (the others, e.g. unixsock-stream/PATH, are passed as given)
+_HOST_PORT_PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws")
+_ENDPOINT = re.compile(r"^(?P<protocol>[a-z][a-z0-9+\-]*)/(?P<address>[^\s?#]+)(?P<extra>[?#]\S*)?$")
+_HOST_PORT = re.compile(r"^(?P<host>\[[0-9A-Fa-f:.]+\]|[^\s:\[\]/]+):(?P<port>[0-9]{1,5})$")
+_RUST_SOURCE = re.compile(r"\s+at\s+\S+\.rs:\d+(?::\d+)?\.?")
+
+
+def check_endpoint(text: str) -> str:
+    """A Zenoh endpoint as a person types it, or ConfigError saying the expected form.
+
+    Why our own check: Zenoh accepts a malformed endpoint at configuration time and fails only
+    when opening, with a generic "Unable to connect"; pydantic's pattern error quotes a regex."""
+    match = _ENDPOINT.match(text.strip()) if isinstance(text, str) else None
+    if match is None:
+        raise ConfigError(f"{text!r} is not an endpoint; expected {ENDPOINT_FORM}")
+    protocol, address = match["protocol"], match["address"]
+    if protocol in _HOST_PORT_PROTOCOLS:
+        host_port = _HOST_PORT.match(address)
+        if host_port is None:
+            raise ConfigError(f"{text!r}: expected {protocol}/HOST:PORT, e.g. {protocol}/127.0.0.1:7447")
+        if not 1 <= int(host_port["port"]) <= 65535:
+            raise ConfigError(f"{text!r}: port {host_port['port']} is not between 1 and 65535")
+    return text.strip()
+
+
+def _endpoint(text: str) -> str:
+    try:
+        return check_endpoint(text)
+    except ConfigError as exc:
+        raise ValueError(str(exc)) from None
+
+
 #: "<protocol>/<address>", e.g. tcp/127.0.0.1:7447, tcp/[::1]:7447, tls/host:7447
-Endpoint = Annotated[str, StringConstraints(pattern=r"^[a-z][a-z0-9+\-]*/\S+$")]
+Endpoint = Annotated[str, AfterValidator(_endpoint)]
+
+
+def clean_zenoh_error(error: object) -> str:
+    """Zenoh's message without the Rust source location it appends (`at /root/.cargo/...rs:447`):
+    the path means nothing to a user and changes with every Zenoh build."""
+    return _RUST_SOURCE.sub("", str(error)).strip().rstrip(".!") or "failed"
 
 #: settings field -> environment variable holding a file path (checked to exist)
 _PATH_VARS = {"config_file": ENV_CONFIG, "credentials_file": ENV_CREDENTIALS, "acl_file": ENV_ACL,
@@ -83,6 +123,9 @@ class ZenohSettings(BaseModel):
     tls_certificate: Path | None = None
     tls_private_key: Path | None = None
     mtls: bool = False
+    #: bound on the Zenoh handshake when opening a link, in ms; None = Zenoh's default (10 s:
+    #: a listener that is not a Zenoh router holds a client that long)
+    open_timeout_ms: int | None = Field(default=None, ge=1, le=3_600_000)
 
     @field_validator("config_file", "credentials_file", "acl_file", "tls_root_ca",
                      "tls_certificate", "tls_private_key")
@@ -114,9 +157,12 @@ class ZenohSettings(BaseModel):
             name = str(first["loc"][0]) if first["loc"] else ""
             var = sources.get(name) or ", ".join(sorted(set(sources.values()))) or name
             shown = "***" if name == "password" else first.get("input")
+            message = str(first["msg"]).removeprefix("Value error, ")
             if not first["loc"]:       # a model-level rule (pairs of settings)
-                raise ConfigError(f"{var}: {first['msg']}") from None
-            raise ConfigError(f"{var}: {first['msg']} (got {shown!r})") from None
+                raise ConfigError(f"{var}: {message}") from None
+            if first["type"] == "value_error":   # our own checks already quote the value
+                raise ConfigError(f"{var}: {message}") from None
+            raise ConfigError(f"{var}: {message} (got {shown!r})") from None
 
     def to_zenoh_config(self) -> zenoh.Config:
         """Build the zenoh.Config; a config file is the base, explicit fields override it."""
@@ -147,6 +193,10 @@ class ZenohSettings(BaseModel):
         if "lease_ms" in explicit:
             entries.append(("transport/link/tx/lease", self.lease_ms))
         entries.append(("scouting/multicast/enabled", self.multicast))
+        if self.open_timeout_ms is not None:
+            # The handshake bound only: connect/timeout_ms would also make a refused connection
+            # retry until the timeout instead of failing at once.
+            entries.append(("transport/unicast/open_timeout", self.open_timeout_ms))
         entries += self._security_entries()
         for key, value in entries:
             try:

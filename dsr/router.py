@@ -19,7 +19,10 @@ import threading
 from collections.abc import Mapping
 from pathlib import Path
 
-from dsr.config import (DEFAULT_ROUTER, ENV_CONNECT, ENV_LISTEN, ENV_MODE, ZenohSettings)
+from pydantic import ValidationError
+
+from dsr.config import (DEFAULT_ROUTER, ENV_CONNECT, ENV_LISTEN, ENV_MODE, ZenohSettings,
+                        check_endpoint, clean_zenoh_error)
 from dsr.errors import ConfigError
 from dsr.process import exit_on_sigterm
 
@@ -63,10 +66,21 @@ def router_settings(args: argparse.Namespace, environ: Mapping[str, str] | None 
                  "acl_file": args.acl, "tls_certificate": args.tls_cert,
                  "tls_private_key": args.tls_key, "tls_root_ca": args.tls_root_ca,
                  "mtls": args.mtls or None}
+    for flag, endpoints in (("--listen", args.listen), ("--connect", args.connect)):
+        for endpoint in endpoints or ():
+            try:
+                check_endpoint(endpoint)
+            except ConfigError as exc:
+                raise ConfigError(f"{flag} {exc}") from None
     fields.update({k: v for k, v in overrides.items() if v is not None})
     if "listen" not in fields and fields.get("config_file") is None:
         fields["listen"] = [DEFAULT_ROUTER]
-    return ZenohSettings(**fields)
+    try:
+        return ZenohSettings(**fields)
+    except ValidationError as exc:     # one line naming the setting, not pydantic's report
+        first = exc.errors()[0]
+        where = f"--{str(first['loc'][0]).replace('_', '-')}: " if first["loc"] else ""
+        raise ConfigError(where + str(first["msg"]).removeprefix("Value error, ")) from None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -82,7 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         session = zenoh.open(conf)
     except zenoh.ZError as exc:
-        print(f"dsr.router: cannot open router ({settings.describe()}): {exc}", file=sys.stderr)
+        print(f"dsr.router: cannot open router ({settings.describe()}): {clean_zenoh_error(exc)}",
+              file=sys.stderr)
         return 1
     try:
         print(f"dsr.router ready on {','.join(settings.listen) or '(config file endpoints)'}"

@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from dsr import wire
-from dsr.config import ZenohSettings, graph_name_from_env
+from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
 from dsr.policy import AllowAll, WritePolicy
@@ -102,7 +102,8 @@ class Replica:
         try:
             self.session = zenoh.open(conf)
         except zenoh.ZError as exc:
-            raise TransportError(f"cannot open Zenoh session ({self.settings.describe()}): {exc}; "
+            raise TransportError(f"cannot open Zenoh session ({self.settings.describe()}): "
+                                 f"{clean_zenoh_error(exc)}; "
                                  "is a router running (python -m dsr.router --listen ...)?"
                                  ) from None
         register_atexit = getattr(threading, "_register_atexit", None)

@@ -46,13 +46,16 @@ class ProcessGroup:
         self.procs: list[subprocess.Popen[bytes]] = []
 
     def spawn(self, args: Sequence[str], env: dict[str, str] | None = None,
-              log_path: Path | None = None) -> subprocess.Popen[bytes]:
-        """Run ``python args...`` from the repo root; output goes to ``log_path`` (or is discarded)."""
+              log_path: Path | None = None, cwd: Path | None = None) -> subprocess.Popen[bytes]:
+        """Run ``python args...`` from the repo root (or ``cwd``, with the repo on PYTHONPATH);
+        output goes to ``log_path`` (or is discarded)."""
         full_env = dict(os.environ)
         full_env.setdefault("RERUN", "off")
         full_env.update(env or {})
+        if cwd is not None:
+            full_env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO_ROOT), full_env.get("PYTHONPATH")) if p)
         out = open(log_path, "wb") if log_path else subprocess.DEVNULL  # noqa: SIM115
-        proc = subprocess.Popen([sys.executable, *args], cwd=REPO_ROOT, env=full_env,
+        proc = subprocess.Popen([sys.executable, *args], cwd=cwd or REPO_ROOT, env=full_env,
                                 stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
         self.procs.append(proc)
         return proc

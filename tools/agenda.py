@@ -7,9 +7,11 @@ insert ``agenda_request/<uuid>`` with ``change`` (JSON, agents/agenda/changes.py
 ``state="pending"``; the agenda agent applies the whole change or nothing and sets ``state`` to
 ``accepted``/``refused`` with a ``message``; the tool prints it and deletes the request node.
 
-Finding the system, first match wins: ``--connect``/``--graph``; ``--run DIR|latest`` (the
-``connect.json`` that `chronav launch` writes in its run directory); the environment
-(``CHRONAV_ZENOH_CONNECT``, ``CHRONAV_GRAPH``), as set for the agents themselves.
+Finding the system, first match wins (tools/connection.py): ``--connect``/``--graph``;
+``--run DIR|ID|latest`` (the ``connect.json`` that `chronav launch` writes in its run directory,
+with the run's credentials: changes are sent as the run's tool identity, which may write only as
+an ``agenda_tool-*`` agent; ``list`` and ``watch`` join as its read-only reader); the environment
+(``CHRONAV_ZENOH_*``, ``CHRONAV_GRAPH``), as set for the agents themselves.
 
 Exit codes, so scripts can tell "fix the change" from "fix the connection":
 0 accepted (or listed/watched); 1 refused, by the agenda agent or already here because the
@@ -26,25 +28,22 @@ import sys
 import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import ExitStack, contextmanager, suppress
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
 import typer
 
-from tools.supervisor import REPO_ROOT
+from tools.connection import ConnectionProblem, Target, open_replica, require_system, resolve_target
+from tools.runs import TOOL_AGENT_PREFIX, Role
 
-RUNS_DIR = REPO_ROOT / "recordings"
-CONNECT_FILE = "connect.json"
 AGENDA_AGENT = "agenda"
-TOOL_AGENT_PREFIX = "agenda_tool"
 REQUEST_TYPE = "agenda_request"
 ANSWERED = ("accepted", "refused")
 DEFAULT_TIMEOUT_S = 10.0
+SYNC_TIMEOUT_S = 5.0
 POLL_S = 0.02
-HOW_TO_FIND = ("start one with `chronav launch SCENE`, then point this tool at it with --run latest, "
-               "--run recordings/<run dir>, or --connect tcp/HOST:PORT --graph <run id>")
 
 agenda_app = typer.Typer(help="List, change and watch the agenda of a running chronav system.",
                          no_args_is_help=True)
@@ -72,115 +71,6 @@ class NoSystemError(AgendaToolError):
     """No system to talk to (unreachable router, empty graph, no agenda agent, no answer)."""
 
     exit_code = 2
-
-
-# ---------------------------------------------------------------------------------------------
-# Where the system is.
-# ---------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class SystemAddress:
-    """Router endpoints and graph name, plus where they came from (for messages that help)."""
-
-    connect: tuple[str, ...]
-    graph: str
-    origin: str
-    run_dir: Path | None = None
-
-    def describe(self) -> str:
-        return f"graph {self.graph!r} via {','.join(self.connect)} ({self.origin})"
-
-
-def _pid_alive(pid: object) -> bool:
-    if not isinstance(pid, int) or pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def _read_json(path: Path) -> dict[str, Any] | None:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
-
-
-def run_is_alive(run_dir: Path) -> bool:
-    """A run is alive while it has not written result.json and its router (or launcher) runs."""
-    if (run_dir / "result.json").exists():
-        return False
-    pids = _read_json(run_dir / "pids.json") or {}
-    connect = _read_json(run_dir / CONNECT_FILE) or {}
-    return _pid_alive(pids.get("router")) or _pid_alive(connect.get("launcher_pid"))
-
-
-def latest_live_run(runs_dir: Path) -> Path:
-    """The newest run directory (by its connect.json) whose processes are alive."""
-    candidates = sorted((p.parent for p in runs_dir.glob(f"*/{CONNECT_FILE}")),
-                        key=lambda d: (d / CONNECT_FILE).stat().st_mtime, reverse=True)
-    for run_dir in candidates:
-        if run_is_alive(run_dir):
-            return run_dir
-    raise NoSystemError(f"no live run under {runs_dir} ({len(candidates)} run director"
-                        f"{'y' if len(candidates) == 1 else 'ies'} with {CONNECT_FILE}, none running); "
-                        + HOW_TO_FIND)
-
-
-def find_run_dir(run: str, runs_dir: Path) -> Path:
-    """``latest``, a run directory path, or a run id under ``runs_dir``."""
-    if run == "latest":
-        return latest_live_run(runs_dir)
-    for candidate in (Path(run), runs_dir / run):
-        if candidate.is_dir():
-            return candidate
-    raise NoSystemError(f"--run {run!r}: no such run directory (looked at {Path(run)} and {runs_dir / run}); "
-                        "use --run latest or the directory `chronav launch` printed")
-
-
-def address_from_run(run_dir: Path) -> SystemAddress:
-    data = _read_json(run_dir / CONNECT_FILE)
-    if data is None:
-        if (run_dir / "result.json").exists():
-            raise NoSystemError(f"run {run_dir} has finished (it has result.json); nothing is running there")
-        raise NoSystemError(f"{run_dir / CONNECT_FILE} is missing or unreadable; is {run_dir} a run directory "
-                            "of `chronav launch`?")
-    endpoint, graph = data.get("endpoint"), data.get("graph")
-    if not isinstance(endpoint, str) or not isinstance(graph, str):
-        raise NoSystemError(f"{run_dir / CONNECT_FILE}: expected string keys 'endpoint' and 'graph', got {data}")
-    if (run_dir / "result.json").exists():
-        raise NoSystemError(f"run {run_dir} has finished (it has result.json); nothing is running there")
-    return SystemAddress((endpoint,), graph, f"from {run_dir / CONNECT_FILE}", run_dir)
-
-
-def resolve_address(connect: list[str] | None, graph: str | None, run: str | None, *,
-                    environ: Mapping[str, str] | None = None, runs_dir: Path | None = None) -> SystemAddress:
-    """Explicit options beat --run, which beats the environment the agents use."""
-    from dsr.config import DEFAULT_ROUTER, ENV_CONNECT, ENV_GRAPH, graph_name_from_env
-    from dsr.errors import ConfigError
-
-    env = os.environ if environ is None else environ
-    if run:
-        base = address_from_run(find_run_dir(run, runs_dir or RUNS_DIR))
-    else:
-        try:
-            env_graph = graph_name_from_env(env)
-        except ConfigError as exc:
-            raise NoSystemError(str(exc)) from None
-        env_connect = [e.strip() for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
-        origin = (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
-            f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
-        base = SystemAddress(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
-    if connect or graph:
-        base = SystemAddress(tuple(connect) if connect else base.connect, graph or base.graph,
-                             "from --connect/--graph" if connect and graph else
-                             f"{'--connect' if connect else '--graph'} over {base.origin}", base.run_dir)
-    return base
 
 
 # ---------------------------------------------------------------------------------------------
@@ -305,58 +195,29 @@ def requested_by() -> str:
     return f"chronav agenda ({user}, pid {os.getpid()})"
 
 
-def members(graph: Any, timeout_s: float = 2.0) -> list[str] | None:
-    """Agents with a writable replica in the graph (liveliness tokens); None when offline."""
-    from dsr import wire
-
-    replica = getattr(graph, "replica", None)
-    session = getattr(replica, "session", None)
-    if session is None:
-        return None
-    replies = session.liveliness().get(wire.member_key(graph.graph_name, "*"), timeout=timeout_s)
-    return sorted({wire.last_chunk(str(r.ok.key_expr)) for r in replies if r.ok is not None})
-
-
-def check_system(graph: Any, address: SystemAddress, *, need_agenda_agent: bool) -> None:
-    """Refuse to go on (exit 2) when nobody is there, saying what to check."""
-    present = members(graph)
-    others = [m for m in present or [] if m != graph.agent]
-    if present is not None and not others and len(graph) == 0:
-        raise NoSystemError(f"joined {address.describe()} but nobody is there: no chronav system uses "
-                            "that graph name (it is the run id, see the run's connect.json); " + HOW_TO_FIND)
-    if need_agenda_agent and present is not None and AGENDA_AGENT not in present:
-        where = f"; see {address.run_dir / 'logs' / 'agenda.log'}" if address.run_dir else ""
-        raise NoSystemError(f"the agenda agent is not running in {address.describe()} (members: "
-                            f"{', '.join(others) or 'none'}){where}")
+def find_system(connect: list[str] | None, graph: str | None, run: str | None, role: Role) -> Target:
+    """Where the system is (see tools/connection.py); problems exit 2."""
+    try:
+        return resolve_target(connect, graph, run, role=role)
+    except ConnectionProblem as exc:
+        raise NoSystemError(str(exc)) from None
 
 
 @contextmanager
-def open_system(address: SystemAddress, *, read_only: bool, need_agenda_agent: bool,
-                sync_timeout_s: float = 5.0) -> Iterator[Any]:
-    """A replica of the running graph for the block; connection problems become NoSystemError."""
-    from dsr import DSRError, ZenohSettings, join
-    from dsr.transport import TransportError
-
+def open_system(target: Target, *, read_only: bool, need_agenda_agent: bool,
+                timeout_s: float = SYNC_TIMEOUT_S) -> Iterator[Any]:
+    """A replica of the running graph for the block; refuses (exit 2) when nobody is there or,
+    for a change, when the agenda agent is missing."""
     try:
-        base = ZenohSettings.from_env()
-        settings = ZenohSettings(**{**base.model_dump(exclude_unset=True), "mode": "client",
-                                    "connect": list(address.connect)})
-    except (DSRError, ValueError) as exc:
-        raise NoSystemError(f"bad connection settings ({address.describe()}): {exc}") from None
-    stack = ExitStack()
-    try:
-        graph = stack.enter_context(join(tool_agent_name(), graph=address.graph, settings=settings,
-                                         read_only=read_only, sync_timeout=sync_timeout_s))
-    except TransportError:
-        ended = (f"run {address.run_dir.name} is no longer running; "
-                 if address.run_dir is not None and not run_is_alive(address.run_dir) else "")
-        raise NoSystemError(f"cannot reach a chronav system at {','.join(address.connect)} ({address.origin}); "
-                            + ended + HOW_TO_FIND) from None
-    except DSRError as exc:
-        raise NoSystemError(f"cannot join {address.describe()}: {exc}") from None
-    with stack:
-        check_system(graph, address, need_agenda_agent=need_agenda_agent)
-        yield graph
+        with open_replica(target, agent=tool_agent_name(), read_only=read_only, timeout_s=timeout_s) as graph:
+            others = require_system(graph, target)
+            if need_agenda_agent and graph.replica is not None and AGENDA_AGENT not in others:
+                where = f"; see {target.run_dir / 'logs' / 'agenda.log'}" if target.run_dir else ""
+                raise NoSystemError(f"the agenda agent is not running in {target.describe()} (members: "
+                                    f"{', '.join(others) or 'none'}){where}")
+            yield graph
+    except ConnectionProblem as exc:
+        raise NoSystemError(str(exc)) from None
 
 
 @dataclass(frozen=True)
@@ -583,7 +444,8 @@ class Connection:
 
 CONNECT_HELP = "Zenoh router endpoint, e.g. tcp/127.0.0.1:7447 (default $CHRONAV_ZENOH_CONNECT)."
 GRAPH_HELP = "Graph name = the run id (default $CHRONAV_GRAPH)."
-RUN_HELP = "A run of `chronav launch`: 'latest', a run directory, or a run id under recordings/."
+RUN_HELP = ("A run of `chronav launch`: 'latest' (your newest live run), a run directory, or a run id under "
+            "./recordings ($CHRONAV_RUNS).")
 TIMEOUT_HELP = "Seconds to wait for the agenda agent's answer."
 
 
@@ -600,7 +462,7 @@ def _change(command: str, build: Callable[[], dict[str, Any]], conn: Connection,
     exit_on_sigterm()
     try:
         change = build()
-        address = resolve_address(conn.connect, conn.graph, conn.run)
+        address = find_system(conn.connect, conn.graph, conn.run, "tool")
         with open_system(address, read_only=False, need_agenda_agent=True) as graph:
             answer = submit_change(graph, change, timeout_s=timeout)
     except AgendaToolError as exc:
@@ -701,7 +563,7 @@ def list_command(
 
     exit_on_sigterm()
     try:
-        address = resolve_address(connect, graph, run)
+        address = find_system(connect, graph, run, "reader")
         with open_system(address, read_only=True, need_agenda_agent=False) as replica:
             data = snapshot(replica)
     except AgendaToolError as exc:
@@ -728,7 +590,7 @@ def watch_command(
 
     exit_on_sigterm()
     try:
-        address = resolve_address(connect, graph, run)
+        address = find_system(connect, graph, run, "reader")
         with open_system(address, read_only=True, need_agenda_agent=False) as replica:
             watcher = ChangeWatcher(replica, r_step=r_step, as_json=as_json, out=sys.stdout, limit=count)
             watcher.connect()

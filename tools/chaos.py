@@ -91,7 +91,6 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
     """Launch SCENE, inject the faults (``schedule``, else a random one from ``seed``), report."""
     from agents.world.scene_world import load_world
     from tools.launch import run_system
-    from tools.supervisor import REPO_ROOT
 
     loaded = load_world(scene)
     if schedule is None:
@@ -99,7 +98,7 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
     chaos = ChaosRun(schedule, log=log)
     kills = sum(1 for f in schedule if f.action == "kill")
     try:
-        result = run_system(loaded.path, rate=rate, runs_dir=runs_dir or REPO_ROOT / "recordings",
+        result = run_system(loaded.path, rate=rate, runs_dir=runs_dir,
                             timeout_s=timeout_s, record=record, restart_limit=kills + 3, on_tick=chaos.on_tick)
     finally:
         chaos.finish()
@@ -154,12 +153,14 @@ def register(app: typer.Typer) -> None:
               schedule: Path = typer.Option(None, help="JSON list of faults to run instead of a random schedule"),
               timeout: float = typer.Option(300.0, help="wall-clock limit of the run"),
               no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
-              runs_dir: Path = typer.Option(None, help="where the run's directory goes (default: recordings/)"),
+              runs_dir: Path = typer.Option(None, help="where the run's directory goes "
+                                            "(default: ./recordings or $CHRONAV_RUNS)"),
               as_json: bool = typer.Option(False, "--json", help="print the summary as one JSON object")) -> None:
         """Launch SCENE under a randomized fault schedule; report faults, missions, convergence, lost writes."""
         from rich.console import Console
 
         from scenes.yamlio import SourceError
+        from tools.launch import LaunchError
 
         err = Console(stderr=True)
         try:
@@ -167,7 +168,7 @@ def register(app: typer.Typer) -> None:
             report = run_chaos(scene, planned, seed=seed, faults=faults, duration_s=duration, timeout_s=timeout,
                                record=not no_record, runs_dir=runs_dir,
                                log=lambda text: err.print(f"[chaos] {text}", highlight=False))
-        except (SourceError, ChaosError) as exc:
+        except (SourceError, ChaosError, LaunchError) as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         summary = report.summary()

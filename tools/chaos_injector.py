@@ -15,6 +15,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import Any
 
 from tools.chaos_checks import describe_divergence, probe_replicas
@@ -111,11 +112,14 @@ class ChaosRun:
     # --------------------------------------------------------------- injector thread
     def _main(self) -> None:
         from dsr import DSRGraph
-        from dsr.config import ZenohSettings
         from dsr.transport import Replica
+        from tools.connection import Target, settings_for
+        from tools.runs import read_connect_file
 
         run = self.status["run"]
-        settings = ZenohSettings.from_env({"CHRONAV_ZENOH_CONNECT": run["endpoint"], "CHRONAV_ZENOH_MODE": "client"})
+        info = read_connect_file(Path(run["run_dir"]))   # the run's tool identity: writes as agenda_tool-*
+        settings = settings_for(Target((info.endpoint,), info.graph, f"run {info.run_id}", info.run_dir,
+                                       info.identity("tool")))
         self.graph = DSRGraph(CHAOS_AGENT, graph=run["graph"])
         self._replica = Replica(self.graph, settings)
         try:

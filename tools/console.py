@@ -35,14 +35,21 @@ def _status_table(status: dict[str, Any]) -> Table:
 
 
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
-                      as_json: bool, with_report: bool) -> int:
-    """Run the system with a progress display; print the result (and the metrics report); exit code."""
+                      as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
+                      startup_timeout_s: float | None = None) -> int:
+    """Run the system with a progress display; print the result (and the metrics report); exit code.
+
+    Exit codes: 0 every mission done; 1 a mission not done, a timeout or an agent given up;
+    2 the run could not start (bad scene, option or environment); 130 interrupted (Ctrl-C)."""
+    from dsr.errors import DSRError
     from scenes.yamlio import SourceError
-    from tools.launch import run_system
+    from tools.launch import LaunchError, run_system
 
     err = Console(stderr=True)
     interactive = sys.stderr.isatty() and not as_json
     last_print = {"t": 0.0}
+    limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s))
+              if v is not None}
 
     def plain_tick(status: dict[str, Any]) -> None:
         if time.monotonic() - last_print["t"] >= 5.0:
@@ -57,44 +64,77 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         if interactive:
             with Live(_status_table({}), console=err, refresh_per_second=4) as live:
                 result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
-                                    restart_limit=restart_limit, on_tick=lambda s: live.update(_status_table(s)))
+                                    restart_limit=restart_limit, on_tick=lambda s: live.update(_status_table(s)),
+                                    **limits)
         else:
             result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
-                                restart_limit=restart_limit, on_tick=None if as_json else plain_tick)
-    except SourceError as exc:
-        err.print(f"error: {exc}", highlight=False, markup=False)
+                                restart_limit=restart_limit, on_tick=None if as_json else plain_tick, **limits)
+    except (SourceError, LaunchError, DSRError) as exc:
+        err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         return 2
+    except KeyboardInterrupt:
+        err.print("interrupted before the run started; nothing was launched", highlight=False, soft_wrap=True)
+        return 130
 
     report: dict[str, Any] | None = None
-    if with_report:
+    if with_report and not result.interrupted:
         from tools.report import build_report, render_report
 
         report = result.metrics or build_report(result.scene_path or result.scene, result.run_dir, result.missions)
         if not as_json:
             render_report(report, Console())
     if as_json:
-        print(json.dumps({"scene": result.scene, "ok": result.ok, "missions": result.missions,
-                          "events": result.events, "restarts": result.restarts, "wall_s": round(result.wall_s, 2),
-                          "run_dir": str(result.run_dir), "rrd": str(result.rrd_path) if result.rrd_path else None,
+        print(json.dumps({"scene": result.scene, "ok": result.ok, "outcome": outcome(result),
+                          "missions": result.missions, "events": result.events, "restarts": result.restarts,
+                          "wall_s": round(result.wall_s, 2), "interrupted": result.interrupted,
+                          "timed_out": result.timed_out, "error": result.error, "run_dir": str(result.run_dir),
+                          "rrd": str(result.rrd_path) if result.rrd_path else None,
                           **({"report": report} if report is not None else {})}))
     else:
-        out = Console()
-        table = Table(title=f"Missions of {result.scene}")
-        for column in ("mission", "state", "started", "finished", "reason"):
-            table.add_column(column)
-        for mid, m in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
-            table.add_row(mid, str(m.get("state")),
-                          format_clock(float(m["started_s"])) if "started_s" in m else "-",
-                          format_clock(float(m["finished_s"])) if "finished_s" in m else "-",
-                          str(m.get("reason", "")))
-        out.print(table)
-        for event in result.events:
-            out.print(f"[supervisor] {event}", highlight=False, markup=False)
-        out.print(f"run directory: {result.run_dir}", highlight=False)
-        if result.rrd_path:
-            out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", highlight=False)
-        out.print(f"{'OK' if result.ok else 'FAILED'}: {sum(m.get('state') == 'done' for m in result.missions.values())}"
-                  f"/{len(result.missions)} missions done in {result.wall_s:.1f} s wall", highlight=False)
+        print_result(result, Console())
     if result.interrupted:
         return 130
     return 0 if result.ok else 1
+
+
+def outcome(result: Any) -> str:
+    """One word for how the run ended: ok, interrupted, timed_out, error or failed."""
+    if result.interrupted:
+        return "interrupted"
+    if result.timed_out:
+        return "timed_out"
+    if result.error is not None:
+        return "error"
+    return "ok" if result.ok else "failed"
+
+
+def print_result(result: Any, out: Console) -> None:
+    """The missions table (every mission of the scene, started or not), supervisor events, where
+    the run and its recording are, and one closing line saying how the run ended."""
+    table = Table(title=f"Missions of {result.scene}")
+    for column in ("mission", "state", "started", "finished", "reason"):
+        table.add_column(column)
+    for mid, m in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
+        table.add_row(mid, str(m.get("state")),
+                      format_clock(float(m["started_s"])) if "started_s" in m else "-",
+                      format_clock(float(m["finished_s"])) if "finished_s" in m else "-",
+                      str(m.get("reason", "")))
+    out.print(table)
+    line = {"highlight": False, "markup": False, "soft_wrap": True}    # paths and messages stay whole
+    for event in result.events:
+        out.print(f"[supervisor] {event}", **line)
+    if result.error:
+        out.print(f"error: {result.error}", **line)
+    out.print(f"run directory: {result.run_dir}", **line)
+    if result.rrd_path:
+        out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", **line)
+    done = f"{result.missions_done}/{len(result.missions)} missions done"
+    wall = f"{result.wall_s:.1f} s wall"
+    closing = {
+        "interrupted": f"INTERRUPTED (Ctrl-C or SIGTERM) after {wall}: {done}; agents stopped",
+        "timed_out": f"TIMED OUT after {wall} (--timeout): {done}",
+        "error": f"FAILED: {done} in {wall}",
+        "ok": f"OK: {done} in {wall}",
+        "failed": f"FAILED: {done} in {wall}",
+    }[outcome(result)]
+    out.print(closing, **line)

@@ -96,33 +96,37 @@ def _short(attrs: dict[str, Any]) -> str:
 def dump(
     json_output: bool = typer.Option(False, "--json", help="Print JSON instead of tables."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Keep printing changes live."),
-    graph_name: str = typer.Option("", "--graph", help="Graph name (default $CHRONAV_GRAPH or "
-                                   "'chronav')."),
-    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) to connect to "
-                                      "(default $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
+                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
+    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
+                                   "$CHRONAV_GRAPH or 'chronav')."),
+    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
+                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
     duration: float = typer.Option(0.0, "--duration", help="With --follow: stop after this many "
                                    "seconds (0 = until Ctrl-C)."),
-    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the state."),
+    timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
+                                  "again for the state."),
 ) -> None:
     """Join a running graph read-only and print it (table or JSON), or follow changes live."""
     import orjson
 
-    from dsr import SIGNALS, DSRError, ZenohSettings, graph_name_from_env, join
+    from dsr import SIGNALS
     from dsr.process import exit_on_sigterm
+    from tools.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
+                                  resolve_target)
 
     try:
-        settings = ZenohSettings.from_env()
-        if connect:
-            settings = ZenohSettings(**{**settings.model_dump(exclude_unset=True),
-                                        "connect": connect})
-        name = graph_name or graph_name_from_env()
-    except (DSRError, ValueError) as exc:
+        check_timeout(timeout)
+        target = resolve_target(connect, graph_name, run, role="reader")
+    except ConnectionProblem as exc:
         typer.echo(f"chronav dsr dump: {exc}", err=True)
         raise typer.Exit(2) from None
     exit_on_sigterm()
+    name = target.graph
     try:
-        with join(f"dump-{os.getpid()}", graph=name, settings=settings,
-                  read_only=True, sync_timeout=timeout) as graph:
+        with open_replica(target, agent=f"dump-{os.getpid()}", read_only=True,
+                          timeout_s=timeout) as graph:
+            require_system(graph, target)
             document = {"graph": name, **graph.to_document(),
                         "stats": graph.replica.stats.as_dict()}
             if json_output:
@@ -144,7 +148,7 @@ def dump(
             deadline = time.monotonic() + duration if duration > 0 else None
             while deadline is None or time.monotonic() < deadline:
                 graph.dispatch(timeout=0.2)
-    except DSRError as exc:
+    except ConnectionProblem as exc:
         typer.echo(f"chronav dsr dump: {exc}", err=True)
         raise typer.Exit(1) from None
     except KeyboardInterrupt:

@@ -3,11 +3,21 @@
 Order matters (see shared notes): the Zenoh router first (agents in client mode fail at once if
 no router listens), then the agents; the launcher joins the graph itself only to watch missions,
 clock and health.  At the end the per-agent recordings are merged into ONE ``.rrd``.
+
+A run belongs to the user who started it (tools/runs.py): its directory goes under
+``./recordings`` of the current directory (or ``$CHRONAV_RUNS``), its router requires the run's
+own credentials (one Zenoh user per agent, an ACL giving each agent's key space to that user
+alone), and ``connect.json`` (mode 0600) tells the owner's tools how to join.
+
+However the run ends (missions done, timeout, Ctrl-C, no trajectory at all, an agent that gave
+up), the agents are stopped, the recordings merged, ``result.json`` written and a result
+returned: the loop's exits are all ``break``s, and the finishing work sits in ``finally``.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import socket
@@ -18,15 +28,30 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from tools.supervisor import REPO_ROOT, Supervisor
+from tools.runs import prepare_run_security, runs_dir as default_runs_dir, write_connect_file
+from tools.supervisor import ProgressWatch, Supervisor
 
 AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
                            "executive")
 DEFAULT_SCENE = "icra_usecase"
 TERMINAL_STATES = ("done", "failed")
+NOT_STARTED = "not started"
+#: an agent whose heartbeat stops for this long (wall s) is killed and restarted
+DEFAULT_HANG_TIMEOUT_S = 60.0
+#: time from an agent's (re)start to its first heartbeat (imports, numba compilation, joining)
+DEFAULT_STARTUP_TIMEOUT_S = 180.0
+#: Zenoh variables a run sets itself; inherited ones (a deployment's user, TLS files, endpoints)
+#: would point the agents somewhere else or clash with the run's credentials
+_RUN_OWNED_PREFIX = "CHRONAV_ZENOH_"
+_INHERITED_ZENOH = ("CHRONAV_ZENOH_LEASE_MS",)
+
+
+class LaunchError(Exception):
+    """The run could not be started as asked (bad option, unwritable directory, no router)."""
 
 
 @dataclass
@@ -42,11 +67,31 @@ class RunResult:
     timed_out: bool = False
     metrics: dict[str, object] = field(default_factory=dict)
     scene_path: Path | None = None
+    error: str | None = None
 
     @property
     def ok(self) -> bool:
-        return (not self.interrupted and not self.timed_out and bool(self.missions)
+        return (not self.interrupted and not self.timed_out and self.error is None and bool(self.missions)
                 and all(m.get("state") == "done" for m in self.missions.values()))
+
+    @property
+    def missions_done(self) -> int:
+        return sum(1 for m in self.missions.values() if m.get("state") == "done")
+
+
+def check_rate(rate: float | None, option: str = "--rate") -> float | None:
+    """--rate: sim seconds per wall second, finite and > 0 (None: the scene's own)."""
+    if rate is not None and (not math.isfinite(rate) or rate <= 0):
+        raise LaunchError(f"{option} {rate:g}: give the sim seconds per wall second as a number greater than 0 "
+                          "(e.g. 1 for real time, 60 for a minute a second), or leave it out for the scene's rate")
+    return rate
+
+
+def check_timeout(value: float, option: str = "--timeout") -> float:
+    """A wall-clock limit in seconds: finite and > 0."""
+    if not math.isfinite(value) or value <= 0:
+        raise LaunchError(f"{option} {value:g}: give a number of wall seconds greater than 0")
+    return value
 
 
 def free_port() -> int:
@@ -55,9 +100,9 @@ def free_port() -> int:
         return int(sock.getsockname()[1])
 
 
-def wait_for_port(port: int, timeout_s: float) -> bool:
+def wait_for_port(port: int, timeout_s: float, give_up: Callable[[], bool] = lambda: False) -> bool:
     deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and not give_up():
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
             if sock.connect_ex(("127.0.0.1", port)) == 0:
                 return True
@@ -76,8 +121,12 @@ def merge_recordings(parts: list[Path], out: Path) -> Path | None:
     """`rerun rrd optimize` = merge + compaction + footer; parts of killed agents are accepted."""
     if not parts:
         return None
-    result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(out)],
-                            capture_output=True, text=True, timeout=300, check=False)
+    try:
+        result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(out)],
+                                capture_output=True, text=True, timeout=300, check=False)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        sys.stderr.write(f"warning: could not merge recordings: {exc}\n")
+        return None
     if result.returncode != 0 or not out.exists():
         sys.stderr.write(f"warning: could not merge recordings: {result.stderr.strip()[-500:]}\n")
         return None
@@ -93,20 +142,46 @@ def write_pids(run_dir: Path, supervisor: Supervisor, router_pid: int | None) ->
     tmp.replace(run_dir / "pids.json")
 
 
-def write_connect_file(run_dir: Path, endpoint: str, graph: str) -> None:
-    """connect.json: how tools (`chronav agenda --run ...`) join this run while it is live."""
-    tmp = run_dir / "connect.json.tmp"
-    tmp.write_text(json.dumps({"endpoint": endpoint, "graph": graph, "launcher_pid": os.getpid()}))
-    tmp.replace(run_dir / "connect.json")
+def run_environment(endpoint: str, graph: str, run_id: str, record: bool) -> dict[str, str]:
+    """The agents' environment: the launcher's, minus any Zenoh identity or endpoint it holds."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith(_RUN_OWNED_PREFIX) or k in _INHERITED_ZENOH}
+    env.update({"CHRONAV_ZENOH_CONNECT": endpoint, "CHRONAV_ZENOH_MODE": "client", "CHRONAV_GRAPH": graph,
+                "CHRONAV_RECORDING_ID": run_id, "PYTHONUNBUFFERED": "1", "CHRONAV_EXIT_WITH_PARENT": "1"})
+    if not record:
+        env["RERUN"] = "off"
+    return env
 
 
-def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path = REPO_ROOT / "recordings",
+def scene_missions(spec: Any) -> dict[str, dict[str, object]]:
+    """Every mission of the scene as not started: what the table shows for missions the executive
+    never published (a run stopped in its first seconds)."""
+    from scenes.clock import parse_clock
+
+    return {m.id: {"mission_id": m.id, "goal": m.goal_text(), "time_s": parse_clock(m.time), "state": NOT_STARTED}
+            for m in spec.missions}
+
+
+def _make_run_dir(directory: Path, run_id: str) -> Path:
+    run_dir = directory / run_id
+    try:
+        run_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise LaunchError(f"cannot create the run directory {run_dir}: {exc.strerror}; run from a directory "
+                          "you can write to, or set CHRONAV_RUNS") from None
+    return run_dir
+
+
+def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path | None = None,
                timeout_s: float = 900.0, record: bool = True, restart_limit: int = 3,
+               hang_timeout_s: float = DEFAULT_HANG_TIMEOUT_S,
+               startup_timeout_s: float = DEFAULT_STARTUP_TIMEOUT_S,
                agent_options: dict[str, list[str]] | None = None,
                on_tick: Callable[[dict[str, object]], None] | None = None) -> RunResult:
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C."""
+    from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
-    from dsr import join
+    from dsr import DSRError, join
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
     from agents.world.scene_world import load_world
@@ -114,30 +189,33 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     from agents.runtime.drawing.layout import blueprint, world_frame
     from agents.runtime.drawing.dsr_graph import GraphLogger
 
+    check_rate(rate)
+    check_timeout(timeout_s)
+    check_timeout(hang_timeout_s, "--hang-timeout")
+    check_timeout(startup_timeout_s, "--startup-timeout")
     loaded = load_world(scene)
     spec = loaded.scene
     policy = policy_from_env()  # fail before any process starts if the write policy is broken
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
-    run_dir = runs_dir / run_id
-    run_dir.mkdir(parents=True, exist_ok=True)
+    graph_name = run_id.replace(".", "_")
+    run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    env = {**os.environ, "CHRONAV_ZENOH_CONNECT": endpoint, "CHRONAV_ZENOH_MODE": "client",
-           "CHRONAV_GRAPH": run_id.replace(".", "_"), "CHRONAV_RECORDING_ID": run_id,
-           "PYTHONUNBUFFERED": "1", "CHRONAV_EXIT_WITH_PARENT": "1"}
-    if not record:
-        env["RERUN"] = "off"
+    security = prepare_run_security(run_dir, graph_name, AGENTS)
+    env = run_environment(endpoint, graph_name, run_id, record)
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit)
-    router = supervisor.add("router", "dsr.router", ["--listen", endpoint])
+    router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]
     for name in AGENTS:
-        options = [*(["-o", f"rate={rate}"] if rate and name == "sim_robot" else [])]
+        options = [*(["-o", f"rate={rate}"] if rate is not None and name == "sim_robot" else [])]
         for opt in (agent_options or {}).get(name, []):
             options += ["-o", opt]
-        supervisor.add(name, f"agents.{name}", [*common, *options])
+        supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
+    watch = ProgressWatch(hang_s=hang_timeout_s, startup_s=startup_timeout_s)
 
     started = time.monotonic()
     interrupted = timed_out = False
+    error: str | None = None
     previous_sigint = signal.getsignal(signal.SIGINT)
     stop_requested = {"flag": False}
 
@@ -149,70 +227,113 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path =
     missions: dict[str, dict[str, object]] = {}
     metrics: dict[str, object] = {}
     recorder = Recorder("launcher", run_dir if record else None, run_id)
-    recorder.send_blueprint(blueprint())
-    world_frame(recorder)
-    log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
+    rrd_path: Path | None = None
     try:
+        recorder.send_blueprint(blueprint())
+        world_frame(recorder)
+        log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
         supervisor.start("router")
-        if not wait_for_port(port, 15):
-            raise RuntimeError(f"the Zenoh router did not listen on {endpoint}; see {router.log_path}")
-        write_connect_file(run_dir, endpoint, env["CHRONAV_GRAPH"])
-        for name in AGENTS:
-            supervisor.start(name)
-        write_pids(run_dir, supervisor, router.pid)
-        settings = ZenohSettings.from_env(env)
-        # Read-only: the launcher only watches; it enforces the agents' write policy too.
-        with join(agent="launcher", graph=env["CHRONAV_GRAPH"], settings=settings, read_only=True,
-                  policy=policy) as graph:
-            graph_logger = GraphLogger(recorder)
-            while True:
-                graph.dispatch(timeout=0.1)
-                if supervisor.poll():
-                    write_pids(run_dir, supervisor, router.pid)
-                status = _status(graph, supervisor, started)
-                status["run"] = {"run_dir": str(run_dir), "endpoint": endpoint, "graph": env["CHRONAV_GRAPH"]}
-                missions = status["missions"]  # type: ignore[assignment]
-                graph_logger.maybe_log(graph, status.get("now_s"))
-                if on_tick is not None:
-                    on_tick(status)
-                if stop_requested["flag"]:
-                    interrupted = True
-                    break
-                if len(missions) == len(spec.missions) and missions and all(
-                        m.get("state") in TERMINAL_STATES for m in missions.values()):
-                    break
-                if status.get("clock_finished"):
-                    break
-                if time.monotonic() - started > timeout_s:
-                    timed_out = True
-                    break
-                if supervisor.given_up():
-                    break
-            graph_logger.maybe_log(graph, status.get("now_s"), force=True)
-        if record:
-            # Metrics of the day (social vs baseline) as scalars in this same recording.
-            from tools.report import build_report, log_report
-
-            metrics = build_report(loaded.path, run_dir, missions)
-            log_report(recorder, metrics, missions)
+        if not wait_for_port(port, 15, give_up=lambda: stop_requested["flag"] or not router.alive):
+            if not stop_requested["flag"]:
+                raise LaunchError(f"the Zenoh router did not listen on {endpoint}; see {router.log_path}")
+        else:
+            write_connect_file(run_dir, run_id=run_id, endpoint=endpoint, graph=graph_name, security=security)
+            for name in AGENTS:
+                supervisor.start(name)
+            write_pids(run_dir, supervisor, router.pid)
+            settings = ZenohSettings.from_env({**env, "CHRONAV_ZENOH_USER": security.reader.user,
+                                               "CHRONAV_ZENOH_PASSWORD": security.reader.password})
+            # Read-only: the launcher only watches; it enforces the agents' write policy too.
+            with join(agent="launcher", graph=graph_name, settings=settings, read_only=True,
+                      policy=policy) as graph:
+                graph_logger = GraphLogger(recorder)
+                status: dict[str, Any] = {}
+                while True:
+                    graph.dispatch(timeout=0.1)
+                    changed = bool(supervisor.poll())
+                    changed |= _restart_stuck(graph, supervisor, watch, read_stamp)
+                    if changed:
+                        write_pids(run_dir, supervisor, router.pid)
+                    status = _status(graph, supervisor, started)
+                    status["run"] = {"run_dir": str(run_dir), "endpoint": endpoint, "graph": graph_name}
+                    missions = status["missions"]
+                    graph_logger.maybe_log(graph, status.get("now_s"))
+                    if on_tick is not None:
+                        on_tick(status)
+                    if stop_requested["flag"]:
+                        interrupted = True
+                        break
+                    if len(missions) == len(spec.missions) and missions and all(
+                            m.get("state") in TERMINAL_STATES for m in missions.values()):
+                        break
+                    if status.get("clock_finished"):
+                        break
+                    if time.monotonic() - started > timeout_s:
+                        timed_out = True
+                        break
+                    if supervisor.given_up():
+                        break
+                graph_logger.maybe_log(graph, status.get("now_s"), force=True)
+        interrupted = interrupted or stop_requested["flag"]
+        if record and not interrupted:
+            metrics = _report(loaded.path, run_dir, missions, recorder)
+    except (LaunchError, DSRError) as exc:    # e.g. the launcher could not join its own router
+        error = str(exc)
     finally:
-        signal.signal(signal.SIGINT, previous_sigint)
-        signal.signal(signal.SIGTERM, previous_sigterm)
-        agents_first = [*reversed(AGENTS), "router"]
-        supervisor.stop_all(order=agents_first)
-        recorder.close()
-    rrd_path = None
-    if record:
-        rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")), runs_dir / f"{run_id}.rrd")
-    result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
-                       events=list(supervisor.events), restarts={n: m.restarts for n, m in supervisor.processes.items()},
-                       wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
-                       metrics=metrics, scene_path=loaded.path)
-    (run_dir / "result.json").write_text(json.dumps({
-        "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
-        "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(rrd_path) if rrd_path else None,
-        "interrupted": interrupted, "timed_out": timed_out}, indent=2))
+        # Still under our handlers: a second Ctrl-C must not cut the clean-up short.
+        try:
+            supervisor.stop_all(order=[*reversed(AGENTS), "router"])
+            recorder.close()
+            if record:
+                rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")),
+                                            run_dir.parent / f"{run_id}.rrd")
+            missions = {**scene_missions(spec), **missions}
+            result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
+                               events=list(supervisor.events),
+                               restarts={n: m.restarts for n, m in supervisor.processes.items()},
+                               wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
+                               metrics=metrics, scene_path=loaded.path, error=error)
+            _write_result(result)
+        finally:
+            signal.signal(signal.SIGINT, previous_sigint)
+            signal.signal(signal.SIGTERM, previous_sigterm)
     return result
+
+
+def _restart_stuck(graph: Any, supervisor: Supervisor, watch: ProgressWatch,
+                   read_stamp: Callable[[Any, str], tuple[int, int] | None]) -> bool:
+    """Kill the agents whose heartbeat stopped (the next poll restarts them); True if any."""
+    now = time.monotonic()
+    killed = False
+    for name in AGENTS:
+        managed = supervisor.processes[name]
+        if managed.pid is None or not managed.alive:
+            continue
+        watch.observe(name, managed.pid, read_stamp(graph, name), now)
+        reason = watch.overdue(name, now)
+        if reason is not None:
+            supervisor.restart_stuck(name, reason)
+            killed = True
+    if killed:
+        supervisor.poll()
+    return killed
+
+
+def _report(scene_path: Path, run_dir: Path, missions: dict[str, dict[str, object]], recorder: Any
+            ) -> dict[str, object]:
+    """Metrics of the day (social vs baseline) as scalars in this same recording."""
+    from tools.report import build_report, log_report
+
+    metrics = build_report(scene_path, run_dir, missions)
+    log_report(recorder, metrics, missions)
+    return metrics
+
+
+def _write_result(result: RunResult) -> None:
+    (result.run_dir / "result.json").write_text(json.dumps({
+        "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
+        "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
+        "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error}, indent=2))
 
 
 def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
@@ -231,19 +352,42 @@ def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:
     }
 
 
+def _option_check(check: Callable[..., Any], option: str) -> Callable[[Any], Any]:
+    """A typer callback refusing a bad value at once, in the check's words (exit 2)."""
+    def callback(value: Any) -> Any:
+        if value is None:
+            return value
+        try:
+            return check(value, option)
+        except LaunchError as exc:
+            raise typer.BadParameter(str(exc).removeprefix(f"{option} ")) from None
+    return callback
+
+
 def register(app: typer.Typer) -> None:
     @app.command("launch")
     def launch(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
-               rate: float = typer.Option(None, help="sim seconds per wall second (default: the scene's)"),
-               timeout: float = typer.Option(900.0, help="wall-clock limit in seconds"),
+               rate: float = typer.Option(None, help="sim seconds per wall second, > 0 (default: the scene's)",
+                                          callback=_option_check(check_rate, "--rate")),
+               timeout: float = typer.Option(900.0, help="wall-clock limit in seconds, > 0",
+                                             callback=_option_check(check_timeout, "--timeout")),
+               hang_timeout: float = typer.Option(DEFAULT_HANG_TIMEOUT_S, help="restart an agent whose heartbeat "
+                                                  "stops for this many wall seconds",
+                                                  callback=_option_check(check_timeout, "--hang-timeout")),
+               startup_timeout: float = typer.Option(DEFAULT_STARTUP_TIMEOUT_S, help="restart an agent that writes "
+                                                     "no first heartbeat within this many wall seconds of its start",
+                                                     callback=_option_check(check_timeout, "--startup-timeout")),
                no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
-               restart_limit: int = typer.Option(3, help="restarts allowed per agent"),
+               restart_limit: int = typer.Option(3, min=0, help="restarts allowed per agent"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
-        """Run every agent as its own process on SCENE until the day's missions are done."""
+        """Run every agent as its own process on SCENE until the day's missions are done.
+
+        The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
         from tools.console import run_with_progress
 
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
-                                 restart_limit=restart_limit, as_json=as_json, with_report=False)
+                                 restart_limit=restart_limit, as_json=as_json, with_report=False,
+                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout)
         raise typer.Exit(code)
 
     @app.command("demo")

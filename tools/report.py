@@ -23,7 +23,7 @@ def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -
 
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
-    from agents.lib.socialmap.metrics import read_trajectory_csv
+    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_trajectory_csv
     from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
     from agents.lib.socialmap.search import PlanningError
     from agents.lib.socialmap.social_map import plan
@@ -33,7 +33,11 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
     if not traj_path.exists():
         report["error"] = "no trajectory was recorded"
         return report
-    trajectory = read_trajectory_csv(traj_path)
+    try:
+        trajectory = read_trajectory_csv(traj_path)
+    except TrajectoryFormatError as exc:   # e.g. stopped before the robot's first sample
+        report["error"] = f"no usable trajectory was recorded ({exc})"
+        return report
     try:
         maps = SceneMaps.load(scene)
     except OfflineError as exc:

@@ -3,6 +3,12 @@
 Why process groups: each agent is started in its own session so that stopping it (or SIGKILL in
 a fault test) also stops anything it spawned, and so that a Ctrl-C in the launcher's terminal
 reaches only the launcher, which then stops the agents in order and still merges the recording.
+
+Why a progress watch besides exit codes: an agent can hang without exiting (a loop that never
+returns, a frozen process).  Each agent stamps a heartbeat in the DSR from its main loop
+(agents/runtime/heartbeat.py); `ProgressWatch` turns the stamps the launcher sees into "stuck
+for N s", and `Supervisor.restart_stuck` kills such an agent and starts it again (counted, and
+logged, like a crash).
 """
 
 from __future__ import annotations
@@ -28,6 +34,8 @@ class ManagedProcess:
     restarts: int = 0
     exit_codes: list[int] = field(default_factory=list)
     gave_up: bool = False
+    #: why the supervisor killed the running process itself (a hang), reported when it exits
+    killed_because: str | None = None
 
     @property
     def alive(self) -> bool:
@@ -79,15 +87,31 @@ class Supervisor:
                 continue
             code = managed.proc.returncode
             managed.exit_codes.append(code)
+            what = (f"{name} {managed.killed_because}; killed" if managed.killed_because
+                    else f"{name} exited with {code}")
+            managed.killed_because = None
             if managed.restarts >= self.restart_limit:
                 managed.gave_up = True
-                self.events.append(f"{name} exited with {code}; restart limit {self.restart_limit} reached")
+                self.events.append(f"{what}; restart limit {self.restart_limit} reached")
                 continue
             managed.restarts += 1
-            self.events.append(f"{name} exited with {code}; restart {managed.restarts}/{self.restart_limit}")
+            self.events.append(f"{what}; restart {managed.restarts}/{self.restart_limit}")
             self.start(name)
             restarted.append(name)
         return restarted
+
+    def restart_stuck(self, name: str, reason: str) -> None:
+        """Kill a process that stopped making progress (SIGKILL also ends a SIGSTOPped one);
+        the next `poll` restarts it, counted against the limit, with ``reason`` in the event."""
+        managed = self.processes[name]
+        if managed.proc is None or managed.proc.poll() is not None or self.stopping:
+            return
+        managed.killed_because = reason
+        self._signal(name, signal.SIGKILL)
+        try:
+            managed.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            pass
 
     def given_up(self) -> list[str]:
         return [name for name, managed in self.processes.items() if managed.gave_up]
@@ -121,3 +145,43 @@ class Supervisor:
                 os.killpg(proc.pid, sig)
             except ProcessLookupError:
                 pass
+
+
+@dataclass
+class _Progress:
+    pid: int
+    since: float                 # monotonic time of the (re)start or of the last new stamp
+    stamp: tuple[int, int] | None = None
+    stamped: bool = False        # a stamp written by this pid was seen
+
+
+class ProgressWatch:
+    """Decides, from the heartbeat stamps an observer sees, which agent is stuck.
+
+    A process gets ``startup_s`` from its (re)start to its first stamp (imports, JIT compilation,
+    joining the graph), then at most ``hang_s`` between two stamps.  Stamps are (pid, beat): a
+    stamp of another pid (the previous incarnation, still in the graph) is not progress."""
+
+    def __init__(self, hang_s: float, startup_s: float) -> None:
+        self.hang_s, self.startup_s = hang_s, startup_s
+        self._state: dict[str, _Progress] = {}
+
+    def observe(self, name: str, pid: int, stamp: tuple[int, int] | None, now: float) -> None:
+        state = self._state.get(name)
+        if state is None or state.pid != pid:
+            state = self._state[name] = _Progress(pid=pid, since=now)
+        if stamp is not None and stamp[0] == pid and stamp != state.stamp:
+            state.stamp, state.stamped, state.since = stamp, True, now
+
+    def overdue(self, name: str, now: float) -> str | None:
+        """Why ``name`` counts as stuck now, or None."""
+        state = self._state.get(name)
+        if state is None:
+            return None
+        waited = now - state.since
+        if state.stamped and waited > self.hang_s:
+            return (f"made no progress for {waited:.1f} s (heartbeat {state.stamp[1] if state.stamp else '?'} "
+                    f"was its last; limit {self.hang_s:g} s)")
+        if not state.stamped and waited > self.startup_s:
+            return f"wrote no heartbeat within {waited:.1f} s of its start (limit {self.startup_s:g} s)"
+        return None

@@ -4,7 +4,10 @@ Why the split (after py_trees' Behaviour): an Agent holds the behaviour (``setup
 ``teardown``) and never opens sessions itself; ``run_agent`` owns the middleware, the loop, the
 signals and the cleanup.  That makes every agent constructible offline in a unit test, and makes
 shutdown uniform: SIGINT/SIGTERM end the loop, the recording gets its footer, the Zenoh session is
-closed (an unclosed session hangs the interpreter at exit).
+closed (an unclosed session hangs the interpreter at exit).  The loop also stamps the agent's
+heartbeat in the DSR (agents/runtime/heartbeat.py), so a launcher can tell a stuck agent from a
+busy one.  Credentials come from the environment like every Zenoh setting
+(``CHRONAV_ZENOH_USER`` + ``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from abc import ABC, abstractmethod
 from typing import ClassVar
 
 from agents.runtime.config import AgentConfig, parse_agent_args
+from agents.runtime.heartbeat import Heartbeat
 from agents.runtime.recording import Recorder
 from agents.world.scene_world import SceneWorld, load_world
 from scenes.model import Scene
@@ -81,6 +85,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
         with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as graph:
             agent.setup(graph, recorder)
             log.info("%s joined graph %r", config.name, config.graph)
+            heartbeat = Heartbeat(graph, config.name)
             try:
                 while not stop.is_set():
                     if parent is not None and os.getppid() != parent:
@@ -89,6 +94,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                     started = time.monotonic()
                     graph.dispatch(timeout=0.0)
                     agent.step()
+                    heartbeat.maybe_beat()
                     remaining = config.period_s - (time.monotonic() - started)
                     if remaining > 0:
                         # Wait for signals (DSR changes) rather than sleeping blind.

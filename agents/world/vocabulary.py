@@ -33,6 +33,7 @@ class NodeType:
     MISSION = "mission"
     INTENTION = "intention"
     SENSOR = "sensor"
+    HEARTBEAT = "heartbeat"
 
 
 class EdgeType:
@@ -116,12 +117,17 @@ def sensor_name(agent: str) -> str:
     return f"sensor/{agent}"
 
 
+def heartbeat_name(agent: str) -> str:
+    return f"heartbeat/{agent}"
+
+
 # Attribute value kinds as the DSR stores them (docs/dsr_wire_format.md).
 FLOAT, INT, BOOL, STR, FLOATS, STRS = "float", "int", "bool", "str", "floats", "strs"
 
 # The agents (writers) by their process names.
 SIM_ROBOT, OBSERVER, RECOGNITION = "sim_robot", "human_observer", "object_recognition"
 AGENDA_AGENT, EXECUTIVE, NAVIGATION, AGENDA_TOOL = "agenda", "executive", "social_navigation", "agenda_tool-*"
+ALL_AGENTS = (SIM_ROBOT, OBSERVER, RECOGNITION, AGENDA_AGENT, NAVIGATION, EXECUTIVE)
 
 
 @dataclass(frozen=True)
@@ -184,6 +190,8 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
         **_attrs(NAVIGATION, replans=INT, path_x=FLOATS, path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
     NodeSpec(NodeType.SENSOR, (OBSERVER, RECOGNITION, AGENDA_AGENT), _attrs((OBSERVER, RECOGNITION, AGENDA_AGENT),
                                                                             observed_s=FLOAT)),
+    # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them
+    NodeSpec(NodeType.HEARTBEAT, ALL_AGENTS, _attrs(ALL_AGENTS, beat=INT, pid=INT, wall_s=FLOAT)),
 )}
 
 _POSE = {"x": FLOAT, "y": FLOAT, "theta": FLOAT}

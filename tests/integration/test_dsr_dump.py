@@ -36,8 +36,64 @@ def test_dump_json_and_table(world):
 
 def test_dump_reports_unreachable_router_on_stderr():
     result = CliRunner().invoke(app, ["dsr", "dump", "--json", "--connect", "tcp/127.0.0.1:1"])
-    assert result.exit_code == 1 and "cannot open Zenoh session" in result.stderr
+    assert result.exit_code == 1 and "nothing listens at tcp/127.0.0.1:1" in result.stderr
     assert result.stdout == ""
+    # In a user's words: no Rust source path, and the command that starts a system.
+    assert ".rs:" not in result.stderr and "python -m dsr.router" not in result.stderr
+    assert "chronav launch" in result.stderr and "--run latest" in result.stderr
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--connect", "garbage"], "--connect 'garbage' is not an endpoint; expected PROTOCOL/HOST:PORT, "
+                               "e.g. tcp/127.0.0.1:7447"),
+    (["--connect", "tcp/localhost"], "--connect 'tcp/localhost': expected tcp/HOST:PORT"),
+    (["--graph", "a/b"], "--graph 'a/b': graph name 'a/b' must match"),
+    (["--timeout", "0"], "--timeout 0: give a number of seconds greater than 0"),
+    (["--timeout", "nan"], "--timeout nan: give a number of seconds greater than 0"),
+])
+def test_bad_options_get_one_line_naming_the_option(args, message):
+    result = CliRunner().invoke(app, ["dsr", "dump", *args])
+    assert result.exit_code == 2
+    assert result.stderr.startswith(f"chronav dsr dump: {message}")
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+
+
+def test_wrong_or_missing_graph_is_an_error_naming_the_graphs_there(world):
+    for args, asked in ((["--graph", "no_such_graph"], "no_such_graph"), ([], "chronav")):
+        env = {"CHRONAV_GRAPH": "somewhere_else"} if not args else {}
+        result = CliRunner().invoke(app, ["dsr", "dump", "--connect", world, *args], env=env)
+        graph = "somewhere_else" if not args else asked
+        assert result.exit_code == 1, result.output
+        assert f"graph {graph!r}" in result.stderr and "nobody is there" in result.stderr
+        assert "graphs with members there: chronav (use --graph NAME)" in result.stderr
+        assert "0 nodes" not in result.stdout
+
+
+def test_timeout_bounds_the_connection_to_a_listener_that_is_not_zenoh(tmp_path):
+    """Zenoh's own handshake timeout is 10 s; --timeout 0.5 must end the attempt long before."""
+    import socket
+    import subprocess
+    import sys
+    import threading
+
+    from tests.support import REPO_ROOT
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(8)
+    held: list[socket.socket] = []
+    threading.Thread(target=lambda: [held.append(server.accept()[0]) for _ in range(8)], daemon=True).start()
+    endpoint = f"tcp/127.0.0.1:{server.getsockname()[1]}"
+    try:
+        result = subprocess.run([sys.executable, "-m", "tools.cli", "dsr", "dump", "--connect", endpoint,
+                                 "--timeout", "0.5"], cwd=REPO_ROOT, capture_output=True, text=True, timeout=8)
+    finally:
+        server.close()
+        for conn in held:
+            conn.close()
+    assert result.returncode == 1, result.stderr
+    assert f"something listens at {endpoint} but refused a chronav session: it is not a Zenoh router" \
+        in result.stderr
 
 
 def test_dump_follow_prints_changes(world, procs, tmp_path):

@@ -13,11 +13,13 @@ from tests.support import ProcessGroup
 
 
 def run_json(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
-    """`python -m tools.cli ARGS --json --timeout T`: the last JSON line of its output, plus its exit code."""
+    """`python -m tools.cli ARGS --json --timeout T`: the last JSON line of its output, plus its exit code.
+
+    The run goes under ``recordings/`` next to the log (``CHRONAV_RUNS``), not into the source tree."""
     group = ProcessGroup()
     try:
         proc = group.spawn(["-m", "tools.cli", *args, "--json", "--timeout", str(timeout_s - 30)],
-                           env={"RERUN": "on"}, log_path=log)
+                           env={"RERUN": "on", "CHRONAV_RUNS": str(log.parent / "recordings")}, log_path=log)
         try:
             proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:

@@ -32,6 +32,7 @@ from dsr import ZenohSettings, join
 from scenes.loader import load_scene
 from scenes.clock import format_clock
 from tests.support import REPO_ROOT, ProcessGroup, wait_until
+from tools.runs import read_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 RATE = 1.0                      # sim s per wall s while driving: the mission takes ~20 s wall
@@ -105,9 +106,10 @@ def test_added_activity_makes_the_driving_robot_go_round_the_tv(procs: ProcessGr
                    message="connect.json of the run")
         assert launcher.poll() is None, (tmp_path / "launcher.log").read_text()
         run_dir = next(runs.glob("*/connect.json")).parent
-        connect = json.loads((run_dir / "connect.json").read_text())
-        with join("agenda_live_test", graph=connect["graph"], settings=ZenohSettings(connect=[connect["endpoint"]]),
-                  read_only=True) as graph:
+        run = read_connect_file(run_dir)        # the run's reader identity: its router requires one
+        reader = run.identity("reader")
+        settings = ZenohSettings(connect=[run.endpoint], user=reader.user, password=reader.password)
+        with join("agenda_live_test", graph=run.graph, settings=settings, read_only=True) as graph:
             def robot() -> Any:
                 return graph.get_node_by_name("robot")
 

@@ -34,6 +34,7 @@ from scenes.loader import load_scene
 from tests.support import REPO_ROOT, free_port, wait_until
 from tools import agenda as tool
 from tools.cli import app
+from tools.runs import RunSecurity, prepare_run_security, write_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 NOW_S = 9 * 3600 + 5 * 60.0          # 09:05 on the sim clock
@@ -63,8 +64,11 @@ def router() -> Iterator[str]:
         session.close()
 
 
-def _client(endpoint: str) -> ZenohSettings:
-    return ZenohSettings(connect=[endpoint])
+def _client(endpoint: str, security: RunSecurity | None = None, agent: str = "") -> ZenohSettings:
+    if security is None:
+        return ZenohSettings(connect=[endpoint])
+    identity = security.agents[agent]
+    return ZenohSettings(connect=[endpoint], user=identity.user, password=identity.password)
 
 
 @dataclass
@@ -73,6 +77,7 @@ class LiveSystem:
     graph: str
     world: DSRGraph
     errors: list[BaseException] = field(default_factory=list)
+    security: RunSecurity | None = None
 
     @property
     def env(self) -> dict[str, str]:
@@ -112,7 +117,7 @@ def world_only(router: str) -> Iterator[LiveSystem]:
 def _agent_loop(system: LiveSystem, ready: threading.Event, stop: threading.Event, step: bool) -> None:
     try:
         agent = AgendaAgent(AgentConfig(name="agenda", scene=SCENE, graph=system.graph))
-        with join("agenda", graph=system.graph, settings=_client(system.endpoint)) as graph:
+        with join("agenda", graph=system.graph, settings=_client(system.endpoint, system.security, "agenda")) as graph:
             agent.setup(graph, Recorder("agenda", None, None))
             ready.set()
             while not stop.wait(0.01):
@@ -300,7 +305,8 @@ def test_unreachable_router_exits_2(nobody_env: dict[str, str]) -> None:
     for args in (["add", "tv", "09:08", "09:40"], ["list"], ["watch", "--timeout", "1"]):
         result = runner.invoke(app, ["agenda", *args], env=nobody_env)
         assert result.exit_code == 2, result.output
-        assert f"cannot reach a chronav system at {endpoint} (from CHRONAV_ZENOH_CONNECT" in result.stderr
+        assert f"cannot reach a chronav system: nothing listens at {endpoint} (from CHRONAV_ZENOH_CONNECT" \
+            in result.stderr
         assert "chronav launch" in result.stderr and "--run latest" in result.stderr
 
 
@@ -327,72 +333,46 @@ def test_no_answer_times_out_exits_2_and_withdraws_the_request(silent: LiveSyste
 
 
 # ---------------------------------------------------------------------------------------------
-# Finding the system: options, --run, environment.
+# Finding the system: --run latest of this user, with the run's credentials.
 # ---------------------------------------------------------------------------------------------
 
-def _dead_pid() -> int:
-    """The pid of a process that has exited (and been reaped)."""
-    child = subprocess.Popen([sys.executable, "-c", "pass"])
-    child.wait()
-    return child.pid
+@pytest.fixture
+def secured_run(tmp_path: Path) -> Iterator[LiveSystem]:
+    """A run as `chronav launch` leaves it: a router requiring the run's credentials and ACL, the
+    world and the agenda agent each with their own user, and the owner-only connect file."""
+    import zenoh
+
+    graph = f"agenda_cli_secured_{os.getpid()}"
+    run_dir = tmp_path / "recordings" / graph
+    security = prepare_run_security(run_dir, graph, ("sim_robot", "agenda"))
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    router = zenoh.open(ZenohSettings(mode="router", listen=[endpoint], credentials_file=security.credentials_file,
+                                      acl_file=security.acl_file).to_zenoh_config())
+    try:
+        write_connect_file(run_dir, run_id=graph, endpoint=endpoint, graph=graph, security=security)
+        with join("sim_robot", graph=graph, settings=_client(endpoint, security, "sim_robot")) as world:
+            _populate_world(world)
+            yield from _with_agent(LiveSystem(endpoint, graph, world, security=security), step=True)
+    finally:
+        router.close()
 
 
-def _make_run(runs: Path, name: str, *, pid: int, endpoint: str = "tcp/127.0.0.1:1", graph: str | None = None,
-              finished: bool = False, mtime: float | None = None) -> Path:
-    run = runs / name
-    run.mkdir(parents=True)
-    connect = run / "connect.json"
-    connect.write_text(json.dumps({"endpoint": endpoint, "graph": graph or name.replace(".", "_"),
-                                   "launcher_pid": pid}))
-    if finished:
-        (run / "result.json").write_text("{}")
-    if mtime is not None:
-        os.utime(connect, (mtime, mtime))
-    return run
-
-
-def test_run_resolution(tmp_path: Path) -> None:
-    runs = tmp_path / "recordings"
-    live = _make_run(runs, "live", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", mtime=1000)
-    _make_run(runs, "dead", pid=_dead_pid(), mtime=2000)
-    done = _make_run(runs, "done", pid=os.getpid(), finished=True, mtime=3000)
-    assert tool.find_run_dir("latest", runs) == live
-    assert tool.find_run_dir("live", runs) == live and tool.find_run_dir(str(done), runs) == done
-    address = tool.address_from_run(live)
-    assert address.connect == ("tcp/127.0.0.1:7001",) and address.graph == "live" and address.run_dir == live
-    with pytest.raises(tool.NoSystemError, match="has finished"):
-        tool.address_from_run(done)
-    with pytest.raises(tool.NoSystemError, match="no such run directory"):
-        tool.find_run_dir("nope", runs)
-    (live / "connect.json").unlink()
-    with pytest.raises(tool.NoSystemError, match=r"no live run under .*chronav launch"):
-        tool.find_run_dir("latest", runs)
-
-
-def test_address_precedence(tmp_path: Path) -> None:
-    runs = tmp_path / "recordings"
-    _make_run(runs, "run1", pid=os.getpid(), endpoint="tcp/127.0.0.1:7001", graph="run1")
-    env = {"CHRONAV_ZENOH_CONNECT": "tcp/127.0.0.1:7002", "CHRONAV_GRAPH": "envgraph"}
-    default = tool.resolve_address(None, None, None, environ={})
-    assert default.connect == ("tcp/127.0.0.1:7447",) and default.graph == "chronav"
-    assert "CHRONAV_ZENOH_CONNECT is not set" in default.origin
-    from_env = tool.resolve_address(None, None, None, environ=env)
-    assert (from_env.connect, from_env.graph) == (("tcp/127.0.0.1:7002",), "envgraph")
-    from_run = tool.resolve_address(None, None, "latest", environ=env, runs_dir=runs)
-    assert (from_run.connect, from_run.graph) == (("tcp/127.0.0.1:7001",), "run1")
-    explicit = tool.resolve_address(["tcp/127.0.0.1:7003"], "g3", "latest", environ=env, runs_dir=runs)
-    assert (explicit.connect, explicit.graph) == (("tcp/127.0.0.1:7003",), "g3")
-    assert tool.resolve_address(None, "g4", None, environ=env).connect == ("tcp/127.0.0.1:7002",)
-
-
-def test_run_latest_through_the_cli(live: LiveSystem, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    runs = tmp_path / "recordings"
-    _make_run(runs, "the_run", pid=os.getpid(), endpoint=live.endpoint, graph=live.graph)
-    monkeypatch.setattr(tool, "RUNS_DIR", runs)
-    result = runner.invoke(app, ["agenda", "add", "tv", "09:08", "09:40", "--run", "latest", "--json"], env={
-        "CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "wrong"})
+def test_run_latest_joins_with_the_runs_credentials(secured_run: LiveSystem, tmp_path: Path) -> None:
+    env = {"CHRONAV_RUNS": str(tmp_path / "recordings"),
+           "CHRONAV_ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}", "CHRONAV_GRAPH": "wrong"}
+    result = runner.invoke(app, ["agenda", "add", "tv", "09:08", "09:40", "--run", "latest", "--json"], env=env)
     assert result.exit_code == 0, result.output
-    assert json.loads(result.stdout)["graph"] == live.graph
+    assert json.loads(result.stdout)["graph"] == secured_run.graph and json.loads(result.stdout)["accepted"]
+    listed = runner.invoke(app, ["agenda", "list", "--run", "latest", "--json"], env=env)
+    assert listed.exit_code == 0 and [a["id"] for a in json.loads(listed.stdout)["activities"]] == ["tv-0908"]
+
+    # The same router and graph, without the run's credentials: refused before anything is sent.
+    bare = runner.invoke(app, ["agenda", "cancel", "tv-0908", "--connect", secured_run.endpoint,
+                               "--graph", secured_run.graph], env={"CHRONAV_RUNS": env["CHRONAV_RUNS"]})
+    assert bare.exit_code == 2
+    assert f"something listens at {secured_run.endpoint} but refused a chronav session" in bare.stderr
+    assert "requires credentials" in bare.stderr and "--run latest" in bare.stderr
+    assert secured_run.world.get_node_by_name("activity/tv-0908").attrs["state"] != "cancelled"
 
 
 # ---------------------------------------------------------------------------------------------

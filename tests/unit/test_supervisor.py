@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import os
+import signal
 import time
 from pathlib import Path
 
 from tests.support import wait_until
-from tools.supervisor import Supervisor
+from tools.supervisor import ProgressWatch, Supervisor
 
 
 def test_crashing_process_is_restarted_until_the_limit(tmp_path: Path) -> None:
@@ -32,3 +33,39 @@ def test_stop_all_terminates_long_running_processes(tmp_path: Path) -> None:
     sup.stop_all(timeout_s=5)
     assert not sup.processes["sleeper"].alive
     assert sup.poll() == []  # stopping: no restart
+
+
+def test_progress_watch_gives_startup_time_then_a_bound_between_heartbeats() -> None:
+    watch = ProgressWatch(hang_s=5.0, startup_s=30.0)
+    watch.observe("agent", pid=100, stamp=None, now=0.0)
+    assert watch.overdue("agent", 29.0) is None                       # still starting
+    assert "wrote no heartbeat within 31.0 s of its start" in (watch.overdue("agent", 31.0) or "")
+    watch.observe("agent", pid=100, stamp=(100, 1), now=31.5)
+    assert watch.overdue("agent", 36.0) is None
+    watch.observe("agent", pid=100, stamp=(100, 2), now=36.0)       # progress resets the bound
+    watch.observe("agent", pid=100, stamp=(100, 2), now=40.0)       # the same stamp again is not progress
+    reason = watch.overdue("agent", 41.5)
+    assert reason is not None and "made no progress for 5.5 s" in reason and "heartbeat 2" in reason
+    # A restarted agent (new pid) gets its startup time again; its predecessor's stamp does not count.
+    watch.observe("agent", pid=200, stamp=(100, 2), now=42.0)
+    assert watch.overdue("agent", 70.0) is None
+    watch.observe("agent", pid=200, stamp=(200, 1), now=71.0)
+    assert watch.overdue("agent", 75.0) is None and watch.overdue("agent", 76.5) is not None
+
+
+def test_a_stuck_process_is_killed_restarted_and_logged(tmp_path: Path) -> None:
+    sup = Supervisor(tmp_path / "logs", dict(os.environ), restart_limit=1)
+    sup.add("sleeper", "tests.unit.crash_helper", ["--sleep", "60"])
+    sup.start_all()
+    try:
+        first = sup.processes["sleeper"].pid
+        assert first is not None
+        os.kill(first, signal.SIGSTOP)                                  # alive, but frozen
+        sup.restart_stuck("sleeper", "made no progress for 9 s")
+        assert sup.poll() == ["sleeper"] and sup.processes["sleeper"].pid != first
+        assert sup.events == ["sleeper made no progress for 9 s; killed; restart 1/1"]
+        sup.restart_stuck("sleeper", "made no progress for 9 s")
+        sup.poll()
+        assert sup.given_up() == ["sleeper"] and sup.events[-1].endswith("restart limit 1 reached")
+    finally:
+        sup.stop_all(timeout_s=2)

@@ -1,0 +1,53 @@
+"""The progress stamp every agent writes in the DSR, and how a supervisor reads it.
+
+Why in the DSR and from the agent's main loop: a process can be alive (its pid exists, its
+Zenoh threads still answer, its liveliness token stays) while its loop is stuck, e.g. in an
+endless computation; only a stamp written by the loop itself shows that it still makes
+progress.  ``heartbeat/<agent>`` carries ``beat`` (a counter), ``pid`` (which incarnation wrote
+it: a restarted agent's first stamps must not be mistaken for its predecessor's) and
+``wall_s``.  The launcher (tools/supervisor.py) restarts an agent whose stamp stops changing.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+from agents.world.vocabulary import NodeType, heartbeat_name
+
+#: wall seconds between two stamps: 6 agents -> 6 small deltas a second
+HEARTBEAT_PERIOD_S = 1.0
+
+
+class Heartbeat:
+    """Stamps ``heartbeat/<agent>`` at most every ``period_s`` wall seconds."""
+
+    def __init__(self, graph: Any, agent: str, period_s: float = HEARTBEAT_PERIOD_S) -> None:
+        self.graph, self.agent, self.period_s = graph, agent, period_s
+        self.beat = 0
+        self._last = -float("inf")
+
+    def maybe_beat(self) -> None:
+        now = time.monotonic()
+        if now - self._last < self.period_s:
+            return
+        self._last = now
+        self.beat += 1
+        attrs = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
+        node = self.graph.get_node_by_name(heartbeat_name(self.agent))
+        if node is None:
+            self.graph.insert_node(type=NodeType.HEARTBEAT, name=heartbeat_name(self.agent), attrs=attrs)
+        else:
+            self.graph.update_node(node.id, attrs=attrs)
+
+
+def read_stamp(graph: Any, agent: str) -> tuple[int, int] | None:
+    """(pid, beat) of the agent's last stamp, None before its first one."""
+    node = graph.get_node_by_name(heartbeat_name(agent))
+    if node is None:
+        return None
+    pid, beat = node.attrs.get("pid"), node.attrs.get("beat")
+    if not isinstance(pid, int) or not isinstance(beat, int):
+        return None
+    return pid, beat
