@@ -144,9 +144,8 @@ class ExecutiveAgent(Agent):
                                           "state": IntentionState.ACTIVE, "issued_s": now_s})
             g.insert_or_assign_edge(node.id, mission.node_id, EdgeType.STEP_OF, attrs={})
         merged = " -> ".join(st.describe() for st in steps[first:index + 1])
-        self.rec.event(f"{format_clock(now_s)} {mission.mission_id} steps {first + 1}-{index + 1}/{len(steps)}: {merged}"
-                       if index > first else f"{format_clock(now_s)} {mission.mission_id} step {index + 1}/{len(steps)}: "
-                       f"{step.describe()}")
+        which = f"steps {first + 1}-{index + 1}" if index > first else f"step {index + 1}"
+        self.rec.event(f"{format_clock(now_s)} {mission.mission_id} {which}/{len(steps)}: {merged}")
 
     def _cancel_active(self, mission_id: str) -> None:
         for old in intentions(self.graph, mission_id):
