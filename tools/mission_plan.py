@@ -77,11 +77,16 @@ def plan_scene(scene: Path, mission: str, at_s: float | None, grammar_file: Path
         if as_json:
             typer.echo(json.dumps(payload))
         typer.echo(f"no plan for {mission!r} at {format_clock(t_s)}: {exc}", err=True)
+        diagnosis = getattr(result, "diagnosis", None)
+        if diagnosis is not None:  # the grammar's why: blocking rule, condition and facts
+            for line in diagnosis.lines()[1:]:
+                typer.echo(f"  {line}", err=True)
         raise typer.Exit(1) from None
     result = plan.result
     payload.update(found=True, grammar_mission=plan.grammar_mission, expanded=result.expanded,
                    generated=result.generated, cost=result.cost, target_bindings=dict(result.target_bindings),
-                   steps=[s.as_json() for s in steps], intentions=len({s.intention for s in steps}))
+                   steps=[s.as_json() for s in steps], intentions=len({s.intention for s in steps}),
+                   agm_plan=result.agm_lines())  # the grammar's plan in AGM's plan-file form
     if as_json:
         typer.echo(json.dumps(payload))
         return
