@@ -106,6 +106,9 @@ def test_plan_wait_by_the_agenda_id() -> None:
 def test_plan_object_only_after_its_activity() -> None:
     during = plan("--mission", "object:therapy_table", "--at", "09:06", exit_code=1)
     assert during["found"] is False
+    assert during["diagnosis"]["blockers"][0]["rule"] == "goToObject", "the grammar says why"
+    text = RUNNER.invoke(app, ["plan", "center_day", "--mission", "object:therapy_table", "--at", "09:06"])
+    assert "fails: activity/table_therapy -has-> therapy_table" in text.stderr
     after = plan("--mission", "object:therapy_table", "--at", "09:20")
     assert after["steps"][-1]["rule"] == "goToObject" and "goal" in after["steps"][-1]
 
