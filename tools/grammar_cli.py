@@ -85,15 +85,15 @@ def _summary(r: dict[str, Any]) -> str:
 
 
 def _parse_time(text: str | None) -> float | None:
-    """``HH:MM`` (or ``HH:MM:SS``) or plain seconds since midnight."""
+    """``HH:MM`` (or ``HH:MM:SS``): the one clock syntax of every command (scenes/clock.py)."""
     from scenes.clock import parse_clock
 
     if text is None:
         return None
     try:
-        return parse_clock(text) if ":" in text else float(text)
-    except ValueError:
-        _fail(f"--at {text!r}: expected HH:MM, HH:MM:SS or seconds since midnight")
+        return parse_clock(text)
+    except ValueError as exc:
+        _fail(f"--at: {exc}")
     return None
 
 

@@ -93,7 +93,7 @@ def test_plan_on_a_shipped_scene_at_a_time_of_day() -> None:
     # As the executive runs it: the room mission's last changeRoom is goToRoom (stop inside the room).
     assert steps and steps[-1]["rule"] == "goToRoom" and steps[-1]["bindings"]["r2"] == "dining_room"
     bad_time = runner.invoke(app, ["plan", str(scene), "-m", "room:dining_room", "--at", "25:00"])
-    assert bad_time.exit_code == 2 and "--at '25:00'" in bad_time.stderr
+    assert bad_time.exit_code == 2 and "--at: '25:00' is not a valid clock time" in bad_time.stderr
 
 
 def test_no_plan_names_the_blocking_rule_condition_and_facts(tmp_path: Path) -> None:

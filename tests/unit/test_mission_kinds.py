@@ -143,3 +143,22 @@ def test_chronav_plan_is_the_executives_plan(mission: str, at: str) -> None:
     steps = MissionPlanner(world.scene).plan(graph_at(world, t), mission).steps
     out = plan("--mission", mission, "--at", at)
     assert [(s["rule"], s["bindings"]) for s in out["steps"]] == [(s.rule, s.bindings) for s in steps]
+
+
+@pytest.mark.parametrize("goal,fragment", [
+    ("{group: [res_carla, visitor_lu]}", "no person named 'visitor_lu'; did you mean 'visitor_luis'?"),
+    ("{group: [res_carla, res_carla]}", "'res_carla' is named twice in the group"),
+    ("{group: [res_carla]}", "group"),
+    ("{wait: table_therapi}", "waits for unknown activity 'table_therapi'; activities: lunch, reading_club"),
+    ("{dance: res_carla}", "a goal is one of"),
+])
+def test_scene_check_names_bad_group_and_wait_goals(tmp_path, goal: str, fragment: str) -> None:
+    from scenes.loader import SCENES_DIR
+
+    text = (SCENES_DIR / "center_day.yaml").read_text()
+    scene = tmp_path / "bad.yaml"
+    scene.write_text(text + f'  - {{id: extra, time: "10:00", goal: {goal}}}\n')
+    line = len(text.splitlines()) + 1
+    result = RUNNER.invoke(app, ["scene", "check", str(scene)])
+    assert result.exit_code != 0 and fragment in result.stderr, result.output
+    assert f"{scene}:{line}:" in result.stderr, "located at the mission's line"
