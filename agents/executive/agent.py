@@ -24,7 +24,7 @@ from agents.missions.planning import MissionPlanner, intention_end, remaining_ro
 from agents.missions.steps import PlanStep, Rule, StepFailed
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
-from agents.world.freshness import observed_up_to
+from agents.world.freshness import interactions_follow_activities, observed_up_to
 from agents.world.vocabulary import (ActivityView, ClockView, EdgeType, IntentionKind, IntentionState,
                                      IntentionView, MissionState, MissionView, NodeType, intention_name, intentions,
                                      mission_name, missions)
@@ -90,8 +90,8 @@ class ExecutiveAgent(Agent):
             self._monitor(active[0], now_s)
             return
         due = [m for m in day if m.state == MissionState.PENDING and m.time_s <= now_s]
-        if due and not observed_up_to(g, now_s):
-            self._dirty = True  # after a clock skip: plan on the people and agenda of now, not of before
+        if due and not (observed_up_to(g, now_s) and interactions_follow_activities(g)):
+            self._dirty = True  # after a clock skip or an activity's end: plan on the world of now
             return
         if due:
             self._start(due[0], now_s)

@@ -16,10 +16,10 @@ from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.world.dsr_readers import running_activities
 from agents.world.dsr_writers import write_interactions, write_person
-from agents.world.freshness import mark_observed, observed_s
+from agents.world.freshness import mark_observed
 from agents.world.interactions import interaction_pairs, scene_conversations
 from agents.world.motion import people_at
-from agents.world.vocabulary import AGENDA_AGENT, WORLD
+from agents.world.vocabulary import WORLD
 from agents.world.vocabulary import now_s as now_of
 from scenes.geometry import angle_difference
 from agents.runtime.recording import Recorder
@@ -41,30 +41,13 @@ class HumanObserverAgent(Agent):
         self.tracks: dict[str, tuple[float, float, float]] = {}
         self.published: dict[str, tuple[float, float, float]] = {}
         self._last_t: float | None = None
-        self._agenda_seen: float | None = None
 
     def step(self) -> None:
         now_s = now_of(self.graph)
-        agenda_s = observed_s(self.graph, AGENDA_AGENT)
-        if now_s is None or self.graph.get_node_by_name(WORLD) is None:
+        if now_s is None or self.graph.get_node_by_name(WORLD) is None or now_s == self._last_t:
             return
-        if now_s == self._last_t and agenda_s == self._agenda_seen:
-            return
-        if now_s != self._last_t:
-            self._last_t = now_s
-            self.rec.set_time(now_s)
-            self._observe(now_s)
-        # Interactions follow the running activities: computed again once the agenda agent has
-        # caught up with this time, and stamped as observed only up to what it has seen, so a
-        # planner never reads "caught up" with links of an activity that has just ended.
-        self._agenda_seen = agenda_s
-        positions = {name: (x, y) for name, (x, y, _) in self.tracks.items()}
-        write_interactions(self.graph, interaction_pairs(positions, running_activities(self.graph),
-                                                         scene_conversations(self.scene)))
-        mark_observed(self.graph, self.config.name, now_s if agenda_s is None else min(now_s, agenda_s))
-
-    def _observe(self, now_s: float) -> None:
-        """Detect every person (noisy), track and publish them."""
+        self._last_t = now_s
+        self.rec.set_time(now_s)
         for truth in people_at(self.scene, now_s):
             det = (truth.x + self.rng.normal(0, self.noise_xy), truth.y + self.rng.normal(0, self.noise_xy),
                    truth.theta + self.rng.normal(0, self.noise_theta))
@@ -77,6 +60,10 @@ class HumanObserverAgent(Agent):
                          prev[2] + a * angle_difference(det[2], prev[2]))
             self.tracks[truth.name] = track
             self._publish(truth.name, truth.role, track, now_s)
+        positions = {name: (x, y) for name, (x, y, _) in self.tracks.items()}
+        write_interactions(self.graph, interaction_pairs(positions, running_activities(self.graph),
+                                                         scene_conversations(self.scene)))
+        mark_observed(self.graph, self.config.name, now_s)
         log_people(self.rec, self.tracks)
 
     def _publish(self, name: str, role: str, pose: tuple[float, float, float], now_s: float) -> None:
