@@ -43,7 +43,7 @@ def world(scene: str, tmp_path: Path) -> tuple[DSRGraph, dict[str, object]]:
 def set_clock(graph: DSRGraph, agents: dict, hhmm: str) -> None:
     graph.update_node(graph.get_node_by_name("clock").id, attrs={"now_s": parse_clock(hhmm)})
     agents["sim_robot"].now_s = parse_clock(hhmm)
-    for name in ("object_recognition", "human_observer", "agenda"):
+    for name in ("object_recognition", "agenda", "human_observer"):  # the observer's links follow the agenda
         agents[name].step()
     graph.dispatch()
 
