@@ -131,6 +131,12 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
             target = getattr(goal, kind, None)
             if isinstance(target, str) and target not in known:
                 raise located.error(("missions", i, "goal", kind), unknown(kind, target, known))
+        members = getattr(goal, "group", None) or []
+        for j, member in enumerate(members):
+            if member not in people:
+                raise located.error(("missions", i, "goal", "group", j), unknown("person", member, people))
+            if member in members[:j]:
+                raise located.error(("missions", i, "goal", "group", j), f"{member!r} is named twice in the group")
 
 
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:

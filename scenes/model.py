@@ -229,12 +229,21 @@ class PersonGoal(Strict):
     person: Name
 
 
-_GOAL_KINDS = ("pose", "room", "object", "person")
+class GroupGoal(Strict):
+    group: list[Name] = Field(min_length=2, description="people the robot faces together (takeTheAttention)")
+
+
+class WaitGoal(Strict):
+    wait: Name = Field(description="agenda activity id: the mission ends when that activity has")
+
+
+_GOAL_KINDS = ("pose", "room", "object", "person", "group", "wait")
+_GOALS = (PoseGoal, RoomGoal, ObjectGoal, PersonGoal, GroupGoal, WaitGoal)
 
 
 def _goal_kind(value: Any) -> str | None:
     """Which goal a mapping is, by its key; None lets pydantic report "not one of them"."""
-    if isinstance(value, PoseGoal | RoomGoal | ObjectGoal | PersonGoal):
+    if isinstance(value, _GOALS):
         return next(k for k in _GOAL_KINDS if hasattr(value, k))
     if isinstance(value, dict):
         kinds = [k for k in _GOAL_KINDS if k in value]
@@ -243,10 +252,12 @@ def _goal_kind(value: Any) -> str | None:
 
 
 Goal = Annotated[Annotated[PoseGoal, Tag("pose")] | Annotated[RoomGoal, Tag("room")]
-                 | Annotated[ObjectGoal, Tag("object")] | Annotated[PersonGoal, Tag("person")],
+                 | Annotated[ObjectGoal, Tag("object")] | Annotated[PersonGoal, Tag("person")]
+                 | Annotated[GroupGoal, Tag("group")] | Annotated[WaitGoal, Tag("wait")],
                  Discriminator(_goal_kind, custom_error_type="goal_kind",
                                custom_error_message="a goal is one of {pose: [x, y, theta]}, {room: NAME}, "
-                                                    "{object: NAME} or {person: NAME}")]
+                                                    "{object: NAME}, {person: NAME}, {group: [P1, P2, ...]} "
+                                                    "or {wait: ACTIVITY}")]
 
 
 class Mission(Strict):
@@ -257,7 +268,8 @@ class Mission(Strict):
 
 
     def goal_text(self) -> str:
-        """The mission string of the executive (`room:X`, `object:X`, `person:X`, `pose:x,y,theta`)."""
+        """The mission string of the executive (`room:X`, `object:X`, `person:X`, `group:P1+P2`,
+        `wait:ACTIVITY`, `pose:x,y,theta`; agents/missions/kinds.py)."""
         goal = self.goal
         if isinstance(goal, PoseGoal):
             return f"pose:{goal.pose.x},{goal.pose.y},{goal.pose.theta}"
@@ -265,6 +277,10 @@ class Mission(Strict):
             return f"room:{goal.room}"
         if isinstance(goal, ObjectGoal):
             return f"object:{goal.object}"
+        if isinstance(goal, GroupGoal):
+            return "group:" + "+".join(goal.group)
+        if isinstance(goal, WaitGoal):
+            return f"wait:{goal.wait}"
         return f"person:{goal.person}"
 
 

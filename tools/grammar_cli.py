@@ -97,24 +97,12 @@ def _parse_time(text: str | None) -> float | None:
     return None
 
 
-def _load_world(scene: Path, at_s: float | None) -> Any:
-    """A ``.json`` file is a networkx node-link graph, a ``.xml`` file an AGM world; anything
-    else is a scene: its symbolic graph (rooms, doors, robot, people, objects, the day's
-    activities with their state at ``at_s``, by default the scene clock's start)."""
-    if scene.suffix.lower() in (".json", ".xml"):
-        from grammar.agm_world import load_world
+def _load_world(path: Path) -> Any:
+    """A world file: ``.json`` networkx node-link graph or ``.xml`` AGM world (a scene goes through
+    tools/mission_plan.py: the executive's own planning on the agents' DSR at ``--at``)."""
+    from grammar.agm_world import load_world
 
-        return load_world(scene)
-    from agents.world.dsr_readers import symbolic_view
-    from agents.world.offline import graph_at
-    from agents.world.scene_world import load_world as load_scene_world
-    from scenes.yamlio import SourceError
-
-    try:
-        world = load_scene_world(scene)
-    except SourceError as exc:
-        _fail(str(exc))
-    return symbolic_view(graph_at(world, world.scene.clock.start_s if at_s is None else at_s))
+    return load_world(path)
 
 
 def _step_json(step: Any) -> dict[str, Any]:
@@ -173,7 +161,7 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
                                                                    "graph, .xml AGM world)"),
                  mission: Optional[str] = typer.Option(None, "--mission", "-m",
                                                        help="room:NAME, object:NAME, person:NAME, group:P1+P2, "
-                                                            "wait:ACTIVITY"),
+                                                            "wait:ACTIVITY, pose:X,Y,THETA (pose on scenes)"),
                  world_file: Optional[Path] = typer.Option(None, "--world", "-w",
                                                            help="AGM world (.xml) or node-link graph (.json); "
                                                                 "use with --target, as AGM's agglplan"),
@@ -199,6 +187,11 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
             _fail("with --world/--target, give no SCENE, --mission, --robot or --at")
     elif scene is None or mission is None:
         _fail("give SCENE --mission M, or --world W.xml --target T.aggt [--grammar G.aggl]")
+    elif scene.suffix.lower() not in (".json", ".xml"):  # a scene: the executive's own planning at --at
+        from tools.mission_plan import plan_scene
+
+        plan_scene(scene, mission, _parse_time(at), grammar_file, robot, max_expansions, as_json)
+        return
     try:
         grammar = load_grammar(grammar_file or default_grammar_path())
         if agm_mode:
@@ -206,7 +199,7 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
 
             assert world_file is not None and target_file is not None
             target = load_target(target_file)
-            world = _load_world(world_file, None)
+            world = _load_world(world_file)
             result = Planner(grammar, world).plan(target, max_expansions=max_expansions)
             payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file}
             what = f"target {str(target_file)!r}"
@@ -214,7 +207,7 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
             from grammar.missions import plan_mission
 
             assert scene is not None and mission is not None
-            world = _load_world(scene, _parse_time(at))
+            world = _load_world(scene)
             result = plan_mission(grammar, world, mission, robot=robot, max_expansions=max_expansions)
             payload = {"mission": mission, "grammar": grammar.file}
             what = repr(mission)

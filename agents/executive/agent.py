@@ -1,23 +1,38 @@
 """The executive agent: missions -> plans -> intentions, monitored until done or failed.
 
-The DSR contract (fixed; see docs/ARCHITECTURE.md):
+The DSR contract (fixed; see docs/ARCHITECTURE.md, names in agents/world/vocabulary.py):
 - ``mission/<id>`` nodes (type ``mission``): ``mission_id``, ``goal`` (mission string), ``time_s``,
   ``state`` pending -> active -> done | failed, ``reason``, ``started_s``, ``finished_s``, ``plan``
   (rule names), ``replans``.
-- ``intention/<id>/<k>`` nodes (type ``intention``) with an edge intention -(step_of)-> mission:
-  ``kind`` navigate | wait, ``state`` active -> done | failed (written by the executing agent),
+- ``intention/<id>/<attempt>.<step>`` nodes (type ``intention``) with an edge intention -(step_of)->
+  mission: ``kind`` navigate | wait, ``state`` active -> done | failed (navigate: written by the
+  social navigation; wait: by this agent when the activity has ended) | cancelled,
   ``goal_x/goal_y/goal_theta/goal_has_theta`` or ``until_s``, ``rule``, ``bindings``, ``reason``.
-The executive writes missions and intentions; social navigation only flips an intention's state.
+The executive writes missions and intentions; social navigation only flips a navigate intention's state.
+
+Replans (why two budgets): a step that fails (no path, timed out) may be retried MAX_REPLANS times;
+a world that changes under the plan (the approached person walks on, an agenda change or a door
+alters the route) is not a failure, and is followed up to MAX_WORLD_REPLANS times.
 """
 
 from __future__ import annotations
 
-from agents.missions.planning import MissionPlanner, PlanStep, StepFailed
+from collections import Counter
+
+from agents.missions.kinds import MissionStringError
+from agents.missions.planning import MissionPlanner, intention_end, remaining_route, route_rooms
+from agents.missions.steps import PlanStep, Rule, StepFailed
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
+from agents.world.freshness import interactions_follow_activities, observed_up_to
+from agents.world.vocabulary import (ActivityView, ClockView, EdgeType, IntentionKind, IntentionState,
+                                     IntentionView, MissionState, MissionView, NodeType, intention_name, intentions,
+                                     mission_name, missions)
 from scenes.clock import format_clock, parse_clock
 
 MAX_REPLANS = 4
+MAX_WORLD_REPLANS = 20
+FAILURE, WORLD = "failure", "world"
 
 
 class ExecutiveAgent(Agent):
@@ -28,6 +43,7 @@ class ExecutiveAgent(Agent):
         self.rec = recorder
         self.planner = MissionPlanner(self.scene, grammar_file=self.config.options.get("grammar"))
         self._steps: dict[str, list[PlanStep]] = {}
+        self._replans: dict[str, Counter[str]] = {}
         self._written_missions = False
         self._dirty = True
         self._world_changed = False
@@ -41,7 +57,7 @@ class ExecutiveAgent(Agent):
 
     def _on_symbolic_change(self, node, *_rest: object) -> None:  # noqa: ANN001 - dsr.Node
         """Activities and doors are what the grammar's preconditions read: re-check the plan."""
-        if node.type in ("activity", "door"):
+        if node.type in (NodeType.ACTIVITY, NodeType.DOOR):
             self._world_changed = True
 
     def _write_missions(self) -> None:
@@ -49,158 +65,169 @@ class ExecutiveAgent(Agent):
         g = self.graph
         with g.transaction():
             for mission in self.scene.missions:
-                if g.get_node_by_name(f"mission/{mission.id}") is None:
-                    g.insert_node(type="mission", name=f"mission/{mission.id}",
+                if g.get_node_by_name(mission_name(mission.id)) is None:
+                    g.insert_node(type=NodeType.MISSION, name=mission_name(mission.id),
                                   attrs={"mission_id": mission.id, "goal": mission.goal_text(),
-                                         "time_s": parse_clock(mission.time), "state": "pending",
+                                         "time_s": parse_clock(mission.time), "state": MissionState.PENDING,
                                          "description": mission.description, "replans": 0})
         self._written_missions = True
 
     def step(self) -> None:
         g = self.graph
-        clock = g.get_node_by_name("clock")
+        clock = ClockView.of(g)
         if clock is None or g.get_node_by_name(self.scene.robot.name) is None:
             return
         if not self._written_missions:
             self._write_missions()
-        now_s = float(clock.attrs["now_s"])
+        now_s = clock.now_s
         self.rec.set_time(now_s)
         if not self._dirty:
             return
         self._dirty = False
-        missions = sorted(g.nodes_of_type("mission"), key=lambda n: float(n.attrs.get("time_s", 0)))
-        active = [m for m in missions if m.attrs.get("state") == "active"]
+        day = missions(g)
+        active = [m for m in day if m.state == MissionState.ACTIVE]
         if active:
             self._monitor(active[0], now_s)
             return
-        due = [m for m in missions if m.attrs.get("state") == "pending" and float(m.attrs["time_s"]) <= now_s]
+        due = [m for m in day if m.state == MissionState.PENDING and m.time_s <= now_s]
+        if due and not (observed_up_to(g, now_s) and interactions_follow_activities(g)):
+            self._dirty = True  # after a clock skip or an activity's end: plan on the world of now
+            return
         if due:
             self._start(due[0], now_s)
 
-    # ----------------------------------------------------------------- mission lifecycle
-    def _start(self, mission, now_s: float) -> None:  # noqa: ANN001
-        self.graph.update_node(mission.id, attrs={"state": "active", "started_s": now_s})
-        self.rec.event(f"{format_clock(now_s)} mission {mission.attrs['mission_id']} ({mission.attrs['goal']}) started")
-        self._plan(mission, now_s, reason="start")
+    def _mission(self, mission: MissionView) -> MissionView:
+        """The mission as the DSR holds it now (after this agent's own writes)."""
+        return MissionView.from_node(self.graph.get_node(mission.node_id))
 
-    def _plan(self, mission, now_s: float, reason: str) -> None:  # noqa: ANN001
-        mission_id = str(mission.attrs["mission_id"])
+    # ----------------------------------------------------------------- mission lifecycle
+    def _start(self, mission: MissionView, now_s: float) -> None:
+        self.graph.update_node(mission.node_id, attrs={"state": MissionState.ACTIVE, "started_s": now_s})
+        self.rec.event(f"{format_clock(now_s)} mission {mission.mission_id} ({mission.goal}) started")
+        self._replans[mission.mission_id] = Counter()
+        self._plan(self._mission(mission), now_s, reason="start")
+
+    def _plan(self, mission: MissionView, now_s: float, reason: str) -> None:
         try:
-            steps = self.planner.plan(self.graph, str(mission.attrs["goal"]), now_s)
-        except StepFailed as exc:
-            self._finish(mission, now_s, "failed", f"no plan: {exc}")
+            steps = self.planner.plan(self.graph, mission.goal).steps
+        except (StepFailed, MissionStringError) as exc:
+            self._finish(mission, now_s, MissionState.FAILED, f"no plan: {exc}")
             return
-        self._steps[mission_id] = steps
+        self._steps[mission.mission_id] = steps
         explained = " -> ".join(step.describe() for step in steps) or "(already satisfied)"
-        self.graph.update_node(mission.id, attrs={"plan": [s.rule for s in steps]})
-        self.rec.event(f"{format_clock(now_s)} plan for {mission_id} ({reason}): {explained}")
-        self.log.info("plan for %s (%s): %s", mission_id, reason, explained)
+        self.graph.update_node(mission.node_id, attrs={"plan": [s.rule for s in steps]})
+        self.rec.event(f"{format_clock(now_s)} plan for {mission.mission_id} ({reason}): {explained}")
+        self.log.info("plan for %s (%s): %s", mission.mission_id, reason, explained)
         if not steps:
-            self._finish(mission, now_s, "done", "")
+            self._finish(mission, now_s, MissionState.DONE, "")
             return
         self._issue(mission, steps, 0, now_s)
 
-    def _issue(self, mission, steps: list[PlanStep], index: int, now_s: float) -> None:  # noqa: ANN001
+    def _issue(self, mission: MissionView, steps: list[PlanStep], first: int, now_s: float) -> None:
         g = self.graph
-        mission_id = str(mission.attrs["mission_id"])
-        first = index
-        while index + 1 < len(steps) and steps[index].rule == "changeRoom" and steps[index + 1].navigates:
-            index += 1  # door-to-door hops followed by a move: one intention, confined to the route's rooms
+        index = intention_end(steps, first)
         step = steps[index]
         try:
-            attrs = step.intention_attrs(g, now_s)
+            attrs = step.intention_attrs(g, self.scene)
         except StepFailed as exc:
-            self._replan_or_fail(mission, now_s, f"step {step.rule}: {exc}")
+            self._replan_or_fail(mission, now_s, f"step {step.rule}: {exc}", FAILURE)
             return
-        if index > first:
-            hops = steps[first:index]
-            attrs["rooms"] = [hops[0].bindings["r1"], *(hop.bindings["r2"] for hop in hops),
-                              *([step.bindings["room"]] if step.rule == "goToRoom" else [])]
-            attrs["pass_through"] = step.rule == "changeRoom"
-        replans = int(mission.attrs.get("replans", 0))
-        name = f"intention/{mission_id}/{replans}.{index}"
+        rooms = route_rooms(steps, first, index)
+        if rooms:
+            attrs["rooms"] = rooms
+        name = intention_name(mission.mission_id, mission.replans, index)
         with g.transaction():
-            for old in g.nodes_of_type("intention"):
-                if old.attrs.get("mission_id") == mission_id and old.attrs.get("state") == "active":
-                    g.update_node(old.id, attrs={"state": "cancelled"})
-            node = g.get_node_by_name(name) or g.insert_node(type="intention", name=name, attrs={})
-            g.update_node(node.id, attrs={**attrs, "mission_id": mission_id, "step": index, "rule": step.rule,
+            self._cancel_active(mission.mission_id)
+            node = g.get_node_by_name(name) or g.insert_node(type=NodeType.INTENTION, name=name, attrs={})
+            g.update_node(node.id, attrs={**attrs, "mission_id": mission.mission_id, "step": index, "rule": step.rule,
                                           "bindings": [f"{k}={v}" for k, v in sorted(step.bindings.items())],
-                                          "state": "active", "issued_s": now_s})
-            g.insert_or_assign_edge(node.id, mission.id, "step_of", attrs={})
+                                          "state": IntentionState.ACTIVE, "issued_s": now_s})
+            g.insert_or_assign_edge(node.id, mission.node_id, EdgeType.STEP_OF, attrs={})
         merged = " -> ".join(st.describe() for st in steps[first:index + 1])
-        self.rec.event(f"{format_clock(now_s)} {mission_id} steps {first + 1}-{index + 1}/{len(steps)}: {merged}"
-                       if index > first else f"{format_clock(now_s)} {mission_id} step {index + 1}/{len(steps)}: "
-                       f"{step.describe()}")
+        which = f"steps {first + 1}-{index + 1}" if index > first else f"step {index + 1}"
+        self.rec.event(f"{format_clock(now_s)} {mission.mission_id} {which}/{len(steps)}: {merged}")
 
-    def _monitor(self, mission, now_s: float) -> None:  # noqa: ANN001
-        g = self.graph
-        mission_id = str(mission.attrs["mission_id"])
-        steps = self._steps.get(mission_id)
+    def _cancel_active(self, mission_id: str) -> None:
+        for old in intentions(self.graph, mission_id):
+            if old.active:
+                self.graph.update_node(old.node_id, attrs={"state": IntentionState.CANCELLED})
+
+    def _monitor(self, mission: MissionView, now_s: float) -> None:
+        steps = self._steps.get(mission.mission_id)
         if steps is None:  # restarted executive: plan again from the current world
+            self._replans.setdefault(mission.mission_id, Counter())
             self._plan(mission, now_s, reason="executive restarted")
             return
-        intentions = [n for n in g.nodes_of_type("intention")
-                      if n.attrs.get("mission_id") == mission_id and n.attrs.get("state") != "cancelled"]
-        if not intentions:
+        current_ones = [i for i in intentions(self.graph, mission.mission_id) if i.state != IntentionState.CANCELLED]
+        if not current_ones:
             self._issue(mission, steps, 0, now_s)
             return
-        current = max(intentions, key=lambda n: float(n.attrs.get("issued_s", 0)))
-        state = current.attrs.get("state")
-        index = int(current.attrs.get("step", 0))
-        if state == "done":
-            if index + 1 < len(steps):
-                self._issue(mission, steps, index + 1, now_s)
+        current = max(current_ones, key=lambda i: i.issued_s)
+        if current.step >= len(steps):
+            self._plan(mission, now_s, reason="plan changed under a running step")
+            return
+        step = steps[current.step]
+        if current.active and current.kind == IntentionKind.WAIT:
+            self._watch_wait(current, step, now_s)
+            current = IntentionView.from_node(self.graph.get_node(current.node_id))
+        if current.state == IntentionState.DONE:
+            if current.step + 1 < len(steps):
+                self._issue(mission, steps, current.step + 1, now_s)
             else:
-                self._finish(mission, now_s, "done", "")
-        elif state == "failed":
-            self._replan_or_fail(mission, now_s, str(current.attrs.get("reason", "step failed")))
-        elif state == "active" and steps[index].diverged(g, now_s):
-            self._replan_or_fail(mission, now_s, f"world diverged during {steps[index].rule}")
-        elif state == "active" and self._world_changed:
+                self._finish(mission, now_s, MissionState.DONE, "")
+        elif current.state == IntentionState.FAILED:
+            self._replan_or_fail(mission, now_s, current.reason or "step failed", FAILURE)
+        elif current.active and step.diverged(self.graph):
+            self._replan_or_fail(mission, now_s, f"world diverged during {step.rule}", WORLD)
+        elif current.active and self._world_changed:
             self._world_changed = False
             self._check_route(mission, steps, now_s)
 
-    def _check_route(self, mission, steps: list[PlanStep], now_s: float) -> None:  # noqa: ANN001
+    def _watch_wait(self, intention: IntentionView, step: PlanStep, now_s: float) -> None:
+        """A wait is this agent's own intention: done once the activity has ended; its deadline
+        follows the activity when the agenda moves it (the simulator skips idle time up to it)."""
+        activity: ActivityView | None = step.awaited(self.graph)
+        if step.wait_over(self.graph):
+            self.graph.update_node(intention.node_id, attrs={"state": IntentionState.DONE})
+            ended = "left the agenda" if activity is None else activity.state
+            self.rec.event(f"{format_clock(now_s)} waited for {step.subject} ({ended})")
+        elif activity is not None and activity.end_s != intention.until_s:
+            self.graph.update_node(intention.node_id, attrs={"until_s": activity.end_s})
+
+    def _check_route(self, mission: MissionView, steps: list[PlanStep], now_s: float) -> None:
         """Replan when an agenda change or a door makes the symbolic plan's remaining route differ."""
         g = self.graph
         robot = g.get_node_by_name(self.scene.robot.name)
-        here = next((g.get_node(e.dst).name for e in g.edges_from(robot.id, "in") if g.get_node(e.dst)), None)
+        here = next((g.get_node(e.dst).name for e in g.edges_from(robot.id, EdgeType.IN) if g.get_node(e.dst)), None)
         try:
-            fresh = self.planner.plan(g, str(mission.attrs["goal"]), now_s)
-        except StepFailed as exc:
-            self._replan_or_fail(mission, now_s, f"world diverged: {exc}")
+            fresh = self.planner.plan(g, mission.goal).steps
+        except (StepFailed, MissionStringError) as exc:
+            self._replan_or_fail(mission, now_s, f"world diverged: {exc}", WORLD)
             return
-        if _route(steps, here) != _route(fresh, here):
-            old, new = " -> ".join(_route(steps, here)) or "-", " -> ".join(_route(fresh, here)) or "-"
-            self._replan_or_fail(mission, now_s, f"world diverged: route {old} is now {new}")
+        old, new = remaining_route(steps, here), remaining_route(fresh, here)
+        if old != new:
+            self._replan_or_fail(mission, now_s, f"world diverged: route {' -> '.join(old) or '-'} is now "
+                                                 f"{' -> '.join(new) or '-'}", WORLD)
 
-    def _replan_or_fail(self, mission, now_s: float, reason: str) -> None:  # noqa: ANN001
-        replans = int(mission.attrs.get("replans", 0))
-        if replans >= MAX_REPLANS:
-            self._finish(mission, now_s, "failed", reason)
+    def _replan_or_fail(self, mission: MissionView, now_s: float, reason: str, cause: str) -> None:
+        counts = self._replans.setdefault(mission.mission_id, Counter())
+        limit = MAX_REPLANS if cause == FAILURE else MAX_WORLD_REPLANS
+        if counts[cause] >= limit:
+            self._finish(mission, now_s, MissionState.FAILED, reason)
             return
-        self.graph.update_node(mission.id, attrs={"replans": replans + 1})
-        self.rec.event(f"{format_clock(now_s)} replanning {mission.attrs['mission_id']}: {reason}", level="WARN")
-        self._plan(self.graph.get_node(mission.id), now_s, reason=reason)
+        counts[cause] += 1
+        self.graph.update_node(mission.node_id, attrs={"replans": mission.replans + 1})
+        self.rec.event(f"{format_clock(now_s)} replanning {mission.mission_id}: {reason}", level="WARN")
+        self._plan(self._mission(mission), now_s, reason=reason)
 
-    def _finish(self, mission, now_s: float, state: str, reason: str) -> None:  # noqa: ANN001
+    def _finish(self, mission: MissionView, now_s: float, state: str, reason: str) -> None:
         g = self.graph
         with g.transaction():
-            g.update_node(mission.id, attrs={"state": state, "finished_s": now_s, "reason": reason})
-            for node in g.nodes_of_type("intention"):
-                if node.attrs.get("mission_id") == mission.attrs["mission_id"] and node.attrs.get("state") == "active":
-                    g.update_node(node.id, attrs={"state": "cancelled"})
-        took = now_s - float(mission.attrs.get("started_s", now_s))
-        self.rec.event(f"{format_clock(now_s)} mission {mission.attrs['mission_id']} {state}"
-                       f"{': ' + reason if reason else ''} ({took:.0f} s)", level="INFO" if state == "done" else "ERROR")
-        self.log.info("mission %s %s %s", mission.attrs["mission_id"], state, reason)
-
-
-def _route(steps: list[PlanStep], here: str | None) -> list[str]:
-    """The rooms still to enter (and waits still to do), from the robot's current room on."""
-    route = [step.bindings["r2"] if step.rule == "changeRoom" else f"wait:{step.bindings.get('a', '')}"
-             for step in steps if step.rule in ("changeRoom", "waitForPassage")]
-    if here in route:
-        route = route[route.index(here) + 1:]
-    return route
+            g.update_node(mission.node_id, attrs={"state": state, "finished_s": now_s, "reason": reason})
+            self._cancel_active(mission.mission_id)
+        self._steps.pop(mission.mission_id, None)
+        took = now_s - (mission.started_s if mission.started_s is not None else now_s)
+        ok = state == MissionState.DONE
+        self.rec.event(f"{format_clock(now_s)} mission {mission.mission_id} {state}"
+                       f"{': ' + reason if reason else ''} ({took:.0f} s)", level="INFO" if ok else "ERROR")
+        self.log.info("mission %s %s %s", mission.mission_id, state, reason)

@@ -1,208 +1,139 @@
-"""From a mission string to executable steps, and from a step to an intention's attributes.
+"""From a mission string to executable steps, and from steps to intentions.
 
-Why steps resolve their goal pose only when issued: a plan made at 11:00 may be executed at
-11:02; the person to approach has moved and an activity may have started.  Each step therefore
-keeps its *symbolic* bindings and computes (x, y, theta) from the live DSR when it is issued, and
-says when the world has diverged enough to need a new plan.
+Why one planner for the executive and `chronav plan`: the live executive and the offline command
+must plan a mission the same way on the same DSR.  Both call :meth:`MissionPlanner.plan` on a DSR
+graph (the live replica, or ``agents.world.offline.graph_at``) read through
+``agents.world.dsr_readers.symbolic_view``; both group the steps into intentions with
+:func:`intention_end` and :func:`route_rooms`.
+
+What the planner adds to the grammar's plan (docs/grammar.md, "Missions"):
+- ``pose:x,y,theta`` is planned as ``room:<room of the pose>`` followed by ``goToPose``;
+- the last ``changeRoom`` of a ``room:`` mission becomes ``goToRoom`` (stop well inside the room,
+  not just past its door); other ``changeRoom`` steps are pass-through waypoints past their door;
+- ``wait:ID`` takes the id `chronav agenda list` shows (``activity/`` prefix optional);
+- a group mission's ``takeTheAttention`` faces the people the mission named.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import shapely
-
-from agents.missions.goals import (FreeSpace, GoalError, GoalPose, pose_facing_group, pose_facing_person,
-                                    pose_in_room, pose_near_object, pose_past_door)
-from scenes.geometry import posed_polygon
-from agents.world.dsr_readers import dsr_objects, dsr_people, symbolic_view
+from agents.missions.kinds import GROUP, POSE, ROOM, MissionRequest, MissionStringError, check_names, parse_mission
+from agents.missions.steps import PlanStep, Rule, StepFailed, Var
+from agents.world.dsr_readers import symbolic_view
 from scenes.model import Scene
 
-PERSON_MOVED_REPLAN_M = 1.0
 
+class NoMissionPlan(StepFailed):
+    """The mission is well formed but cannot be planned now; ``result`` is the grammar's NoPlan
+    (None when the names were already wrong)."""
 
-class StepFailed(Exception):
-    """A step (or the whole mission) cannot be carried out; the message says why."""
+    def __init__(self, message: str, result: Any = None) -> None:
+        super().__init__(message)
+        self.result = result
 
 
 @dataclass
-class PlanStep:
-    """One rule application: ``rule`` names what to do, ``bindings`` with what (DSR names)."""
+class MissionPlan:
+    """A mission planned: the request, the grammar mission it became, the grammar's plan and the
+    executable steps."""
 
-    rule: str
-    bindings: dict[str, str]
-    scene: Scene = field(repr=False)
-    issued_goal: GoalPose | None = field(default=None, repr=False)
+    request: MissionRequest
+    grammar_mission: str
+    result: Any            # grammar.planner.Plan
+    steps: list[PlanStep]
 
     @property
-    def navigates(self) -> bool:
-        """Does this step end with the robot driving somewhere (as opposed to waiting)?"""
-        return self.rule not in ("waitFor", "waitForPassage")
-
-    def describe(self) -> str:
-        args = ", ".join(f"{k}={v}" for k, v in sorted(self.bindings.items()))
-        return f"{self.rule}({args})"
-
-    # ------------------------------------------------------------ resolution against the live DSR
-    def intention_attrs(self, graph: Any, now_s: float) -> dict[str, Any]:
-        if self.rule in ("waitFor", "waitForPassage"):
-            name = self.bindings.get("a") or f"activity/{self.bindings.get('activity', '')}"
-            activity = graph.get_node_by_name(name)
-            if activity is None:
-                raise StepFailed(f"unknown activity {name!r}")
-            return {"kind": "wait", "until_s": float(activity.attrs["end_s"])}
-        goal = self._goal_pose(graph, now_s)
-        self.issued_goal = goal
-        return {"kind": "navigate", **goal.as_attrs(), "target": self.bindings.get("target", ""),
-                "pass_through": self.rule == "changeRoom"}
-
-    def _goal_pose(self, graph: Any, now_s: float) -> GoalPose:
-        del now_s
-        robot = graph.get_node_by_name(self.scene.robot.name)
-        rx, ry, _ = graph.world_pose(robot.id)
-        objects = dsr_objects(graph)
-        people = dsr_people(graph)
-        free = FreeSpace(self.scene, objects)
-        busy = _busy_spaces(graph, objects)
-        b = self.bindings
-        try:
-            if self.rule == "goToPose":
-                return GoalPose(float(b["x"]), float(b["y"]), float(b["theta"]))
-            if self.rule == "goToRoom":
-                return pose_in_room(b["room"], self.scene, free, people, busy, (rx, ry))
-            if self.rule == "changeRoom":
-                return pose_past_door(b["d"], b["r2"], self.scene, free, people)
-            if self.rule == "goToObject":
-                obj = next((o for o in objects if o.name == b.get("object", b.get("o"))), None)
-                if obj is None:
-                    raise StepFailed(f"object {b.get('object', b.get('o'))!r} is not in the DSR")
-                return pose_near_object(obj, free, people, busy, (rx, ry), self.scene.robot.radius)
-            if self.rule == "approachPerson":
-                person = next((p for p in people if p.name == b.get("person", b.get("p"))), None)
-                if person is None:
-                    raise StepFailed(f"person {b.get('person', b.get('p'))!r} is not in the DSR")
-                return pose_facing_person(person, free, people, (rx, ry))
-            if self.rule == "takeTheAttention":
-                names = set(b["group"].split("+")) if "group" in b else _group_of(graph, {b["p"], b["q"]})
-                members = [p for p in people if p.name in names]
-                if len(members) != len(names):
-                    raise StepFailed(f"group members not all seen: {sorted(names)}")
-                return pose_facing_group(members, free, people, (rx, ry))
-        except GoalError as exc:
-            raise StepFailed(str(exc)) from None
-        raise StepFailed(f"rule {self.rule!r} has no executable action")
-
-    def diverged(self, graph: Any, now_s: float) -> bool:
-        """Has the world changed under this step enough that its goal pose is no longer right?"""
-        del now_s
-        if self.issued_goal is None:
-            return False
-        if self.rule == "approachPerson":
-            person = graph.get_node_by_name(self.bindings["person"])
-            if person is None:
-                return True
-            px, py, _ = graph.world_pose(person.id)
-            expected = self._goal_distance_reference(graph)
-            return expected is not None and math.hypot(px - expected[0], py - expected[1]) > PERSON_MOVED_REPLAN_M
-        if self.rule == "goToObject":
-            busy = _busy_spaces(graph, dsr_objects(graph))
-            point = shapely.Point(self.issued_goal.x, self.issued_goal.y)
-            return any(space.contains(point) for space in busy)
-        return False
-
-    def _goal_distance_reference(self, graph: Any) -> tuple[float, float] | None:
-        if not hasattr(self, "_person_at_issue"):
-            person = graph.get_node_by_name(self.bindings["person"])
-            if person is None:
-                return None
-            x, y, _ = graph.world_pose(person.id)
-            self._person_at_issue = (x, y)
-        return self._person_at_issue
-
-
-def _group_of(graph: Any, seeds: set[str]) -> set[str]:
-    """The seeds plus everyone linked to them by `interacting` edges (transitively)."""
-    names = set(seeds)
-    changed = True
-    while changed:
-        changed = False
-        for edge in graph.edges_of_type("interacting"):
-            src, dst = graph.get_node(edge.src), graph.get_node(edge.dst)
-            if src is None or dst is None or src.type != "person" or dst.type != "person":
-                continue
-            if (src.name in names) != (dst.name in names):
-                names |= {src.name, dst.name}
-                changed = True
-    return names
-
-
-def _busy_spaces(graph: Any, objects: list) -> list[shapely.Geometry]:
-    """Interaction spaces of objects with a running activity: no goal pose inside them."""
-    running = {str(n.attrs.get("object")) for n in graph.nodes_of_type("activity") if n.attrs.get("state") == "running"}
-    return [posed_polygon(o.interaction, o.x, o.y, o.theta) for o in objects if o.name in running]
-
-
-def direct_steps(goal_text: str, scene: Scene) -> list[PlanStep]:
-    """Mission string -> one step, without symbolic planning (used when no grammar is configured)."""
-    kind, _, arg = goal_text.partition(":")
-    if kind == "pose":
-        try:
-            x, y, theta = (float(v) for v in arg.split(","))
-        except ValueError:
-            raise StepFailed(f"bad pose mission {goal_text!r}; expected pose:x,y,theta") from None
-        return [PlanStep("goToPose", {"x": str(x), "y": str(y), "theta": str(theta)}, scene)]
-    rule = {"room": "goToRoom", "object": "goToObject", "person": "approachPerson", "group": "takeTheAttention",
-            "wait": "waitFor"}.get(kind)
-    if rule is None or not arg:
-        raise StepFailed(f"unknown mission {goal_text!r}")
-    key = {"goToRoom": "room", "goToObject": "object", "approachPerson": "person", "takeTheAttention": "group",
-           "waitFor": "activity"}[rule]
-    return [PlanStep(rule, {key: arg, "target": arg}, scene)]
-
-
-PASS_THROUGH_M = 0.7   # changeRoom: aim this far past the door, inside the next room
+    def cost(self) -> float:
+        return float(self.result.cost)
 
 
 class MissionPlanner:
-    """Plans missions with the AGGL grammar on the symbolic DSR (docs/grammar.md).
+    """Plans missions with the AGGL grammar (docs/grammar.md) on the symbolic part of a DSR graph."""
 
-    Mission strings are the grammar's (``room:``, ``object:``, ``person:``, ``group:``, ``wait:``)
-    plus ``pose:x,y,theta``, planned as ``room:<room of the pose>`` followed by ``goToPose``.
-    The last ``changeRoom`` of a room mission becomes ``goToRoom`` (stop well inside the room);
-    other ``changeRoom`` steps are pass-through waypoints just past their door.
-    """
-
-    def __init__(self, scene: Scene, grammar_file: str | None = None) -> None:
+    def __init__(self, scene: Scene, grammar_file: str | Path | None = None, *, robot: str | None = None,
+                 max_expansions: int | None = None) -> None:
         from grammar import default_grammar_path, load_grammar
 
         self.scene = scene
+        self.robot = robot or scene.robot.name
         self.grammar_file = Path(grammar_file) if grammar_file else default_grammar_path()
         self.grammar = load_grammar(self.grammar_file)
+        self.max_expansions = max_expansions
 
-    def plan(self, graph: Any, goal_text: str, now_s: float) -> list[PlanStep]:
+    def plan(self, graph: Any, goal_text: str) -> MissionPlan:
+        """Plan ``goal_text`` on ``graph`` (a DSR replica). MissionStringError for a malformed
+        mission; NoMissionPlan (a StepFailed) when the world offers no plan."""
         from grammar import MissionError, plan_mission
 
-        del now_s
-        kind, _, arg = goal_text.partition(":")
-        final: list[PlanStep] = []
-        target = goal_text
-        if kind == "pose":
-            final = direct_steps(goal_text, self.scene)
-            x, y = float(final[0].bindings["x"]), float(final[0].bindings["y"])
-            room = self.scene.room_at(x, y)
+        request = parse_mission(goal_text)
+        problem = check_names(request, graph)
+        if problem is not None:
+            raise NoMissionPlan(f"mission {goal_text!r}: {problem}")
+        room = None
+        if request.kind == POSE:
+            assert request.pose is not None
+            room = self.scene.room_at(request.pose[0], request.pose[1])
             if room is None:
-                raise StepFailed(f"pose ({x:g}, {y:g}) is in no room")
-            target = f"room:{room}"
+                raise NoMissionPlan(f"mission {goal_text!r}: ({request.pose[0]:g}, {request.pose[1]:g}) is in no "
+                                    f"room of scene {self.scene.name!r}")
+        grammar_mission = request.grammar_mission(room)
+        options = {} if self.max_expansions is None else {"max_expansions": self.max_expansions}
         try:
-            result = plan_mission(self.grammar, symbolic_view(graph), target, robot=self.scene.robot.name)
-        except MissionError as exc:
-            raise StepFailed(str(exc)) from None
+            result = plan_mission(self.grammar, symbolic_view(graph), grammar_mission, robot=self.robot, **options)
+        except MissionError as exc:  # the grammar refused a form this module accepted: a bug, said plainly
+            raise MissionStringError(str(exc)) from None
         if not result.found:
-            raise StepFailed(result.reason)
-        steps = [PlanStep(step.rule, dict(step.bindings), self.scene) for step in result.steps]
-        if kind == "room" and steps and steps[-1].rule == "changeRoom":
-            steps[-1] = PlanStep("goToRoom", {"room": steps[-1].bindings["r2"], "target": arg}, self.scene)
-        return steps + final
+            raise NoMissionPlan(result.reason, result)
+        return MissionPlan(request, grammar_mission, result, executable_steps(request, result.steps))
+
+
+def executable_steps(request: MissionRequest, grammar_steps: Any) -> list[PlanStep]:
+    """The grammar's steps as the executive carries them out (see the module docstring)."""
+    steps = [PlanStep(step.rule, dict(step.bindings), float(step.cost)) for step in grammar_steps]
+    if request.kind == ROOM and steps and steps[-1].rule == Rule.CHANGE_ROOM:
+        last = steps[-1]
+        steps[-1] = PlanStep(Rule.GO_TO_ROOM, dict(last.bindings), last.cost)
+    if request.kind == GROUP:
+        for step in steps:
+            if step.rule == Rule.TAKE_THE_ATTENTION:
+                step.members = request.names
+    if request.kind == POSE:
+        assert request.pose is not None
+        x, y, theta = request.pose
+        bindings = {Var.X: repr(x), Var.Y: repr(y), **({} if theta is None else {Var.THETA: repr(theta)})}
+        steps.append(PlanStep(Rule.GO_TO_POSE, bindings, 0.0))
+    return steps
+
+
+def intention_end(steps: list[PlanStep], first: int) -> int:
+    """Index of the last step of the intention that starts at ``first``: door-to-door hops
+    followed by a move become one intention, confined to the route's rooms."""
+    index = first
+    while index + 1 < len(steps) and steps[index].rule == Rule.CHANGE_ROOM and steps[index + 1].navigates:
+        index += 1
+    return index
+
+
+def route_rooms(steps: list[PlanStep], first: int, last: int) -> list[str]:
+    """The rooms an intention spanning ``steps[first..last]`` may cross, in order: the room moves'
+    (empty when it moves to no other room: unconfined, within the robot's room)."""
+    moves = [step for step in steps[first:last + 1] if step.rule in Rule.ROOM_MOVES]
+    if not moves:
+        return []
+    return [moves[0].bindings[Var.FROM_ROOM], *(move.bindings[Var.TO_ROOM] for move in moves)]
+
+
+def remaining_route(steps: list[PlanStep], here: str | None) -> list[str]:
+    """The rooms still to enter (and waits still to do), from the robot's current room on."""
+    route = []
+    for step in steps:
+        if step.rule in Rule.ROOM_MOVES:
+            route.append(step.bindings[Var.TO_ROOM])
+        elif step.rule == Rule.WAIT_FOR_PASSAGE:
+            route.append(f"wait:{step.bindings.get(Var.ACTIVITY, '')}")
+    if here in route:
+        route = route[route.index(here) + 1:]
+    return route

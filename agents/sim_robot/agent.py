@@ -1,14 +1,17 @@
 """The simulated robot agent: owns the simulated world, the robot's body and the sim clock.
 
 Clock policy (why): a 09:00-14:00 day must finish in minutes, yet control must see small, even
-time steps. So the clock runs in three modes, decided every loop from the DSR:
+time steps. So the clock runs in four modes, decided every loop from the DSR:
 - **driving**: a navigation is active (robot attr ``nav_active``): lockstep. The robot publishes
   its pose stamped ``pose_stamp``; it integrates the next ``control_dt`` only once the controller
   answered with ``cmd_stamp >= pose_stamp`` (or a wall-clock watchdog expires: the base then
   brakes, like a real motor driver with stale commands). Never faster than ``clock.rate``.
 - **busy**: a mission is active but nothing drives (the executive is planning): real time.
+- **busy** too when a mission is due and none is active (the executive is about to start it).
 - **idle**: nothing to do: jump to the next mission / wait deadline when ``skip_idle``,
   otherwise run at ``clock.rate``.
+- **starting**: the scene has missions the executive has not written yet: the clock stands still,
+  so a mission due at the start of the day starts then, however long the agents take to start.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ from agents.world.dsr_readers import closed_doors
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at
-from agents.world.vocabulary import AGENDA, CLOCK, WORLD
+from agents.world.vocabulary import AGENDA, CLOCK, WORLD, MissionState, intentions, missions
 from scenes.geometry import project_on_segments
 
 CONTROL_DT_S = 0.1
@@ -147,6 +150,8 @@ class SimRobotAgent(Agent):
                     return
                 cmd = Velocity()  # stale command: brake, keep time flowing
             self._advance(self.control_dt, cmd)
+        elif mode == "starting":
+            return
         elif mode == "busy":
             dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * BUSY_RATE - (self.now_s - self._sim_anchor)))
             if dt > 0:
@@ -186,15 +191,24 @@ class SimRobotAgent(Agent):
         if any(n.attrs.get("state") == "active" and n.attrs.get("kind", "navigate") != "wait"
                for n in g.nodes_of_type("intention")):
             return "busy"
-        if any(n.attrs.get("state") == "active" for n in g.nodes_of_type("mission")) and not any(
-                n.attrs.get("state") == "active" for n in g.nodes_of_type("intention")):
+        day = missions(g)
+        if self.scene.missions and not day:
+            return "starting"  # the executive has not written the day's missions yet: time stands still
+        if any(m.state == MissionState.ACTIVE for m in day) and not any(i.active for i in intentions(g)):
             return "busy"
+        if not any(m.state == MissionState.ACTIVE for m in day) and any(
+                m.state == MissionState.PENDING and m.time_s <= self.now_s for m in day):
+            return "busy"  # a mission is due: let the executive start it now, not minutes of sim time later
         return "idle"
 
     def _next_deadline(self) -> float | None:
-        """Earliest future time something is due: a pending mission, the end of a wait."""
-        times = [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
-                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
+        """Earliest future time something is due: a pending mission, the end of a wait.
+
+        While a mission is active (waiting for an activity), pending missions cannot start, so
+        their times are not deadlines: the clock skips straight to the end of the wait."""
+        busy = any(n.attrs.get("state") == "active" for n in self.graph.nodes_of_type("mission"))
+        times = [] if busy else [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
+                                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
         times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type("intention")
                   if n.attrs.get("state") == "active" and n.attrs.get("kind") == "wait" and "until_s" in n.attrs]
         future = [t for t in times if t > self.now_s]

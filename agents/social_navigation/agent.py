@@ -35,6 +35,7 @@ from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupi
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.runtime.drawing.social_map import log_social_map
 from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
+from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
 
@@ -129,15 +130,14 @@ class SocialNavigationAgent(Agent):
         fixed the route's rooms (agents/world/navigation.py)."""
         return self.maps.build(self.graph, now_s, self.route_rooms)
 
-    def _active_intention(self) -> Any:
-        for node in self.graph.nodes_of_type("intention"):
-            if node.attrs.get("state") == "active" and node.attrs.get("kind") == "navigate":
-                return node
-        return None
+    def _active_intention(self) -> IntentionView | None:
+        """The navigate intention to carry out (one at a time: the executive cancels the previous)."""
+        return next((i for i in intentions(self.graph)
+                     if i.active and i.kind == IntentionKind.NAVIGATE and i.goal is not None), None)
 
     def _laser_points(self, robot: Any, pose: tuple[float, float, float]) -> np.ndarray:
-        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
-        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        view = RobotView.from_node(robot)
+        ranges, angles = np.asarray(view.laser_ranges, dtype=float), np.asarray(view.laser_angles, dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles):
             return np.empty((0, 2))
         hit = ranges < self.scene.robot.laser_range - 1e-6  # a ray at max range hit nothing
@@ -154,28 +154,26 @@ class SocialNavigationAgent(Agent):
         self.rec.set_time(now_s)
         intention = self._active_intention()
         if intention is None:
-            if self.intention_id is not None or robot.attrs.get("nav_active"):
+            if self.intention_id is not None or RobotView.from_node(robot).nav_active:
                 self._stop(robot, None, None)
             self._maybe_log_map(now_s)
             return
-        if intention.id != self.intention_id:
+        if intention.node_id != self.intention_id:
             if observed_up_to(self.graph, now_s):  # after a clock skip, plan on today's people
                 self._start(intention, robot, now_s)
             return
         # Answer the pose first: the simulator integrates the next step while this agent replans.
-        pose_stamp = float(robot.attrs.get("pose_stamp", -1.0))
+        pose_stamp = RobotView.from_node(robot).pose_stamp
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
         # (sim time advances in float steps of control_dt: 2 x 0.1 may sum to 0.19999...)
-        if self.intention_id == intention.id and now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S:
+        if self.intention_id == intention.node_id and now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S:
             self._replan(intention, robot, now_s)
 
-    def _start(self, intention: Any, robot: Any, now_s: float) -> None:
-        self.intention_id = intention.id
-        attrs = intention.attrs
-        theta = float(attrs["goal_theta"]) if attrs.get("goal_has_theta", True) else None
-        self.goal = (float(attrs["goal_x"]), float(attrs["goal_y"]), theta)
-        self.route_rooms = tuple(str(r) for r in attrs.get("rooms", []))
+    def _start(self, intention: IntentionView, robot: Any, now_s: float) -> None:
+        self.intention_id = intention.node_id
+        self.goal = intention.goal
+        self.route_rooms = intention.rooms
         self.started_s = now_s
         self.follower.reset()
         pose = self.graph.world_pose(robot.id)
@@ -192,7 +190,7 @@ class SocialNavigationAgent(Agent):
             self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
             return False
         points = self._route(pose, path)
-        self._adopt(points, now_s, reason, path.cost)
+        self._adopt(points, now_s, reason, path.cost, replan=False)
         return True
 
     def _route(self, pose: tuple[float, float, float], path: Any) -> np.ndarray:
@@ -200,12 +198,12 @@ class SocialNavigationAgent(Agent):
         assert self.goal is not None
         return np.vstack([[pose[0], pose[1]], path.points_m[1:-1], [self.goal[0], self.goal[1]]])
 
-    def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+    def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool = True) -> None:
         self.global_points = points
         self._best_distance, self._progress_s = math.inf, now_s  # a new path: measure progress afresh
         self.band = eb.band_from_path(points, (), self.band_params)
         self.last_replan_s = now_s
-        self._publish_path(points, now_s, reason, cost)
+        self._publish_path(points, now_s, reason, cost, replan)
 
     def _remaining_global(self, pose: tuple[float, float, float]) -> np.ndarray:
         """The global path from the point nearest the robot on (the band may cut inflated corners,
@@ -233,7 +231,7 @@ class SocialNavigationAgent(Agent):
                 goal = nearest_free(smap.cost, smap.spec, goal, max_m=GOAL_TOLERANCE_M)
         return plan(smap, start, goal, cruise_speed_mps=self.cruise, replanner=self.replanner)
 
-    def _replan(self, intention: Any, robot: Any, now_s: float) -> None:
+    def _replan(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         del intention
         if self.band is None or self.goal is None:
             return
@@ -253,7 +251,7 @@ class SocialNavigationAgent(Agent):
             points = self._route(pose, new_path)
             self._adopt(points, now_s, f"replanned ({why})", new_path.cost)
 
-    def _control(self, intention: Any, robot: Any, now_s: float, pose_stamp: float) -> None:
+    def _control(self, intention: IntentionView, robot: Any, now_s: float, pose_stamp: float) -> None:
         assert self.band is not None and self.goal is not None
         pose = self.graph.world_pose(robot.id)
         obstacles = self._laser_points(robot, pose)
@@ -270,9 +268,9 @@ class SocialNavigationAgent(Agent):
         if contact:  # pressed against something ahead: back off slowly while turning to the path
             vx, vy = -BACK_OFF_MPS * math.cos(math.atan2(vy, vx)), -BACK_OFF_MPS * math.sin(math.atan2(vy, vx))
         self.last_answered = pose_stamp
-        passed = bool(intention.attrs.get("pass_through")) and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
+        passed = intention.pass_through and out.distance_to_goal_m < PASS_THROUGH_TOLERANCE_M
         if out.reached or passed:
-            self._stop(robot, intention, "done")
+            self._stop(robot, intention.node_id, IntentionState.DONE)
             self.rec.event(f"{format_clock(now_s)} reached goal of {intention.name} "
                            f"({now_s - self.started_s:.0f} s)")
             return
@@ -308,8 +306,8 @@ class SocialNavigationAgent(Agent):
     def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
         """Speed factor from the free space ahead in the direction of motion (laser), and whether
         the robot is in contact with something ahead."""
-        ranges = np.asarray(robot.attrs.get("laser_ranges", []), dtype=float)
-        angles = np.asarray(robot.attrs.get("laser_angles", []), dtype=float)
+        view = RobotView.from_node(robot)
+        ranges, angles = np.asarray(view.laser_ranges, dtype=float), np.asarray(view.laser_angles, dtype=float)
         if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
             return 1.0, False
         heading = math.atan2(vy, vx)
@@ -319,13 +317,13 @@ class SocialNavigationAgent(Agent):
         free = float(np.min(ranges[ahead])) - self.scene.robot.radius
         return float(np.clip(free / SLOW_ZONE_M, 0.15, 1.0)), free < CONTACT_M
 
-    def _stop(self, robot: Any, intention: Any, state: str | None, reason: str = "") -> None:
+    def _stop(self, robot: Any, intention_id: int | None, state: str | None, reason: str = "") -> None:
         g = self.graph
         with g.transaction():
             g.update_node(robot.id, attrs={"nav_active": False, "cmd_vx": 0.0, "cmd_vy": 0.0, "cmd_omega": 0.0,
-                                           "cmd_stamp": float(robot.attrs.get("pose_stamp", 0.0))})
-            if intention is not None and state is not None:
-                g.update_node(intention.id, attrs={"state": state, "reason": reason})
+                                           "cmd_stamp": max(0.0, RobotView.from_node(robot).pose_stamp)})
+            if intention_id is not None and state is not None and g.get_node(intention_id) is not None:
+                g.update_node(intention_id, attrs={"state": state, "reason": reason})
         self.intention_id = None
         self.band = None
         self.goal = None
@@ -333,22 +331,21 @@ class SocialNavigationAgent(Agent):
 
     def _fail(self, reason: str) -> None:
         robot = self._robot()
-        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
         self.log.warning("navigation failed: %s", reason)
         self.rec.event(f"navigation failed: {reason}", level="ERROR")
-        self._stop(robot, intention, "failed", reason)
+        self._stop(robot, self.intention_id, IntentionState.FAILED, reason)
 
     # ----------------------------------------------------------------- outputs
-    def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float) -> None:
+    def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool) -> None:
         robot = self._robot()
-        intention = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
+        node = self.graph.get_node(self.intention_id) if self.intention_id is not None else None
         with self.graph.transaction():
             attrs = {"path_x": points[:, 0].tolist(), "path_y": points[:, 1].tolist(), "path_cost": float(cost),
                      "planned_s": now_s}
             self.graph.update_node(robot.id, attrs=attrs)
-            if intention is not None:
-                self.graph.update_node(intention.id, attrs={**attrs, "replans": int(intention.attrs.get("replans", 0))
-                                                            + (0 if reason.startswith("intention") else 1)})
+            if node is not None:
+                intention = IntentionView.from_node(node)
+                self.graph.update_node(intention.node_id, attrs={**attrs, "replans": intention.replans + int(replan)})
         self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
         self.rec.line_strip("world/navigation/global_path", points.tolist(), color=[255, 255, 255], radius=0.03)
         self._maybe_log_map(now_s, force=True)

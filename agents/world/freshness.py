@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from agents.world.vocabulary import ActivityState, EdgeType, NodeType
+
 PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
 
 
@@ -22,6 +24,17 @@ def mark_observed(graph: Any, agent: str, now_s: float) -> None:
         graph.update_node(node.id, attrs={"observed_s": now_s})
 
 
+def observed_s(graph: Any, agent: str) -> float | None:
+    """The sim time ``agent`` last stamped, or None before its first stamp."""
+    node = graph.get_node_by_name(f"sensor/{agent}")
+    if node is None:
+        return None
+    try:
+        return float(node.attrs.get("observed_s"))
+    except (TypeError, ValueError):
+        return None
+
+
 def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
     """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
     for agent in agents:
@@ -29,3 +42,17 @@ def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVER
         if node is None or float(node.attrs.get("observed_s", -1e9)) < now_s - slack_s:
             return False
     return True
+
+
+def interactions_follow_activities(graph: Any) -> bool:
+    """False while a person -> object ``interacting`` link remains for an object no running activity
+    has: the human observer has not yet seen that the activity ended (it recomputes its links on its
+    next look).  A planner must not read such an object as in use."""
+    running = {str(node.attrs.get("object")) for node in graph.nodes_of_type(NodeType.ACTIVITY)
+               if node.attrs.get("state") == ActivityState.RUNNING}
+    for edge in graph.edges_of_type(EdgeType.INTERACTING):
+        target = graph.get_node(edge.dst)
+        if target is not None and target.type == NodeType.OBJECT and target.name not in running:
+            return False
+    return True
+

@@ -23,9 +23,10 @@ from agents.lib.socialmap.grid import grid_shape
 from agents.lib.socialmap.types import SocialMapInputError
 from agents.world.building import PLANNING_MARGIN_M
 from agents.world.crowd_scene import check_people
+from agents.world.vocabulary import activity_id_of
 from scenes.clock import parse_clock
 from scenes.loader import LoadedScene, load_scene
-from scenes.model import PoseGoal, RoomGoal, Scene
+from scenes.model import PoseGoal, RoomGoal, Scene, WaitGoal
 from scenes.yamlio import SourceError
 
 
@@ -168,7 +169,19 @@ def resolve_world(loaded: LoadedScene) -> SceneWorld:
             check = world.apply(check, change)
         except AgendaChangeError as exc:
             raise loaded.error(("agenda_changes", change.index), str(exc)) from None
+    _check_wait_missions(loaded, {a.id for a in day.activities} | {a.id for a in check.activities})
     return world
+
+
+def _check_wait_missions(loaded: LoadedScene, activity_ids: set[str]) -> None:
+    """A ``wait`` mission names an activity of the day (or one a scripted change adds)."""
+    for index, mission in enumerate(loaded.scene.missions):
+        if isinstance(mission.goal, WaitGoal):
+            wanted = activity_id_of(mission.goal.wait)
+            if wanted not in activity_ids:
+                known = ", ".join(sorted(activity_ids)) or "none"
+                raise loaded.error(("missions", index, "goal", "wait"),
+                                   f"mission {mission.id!r} waits for unknown activity {wanted!r}; activities: {known}")
 
 
 def load_world(name_or_path: str | Path | LoadedScene) -> SceneWorld:

@@ -50,19 +50,69 @@ class EdgeType:
     TARGETS = "targets"          # mission -> what it is about
 
 
+class MissionState:
+    """``mission.state``: pending -> active -> done | failed (written by the executive)."""
+
+    PENDING = "pending"
+    ACTIVE = "active"
+    DONE = "done"
+    FAILED = "failed"
+    TERMINAL = (DONE, FAILED)
+
+
+class IntentionState:
+    """``intention.state``: active -> done | failed (the executing agent) | cancelled (the executive)."""
+
+    ACTIVE = "active"
+    DONE = "done"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
+class IntentionKind:
+    """``intention.kind``: drive to a goal pose (social navigation) or wait for an activity (executive)."""
+
+    NAVIGATE = "navigate"
+    WAIT = "wait"
+
+
+class ActivityState:
+    """``activity.state`` (the agenda library's states, as they travel on the wire)."""
+
+    SCHEDULED = "scheduled"
+    UPCOMING = "upcoming"
+    RUNNING = "running"
+    FINISHED = "finished"
+    CANCELLED = "cancelled"
+    ENDED = (FINISHED, CANCELLED)
+
+
 # Well-known node names.
 WORLD = "world"
 CLOCK = "clock"
 AGENDA = "agenda"
 GROUND_TRUTH_PEOPLE = "ground_truth/people"
+ACTIVITY_PREFIX = "activity/"
 
 
 def activity_name(activity_id: str) -> str:
-    return f"activity/{activity_id}"
+    """The node name of agenda activity ``activity_id``: ``activity/<id>``."""
+    return f"{ACTIVITY_PREFIX}{activity_id}"
+
+
+def activity_id_of(name: str) -> str:
+    """The id ``chronav agenda list`` shows for an ``activity/<id>`` node name."""
+    return name.removeprefix(ACTIVITY_PREFIX)
 
 
 def mission_name(mission_id: str) -> str:
     return f"mission/{mission_id}"
+
+
+def intention_name(mission_id: str, attempt: int, step: int) -> str:
+    """``intention/<mission>/<attempt>.<step>``: a new name for every (re)issue, so the executing
+    agent sees a new node (and a new goal) whenever the executive replans."""
+    return f"intention/{mission_id}/{attempt}.{step}"
 
 
 def sensor_name(agent: str) -> str:
@@ -234,6 +284,25 @@ def now_s(graph: Any) -> float | None:
 
 
 @dataclass(frozen=True)
+class RobotView:
+    """What the simulator and the navigation publish on the robot node."""
+
+    node_id: int
+    name: str
+    pose_stamp: float
+    nav_active: bool
+    laser_ranges: tuple[float, ...]
+    laser_angles: tuple[float, ...]
+
+    @classmethod
+    def from_node(cls, node: Any) -> RobotView:
+        a = node.attrs
+        return cls(node.id, node.name, float(_get(a, "pose_stamp", -1.0)), bool(_get(a, "nav_active", False)),
+                   tuple(float(v) for v in _get(a, "laser_ranges", [])),
+                   tuple(float(v) for v in _get(a, "laser_angles", [])))
+
+
+@dataclass(frozen=True)
 class ActivityView:
     id: str
     name: str
@@ -247,14 +316,29 @@ class ActivityView:
     @classmethod
     def from_node(cls, node: Any) -> ActivityView:
         a = node.attrs
-        return cls(str(_get(a, "activity_id", node.name.removeprefix("activity/"))), str(_get(a, "name", "")),
+        return cls(str(_get(a, "activity_id", activity_id_of(node.name))), str(_get(a, "name", "")),
                    str(_get(a, "object", "")), str(_get(a, "room", "")), float(_get(a, "start_s", 0.0)),
                    float(_get(a, "end_s", 0.0)), tuple(str(p) for p in _get(a, "participants", [])),
-                   str(_get(a, "state", "scheduled")))
+                   str(_get(a, "state", ActivityState.SCHEDULED)))
+
+    @classmethod
+    def named(cls, graph: Any, name: str) -> ActivityView | None:
+        """The activity node called ``name`` (``activity/<id>``), or None."""
+        node = graph.get_node_by_name(name)
+        if node is None or node.type != NodeType.ACTIVITY:
+            return None
+        try:
+            return cls.from_node(node)
+        except (TypeError, ValueError):
+            return None
 
     @property
     def running(self) -> bool:
-        return self.state == "running"
+        return self.state == ActivityState.RUNNING
+
+    @property
+    def ended(self) -> bool:
+        return self.state in ActivityState.ENDED
 
 
 def activities(graph: Any) -> list[ActivityView]:
@@ -275,12 +359,33 @@ class MissionView:
     time_s: float
     state: str
     replans: int
+    started_s: float | None = None
+    finished_s: float | None = None
+    reason: str = ""
 
     @classmethod
     def from_node(cls, node: Any) -> MissionView:
         a = node.attrs
+        started, finished = a.get("started_s"), a.get("finished_s")
         return cls(node.id, str(_get(a, "mission_id", node.name.removeprefix("mission/"))), str(_get(a, "goal", "")),
-                   float(_get(a, "time_s", 0.0)), str(_get(a, "state", "pending")), int(_get(a, "replans", 0)))
+                   float(_get(a, "time_s", 0.0)), str(_get(a, "state", MissionState.PENDING)),
+                   int(_get(a, "replans", 0)), None if started is None else float(started),
+                   None if finished is None else float(finished), str(_get(a, "reason", "")))
+
+    @property
+    def terminal(self) -> bool:
+        return self.state in MissionState.TERMINAL
+
+
+def missions(graph: Any) -> list[MissionView]:
+    """Every readable mission node, in the order they are due (time, then id)."""
+    out = []
+    for node in graph.nodes_of_type(NodeType.MISSION):
+        try:
+            out.append(MissionView.from_node(node))
+        except (TypeError, ValueError):
+            continue
+    return sorted(out, key=lambda m: (m.time_s, m.mission_id))
 
 
 @dataclass(frozen=True)
@@ -292,9 +397,43 @@ class IntentionView:
     state: str
     step: int
     issued_s: float
+    rule: str = ""
+    goal: tuple[float, float, float | None] | None = None   # (x, y, theta or None) of a navigate intention
+    until_s: float | None = None                            # end of the awaited activity (wait)
+    target: str = ""
+    rooms: tuple[str, ...] = ()
+    pass_through: bool = False
+    reason: str = ""
+    replans: int = 0                                        # paths the navigation adopted after the first
 
     @classmethod
     def from_node(cls, node: Any) -> IntentionView:
         a = node.attrs
-        return cls(node.id, node.name, str(_get(a, "mission_id", "")), str(_get(a, "kind", "navigate")),
-                   str(_get(a, "state", "active")), int(_get(a, "step", 0)), float(_get(a, "issued_s", 0.0)))
+        goal = None
+        if a.get("goal_x") is not None and a.get("goal_y") is not None:
+            theta = float(_get(a, "goal_theta", 0.0)) if _get(a, "goal_has_theta", True) else None
+            goal = (float(a["goal_x"]), float(a["goal_y"]), theta)
+        until = a.get("until_s")
+        return cls(node.id, node.name, str(_get(a, "mission_id", "")), str(_get(a, "kind", IntentionKind.NAVIGATE)),
+                   str(_get(a, "state", IntentionState.ACTIVE)), int(_get(a, "step", 0)),
+                   float(_get(a, "issued_s", 0.0)), str(_get(a, "rule", "")), goal,
+                   None if until is None else float(until), str(_get(a, "target", "")),
+                   tuple(str(r) for r in _get(a, "rooms", [])), bool(_get(a, "pass_through", False)),
+                   str(_get(a, "reason", "")), int(_get(a, "replans", 0)))
+
+    @property
+    def active(self) -> bool:
+        return self.state == IntentionState.ACTIVE
+
+
+def intentions(graph: Any, mission_id: str | None = None) -> list[IntentionView]:
+    """Every readable intention (of one mission when ``mission_id`` is given)."""
+    out = []
+    for node in graph.nodes_of_type(NodeType.INTENTION):
+        try:
+            view = IntentionView.from_node(node)
+        except (TypeError, ValueError):
+            continue
+        if mission_id is None or view.mission_id == mission_id:
+            out.append(view)
+    return out

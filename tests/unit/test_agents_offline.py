@@ -44,7 +44,7 @@ def set_clock(graph: DSRGraph, agents: dict, hhmm: str | float) -> None:
     """The simulator jumps to the time (clock, pose and the people's truth in one delta), then the
     perceivers catch up, as they do live."""
     agents["sim_robot"].skip_to(parse_clock(hhmm) if isinstance(hhmm, str) else hhmm)
-    for name in ("object_recognition", "human_observer", "agenda"):
+    for name in ("object_recognition", "agenda", "human_observer"):  # the observer's links follow the agenda
         agents[name].step()
     graph.dispatch()
 

@@ -90,7 +90,8 @@ def test_plan_on_a_shipped_scene_at_a_time_of_day() -> None:
     result = runner.invoke(app, ["plan", str(scene), "-m", "room:dining_room", "--at", "10:30", "--json"])
     assert result.exit_code == 0, result.output
     steps = json.loads(result.stdout)["steps"]
-    assert steps and steps[-1]["rule"] == "changeRoom" and steps[-1]["bindings"]["r2"] == "dining_room"
+    # As the executive runs it: the room mission's last changeRoom is goToRoom (stop inside the room).
+    assert steps and steps[-1]["rule"] == "goToRoom" and steps[-1]["bindings"]["r2"] == "dining_room"
     bad_time = runner.invoke(app, ["plan", str(scene), "-m", "room:dining_room", "--at", "25:00"])
     assert bad_time.exit_code == 2 and "--at: '25:00' is not a valid clock time" in bad_time.stderr
 

@@ -52,3 +52,25 @@ def test_attribute_kinds_are_checked() -> None:
         check_attrs("clock", {"now_s": "ten"})
     with pytest.raises(VocabularyError, match="no attribute 'now_S'"):
         check_attrs("clock", {"now_S": 1.0})
+
+
+def test_state_names_and_typed_views() -> None:
+    from agents.lib.agenda.model import ActivityState as AgendaState
+    from agents.world.vocabulary import (ActivityState, IntentionState, IntentionView, MissionState, MissionView,
+                                         activity_id_of, activity_name, intentions, missions)
+    from dsr import DSRGraph
+
+    assert {s.value for s in AgendaState} == {ActivityState.SCHEDULED, ActivityState.UPCOMING, ActivityState.RUNNING,
+                                              *ActivityState.ENDED}
+    assert activity_id_of(activity_name("tv_game")) == "tv_game"
+    graph = DSRGraph(agent="test")
+    mission = graph.insert_node("mission", "mission/m", {"mission_id": "m", "goal": "room:hall", "time_s": 5.0,
+                                                          "state": MissionState.DONE, "finished_s": 9.0})
+    graph.insert_node("intention", "intention/m/0.1", {"mission_id": "m", "kind": "navigate", "goal_x": 1.0,
+                                                       "goal_y": 2.0, "goal_theta": 0.0, "goal_has_theta": False,
+                                                       "rooms": ["a", "b"], "state": IntentionState.ACTIVE})
+    (view,) = missions(graph)
+    assert view == MissionView.from_node(mission) and view.terminal and view.finished_s == 9.0
+    (intention,) = intentions(graph, "m")
+    assert isinstance(intention, IntentionView) and intention.active
+    assert intention.goal == (1.0, 2.0, None) and intention.rooms == ("a", "b") and intentions(graph, "x") == []
