@@ -52,6 +52,7 @@ REPLAN_GAIN = 1.15
 PASS_THROUGH_TOLERANCE_M = 0.5   # a waypoint past a door is reached without stopping on it
 REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
 STALL_TIMEOUT_S = 60.0
+BLOCKED_WAIT_S = 30.0   # sim seconds an intention waits for people to clear a blocked way before failing
 
 
 def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
@@ -107,6 +108,7 @@ class SocialNavigationAgent(Agent):
         self.control_dt = float(self.config.option("control_dt", "0.1"))
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
+        self.blocked_since: float | None = None   # sim time since when no path exists (people in the way)
         self.global_points = np.empty((0, 2))
         self._best_distance, self._progress_s = math.inf, 0.0
         self.goal: tuple[float, float, float | None] | None = None
@@ -164,6 +166,9 @@ class SocialNavigationAgent(Agent):
             return
         # Answer the pose first: the simulator integrates the next step while this agent replans.
         pose_stamp = RobotView.from_node(robot).pose_stamp
+        if self.band is None:   # people block the way: stand still and try again (_wait_for_way)
+            self._wait_for_way(robot, now_s, pose_stamp)
+            return
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
         # (sim time advances in float steps of control_dt: 2 x 0.1 may sum to 0.19999...)
@@ -176,22 +181,43 @@ class SocialNavigationAgent(Agent):
         self.route_rooms = intention.rooms
         self.started_s = now_s
         self.follower.reset()
+        self.band = None
+        self.blocked_since = None
         pose = self.graph.world_pose(robot.id)
-        if not self._plan(pose, now_s, reason=f"intention {intention.name}"):
-            return
-        self.graph.update_node(robot.id, attrs={"nav_active": True})
+        self._plan(pose, now_s, reason=f"intention {intention.name}")
+        if self.intention_id is not None:   # planned, or waiting for people to clear the way
+            self.graph.update_node(robot.id, attrs={"nav_active": True})
 
     def _plan(self, pose: tuple[float, float, float], now_s: float, reason: str) -> bool:
+        """Plan the intention's path; when there is none, wait up to BLOCKED_WAIT_S of sim time (people
+        standing in a doorway or walking through it close it for a moment), then fail."""
         assert self.goal is not None
         try:
             self.map = self._build_map(now_s)
             path = self._plan_from(self.map, pose)
         except PlanningError as exc:
-            self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}): {exc}")
+            if self.blocked_since is None:
+                self.blocked_since = now_s
+                self.rec.event(f"{format_clock(now_s)} no way to ({self.goal[0]:.2f}, {self.goal[1]:.2f}) now "
+                               f"({exc}): waiting for it to clear", level="WARN")
+            if now_s - self.blocked_since >= BLOCKED_WAIT_S:
+                self._fail(f"no path to ({self.goal[0]:.2f}, {self.goal[1]:.2f}) for {BLOCKED_WAIT_S:.0f} s: {exc}")
+            self.last_replan_s = now_s
             return False
+        self.blocked_since = None
         points = self._route(pose, path)
         self._adopt(points, now_s, reason, path.cost, replan=False)
         return True
+
+    def _wait_for_way(self, robot: Any, now_s: float, pose_stamp: float) -> None:
+        """No path yet: answer each pose with a stop (the clock keeps its lockstep pace, so people
+        move on) and plan again every replan period."""
+        if pose_stamp > self.last_answered:
+            self.last_answered = pose_stamp
+            self.graph.update_node(robot.id, attrs={"cmd_vx": 0.0, "cmd_vy": 0.0, "cmd_omega": 0.0,
+                                                    "cmd_stamp": pose_stamp})
+        if now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S:
+            self._plan(self.graph.world_pose(robot.id), now_s, reason="the way cleared")
 
     def _route(self, pose: tuple[float, float, float], path: Any) -> np.ndarray:
         """The path's cell centres with its ends replaced by the exact robot position and goal."""

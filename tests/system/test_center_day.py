@@ -1,9 +1,16 @@
-"""Issue 11, item 3 (multi-process): a day with one mission of every kind, run with `chronav launch`.
+"""Issues 11 and 15 (multi-process): center_day's morning, run with `chronav launch` - one mission
+of every kind among twenty people who live their day (they walk to the agenda's activities, chat,
+fetch residents, and an activity the staff add at 10:45 draws its participants).
 
-Asserted from the run's result (the missions as the DSR held them) and the simulator's ground-truth
-trajectory: every mission done, and what each kind means - the pose reached, the room entered, the
-wait over only after its activity, the table reached only once its therapy had ended, the group
-faced from outside, the walking nurse approached where she stood when the robot arrived.
+The representative part of the day: the scene as shipped up to 11:00 (its first six missions and the
+first agenda change); the whole 09:00-18:00 day, eleven missions, runs in tools/bench_day.py.
+
+Asserted from the run's result (the missions as the DSR held them), the simulator's ground-truth
+trajectory and the people's trajectories beside it (people.csv): every mission done, and what each
+kind means - the pose reached, the room entered, the wait over only after its activity, the table
+reached only once its therapy had ended, the group faced from outside, the walking nurse approached
+where she stood when the robot arrived - and among the moving people no collision and no entry of
+the robot into anyone's intimate zone (HuNavSim's metrics, agents/lib/socialmap/dynamic_metrics.py).
 """
 
 from __future__ import annotations
@@ -14,9 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+import yaml
 
-from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.lib.socialmap.metrics import read_people_csv, read_trajectory_csv
 from agents.missions.goals import SOCIAL_DISTANCE_M
+from agents.world.offline import SceneMaps
 from agents.world.people import people_at
 from agents.world.scene_world import load_world
 from scenes.clock import parse_clock
@@ -26,14 +35,29 @@ from tests.system.launch_helpers import launch_json
 pytestmark = pytest.mark.slow
 WORLD = load_world("center_day")
 SCENE = WORLD.scene
-INTIMATE_M = 0.45
+MORNING_END = "11:00"
+
+
+def morning(directory: Path) -> Path:
+    """center_day as shipped, its clock ending at MORNING_END with the missions and agenda changes
+    due before then."""
+    data = yaml.safe_load(WORLD.path.read_text())
+    end = parse_clock(MORNING_END)
+    data["clock"]["end"] = MORNING_END
+    data["missions"] = [m for m in data["missions"] if parse_clock(m["time"]) < end]
+    data["agenda_changes"] = [c for c in data.get("agenda_changes", []) if parse_clock(c["at"]) < end]
+    path = directory / "center_day.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
 
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> dict:
-    result = launch_json("center_day", tmp_path_factory.mktemp("center_day") / "launch.log", timeout_s=240,
-                         extra=["--no-record"])
-    result["trajectory"] = read_trajectory_csv(Path(result["run_dir"]) / "trajectory.csv")
+    directory = tmp_path_factory.mktemp("center_day")
+    result = launch_json(str(morning(directory)), directory / "launch.log", timeout_s=420, extra=["--no-record"])
+    run_dir = Path(result["run_dir"])
+    result["trajectory"] = read_trajectory_csv(run_dir / "trajectory.csv")
+    result["people"] = read_people_csv(run_dir / "people.csv")
     return result
 
 
@@ -56,7 +80,7 @@ def activity_end(activity_id: str) -> float:
 def test_every_mission_is_done(run: dict) -> None:
     missions = run["missions"]
     assert run["returncode"] == 0, run
-    assert {m.id for m in SCENE.missions} == set(missions)
+    assert {m.id for m in SCENE.missions if parse_clock(m.time) < parse_clock(MORNING_END)} == set(missions)
     assert all(m["state"] == "done" for m in missions.values()), missions
     assert run["restarts"]["executive"] == 0, "the executive crashed (issue 11: person missions)"
     first = missions["m_pose"]
@@ -74,7 +98,8 @@ def test_pose_and_room(run: dict) -> None:
 def test_wait_ends_with_the_activity_and_the_table_is_reached_after_it(run: dict) -> None:
     end = activity_end("table_therapy")
     wait, table_mission = run["missions"]["m_wait"], run["missions"]["m_object"]
-    assert float(wait["started_s"]) < end <= float(wait["finished_s"]) < end + 5.0
+    # (sim time runs at 60x while the executive notices: 10 s of sim time is a sixth of a wall second)
+    assert float(wait["started_s"]) < end <= float(wait["finished_s"]) < end + 10.0
     assert float(table_mission["time_s"]) < end <= float(table_mission["started_s"]), \
         "the table mission was planned only once the therapy had ended"
     table = next(o for o in SCENE.objects if o.name == "therapy_table")
@@ -108,8 +133,20 @@ def test_walking_nurse_is_approached_where_she_is(run: dict) -> None:
     assert int(mission["replans"]) >= 1, "she walked on after the robot set off: the approach was replanned"
 
 
-def test_the_robot_never_enters_an_intimate_zone(run: dict) -> None:
-    trajectory = run["trajectory"]
-    for t, x, y, _ in trajectory[::5]:
-        for person in people_at(WORLD, float(t)):
-            assert math.hypot(person.x - x, person.y - y) > INTIMATE_M, (t, person.name)
+def test_no_collision_and_no_intimate_zone_entered_among_moving_people(run: dict) -> None:
+    """Per mission, from the run's two trajectory files: no contact between the robot and anyone
+    (whoever moved), and the robot never stepped into anyone's intimate zone (the map's zone from
+    where they truly were); people did walk while the robot drove."""
+    maps = SceneMaps.load(WORLD)
+    tracks = run["people"]
+    walkers = {name for j, name in enumerate(tracks.names)
+               if np.nanmax(np.hypot(tracks.vx[:, j], tracks.vy[:, j])) > 0.3}
+    assert len(walkers) >= 5, f"people walked around the robot: {sorted(walkers)}"
+    for mission_id, mission in run["missions"].items():
+        rows = run["trajectory"]
+        rows = rows[(rows[:, 0] >= float(mission["started_s"])) & (rows[:, 0] <= float(mission["finished_s"]))]
+        if len(rows) < 2:
+            continue   # a wait: the robot did not drive
+        dynamic = maps.measure(rows, float(mission["started_s"]), tracks).dynamic
+        assert dynamic.robot_on_person_collisions == dynamic.person_on_robot_collisions == 0, mission_id
+        assert dynamic.robot_intimate_entries == 0, mission_id

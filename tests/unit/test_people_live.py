@@ -69,3 +69,48 @@ def test_people_csv_rows_go_with_the_trajectory_while_driving(tmp_path: Path) ->
     assert robot_times and sorted({row["t"] for row in rows}) == sorted(set(robot_times))
     assert len(rows) == len(robot_times) * len(sim.scene.people)
     assert {row["name"] for row in rows} == {p.name for p in sim.scene.people}
+
+
+def test_the_robot_waits_for_people_to_clear_the_only_way_then_goes(tmp_path: Path) -> None:
+    """Someone stands in the lounge's door, the only way in: the navigation does not fail the
+    intention but stops and tries again; once the doorway is clear it plans and drives.  A way that
+    stays closed fails after BLOCKED_WAIT_S."""
+    from agents.social_navigation.agent import BLOCKED_WAIT_S, SocialNavigationAgent
+    from agents.world.dsr_writers import write_person
+    from agents.world.freshness import mark_observed
+
+    graph = DSRGraph(agent="test")
+    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path))
+    sim.setup(graph, Recorder("sim_robot", None, None))
+    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENE))
+    nav.setup(graph, Recorder("social_navigation", None, None))
+    write_person(graph, "doorkeeper", "resident", (15.0, 2.4, 0.0), "corridor", sim.now_s)
+
+    def tick(t: float) -> None:
+        graph.update_node(graph.get_node_by_name("clock").id, attrs={"now_s": t})
+        for agent in ("human_observer", "agenda"):
+            mark_observed(graph, agent, t)
+        nav.step()
+
+    intention = graph.insert_node(type="intention", name="intention/m/0", attrs={
+        "kind": "navigate", "state": "active", "goal_x": 15.0, "goal_y": 6.0, "goal_theta": 1.57,
+        "mission_id": "m", "step": 0})
+    start = sim.now_s
+    tick(start)
+    assert nav.intention_id == intention.id and nav.band is None and nav.blocked_since == start
+    assert graph.get_node_by_name("robot").attrs["nav_active"] is True, "the clock keeps its lockstep pace"
+    assert graph.get_node(intention.id).attrs["state"] == "active"
+    write_person(graph, "doorkeeper", "resident", (17.0, 6.0, 0.0), "lounge", start + 5.0)
+    tick(start + 5.0)
+    assert nav.band is not None and nav.blocked_since is None, "the doorway cleared: planned"
+    # blocked for good (a closed door): fails after the wait
+    write_person(graph, "doorkeeper", "resident", (15.0, 2.4, 0.0), "corridor", start + 6.0)
+    second = graph.insert_node(type="intention", name="intention/m/1", attrs={
+        "kind": "navigate", "state": "active", "goal_x": 15.0, "goal_y": 6.0, "goal_theta": 1.57,
+        "mission_id": "m", "step": 1})
+    graph.update_node(intention.id, attrs={"state": "done"})
+    tick(start + 6.0)
+    assert nav.intention_id == second.id and nav.band is None
+    tick(start + 6.0 + BLOCKED_WAIT_S + 0.1)
+    assert graph.get_node(second.id).attrs["state"] == "failed"
+    assert "no path" in graph.get_node(second.id).attrs["reason"]
