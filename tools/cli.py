@@ -19,6 +19,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.agenda",        # chronav agenda ...
     "tools.launch",        # chronav launch / chronav demo
     "tools.chaos",         # chronav chaos (fault injection)
+    "tools.evaluate",      # chronav evaluate (planner studies)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",
