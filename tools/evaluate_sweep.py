@@ -9,7 +9,11 @@ starts one such process and waits for it; runs share nothing but the machine.
 The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/socialmap/planners.py).  The
 seed goes to every agent as ``-o seed=N``: each agent that draws random numbers (today the human
 observer's sensor noise; the people simulation of issue 15 next) seeds its generator with it, so
-one seed is one simulated world.
+one seed is one simulated world.  The simulator gets ``-o busy_rate=0``: its clock waits while the
+executive and the navigation plan instead of running on in real time, and ``watchdog_s=30``: a
+command that comes late (a slow replan on a loaded machine) is waited for instead of braking after
+one wall second, so sim times (when the robot leaves, what R and the people are then) and the
+driven path do not depend on how loaded the machine is.
 
 Finished runs are appended to ``DIR/runs.jsonl`` as they end (one JSON object per run with its
 table rows); ``--resume`` skips the runs found there, so an interrupted sweep continues where it
@@ -37,6 +41,8 @@ from typing import Any, Protocol
 
 LEDGER = "runs.jsonl"
 WORKER_LOGS = "worker-logs"
+#: wall seconds the simulator waits for a late velocity command before braking (default 1 s)
+LOCKSTEP_WATCHDOG_S = 30.0
 #: wall seconds a run may take beyond its --timeout (stopping agents, merging the recording)
 CLEANUP_GRACE_S = 180.0
 
@@ -80,6 +86,9 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
 
     options = {name: [f"seed={spec.seed}"] for name in AGENTS}
     options["social_navigation"].append(f"planner={spec.planner}")
+    # Lockstep without wall-clock escapes: sim time waits while the agents plan, and a late command
+    # (a slow replan on a loaded machine) is waited for instead of braking after 1 wall second.
+    options["sim_robot"] += ["busy_rate=0", f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]
     return options
 
 
