@@ -30,6 +30,16 @@ class EvaluateError(Exception):
     """A study that cannot start as asked; the message says what to change."""
 
 
+def _check_extras() -> None:
+    """matplotlib and pyarrow come with chronav's `eval` extra: say so before launching anything."""
+    import importlib.util
+
+    missing = [name for name in ("matplotlib", "pyarrow") if importlib.util.find_spec(name) is None]
+    if missing:
+        raise EvaluateError(f"chronav evaluate needs {' and '.join(missing)}: install chronav's eval extra "
+                            "(pip install -e '.[eval]', which make test and make demo do)")
+
+
 def parse_planners(text: str | None) -> list[str]:
     from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, check_planner
 
@@ -160,6 +170,7 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     from tools.evaluate_table import write_table
     from tools.launch import check_timeout, LaunchError
 
+    _check_extras()
     chosen = parse_planners(planners)
     if seeds < 1:
         raise EvaluateError("--seeds: give at least 1")

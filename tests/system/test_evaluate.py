@@ -39,7 +39,8 @@ def _evaluate(out: Path, *extra: str, timeout_s: float = 600) -> dict[str, Any]:
     log = out.parent / f"{out.name}.log"
     try:
         proc = group.spawn(["-m", "tools.cli", "evaluate", str(TINY), "--planners", PLANNERS, "--seeds", "1",
-                            "--out", str(out), "--timeout", "300", "--json", *extra], log_path=log)
+                            "--out", str(out), "--timeout", "300", "--json", *extra],
+                           env={"RERUN": "on"}, log_path=log)
         try:
             proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
