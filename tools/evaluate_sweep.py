@@ -140,7 +140,9 @@ def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
     args = [sys.executable, "-m", "tools.evaluate_sweep", "--spec", json.dumps(spec.to_dict()),
             "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file)]
     with log_file.open("wb") as log:
-        proc = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+        # Always recorded (RERUN=on whatever the worker's environment says): the report links each run.
+        proc = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                                env={**os.environ, "RERUN": "on"})
         if live is not None:
             live.add(proc)
         try:

@@ -133,8 +133,3 @@ def test_report_is_one_self_contained_file_that_says_what_ran(sweeps: dict[str, 
     assert "chronav 0." in report and "<td>seeds</td><td>1</td>" in report
     assert "Wilcoxon" in report and ".rrd" in report
 
-
-def test_resume_of_a_finished_sweep_launches_nothing(sweeps: dict[str, dict[str, Any]]) -> None:
-    again = _evaluate(Path(sweeps["dask"]["out"]), "--resume")
-    assert again["returncode"] == 0, again
-    assert (again["launched"], again["resumed"], again["pending"]) == (0, 2, 0)
