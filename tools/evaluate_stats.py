@@ -10,6 +10,7 @@ uses their signs and ranks only.  Pairs whose difference is zero are dropped (``
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -101,7 +102,9 @@ def paired_tests(rows: Sequence[Mapping[str, Any]], planner: str = REFERENCE) ->
             nonzero = int(np.count_nonzero(d))
             statistic = p_value = math.nan
             if nonzero:
-                result = wilcoxon(d, zero_method="wilcox", alternative="two-sided")
+                with warnings.catch_warnings():    # "exact p-value not possible with zeros": it falls back itself
+                    warnings.simplefilter("ignore", UserWarning)
+                    result = wilcoxon(d, zero_method="wilcox", alternative="two-sided")
                 statistic, p_value = float(result.statistic), float(result.pvalue)
             out.append(PairedTest(metric, planner, other, len(d), nonzero, float(np.median(d)), statistic, p_value))
     return out

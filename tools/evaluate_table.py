@@ -54,7 +54,10 @@ def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_
 
 
 def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dict[str, float]]:
-    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``."""
+    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``.
+
+    The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
+    too (issue 15's ``people.csv``), pass the mission's slice of them here."""
     from agents.world.offline import metrics_offline
 
     report = metrics_offline(scene, trajectory_csv, None)
