@@ -209,20 +209,24 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], mission: MissionKey, maps: A
     fig, ax = plt.subplots(figsize=(width, max(3.0, 0.7 * width * (ymax - ymin) / (xmax - xmin)) + 0.8))
     draw_world(ax, maps, t_s)
     handles = []
-    for planner in planners:
+    for order, planner in enumerate(planners):
         colour = planner_colour(planner, planners)
+        # Planners often drive the same way: each is drawn thinner than the one before, on top of
+        # it, so coinciding paths show as nested stripes instead of hiding each other.
+        width = max(1.0, 5.0 - 3.5 * order / max(1, len(planners) - 1))
         drawn = 0
         for row in (r for r in mine if r["planner"] == planner):
             xy = _read_xy(row.get("trajectory_csv"))
             if xy is None:
                 continue
-            ax.plot(xy[:, 0], xy[:, 1], color=colour, linewidth=2.0, alpha=0.85, zorder=7)
+            ax.plot(xy[:, 0], xy[:, 1], color=colour, linewidth=width, alpha=0.9, zorder=7 + 0.01 * order,
+                    solid_capstyle="round")
             ax.plot(*xy[0], marker="o", color=colour, markersize=5, zorder=8)
             ax.plot(*xy[-1], marker="*", color=colour, markersize=11, markeredgecolor="black", zorder=8)
             drawn += 1
         failed = sum(1 for r in mine if r["planner"] == planner and r.get("state") != "done")
         note = f" ({drawn} run{'s' if drawn != 1 else ''}" + (f", {failed} not done" if failed else "") + ")"
-        handles.append(Line2D([], [], color=colour, linewidth=2.5, label=planner + note))
+        handles.append(Line2D([], [], color=colour, linewidth=width, label=planner + note))
     handles += [Patch(color=ZONE_COLOURS[z], label=f"{z} zone") for z in ("intimate", "personal", "social")]
     handles.append(Patch(color="#F28E2B", alpha=0.45, label="interaction space (darker: higher R)"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
