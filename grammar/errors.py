@@ -21,14 +21,24 @@ class SourcePos:
         return f"{self.file}:{self.line}:{self.column}"
 
 
+MAX_MESSAGE_CHARS = 400
+"""Longest error message kept: a message quoting a 5 MB token must not flood a terminal."""
+
+
+def shorten(text: str, limit: int = 60) -> str:
+    """``text`` cut to ``limit`` characters, marked with an ellipsis (names quoted in messages)."""
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
 class GrammarError(Exception):
     """A grammar, target or mission text that cannot be used, with the place of the first problem.
 
-    ``str(err)`` is ``file:line:col: message`` so that editors and CI logs can jump to it.
+    ``str(err)`` is ``file:line:col: message`` so that editors and CI logs can jump to it; when
+    there is no place in the file (a file that cannot be read), ``file: message``.
     """
 
     def __init__(self, message: str, file: str = "<string>", line: int = 0, column: int = 0) -> None:
-        self.message = message
+        self.message = shorten(message, MAX_MESSAGE_CHARS)
         self.file = file
         self.line = line
         self.column = column
@@ -41,7 +51,20 @@ class GrammarError(Exception):
         return cls(message, pos.file, pos.line, pos.column)
 
     def __str__(self) -> str:
+        if self.line <= 0:
+            return f"{self.file}: {self.message}"
         return f"{self.file}:{self.line}:{self.column}: {self.message}"
+
+
+@dataclass(frozen=True)
+class GrammarWarning:
+    """Something read as AGM reads it but probably not meant so (``DormantFoo`` = dormant rule ``Foo``)."""
+
+    pos: SourcePos
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.pos}: warning: {self.message}"
 
 
 class MissionError(ValueError):

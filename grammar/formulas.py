@@ -19,7 +19,7 @@ result is the same as the plain loop, except for the order of iteration.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from itertools import product
 
@@ -57,11 +57,26 @@ class Changes:
 class FormulaEvaluator:
     def __init__(self, matcher: Matcher) -> None:
         self.matcher = matcher
+        self._guards: dict[tuple[int, str], tuple[Formula, list[tuple[FLink, bool]] | None]] = {}
+        self._effects: dict[int, tuple[Formula, Callable[[State, Bindings, Changes, StateEditor], None]]] = {}
 
     # ------------------------------------------------------------------ quantifiers
+    def _guard(self, body: Formula, var: str) -> list[tuple[FLink, bool]] | None:
+        key = (id(body), var)
+        found = self._guards.get(key)
+        if found is None or found[0] is not body:
+            found = self._guards[key] = (body, _guard_links(body, var))
+        return found[1]
+
     def _domain(self, decl: VarDecl, body: Formula, state: State, b: Bindings) -> Iterable[int]:
-        guards = _guard_links(body, decl.name)
+        guards = self._guard(body, decl.name)
         if guards is not None and all((link.dst if forward else link.src) in b for link, forward in guards):
+            if len(guards) == 1:
+                link, forward = guards[0]
+                linked = state.inn(b[link.dst], link.label) if forward else state.out(b[link.src], link.label)
+                if not linked:
+                    return ()
+                return [n for n in linked if self.matcher.type_ok(state.type_of(n), decl.type)]
             nodes: dict[int, None] = {}
             for link, forward in guards:
                 other = b[link.dst if forward else link.src]
@@ -124,6 +139,11 @@ class FormulaEvaluator:
             if self.holds(formula.condition, state, b):
                 self.collect(formula.then, state, b, changes, editor)
         elif isinstance(formula, FForall):
+            if len(formula.vars) == 1:  # the common case, without a generator
+                decl = formula.vars[0]
+                for n in self._domain(decl, formula.body, state, b):
+                    self.collect(formula.body, state, {**b, decl.name: n}, changes, editor)
+                return
             for inner in list(self._assignments(formula.vars, formula.body, state, b)):
                 self.collect(formula.body, state, inner, changes, editor)
         elif isinstance(formula, FCreate):
@@ -134,6 +154,94 @@ class FormulaEvaluator:
             changes.retype.append((self._node(b, formula.var), formula.type))
         else:
             raise PlanningError(f"{type(formula).__name__} has no meaning in an effect")
+
+    # ------------------------------------------------------------------ compiled effects
+    def apply_effect(self, formula: Formula, state: State, b: Bindings, changes: Changes,
+                     editor: StateEditor) -> None:
+        """``collect`` through closures built once per formula: the planner applies the same few
+        effects thousands of times, and dispatching on the formula's class each time dominated."""
+        key = id(formula)
+        found = self._effects.get(key)
+        if found is None or found[0] is not formula:
+            found = self._effects[key] = (formula, self._compile_effect(formula))
+        found[1](state, b, changes, editor)
+
+    def _compile_effect(self, f: Formula) -> Callable[[State, Bindings, Changes, StateEditor], None]:
+        node = self._node
+        if isinstance(f, FLink):
+            label, src, dst = f.label, f.src, f.dst
+
+            def add(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                changes.add_edges.append((node(b, src), node(b, dst), label))
+            return add
+        if isinstance(f, FNot) and isinstance(f.body, FLink):
+            label, src, dst = f.body.label, f.body.src, f.body.dst
+
+            def remove(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                changes.remove_edges.append((node(b, src), node(b, dst), label))
+            return remove
+        if isinstance(f, FAnd):
+            parts = [self._compile_effect(item) for item in f.items]
+
+            def both(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                for part in parts:
+                    part(state, b, changes, editor)
+            return both
+        if isinstance(f, FWhen):
+            condition, then = self._compile_condition(f.condition), self._compile_effect(f.then)
+
+            def when(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                if condition(state, b):
+                    then(state, b, changes, editor)
+            return when
+        if isinstance(f, FForall) and len(f.vars) == 1:
+            decl, body = f.vars[0], f.body
+            name, inner = decl.name, self._compile_effect(body)
+            domain = self._domain
+            guards = self._guard(body, name)
+            if guards is not None and len(guards) == 1:  # (forall x:T (when (label a x) ...)): walk a's links
+                link, forward = guards[0]
+                anchor, label, wanted, type_ok = (link.dst if forward else link.src), link.label, decl.type, \
+                    self.matcher.type_ok
+
+                def guarded(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                    a = b.get(anchor)
+                    if a is None:
+                        for n in domain(decl, body, state, b):
+                            inner(state, {**b, name: n}, changes, editor)
+                        return
+                    linked = state.inn(a, label) if forward else state.out(a, label)
+                    for n in list(linked):
+                        if type_ok(state.type_of(n), wanted):
+                            inner(state, {**b, name: n}, changes, editor)
+                return guarded
+
+            def forall(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                for n in domain(decl, body, state, b):
+                    inner(state, {**b, name: n}, changes, editor)
+            return forall
+
+        def generic(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+            self.collect(f, state, b, changes, editor)
+        return generic
+
+    def _compile_condition(self, f: Formula) -> Callable[[State, Bindings], bool]:
+        if isinstance(f, FLink):
+            label, src, dst = f.label, f.src, f.dst
+
+            def link(state: State, b: Bindings) -> bool:
+                s, d = b.get(src), b.get(dst)
+                return s is not None and d is not None and state.has_edge(s, d, label)
+            return link
+        if isinstance(f, FNot):
+            inner = self._compile_condition(f.body)
+            return lambda state, b: not inner(state, b)
+        if isinstance(f, (FAnd, FOr)):
+            parts = [self._compile_condition(item) for item in f.items]
+            if isinstance(f, FAnd):
+                return lambda state, b: all(part(state, b) for part in parts)
+            return lambda state, b: any(part(state, b) for part in parts)
+        return lambda state, b: self.holds(f, state, b)
 
     @staticmethod
     def _node(b: Bindings, name: str) -> int:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
+import itertools
 from functools import lru_cache
 from typing import Any
 
@@ -50,6 +51,39 @@ class NodeRef:
     """Value of a bare variable in an expression: compares equal only to the same world node."""
 
     node: int
+
+
+_TOKENS = itertools.count()
+
+
+class Reader:
+    """What a rule or a nested pattern reads: typed links ``(label, source type, destination
+    type)`` and attribute keys. States that agree on what a reader can see (``view``) give it the
+    same answers, which is what lets the planner reuse matches and ``exists`` results."""
+
+    def __init__(self, links: Iterable[tuple[str, str, str]], attrs: Iterable[str], type_ok: Any) -> None:
+        self.links = frozenset(links)
+        self.attrs = frozenset(attrs)
+        self.labels = frozenset(link[0] for link in self.links)
+        self.type_ok = type_ok
+        self.token = next(_TOKENS)  # unique in the process: names this reader in State.view caches
+        self._seen: dict[tuple[str, str, str], bool] = {}
+
+    def visible(self, state: State, edge: tuple[int, int, str]) -> bool:
+        """Can a link of the world be one this reader reads (label and end types)?"""
+        label = edge[2]
+        if label not in self.labels:
+            return False
+        key = (label, state.type_of(edge[0]), state.type_of(edge[1]))
+        found = self._seen.get(key)
+        if found is None:
+            type_ok = self.type_ok
+            found = self._seen[key] = any(l == label and type_ok(key[1], a) and type_ok(key[2], b)
+                                          for l, a, b in self.links)
+        return found
+
+    def view(self, state: State) -> tuple[object, ...]:
+        return state.view(self.token, self.visible, self.attrs)
 
 
 # ---------------------------------------------------------------------------- compiled patterns
@@ -145,6 +179,11 @@ class Matcher:
         self._compiled: dict[tuple[int, frozenset[str]], CompiledPattern] = {}
         self._ancestors = lru_cache(maxsize=None)(types.ancestors)
         self._free: dict[int, tuple[Pattern, frozenset[str], tuple[str, ...]]] = {}
+        # results of nested `exists` patterns, by (pattern, its bound variables' nodes, what it
+        # can see of the state): the agenda conditions of changeRoom ask the same question about
+        # a room from every room next to it
+        self._exists: dict[tuple[object, ...], bool] = {}
+        self._readers: dict[int, tuple[Pattern, Reader]] = {}
 
     # ------------------------------------------------------------------ typing
     def type_ok(self, world_type: str, pattern_type: str) -> bool:
@@ -280,15 +319,14 @@ class Matcher:
     @staticmethod
     def _name_join(var: str, conds: list[tuple[Expr, PatternLink | None, frozenset[str]]],
                    bound: set[str]) -> tuple[Expr, PatternLink | None] | None:
-        """A condition ``X == var.name`` whose X is computable from bound variables: look ``var``
-        up by name instead of scanning (e.g. the door named by a ``connected`` edge)."""
+        """A condition that names ``var`` through values computable from bound variables: look
+        ``var`` up by name instead of scanning its type (e.g. the door named by a ``connected``
+        edge: ``[d.name in doors or door == d.name]``). See ``_name_source``."""
         for expr, link, _needs in conds:
-            if not (isinstance(expr, Compare) and expr.op == "==") or (link is not None and link.negated):
+            if link is not None and link.negated:
                 continue
-            for mine, other in ((expr.left, expr.right), (expr.right, expr.left)):
-                if isinstance(mine, AttrRef) and mine.var == var and mine.attr == "name":
-                    if _expr_refs(other, None, link) <= bound and not isinstance(other, Exists):
-                        return (other, link)
+            if _name_source(expr, var, bound, link):
+                return (expr, link)
         return None
 
     # ------------------------------------------------------------------ matching
@@ -313,6 +351,20 @@ class Matcher:
             self._free[key] = cached
         prebound = cached[1] | {name for name in cached[2] if name in b}
         return self.compile(pattern, prebound)
+
+    def _exists_holds(self, pattern: Pattern, state: State, b: Bindings) -> bool:
+        compiled = self._compile_exists(pattern, b)
+        found = self._readers.get(id(pattern))
+        if found is None or found[0] is not pattern:
+            from grammar.relevance import pattern_reads  # (relevance imports no matcher)
+
+            found = self._readers[id(pattern)] = (pattern, Reader(*pattern_reads(pattern), self.type_ok))
+        reader = found[1]
+        key = (reader.token, tuple(sorted((v, b[v]) for v in compiled.prebound if v in b)), reader.view(state))
+        holds = self._exists.get(key)
+        if holds is None:
+            holds = self._exists[key] = self.first_match(compiled, state, b) is not None
+        return holds
 
     def first_match(self, compiled: CompiledPattern, state: State, bindings: Bindings | None = None
                     ) -> Bindings | None:
@@ -351,20 +403,47 @@ class Matcher:
             return () if found is None else (found,)
         if kind == "name":
             expr, link = step.source[1], step.source[2]
-            names: list[Value] = []
-            if link is None:
-                names.append(self.eval(expr, state, b))
-            else:
-                for edge in self._edges_of(link, state, b):
-                    names.append(self.eval(expr, state, b, edge))
+            names: set[Value] = set()
+            edges = [None] if link is None else self._edges_of(link, state, b)
+            for edge in edges:
+                found_names = self._names_from(expr, step.var, state, b, edge)
+                if found_names is None:  # a value that cannot be enumerated: scan the type
+                    return self.candidates_of_type(state, step.type)
+                names |= found_names
             out_ids: list[int] = []
-            for name in names:
-                if isinstance(name, str):
-                    found = state.node_by_name(name)
-                    if found is not None and found not in out_ids:
-                        out_ids.append(found)
+            for name in sorted(n for n in names if isinstance(n, str)):
+                found = state.node_by_name(name)
+                if found is not None:
+                    out_ids.append(found)
             return out_ids
         return self.candidates_of_type(state, step.type)
+
+    def _names_from(self, expr: Expr, var: str, state: State, b: Bindings,
+                    edge: tuple[int, int, str] | None) -> set[Value] | None:
+        """Every name ``var`` may have for ``expr`` to hold (a superset), or ``None`` if unknown."""
+        if isinstance(expr, Or):
+            out: set[Value] = set()
+            for item in expr.items:
+                part = self._names_from(item, var, state, b, edge)
+                if part is None:
+                    return None
+                out |= part
+            return out
+        if isinstance(expr, And):
+            for item in expr.items:
+                if _is_name_atom(item, var):
+                    return self._names_from(item, var, state, b, edge)
+            return None
+        if isinstance(expr, Compare) and _is_name_atom(expr, var):
+            mine_left = _is_name_ref(expr.left, var)
+            other = expr.right if mine_left else expr.left
+            value = self.eval(other, state, b, edge)
+            if expr.op == "==":
+                return {value} if isinstance(value, str) else set()
+            if isinstance(value, tuple):
+                return set(value)
+            return None if isinstance(value, str) else set()  # 'in' a string: substrings, unknown
+        return None
 
     @staticmethod
     def _edges_of(link: PatternLink, state: State, b: Bindings) -> list[tuple[int, int, str]]:
@@ -404,7 +483,7 @@ class Matcher:
         if isinstance(expr, Not):
             return not self.truth(expr.expr, state, b, edge)
         if isinstance(expr, Exists):
-            return self.first_match(self._compile_exists(expr.pattern, b), state, b) is not None
+            return self._exists_holds(expr.pattern, state, b)
         if isinstance(expr, Compare):
             return _compare(expr.op, self.eval(expr.left, state, b, edge), self.eval(expr.right, state, b, edge))
         return bool(self.eval(expr, state, b, edge))
@@ -427,6 +506,33 @@ class Matcher:
         if isinstance(expr, ListLit):
             return tuple(self.eval(e, state, b, edge) for e in expr.items)
         return self.truth(expr, state, b, edge)
+
+
+def _is_name_ref(expr: Expr, var: str) -> bool:
+    return isinstance(expr, AttrRef) and expr.var == var and expr.attr == "name"
+
+
+def _is_name_atom(expr: Expr, var: str) -> bool:
+    """``X == var.name``, ``var.name == X`` or ``var.name in X``."""
+    if not isinstance(expr, Compare):
+        return False
+    if expr.op == "==":
+        return _is_name_ref(expr.left, var) != _is_name_ref(expr.right, var)
+    return expr.op == "in" and _is_name_ref(expr.left, var) and not _is_name_ref(expr.right, var)
+
+
+def _name_source(expr: Expr, var: str, bound: set[str], link: PatternLink | None) -> bool:
+    """Does ``expr`` (if true) name ``var`` through values computable from ``bound`` variables?
+    An ``or`` qualifies if every branch does, an ``and`` if one of its items does."""
+    if isinstance(expr, Or):
+        return bool(expr.items) and all(_name_source(item, var, bound, link) for item in expr.items)
+    if isinstance(expr, And):
+        return any(_is_name_atom(item, var) and _name_source(item, var, bound, link) for item in expr.items)
+    if not _is_name_atom(expr, var):
+        return False
+    assert isinstance(expr, Compare)
+    other = expr.right if _is_name_ref(expr.left, var) else expr.left
+    return not isinstance(other, Exists) and _expr_refs(other, None, link) <= bound
 
 
 def _compare(op: str, left: Any, right: Any) -> bool:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Union
 
-from grammar.errors import SourcePos
+from grammar.errors import GrammarWarning, SourcePos
 
 Value = Union[bool, int, float, str, None, tuple]
 
@@ -359,6 +359,9 @@ class Grammar:
     properties: Mapping[str, str] = field(default_factory=dict)
     combos: tuple[ComboRule, ...] = ()
     includes: tuple[str, ...] = ()
+    skipped_includes: tuple[str, ...] = ()  # include paths not read (``includes=False``)
+    declared_types: bool = False  # a ``types`` section exists (then every type used must be declared)
+    warnings: tuple[GrammarWarning, ...] = ()
 
     def rule(self, name: str) -> Rule:
         for rule in self.rules:

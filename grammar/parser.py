@@ -16,16 +16,25 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from lark import Lark
+from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
-from grammar.errors import GrammarError, SourcePos
+from grammar.errors import GrammarError, GrammarWarning, SourcePos, shorten
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder
 from grammar.validate import check_grammar, check_rule, check_target
 
 GRAMMAR_DIR = Path(__file__).resolve().parent
 LARK_FILE = GRAMMAR_DIR / "aggl.lark"
+
+MAX_NESTING = 100
+"""Deepest parse tree accepted (docs/grammar.md, "Limits"): one level per formula connective
+(``not``, ``and``, ``exists``...), about three per parenthesis of a ``where``. Deeper input is
+refused with its position instead of exhausting Python's recursion limit in the later passes."""
+
+MAX_COST_DIGITS = 15
+"""An AGM cost is an integer; more digits than this is a typo, not a cost (and Python refuses to
+convert integers of more than 4300 digits)."""
 
 _AGM_HEADER = re.compile(r"^\s*[A-Za-z0-9_.]+\s*=(?!=)")
 _FIRST_WORD = re.compile(r"[A-Za-z_]+")
@@ -75,8 +84,8 @@ def _end_position(text: str) -> tuple[int, int]:
 
 
 def _first_word(value: str) -> str:
-    match = _WORD.match(value)
-    return match.group(0) if match else value[:1]
+    match = _WORD.match(value[:200])
+    return shorten(match.group(0) if match else value[:1], 40)
 
 
 def _accepted(exc: UnexpectedToken) -> Any:
@@ -105,13 +114,28 @@ def _lark_error(exc: UnexpectedInput, text: str, file: str) -> GrammarError:
     return GrammarError(str(exc), file, getattr(exc, "line", 0), getattr(exc, "column", 0))
 
 
-def _parse(text: str, start: str, file: str) -> Any:
+def _check_depth(tree: Tree, file: str) -> None:
+    """Refuse trees deeper than ``MAX_NESTING`` (walked without recursion)."""
+    stack: list[tuple[Tree, int]] = [(tree, 1)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_NESTING:
+            meta = node.meta
+            line, column = (meta.line, meta.column) if not getattr(meta, "empty", True) else (1, 1)
+            raise GrammarError(f"nested too deeply: more than {MAX_NESTING} levels of formulas, "
+                               "expressions or patterns (see 'Limits' in docs/grammar.md)", file, line, column)
+        stack.extend((child, depth + 1) for child in node.children if isinstance(child, Tree))
+
+
+def _parse(text: str, start: str, file: str) -> tuple[Any, list[GrammarWarning]]:
     try:
         tree = _lark().parse(text, start=start)
     except UnexpectedInput as exc:
         raise _lark_error(exc, text, file) from None
+    _check_depth(tree, file)
+    builder = ModelBuilder(file)
     try:
-        return ModelBuilder(file).transform(tree)
+        return builder.transform(tree), builder.warnings
     except VisitError as exc:  # an error raised inside a transformer callback
         if isinstance(exc.orig_exc, GrammarError):
             raise exc.orig_exc from None
@@ -143,93 +167,122 @@ def _build_types(entries: list[tuple[list[str], list[str], SourcePos]]) -> dict[
     return parents
 
 
+def _agglpath() -> list[Path]:
+    return [Path(entry) for entry in re.split(r"[;:]", os.environ.get("AGGLPATH", "")) if entry]
+
+
 def _resolve_include(path: str, including: Path | None, pos: SourcePos) -> Path:
-    """Relative to the including file, then the working directory, then ``$AGGLPATH`` (``;`` or ``:``)."""
+    """Where an ``include`` file is, looked up as AGM does (``parseAGGL.py``: the path under ``/``,
+    ``.`` and each ``$AGGLPATH`` directory, so that the absolute paths of the authors' machines
+    found in real grammars resolve under a local copy), after the including file's directory."""
     candidates: list[Path] = []
     raw = Path(path).expanduser()
+    relative = Path(*raw.parts[1:]) if raw.is_absolute() else raw  # '/a/b.aggl' -> 'a/b.aggl'
     if raw.is_absolute():
         candidates.append(raw)
-    else:
-        if including is not None:
-            candidates.append(including.parent / raw)
-        candidates.append(Path.cwd() / raw)
-        for entry in re.split(r"[;:]", os.environ.get("AGGLPATH", "")):
-            if entry:
-                candidates.append(Path(entry) / raw)
+    elif including is not None:
+        candidates.append(including.parent / raw)
+    candidates.append(Path.cwd() / relative)
+    candidates.extend(entry / relative for entry in _agglpath())
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()
     looked = ", ".join(str(c) for c in candidates)
-    raise GrammarError.at(pos, f"included file {path!r} not found (looked at: {looked})")
+    raise GrammarError.at(pos, f"included file {shorten(path)!r} not found (looked at: {shorten(looked, 300)}); "
+                               "set AGGLPATH to the directories that hold it")
 
 
 def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = None,
-                  path: Path | None = None, _stack: tuple[Path, ...] = ()) -> Grammar:
-    """Parse grammar text; ``path`` (the file it came from) anchors relative includes."""
+                  path: Path | None = None, includes: bool = True,
+                  _stack: tuple[Path, ...] = ()) -> Grammar:
+    """Parse grammar text; ``path`` (the file it came from) anchors relative includes.
+    ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``."""
+    text = text.removeprefix("\ufeff")
+    if not _stack and all(not line.strip() or line.lstrip().startswith("#") for line in text.splitlines()):
+        raise GrammarError("the file is empty (nothing but blank lines and comments): a grammar needs at "
+                           "least one rule", file, 1, 1)
     dialect = dialect or detect_dialect(text)
     if dialect not in ("agm", "native"):
-        raise GrammarError(f"unknown dialect {dialect!r} (use 'agm' or 'native')", file, 1, 1)
-    raw = _parse(text, "agm_file" if dialect == "agm" else "native_file", file)
+        raise GrammarError(f"unknown dialect {shorten(dialect)!r} (use 'agm' or 'native')", file, 1, 1)
+    raw, warnings = _parse(text, "agm_file" if dialect == "agm" else "native_file", file)
     types = _build_types(raw["types"])
     rules: list[Rule] = []
     combos: list[ComboRule] = []
-    includes: list[str] = []
+    included: list[str] = []
+    skipped: list[str] = []
     for item in raw["items"]:
         if isinstance(item, Rule):
             check_rule(item)
             rules.append(item)
         elif isinstance(item, ComboRule):
             combos.append(item)
+        elif not includes:
+            skipped.append(item.path)
         else:  # an include: its rules (and types) are spliced in at this place
             target = _resolve_include(item.path, path, item.pos)
             if target in _stack or target == path:
-                raise GrammarError.at(item.pos, f"include cycle: {item.path!r} includes itself")
+                raise GrammarError.at(item.pos, f"include cycle: {shorten(item.path)!r} includes itself")
             stack = _stack + ((path,) if path is not None else ())
             inner = load_grammar(target, _stack=stack)
             rules.extend(inner.rules)
             combos.extend(inner.combos)
-            includes.append(str(target))
-            includes.extend(inner.includes)
+            warnings.extend(inner.warnings)
+            included.append(str(target))
+            included.extend(inner.includes)
             for name, supers in inner.types.parents.items():
                 types.setdefault(name, supers)
     name = raw["name"] or (path.stem if path else "grammar")
     grammar = Grammar(name=str(name), rules=tuple(rules), types=TypeTable(types), file=file,
                       dialect=dialect, properties=raw["properties"], combos=tuple(combos),
-                      includes=tuple(includes))
-    check_grammar(grammar)
+                      includes=tuple(included), skipped_includes=tuple(skipped),
+                      declared_types=bool(types), warnings=tuple(warnings))
+    check_grammar(grammar, top_level=not _stack)
     return grammar
 
 
-def load_grammar(path: str | os.PathLike[str], *, dialect: str | None = None,
+def _read(path: str | os.PathLike[str], what: str) -> str:
+    """A grammar or target file's text (UTF-8, an initial byte-order mark allowed)."""
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise GrammarError(f"{what} file not found", str(path)) from None
+    except IsADirectoryError:
+        raise GrammarError(f"is a directory, not a {what} file", str(path)) from None
+    except OSError as exc:
+        raise GrammarError(f"cannot read {what} file: {exc.strerror or exc}", str(path)) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise GrammarError(f"not UTF-8 text ({exc.reason})", str(path), line, column) from None
+
+
+def load_grammar(path: str | os.PathLike[str], *, dialect: str | None = None, includes: bool = True,
                  _stack: tuple[Path, ...] = ()) -> Grammar:
     """Read and parse a grammar file (either dialect); includes resolve relative to it."""
-    file_path = Path(path)
-    try:
-        text = file_path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise GrammarError(f"cannot read grammar file: {exc.strerror or exc}", str(path), 0, 0) from None
-    except UnicodeDecodeError as exc:
-        raise GrammarError(f"not UTF-8 text ({exc.reason})", str(path), 1, 1) from None
-    return parse_grammar(text, str(path), dialect=dialect, path=file_path.resolve(), _stack=_stack)
+    text = _read(path, "grammar")
+    return parse_grammar(text, str(path), dialect=dialect, path=Path(path).resolve(), includes=includes,
+                         _stack=_stack)
 
 
 def parse_target(text: str, file: str = "<string>") -> Target:
     """Parse an AGM ``.aggt`` target, or a native ``target { ... } where ...`` one."""
-    first = _FIRST_WORD.match(re.sub(r"#[^\n]*", "", text).lstrip())
-    start = "native_target" if first and first.group(0) == "target" else "agm_target"
-    target: Target = _parse(text, start, file)
+    text = text.removeprefix("\ufeff")
+    start = "agm_target"
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped and not stripped.startswith("#"):
+            first = _FIRST_WORD.match(stripped)
+            start = "native_target" if first and first.group(0) == "target" else "agm_target"
+            break
+    target: Target = _parse(text, start, file)[0]
     check_target(target)
     return target
 
 
 def load_target(path: str | os.PathLike[str]) -> Target:
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise GrammarError(f"cannot read target file: {exc.strerror or exc}", str(path), 0, 0) from None
-    except UnicodeDecodeError as exc:
-        raise GrammarError(f"not UTF-8 text ({exc.reason})", str(path), 1, 1) from None
-    return parse_target(text, str(path))
+    return parse_target(_read(path, "target"), str(path))
 
 
 def default_grammar_path() -> Path:

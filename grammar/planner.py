@@ -10,8 +10,14 @@ queue breaks ties on (f, h, insertion counter): the same world, grammar and targ
 the same plan, in any process.
 
 Which rules are used: active rules (passive ones model changes of the world that the robot does
-not cause; pass ``include_passive=True`` to use them too), not hierarchical (their right-hand side
-is a sub-goal, expanded by the executive), and dormant rules only after a rule that activates them.
+not cause; pass ``include_passive=True`` to use them too), dormant rules only after a rule that
+activates them, and hierarchical rules as AGM uses them (``agglplanner2.py``): a hierarchical rule
+is an ordinary action of the search (its LHS => RHS rewrite, at its cost); once a plan is found,
+each hierarchical step is *expanded* by planning, from the state before it, the step's right-hand
+side as a sub-target (its left-hand nodes fixed to the step's bindings), without that rule
+(nor the rules being expanded around it). AGM expands the first step (its executive re-plans after
+every step, so a later step is expanded when it comes first): if the first step cannot be
+expanded there is no plan; a later step that cannot be expanded yet keeps ``expansion_error``.
 """
 
 from __future__ import annotations
@@ -19,17 +25,18 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Union
 
 import networkx as nx
 
+from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
 from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
-from grammar.matcher import Bindings, CompiledPattern, Matcher
+from grammar.matcher import Bindings, CompiledPattern, Matcher, Reader
 from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
-from grammar.relevance import relevant_rules
+from grammar.relevance import condition_reads, drop_useless_removers, relevant_rules
 from grammar.rewrite import apply_rule
 from grammar.world import State, World
 
@@ -39,15 +46,26 @@ DEFAULT_MAX_EXPANSIONS = 20_000
 @dataclass(frozen=True)
 class PlanStep:
     """One rule application; ``bindings`` maps each rule variable to a world node name
-    (created nodes get a fresh name ``var#id``)."""
+    (created nodes get a fresh name ``var#id``). ``agm_bindings`` maps them to world graph keys
+    (AGM symbol ids; created nodes get the next free integer id, as AGM numbers them). A
+    hierarchical step carries its ``expansion`` (the sub-plan that realises it) or, when none
+    was found, ``expansion_error``."""
 
     rule: str
     bindings: Mapping[str, str]
     cost: float
+    hierarchical: bool = False
+    expansion: Plan | None = field(default=None, compare=False, repr=False)
+    expansion_error: str | None = field(default=None, compare=False)
+    agm_bindings: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     def __str__(self) -> str:
         args = ", ".join(f"{var}={name}" for var, name in self.bindings.items())
         return f"{self.rule}({args})"
+
+    def agm_line(self) -> str:
+        """The step as a line of an AGM plan file: ``[*]rule@{'var': 'id', ...}``."""
+        return f"{'*' if self.hierarchical else ''}{self.rule}@{dict(self.agm_bindings or self.bindings)!r}"
 
 
 @dataclass(frozen=True)
@@ -60,14 +78,40 @@ class Plan:
     final_state: State | None = field(default=None, compare=False, repr=False)
     found: bool = field(default=True, init=False)
 
+    def agm_lines(self) -> list[str]:
+        """The plan as AGM's planner writes it: a first hierarchical step is replaced by its
+        expansion followed by ``#!*rule@{...}`` (AGM's mark of a decomposed step); later steps
+        are written as they are (AGM expands them when they become the first step)."""
+        lines: list[str] = []
+        for i, step in enumerate(self.steps):
+            if i == 0 and step.hierarchical and step.expansion is not None:
+                lines.extend(step.expansion.agm_lines())
+                lines.append("#!" + step.agm_line())
+            else:
+                lines.append(step.agm_line())
+        return lines
+
+    def flat_steps(self) -> list[PlanStep]:
+        """The steps to execute: every hierarchical step replaced by its expansion (recursively)."""
+        out: list[PlanStep] = []
+        for step in self.steps:
+            if step.hierarchical and step.expansion is not None:
+                out.extend(step.expansion.flat_steps())
+            else:
+                out.append(step)
+        return out
+
 
 @dataclass(frozen=True)
 class NoPlan:
-    """No plan: ``reason`` says why (target unreachable, expansion limit, unknown names...)."""
+    """No plan: ``reason`` says why (target unreachable, expansion limit, unknown names...);
+    ``diagnosis`` (when the search ran out of states) names the rules whose conditions block
+    the target and the facts that block them (grammar/diagnosis.py)."""
 
     reason: str
     expanded: int = 0
     generated: int = 0
+    diagnosis: Diagnosis | None = field(default=None, compare=False)
     found: bool = field(default=False, init=False)
 
 
@@ -78,27 +122,35 @@ PlanResult = Union[Plan, NoPlan]
 class _Compiled:
     rule: Rule
     lhs: CompiledPattern
+    reader: Reader  # what decides its matches (relevance.condition_reads)
 
 
 class Planner:
-    """Plans on one world with one grammar; reuse it to plan several targets on the same world."""
+    """Plans on one world with one grammar; reuse it to plan several targets on the same world.
+    ``exclude`` names rules not to use (the hierarchical rules being expanded)."""
 
     def __init__(self, grammar: Grammar, world: nx.MultiDiGraph | World, *,
-                 include_passive: bool = False) -> None:
+                 include_passive: bool = False, exclude: frozenset[str] = frozenset()) -> None:
         self.grammar = grammar
         self.world = world if isinstance(world, World) else World(world)
         self.matcher = Matcher(grammar.types, self.world)
         self.formulas = FormulaEvaluator(self.matcher)
+        self.include_passive = include_passive
+        self.exclude = frozenset(exclude)
         self.rules: list[_Compiled] = []
         for rule in grammar.rules:
-            if rule.hierarchical or (not rule.active and not include_passive):
+            if rule.name in self.exclude or (not rule.active and not include_passive):
                 continue
             lhs = rule.lhs
             extra = tuple(PatternNode(p.name, p.type, pos=p.pos) for p in rule.parameters
                           if lhs.node(p.name) is None)
             if extra:
                 lhs = Pattern(lhs.nodes + extra, lhs.links)
-            self.rules.append(_Compiled(rule, self.matcher.compile(lhs)))
+            reader = Reader(*condition_reads(rule), self.matcher.type_ok)
+            self.rules.append(_Compiled(rule, self.matcher.compile(lhs), reader))
+        # matches that pass every condition, by (rule, what the rule can see of the state): states
+        # that differ only in links and attributes a rule does not read share its matches
+        self._matches: dict[tuple[str, tuple[object, ...]], list[Bindings]] = {}
 
     # ------------------------------------------------------------------ pieces used by the search
     def applications(self, state: State, rules: list[_Compiled] | None = None
@@ -109,14 +161,27 @@ class Planner:
             rule = compiled.rule
             if rule.dormant and rule.name not in state.overlay.activated:
                 continue
-            for b in self.matcher.matches(compiled.lhs, state):
-                if rule.where and not all(self.matcher.truth(c, state, b) for c in rule.where):
-                    continue
-                if rule.precondition is not None and not self.formulas.holds(rule.precondition, state, b):
-                    continue
+            for b in self.applicable(compiled, state):
                 application = apply_rule(rule, state, b, self.matcher, self.formulas)
                 out.append((rule, application.bindings, application.state))
         return out
+
+    def applicable(self, compiled: _Compiled, state: State) -> list[Bindings]:
+        """The left-hand side matches of a rule that pass its conditions (cached, see __init__)."""
+        key = (compiled.rule.name, compiled.reader.view(state))
+        found = self._matches.get(key)
+        if found is not None:
+            return found
+        rule = compiled.rule
+        found = []
+        for b in self.matcher.matches(compiled.lhs, state):
+            if rule.where and not all(self.matcher.truth(c, state, b) for c in rule.where):
+                continue
+            if rule.precondition is not None and not self.formulas.holds(rule.precondition, state, b):
+                continue
+            found.append(b)
+        self._matches[key] = found
+        return found
 
     def target_match(self, target: Target, compiled: CompiledPattern, state: State) -> Bindings | None:
         for b in self.matcher.matches(compiled, state):
@@ -133,19 +198,25 @@ class Planner:
 
     # ------------------------------------------------------------------ search
     def plan(self, target: Target, *, max_expansions: int = DEFAULT_MAX_EXPANSIONS,
-             heuristic: str | Callable[[State], float] = "auto", prune: bool = True) -> PlanResult:
-        """A* from the world to ``target``. ``prune`` drops rules irrelevant to the target
-        (relevance.py: same reachability and optimal cost, far fewer states)."""
+             heuristic: str | Callable[[State], float] = "auto", prune: bool = True,
+             start: State | None = None, expand: bool = True, diagnose: bool = True) -> PlanResult:
+        """A* from the world (or from ``start``) to ``target``. ``prune`` drops rules irrelevant
+        to the target (relevance.py: same reachability and optimal cost, far fewer states);
+        ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search."""
         if max_expansions < 1:
             raise PlanningError(f"max_expansions must be >= 1, got {max_expansions}")
-        start = self.world.initial_state()
+        start = start if start is not None else self.world.initial_state()
         missing = self._missing_constants(target, start)
         if missing:
             return NoPlan(f"the target names nodes that are not in the world: {', '.join(missing)}")
+        problem = type_problem(self, target, start)
+        if problem is not None:
+            return NoPlan(problem.summary, diagnosis=problem)
         goal = self.matcher.compile(target.pattern)
         rules = self.rules
         if prune:
-            keep = {rule.name for rule in relevant_rules([c.rule for c in self.rules], target)}
+            relevant = relevant_rules([c.rule for c in self.rules], target, self.grammar.types)
+            keep = {rule.name for rule in drop_useless_removers(relevant, target, self.grammar.types)}
             rules = [c for c in self.rules if c.rule.name in keep]
         h = self._heuristic(heuristic, target, start, rules)
 
@@ -158,6 +229,7 @@ class Planner:
         best_g: dict[State, float] = {start: 0.0}
         parent: dict[State, tuple[State, Rule, Bindings]] = {}
         closed: set[State] = set()
+        order: list[State] = []  # closed states in expansion order (for a deterministic diagnosis)
         expanded = generated = 0
         while queue:
             f, h_value, _, state = heapq.heappop(queue)
@@ -166,11 +238,13 @@ class Planner:
             g = best_g[state]
             match = self.target_match(target, goal, state)
             if match is not None:
-                return self._reconstruct(state, parent, g, match, expanded, generated)
+                return self._reconstruct(state, parent, g, match, expanded, generated, target, expand)
             if expanded >= max_expansions:
                 return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
                               expanded, generated)
             closed.add(state)
+            if diagnose and len(order) < MAX_STATES:
+                order.append(state)
             expanded += 1
             for rule, b, nxt in self.applications(state, rules):
                 generated += 1
@@ -186,8 +260,11 @@ class Planner:
                 parent[nxt] = (state, rule, b)
                 counter += 1
                 heapq.heappush(queue, (g2 + h2, h2, counter, nxt))
-        return NoPlan(f"no sequence of rules reaches the target (all {expanded} reachable states "
-                      "searched)", expanded, generated)
+        reason = f"no sequence of rules reaches the target (all {expanded} reachable states searched)"
+        diagnosis = explain(self, target, order, [c.rule for c in rules]) if diagnose else None
+        if diagnosis is not None and diagnosis.blockers:
+            reason += f"; blocked: {diagnosis.blockers[0]}"
+        return NoPlan(reason, expanded, generated, diagnosis)
 
     def _heuristic(self, heuristic: str | Callable[[State], float], target: Target, start: State,
                    rules: list[_Compiled]) -> Heuristic:
@@ -201,17 +278,71 @@ class Planner:
         raise PlanningError(f"unknown heuristic {heuristic!r} (use 'auto', 'zero' or a function)")
 
     def _reconstruct(self, state: State, parent: dict[State, tuple[State, Rule, Bindings]], cost: float,
-                     match: Bindings, expanded: int, generated: int) -> Plan:
-        steps: list[PlanStep] = []
+                     match: Bindings, expanded: int, generated: int, target: Target, expand: bool
+                     ) -> PlanResult:
+        chain: list[tuple[State, Rule, Bindings, State]] = []
         final = state
         while state in parent:
             before, rule, b = parent[state]
-            names = {var: (before.name_of(n) if before.exists(n) else state.name_of(n)) for var, n in b.items()}
-            steps.append(PlanStep(rule.name, names, rule.cost))
+            chain.append((before, rule, b, state))
             state = before
-        steps.reverse()
+        chain.reverse()
+        ids = _AgmIds(self.world)
+        steps: list[PlanStep] = []
+        for index, (before, rule, b, after) in enumerate(chain):
+            names = {var: (before.name_of(n) if before.exists(n) else after.name_of(n)) for var, n in b.items()}
+            agm = {var: ids.of(n, before) for var, n in b.items()}
+            step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm)
+            if rule.hierarchical and expand:
+                sub = self._expand(rule, b, before)
+                if isinstance(sub, NoPlan):
+                    if index == 0:  # AGM: the first step must be expandable, or there is no plan
+                        return NoPlan(f"the plan starts with hierarchical step {step} but its expansion "
+                                      f"failed: {sub.reason}", expanded, generated, sub.diagnosis)
+                    step = replace(step, expansion_error=sub.reason)
+                else:
+                    step = replace(step, expansion=sub)
+            steps.append(step)
         target_names = {var: final.name_of(n) for var, n in match.items()}
         return Plan(tuple(steps), cost, expanded, generated, target_names, final)
+
+    def _expand(self, rule: Rule, bindings: Bindings, before: State) -> PlanResult:
+        """Plan the right-hand side of hierarchical ``rule`` from ``before``, its left-hand nodes
+        fixed to ``bindings``, without the rules being expanded (AGM's ``excludeList``)."""
+        nodes = []
+        for node in rule.rhs.nodes:
+            if rule.lhs.node(node.name) is not None and node.name in bindings:
+                nodes.append(PatternNode(node.name, node.type, constant=before.name_of(bindings[node.name]),
+                                         pos=node.pos))
+            else:
+                nodes.append(PatternNode(node.name, node.type, pos=node.pos))
+        target = Target(Pattern(tuple(nodes), rule.rhs.links), file=f"<expansion of {rule.name}>")
+        sub = Planner(self.grammar, self.world, include_passive=self.include_passive,
+                      exclude=self.exclude | {rule.name})
+        return sub.plan(target, start=before)
+
+
+class _AgmIds:
+    """AGM symbol ids for plan files: a world node's graph key; a created node gets the next
+    integer after the largest id in the state that creates it (``getNewIdForSymbol``)."""
+
+    def __init__(self, world: World) -> None:
+        self.world = world
+        self.created: dict[int, str] = {}
+        self.base_max = max((int(k) for k in world.keys if _is_int(k)), default=0)
+
+    def of(self, node: int, state: State) -> str:
+        if node < self.world.size:
+            return str(self.world.keys[node])
+        found = self.created.get(node)
+        if found is None:
+            largest = max([self.base_max, *(int(v) for k, v in self.created.items() if state.exists(k))])
+            found = self.created[node] = str(largest + 1)
+        return found
+
+
+def _is_int(key: object) -> bool:
+    return isinstance(key, int) and not isinstance(key, bool) or (isinstance(key, str) and key.isdigit())
 
 
 def plan(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,

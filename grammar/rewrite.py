@@ -40,7 +40,7 @@ def apply_rule(rule: Rule, state: State, lhs_bindings: Bindings, matcher: Matche
     changes.retype.extend((b[n.name], n.type) for n in rule.retyped_nodes)
     changes.add_edges.extend((b[l.src], b[l.dst], l.label) for l in rule.added_links)
     if rule.effect is not None:
-        formulas.collect(rule.effect, state, b, changes, editor)
+        formulas.apply_effect(rule.effect, state, b, changes, editor)
     values = []
     for assignment in rule.assignments:
         value = matcher.eval(assignment.value, state, b)

@@ -12,7 +12,7 @@ from typing import Any
 
 from lark import Token, Transformer, v_args
 
-from grammar.errors import GrammarError, SourcePos
+from grammar.errors import GrammarError, GrammarWarning, SourcePos, shorten
 from grammar.model import (
     And,
     Assignment,
@@ -48,7 +48,54 @@ from grammar.model import (
 )
 from grammar.validate import formula_pos
 
-_AGM_DIGITS = re.compile(r"^[0-9]+$")
+_AGM_AN = re.compile(r"[A-Za-z0-9_.]+")
+
+
+class AgmHead:
+    """How AGM's parser reads the words before ``:`` of a rule (``parseAGGL.py``: the rule
+    alternatives are tried in order normal, combo, hierarchical, include; ``dormant`` is a
+    ``CaselessLiteral`` and ``hierarchical`` a ``Literal``, both matching a prefix of a word)."""
+
+    def __init__(self, name: str, dormant: bool, hierarchical: bool, glued: str | None) -> None:
+        self.name = name
+        self.dormant = dormant
+        self.hierarchical = hierarchical
+        self.glued = glued  # the keyword read off the front of a word ("DormantFoo"), for a warning
+
+
+def _keyword_prefix(text: str, keyword: str, caseless: bool) -> tuple[str, bool, bool]:
+    """(rest, matched, glued): ``keyword`` read off the front of ``text`` as pyparsing does."""
+    head = text[:len(keyword)]
+    if (head.lower() if caseless else head) != keyword:
+        return text, False, False
+    rest = text[len(keyword):]
+    return rest.lstrip(), True, bool(rest) and not rest[0].isspace()
+
+
+def _single_name(text: str) -> str | None:
+    match = _AGM_AN.match(text)
+    return match.group(0) if match and not text[match.end():].strip() else None
+
+
+def read_agm_head(words: list[str], combo: bool = False) -> AgmHead | None:
+    """Rule name and flags from the words before ``:``, or ``None`` if AGM cannot read them."""
+    text = " ".join(words)
+    if combo:  # only the plain 'name : active(N) { atoms where: ... }' form is a combo rule
+        return AgmHead(words[0], False, False, None) if len(words) == 1 else None
+    rest, dormant, glued = _keyword_prefix(text, "dormant", caseless=True)
+    name = _single_name(rest)
+    if name is not None:  # AGM's normal rule: [dormant] NAME
+        return AgmHead(name, dormant, False, "dormant" if glued else None)
+    rest, dormant1, glued1 = _keyword_prefix(text, "dormant", caseless=True)
+    rest, hierarchical, glued2 = _keyword_prefix(rest, "hierarchical", caseless=False)
+    if not hierarchical:
+        return None
+    rest, dormant2, glued3 = _keyword_prefix(rest, "dormant", caseless=True)
+    name = _single_name(rest)
+    if name is None:
+        return None
+    glued_word = "dormant" if (glued1 or glued3) else "hierarchical" if glued2 else None
+    return AgmHead(name, dormant1 or dormant2, True, glued_word)
 
 
 class _Section:
@@ -107,6 +154,7 @@ class ModelBuilder(Transformer):
     def __init__(self, file: str) -> None:
         super().__init__()
         self.file = file
+        self.warnings: list[GrammarWarning] = []
 
     # ------------------------------------------------------------------ helpers
     def _pos(self, meta: Any) -> SourcePos | None:
@@ -193,7 +241,36 @@ class ModelBuilder(Transformer):
         return _Types(list(c))
 
     def agm_include(self, meta: Any, c: list[Token]) -> _Include:
-        return _Include(str(c[0]).strip(), self._tpos(c[0]))
+        if str(c[0]) != "include":
+            raise self._error(c[0], f"unexpected '(' after {shorten(str(c[0]))!r}; a rule is "
+                                    "'NAME : active(COST) {...}', an include 'include(PATH)'")
+        return _Include(str(c[1]).strip(), self._tpos(c[1]))
+
+    def _cost(self, token: Token) -> float:
+        digits = str(token).lstrip("+-")
+        if len(digits) > 15:
+            raise self._error(token, f"cost {shorten(str(token), 20)!r} has {len(digits)} digits; "
+                                     "costs are small integers")
+        return float(int(str(token)))
+
+    def agm_head(self, meta: Any, c: list[Token]) -> list[Token]:
+        return list(c)
+
+    def _head(self, words: list[Token], combo: bool) -> AgmHead:
+        head = read_agm_head([str(w) for w in words], combo=combo)
+        if head is None:
+            text = shorten(" ".join(str(w) for w in words))
+            raise self._error(words[0], f"cannot read rule head {text!r}: AGM reads "
+                                        "'[dormant] NAME' or '[dormant] hierarchical [dormant] NAME' before ':'")
+        if head.glued is not None:
+            first = shorten(" ".join(str(w) for w in words))
+            kind = ("dormant hierarchical" if head.dormant else "hierarchical") if head.hierarchical else "dormant"
+            self.warnings.append(GrammarWarning(
+                self._tpos(words[0]),
+                f"{first!r} is read as the {kind} rule {shorten(head.name)!r}, as AGM reads it (its "
+                f"'{head.glued}' keyword matches the start of a word); write it as a separate word "
+                "to make that plain, or rename the rule"))
+        return head
 
     def agm_success(self, meta: Any, c: list[Token]) -> _Section:
         try:
@@ -221,29 +298,22 @@ class ModelBuilder(Transformer):
                        tuple(x for x in c if isinstance(x, PatternLink)))
 
     def agm_rule(self, meta: Any, c: list[Any]) -> Rule:
-        flags = [t for t in c if isinstance(t, Token) and t.type in ("DORMANT", "HIERARCHICAL")]
-        rest = [x for x in c if not (isinstance(x, Token) and x.type in ("DORMANT", "HIERARCHICAL"))]
-        name, mode, cost = rest[0], rest[1], rest[2]
-        for keyword in ("dormant", "hierarchical"):
-            if str(name).startswith(keyword) and len(str(name)) > len(keyword):
-                raise self._error(name, f"rule name {str(name)!r} starts with the keyword {keyword!r}; "
-                                        f"AGM would read it as '{keyword} {str(name)[len(keyword):]}': "
-                                        "add a space or rename the rule")
+        words, mode, cost = c[0], c[1], c[2]
+        head = self._head(words, combo=False)
         if str(mode) not in ("active", "passive"):
-            raise self._error(mode, f"expected 'active' or 'passive' after ':' in rule {str(name)!r}, "
-                                    f"got {str(mode)!r}")
-        sections = [x for x in rest[3:] if isinstance(x, _Section)]
-        graphs = [x for x in rest[3:] if isinstance(x, Pattern)]
+            raise self._error(mode, f"expected 'active' or 'passive' after ':' in rule {shorten(head.name)!r}, "
+                                    f"got {shorten(str(mode))!r}")
+        sections = [x for x in c[3:] if isinstance(x, _Section)]
+        graphs = [x for x in c[3:] if isinstance(x, Pattern)]
         by_kind = {s.kind: s.value for s in sections}
         return Rule(
-            name=str(name), lhs=graphs[0], rhs=graphs[1], cost=float(int(str(cost))),
+            name=head.name, lhs=graphs[0], rhs=graphs[1], cost=self._cost(cost),
             active=str(mode) == "active",
             precondition=by_kind.get("precondition"), effect=by_kind.get("effect"),
             parameters=by_kind.get("parameters", ()),
-            hierarchical=any(t.type == "HIERARCHICAL" for t in flags),
-            dormant=any(t.type == "DORMANT" for t in flags),
+            hierarchical=head.hierarchical, dormant=head.dormant,
             activates=by_kind.get("activates", ()), success=by_kind.get("success"),
-            pos=self._tpos(flags[0] if flags else name),
+            pos=self._tpos(words[0]),
         )
 
     def combo_atom(self, meta: Any, c: list[Any]) -> ComboAtom:
@@ -254,12 +324,14 @@ class ModelBuilder(Transformer):
         return tuple((names[i], names[i + 1]) for i in range(0, len(names), 2))
 
     def agm_combo(self, meta: Any, c: list[Any]) -> ComboRule:
-        name, mode, cost = c[0], c[1], c[2]
+        words, mode, cost = c[0], c[1], c[2]
+        name = words[0]
+        self._head(words, combo=True)
         if str(mode) not in ("active", "passive"):
             raise self._error(mode, f"expected 'active' or 'passive', got {str(mode)!r}")
         atoms = tuple(x for x in c[3:] if isinstance(x, ComboAtom))
         equivs = tuple(x for x in c[3:] if isinstance(x, tuple))
-        return ComboRule(str(name), float(int(str(cost))), atoms, equivs, str(mode) == "active",
+        return ComboRule(str(name), self._cost(cost), atoms, equivs, str(mode) == "active",
                          self._tpos(name))
 
     def agm_file(self, meta: Any, c: list[Any]) -> dict[str, Any]:
@@ -271,7 +343,8 @@ class ModelBuilder(Transformer):
 
     def agm_target(self, meta: Any, c: list[Any]) -> Target:
         pattern = next((x for x in c if isinstance(x, Pattern)), Pattern())
-        nodes = tuple(PatternNode(n.name, n.type, constant=n.name if _AGM_DIGITS.match(n.name) else None,
+        # AGM's generateTarget_AGGT: a name starting with a digit is a constant (a world symbol id)
+        nodes = tuple(PatternNode(n.name, n.type, constant=n.name if n.name[:1].isdigit() else None,
                                   pos=n.pos) for n in pattern.nodes)
         pre = next((x.value for x in c if isinstance(x, _Section)), None)
         return Target(Pattern(nodes, pattern.links), precondition=pre, file=self.file)
@@ -357,11 +430,11 @@ class ModelBuilder(Transformer):
             if sec.kind in ("where", "set"):
                 continue
             if sec.kind in single:
-                raise self._error(sec.pos, f"rule {str(name)!r} has two '{sec.kind}' sections")
+                raise self._error(sec.pos, f"rule {shorten(str(name))!r} has two '{sec.kind}' sections")
             single[sec.kind] = sec
         for required in ("lhs", "rhs"):
             if required not in single:
-                raise self._error(name, f"rule {str(name)!r} has no '{required}' section")
+                raise self._error(name, f"rule {shorten(str(name))!r} has no '{required}' section")
 
         def value(kind: str, default: Any) -> Any:
             return single[kind].value if kind in single else default

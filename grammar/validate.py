@@ -7,8 +7,12 @@ loaded, with its line and column, not as a wrong plan an hour later.
 
 from __future__ import annotations
 
-from grammar.errors import GrammarError, SourcePos
+import math
+from collections.abc import Iterator
+
+from grammar.errors import GrammarError, SourcePos, shorten
 from grammar.model import (
+    ANY_TYPE,
     And,
     AttrRef,
     Compare,
@@ -166,7 +170,12 @@ def _created_in(formula: Formula | None) -> set[str]:
 
 
 def check_rule(rule: Rule) -> None:
-    where = f"rule {rule.name!r}"
+    where = f"rule {shorten(rule.name)!r}"
+    if not math.isfinite(rule.cost):
+        raise GrammarError.at(rule.pos, f"{where}: cost {rule.cost:g} is not a finite number")
+    if rule.success is not None and not (0.0 <= rule.success <= 1.0):
+        raise GrammarError.at(rule.pos, f"{where}: success {rule.success:g} is not a probability "
+                                        "(between 0 and 1)")
     if rule.cost < 0:
         raise GrammarError.at(rule.pos, f"{where}: cost {rule.cost:g} is negative; the planner needs "
                                         "costs >= 0 to find the cheapest plan")
@@ -209,15 +218,70 @@ def check_target(target: Target) -> None:
         check_formula(target.precondition, names, effect=False, in_condition=False, fallback=None)
 
 
-def check_grammar(grammar: Grammar) -> None:
-    """Whole-grammar checks, after includes are merged: unique rule names, known activations."""
+def _types_used(rule: Rule) -> Iterator[tuple[str, SourcePos | None]]:
+    """Every type a rule names: pattern nodes (nested ``exists`` included), quantified and
+    parameter variables, ``create``/``retype`` in formulas."""
+    patterns = [rule.rhs, rule.lhs]  # popped from the end: left-hand side first
+    exprs: list[Expr] = list(rule.where) + [a.value for a in rule.assignments]
+    formulas: list[Formula] = [f for f in (rule.precondition, rule.effect) if f is not None]
+    for decl in rule.parameters:
+        yield decl.type, decl.pos
+    while patterns or exprs or formulas:
+        if patterns:
+            pattern = patterns.pop()
+            for node in pattern.nodes:
+                yield node.type, node.pos
+                exprs.extend(node.conditions)
+            for link in pattern.links:
+                exprs.extend(link.conditions)
+        elif exprs:
+            expr = exprs.pop()
+            if isinstance(expr, Exists):
+                patterns.append(expr.pattern)
+            elif isinstance(expr, Compare):
+                exprs.extend((expr.left, expr.right))
+            elif isinstance(expr, Not):
+                exprs.append(expr.expr)
+            elif isinstance(expr, (And, Or, ListLit)):
+                exprs.extend(expr.items)
+        else:
+            formula = formulas.pop()
+            if isinstance(formula, (FExists, FForall)):
+                for decl in formula.vars:
+                    yield decl.type, decl.pos
+                formulas.append(formula.body)
+            elif isinstance(formula, (FCreate, FRetype)):
+                yield formula.type, formula.pos
+            elif isinstance(formula, FNot):
+                formulas.append(formula.body)
+            elif isinstance(formula, (FAnd, FOr)):
+                formulas.extend(formula.items)
+            elif isinstance(formula, FWhen):
+                formulas.extend((formula.condition, formula.then))
+
+
+def check_grammar(grammar: Grammar, *, top_level: bool = True) -> None:
+    """Whole-grammar checks, after includes are merged: unique rule names, known activations,
+    declared types (when the grammar has a ``types`` section), and at least one rule."""
     seen: dict[str, Rule] = {}
     for rule in grammar.rules:
         if rule.name in seen:
             first = seen[rule.name].pos
-            raise GrammarError.at(rule.pos, f"rule {rule.name!r} is defined twice (first at {first})")
+            raise GrammarError.at(rule.pos, f"rule {shorten(rule.name)!r} is defined twice (first at {first})")
         seen[rule.name] = rule
     for rule in grammar.rules:
         for name in rule.activates:
-            if name not in seen:
-                raise GrammarError.at(rule.pos, f"rule {rule.name!r} activates unknown rule {name!r}")
+            if name not in seen and not grammar.skipped_includes:
+                raise GrammarError.at(rule.pos, f"rule {shorten(rule.name)!r} activates unknown rule "
+                                                f"{shorten(name)!r}")
+    if grammar.declared_types:
+        declared = set(grammar.types.parents)
+        for rule in grammar.rules:
+            for type_name, pos in _types_used(rule):
+                if type_name not in declared and type_name != ANY_TYPE:
+                    known = ", ".join(sorted(declared)[:12]) + (", ..." if len(declared) > 12 else "")
+                    raise GrammarError.at(pos or rule.pos,
+                                          f"rule {shorten(rule.name)!r} uses type {shorten(type_name)!r}, "
+                                          f"which the types section does not declare (declared: {known})")
+    if top_level and not grammar.rules and not grammar.combos and not grammar.skipped_includes:
+        raise GrammarError("no rules: a grammar needs at least one rule to plan with", grammar.file, 1, 1)

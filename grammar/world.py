@@ -13,7 +13,7 @@ edges carry their type as attribute ``type`` (or as the edge key), as produced b
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -99,31 +99,62 @@ class Overlay:
     next_id: int = -1  # id of the next created node; -1 = world.size
 
 
+_NO_CHANGE = Overlay()
+_EMPTY_MAP: dict = {}  # shared, never written: the indexes of an overlay without node changes
+
+
 class State:
     """One world in the search: base + overlay, with the overlay indexed for fast queries."""
 
     __slots__ = ("world", "overlay", "_added_out", "_added_in", "_types", "_names", "_attrs",
-                 "_by_type_new", "_hash")
+                 "_by_type_new", "_hash", "_views")
 
     def __init__(self, world: World, overlay: Overlay | None = None) -> None:
         self.world = world
-        self.overlay = overlay or Overlay()
+        self.overlay = overlay or _NO_CHANGE
         ov = self.overlay
         self._added_out: dict[tuple[int, str], list[int]] = {}
         self._added_in: dict[tuple[int, str], list[int]] = {}
-        for s, d, label in sorted(ov.added):  # sorted: iteration order must not depend on hashing
-            self._added_out.setdefault((s, label), []).append(d)
-            self._added_in.setdefault((d, label), []).append(s)
-        self._types: dict[int, str] = {i: t for i, t, _ in ov.created}
-        self._types.update(dict(ov.retyped))
-        self._names: dict[int, str] = {i: n for i, _, n in ov.created}
-        self._attrs: dict[int, dict[str, Value]] = {}
-        for i, key, value in ov.attrs:
-            self._attrs.setdefault(i, {})[key] = value
-        self._by_type_new: dict[str, list[int]] = {}
-        for i in sorted(self._types):
-            self._by_type_new.setdefault(self._types[i], []).append(i)
+        if ov.added:
+            for s, d, label in sorted(ov.added):  # sorted: iteration order must not depend on hashing
+                self._added_out.setdefault((s, label), []).append(d)
+                self._added_in.setdefault((d, label), []).append(s)
+        if ov.created or ov.retyped:  # (most states only move links: share the empty indexes)
+            self._types: dict[int, str] = {i: t for i, t, _ in ov.created}
+            self._types.update(dict(ov.retyped))
+            self._names: dict[int, str] = {i: n for i, _, n in ov.created}
+            self._by_type_new: dict[str, list[int]] = {}
+            for i in sorted(self._types):
+                self._by_type_new.setdefault(self._types[i], []).append(i)
+        else:
+            self._types = self._names = _EMPTY_MAP  # type: ignore[assignment]
+            self._by_type_new = _EMPTY_MAP  # type: ignore[assignment]
+        if ov.attrs:
+            self._attrs: dict[int, dict[str, Value]] = {}
+            for i, key, value in ov.attrs:
+                self._attrs.setdefault(i, {})[key] = value
+        else:
+            self._attrs = _EMPTY_MAP  # type: ignore[assignment]
         self._hash = hash(ov)
+        self._views: dict[Hashable, tuple[object, ...]] | None = None
+
+    def view(self, reader: Hashable, visible: Callable[[State, Edge], bool], attrs: frozenset[str]
+             ) -> tuple[object, ...]:
+        """The part of this state's difference from the base world that ``reader`` can see: the
+        added and removed links ``visible`` accepts, the attributes it reads, every node change.
+        States with equal views give a reader the same answers (cached per state and reader)."""
+        views = self._views
+        if views is None:
+            views = self._views = {}
+        found = views.get(reader)
+        if found is None:
+            ov = self.overlay
+            found = (frozenset(e for e in ov.added if visible(self, e)),
+                     frozenset(e for e in ov.removed if visible(self, e)),
+                     frozenset(a for a in ov.attrs if a[1] in attrs) if ov.attrs else frozenset(),
+                     ov.created, ov.deleted, ov.retyped)
+            views[reader] = found
+        return found
 
     # ------------------------------------------------------------------ identity
     def __hash__(self) -> int:
@@ -274,8 +305,9 @@ class StateEditor:
         self.state = state
         ov = state.overlay
         self.world = state.world
-        self.added = set(ov.added)
-        self.removed = set(ov.removed)
+        # links are copied on first change (most rule applications change two or three)
+        self.added: set[Edge] | frozenset[Edge] = ov.added
+        self.removed: set[Edge] | frozenset[Edge] = ov.removed
         self.created = {i: (t, n) for i, t, n in ov.created}
         self.deleted = set(ov.deleted)
         self.retyped = dict(ov.retyped)
@@ -283,22 +315,32 @@ class StateEditor:
         self.activated = set(ov.activated)
         self.next_id = ov.next_id if ov.next_id >= 0 else self.world.size
 
+    def _own_links(self) -> None:
+        if isinstance(self.added, frozenset):
+            self.added = set(self.added)
+        if isinstance(self.removed, frozenset):
+            self.removed = set(self.removed)
+
     def _base_has(self, e: Edge) -> bool:
         return e in self.world.edge_attrs
 
     def add_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.removed:
-            self.removed.discard(e)
-        elif not self._base_has(e):
-            self.added.add(e)
+            self._own_links()
+            self.removed.discard(e)  # type: ignore[union-attr]
+        elif e not in self.added and not self._base_has(e):
+            self._own_links()
+            self.added.add(e)  # type: ignore[union-attr]
 
     def remove_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.added:
-            self.added.discard(e)
-        elif self._base_has(e):
-            self.removed.add(e)
+            self._own_links()
+            self.added.discard(e)  # type: ignore[union-attr]
+        elif e not in self.removed and self._base_has(e):
+            self._own_links()
+            self.removed.add(e)  # type: ignore[union-attr]
 
     def create_node(self, node_type: str, name_hint: str) -> int:
         i = self.next_id
@@ -312,6 +354,7 @@ class StateEditor:
         for s, label in view.edges_to(n):
             self.remove_edge(s, n, label)
         self.added = {e for e in self.added if e[0] != n and e[1] != n}
+        self.removed = set(self.removed)
         if n in self.created:
             del self.created[n]
         else:
@@ -339,12 +382,15 @@ class StateEditor:
         self.activated.update(rule_names)
 
     def freeze(self) -> State:
+        ov = self.state.overlay
         overlay = Overlay(
-            added=frozenset(self.added), removed=frozenset(self.removed),
-            created=tuple((i, t, n) for i, (t, n) in sorted(self.created.items())),
-            deleted=frozenset(self.deleted), retyped=frozenset(self.retyped.items()),
-            attrs=frozenset((i, k, v) for (i, k), v in self.attrs.items()),
-            activated=frozenset(self.activated),
+            added=self.added if isinstance(self.added, frozenset) else frozenset(self.added),
+            removed=self.removed if isinstance(self.removed, frozenset) else frozenset(self.removed),
+            created=tuple((i, t, n) for i, (t, n) in sorted(self.created.items())) if self.created else (),
+            deleted=ov.deleted if self.deleted == ov.deleted else frozenset(self.deleted),
+            retyped=frozenset(self.retyped.items()) if self.retyped else frozenset(),
+            attrs=frozenset((i, k, v) for (i, k), v in self.attrs.items()) if self.attrs else frozenset(),
+            activated=ov.activated if self.activated == ov.activated else frozenset(self.activated),
             next_id=self.next_id if self.created or self.next_id != self.world.size else -1,
         )
         return State(self.world, overlay)

@@ -21,7 +21,8 @@ def parse_clock(text: str) -> float:
     """``"HH:MM"`` or ``"HH:MM:SS"`` -> seconds since midnight; ``"24:00"`` is the end of the day."""
     match = CLOCK_PATTERN.match(text.strip()) if isinstance(text, str) else None
     if not match:
-        raise ValueError(f"{text!r} is not a clock time (use HH:MM or HH:MM:SS)")
+        shown = text if isinstance(text, str) and len(text) <= 40 else f"{str(text)[:40]}..."
+        raise ValueError(f"{shown!r} is not a clock time (use HH:MM or HH:MM:SS, e.g. 09:30)")
     hours, minutes, seconds = int(match[1]), int(match[2]), int(match[3] or 0)
     if (hours, minutes, seconds) != (24, 0, 0) and (hours > 23 or minutes > 59 or seconds > 59):
         raise ValueError(f"{text!r} is not a valid clock time (00:00 to 24:00)")

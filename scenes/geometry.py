@@ -32,8 +32,8 @@ class GeometryError(ValueError):
 
 def finite(owner: str, name: str, value: Any) -> float:
     """``value`` as a finite float, or GeometryError naming ``owner`` and ``name``."""
-    if isinstance(value, bool):
-        raise GeometryError(f"{owner}: {name} must be a number, got {value!r}")
+    if isinstance(value, bool):  # YAML's true/false, which Python would take for 1 and 0
+        raise GeometryError(f"{owner}: {name} must be a number, got {'true' if value else 'false'}")
     try:
         number = float(value)
     except (TypeError, ValueError, OverflowError):
@@ -152,8 +152,8 @@ def shape_from_spec(spec: Shape | Mapping[str, Any] | Any, where: str = "shape")
             raise GeometryError(f"{where}: unknown key(s) {sorted(map(str, unknown))} for a {kind}")
     try:
         return cls(**kwargs)
-    except GeometryError as exc:
-        raise GeometryError(f"{where}: {exc}") from None
+    except GeometryError as exc:  # the shape's own message already starts with its kind
+        raise GeometryError(str(exc) if where == kind else f"{where}: {exc}") from None
 
 
 def shape_to_dict(shape: Shape) -> dict[str, Any]:

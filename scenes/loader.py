@@ -7,10 +7,15 @@ point at the line of the offending key.
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
 import shapely
+import shapely.ops
+
+from scenes.clock import parse_clock
+from scenes.geometry import posed_polygon
 
 from scenes.model import Scene
 from scenes.yamlio import LocatedYaml, SourceError, load_located_file, validate_located
@@ -47,37 +52,144 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
     raise SourceError(str(path), 1, 1, "", "no such scene file")
 
 
+# A person's body, as the social map blocks it (agents/lib/socialmap/grid.py GridParams.person_radius_m).
+PERSON_BODY_RADIUS_M = 0.25
+# How far a door's centre may lie from each of its rooms' outlines.
+DOOR_ON_WALL_TOLERANCE_M = 0.1
+
+
+def _check_references(scene: Scene, located: LocatedYaml) -> None:
+    """Names unique, references resolved: located at the key that is wrong, not at the file's start."""
+    for kind, key, items in (("room", "rooms", scene.rooms), ("object", "objects", scene.objects),
+                             ("person", "people", scene.people), ("door", "doors", scene.doors)):
+        seen: dict[str, int] = {}
+        for index, item in enumerate(items):
+            if item.name in seen:
+                line, _ = located.where((key, seen[item.name], "name"))
+                raise located.error((key, index, "name"), f"duplicate {kind} name {item.name!r} (first on line "
+                                    f"{line}); give each {kind} its own name")
+            seen[item.name] = index
+    rooms = {r.name for r in scene.rooms}
+    objects = {o.name for o in scene.objects}
+    people = {p.name for p in scene.people}
+    doors = {d.name for d in scene.doors}
+
+    def unknown(kind: str, value: str, known: set[str]) -> str:
+        close = difflib.get_close_matches(value, sorted(known), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        return f"no {kind} named {value!r}; {hint}{kind}s: {', '.join(sorted(known)) or 'none'}"
+
+    for i, door in enumerate(scene.doors):
+        for j, room in enumerate(door.between):
+            if room not in rooms:
+                raise located.error(("doors", i, "between", j), unknown("room", room, rooms))
+        if door.between[0] == door.between[1]:
+            raise located.error(("doors", i, "between", 1), f"door {door.name!r} joins room {door.between[0]!r} "
+                                "to itself; name the two rooms it connects")
+    for i, change in enumerate(scene.door_changes):
+        if change.door not in doors:
+            raise located.error(("door_changes", i, "door"), unknown("door", change.door, doors))
+    for i, person in enumerate(scene.people):
+        times = [parse_clock(w.time) for w in person.waypoints]
+        for j in range(1, len(times)):
+            if times[j] <= times[j - 1]:
+                raise located.error(("people", i, "waypoints", j, "time"),
+                                    f"{person.waypoints[j].time} is not after the previous waypoint's "
+                                    f"{person.waypoints[j - 1].time}; waypoints go in time order")
+        for j, other in enumerate(person.interacting_with):
+            key = ("people", i, "interacting_with", j)
+            if other in objects:
+                raise located.error(key, f"{other!r} is an object; links to objects come from the agenda: add "
+                                    f"an activity on it with {person.name!r} among its participants")
+            if other == person.name:
+                raise located.error(key, f"{person.name!r} cannot interact with themself")
+            if other not in people:
+                raise located.error(key, unknown("person", other, people))
+    seen_ids: dict[str, int] = {}
+    for i, mission in enumerate(scene.missions):
+        if mission.id in seen_ids:
+            line, _ = located.where(("missions", seen_ids[mission.id], "id"))
+            raise located.error(("missions", i, "id"), f"duplicate mission id {mission.id!r} (first on line {line})")
+        seen_ids[mission.id] = i
+        goal = mission.goal
+        for kind, known in (("room", rooms), ("object", objects), ("person", people)):
+            target = getattr(goal, kind, None)
+            if isinstance(target, str) and target not in known:
+                raise located.error(("missions", i, "goal", kind), unknown(kind, target, known))
+
+
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
     for index, room in enumerate(scene.rooms):  # before the union: GEOS fails on invalid polygons
         if not shapely.Polygon(room.polygon).is_valid:
             raise located.error(("rooms", index, "polygon"), f"room {room.name!r} polygon self-intersects")
     building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
+    footprints = [(obj.name, posed_polygon(obj.footprint, obj.pose.x, obj.pose.y, obj.pose.theta))
+                  for obj in scene.objects]
 
     def inside(key: tuple[str | int, ...], x: float, y: float, what: str) -> None:
         if not building.covers(shapely.Point(x, y)):
             raise located.error(key, f"{what} at ({x:g}, {y:g}) is outside every room")
 
-    inside(("robot", "pose"), scene.robot.pose.x, scene.robot.pose.y, "robot")
+    def clear(key: tuple[str | int, ...], x: float, y: float, what: str, radius: float,
+              body: str) -> None:
+        """Nothing solid within ``radius`` of (x, y): not on a wall, not in an object's footprint."""
+        point = shapely.Point(x, y)
+        if not walls.is_empty and walls.distance(point) < radius:
+            near = shapely.ops.nearest_points(walls, point)[0]
+            raise located.error(key, f"{what} at ({x:g}, {y:g}) is on a wall: the wall at ({near.x:.2f}, "
+                                f"{near.y:.2f}) is {walls.distance(point):.2f} m away, closer than {body} "
+                                f"({radius:g} m); move it into the room")
+        for name, footprint in footprints:
+            if footprint.distance(point) < radius or footprint.covers(point):
+                raise located.error(key, f"{what} at ({x:g}, {y:g}) is inside object {name!r} (its footprint "
+                                    f"is {footprint.distance(point):.2f} m away, closer than {body}, "
+                                    f"{radius:g} m); move one of them")
+
+    robot = scene.robot
+    inside(("robot", "pose"), robot.pose.x, robot.pose.y, "robot")
+    clear(("robot", "pose"), robot.pose.x, robot.pose.y, "robot", robot.radius, "its radius")
     for i, obj in enumerate(scene.objects):
         inside(("objects", i, "pose"), obj.pose.x, obj.pose.y, f"object {obj.name!r}")
     for i, person in enumerate(scene.people):
         inside(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
+        clear(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}",
+              PERSON_BODY_RADIUS_M, "a person's body")
         for j, waypoint in enumerate(person.waypoints):
-            inside(("people", i, "waypoints", j, "pose"), waypoint.pose.x, waypoint.pose.y,
-                   f"waypoint of {person.name!r}")
-    walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
+            key = ("people", i, "waypoints", j, "pose")
+            inside(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}")
+            clear(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}", PERSON_BODY_RADIUS_M,
+                  "a person's body")
     for i, person in enumerate(scene.people):
         route = [person.pose, *(w.pose for w in person.waypoints)]
         for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
             if (a.x, a.y) != (b.x, b.y) and shapely.LineString([(a.x, a.y), (b.x, b.y)]).crosses(walls):
                 raise located.error(("people", i, "waypoints", j), f"{person.name!r} would walk through a "
                                     f"wall from ({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint at the door")
+    polygons = {room.name: shapely.Polygon(room.polygon) for room in scene.rooms}
     for i, door in enumerate(scene.doors):
-        inside(("doors", i, "position"), door.position[0], door.position[1], f"door {door.name!r}")
+        x, y = door.position
+        key = ("doors", i, "position")
+        inside(key, x, y, f"door {door.name!r}")
+        point = shapely.Point(x, y)
+        for room in door.between:
+            gap = polygons[room].exterior.distance(point)
+            if gap > DOOR_ON_WALL_TOLERANCE_M:
+                raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is not on the outline of room "
+                                    f"{room!r} ({gap:.2f} m from it); a door sits on the wall between its two "
+                                    f"rooms {door.between[0]!r} and {door.between[1]!r}")
+        clearance = min(door.width / 2, robot.radius) - 0.01
+        if not walls.is_empty and walls.distance(point) < clearance:
+            raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is on solid wall: a wall passes "
+                                f"{walls.distance(point):.2f} m from its centre; leave a gap of the door's width "
+                                f"({door.width:g} m) in the wall there")
     for i, mission in enumerate(scene.missions):
         pose = getattr(mission.goal, "pose", None)
         if pose is not None:
-            inside(("missions", i, "goal", "pose"), pose.x, pose.y, f"goal of mission {mission.id!r}")
+            key = ("missions", i, "goal", "pose")
+            what = f"goal of mission {mission.id!r}"
+            inside(key, pose.x, pose.y, what)
+            clear(key, pose.x, pose.y, what, robot.radius, "the robot's radius")
 
 
 def load_scene(name_or_path: str | Path) -> LoadedScene:
@@ -87,6 +199,7 @@ def load_scene(name_or_path: str | Path) -> LoadedScene:
     if not isinstance(located.data, dict):
         raise SourceError(str(path), 1, 1, "", "a scene file must be a YAML mapping")
     scene = validate_located(Scene, located)
+    _check_references(scene, located)
     _check_geometry(scene, located)
     loaded = LoadedScene(scene=scene, path=path, located=located)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():

@@ -12,24 +12,45 @@ import math
 import datetime as dt
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, PlainSerializer, PlainValidator, field_validator, model_validator
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, PlainSerializer,
+                      PlainValidator, Tag, ValidationInfo, field_validator, model_validator)
 
 from scenes.clock import ClockTime, parse_clock
 from scenes.geometry import Circle, Rectangle, Trapezoid, shape_from_spec, shape_to_dict
 from scenes.geometry import Shape as GeometryShape
+from scenes.names import Name
+from scenes.yamlio import as_date
 
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-Point = tuple[float, float]
+def _number(value: Any) -> Any:
+    """YAML's ``true``/``false`` are not numbers, although Python counts them as 1 and 0."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got {'true' if value else 'false'}")
+    return value
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise ValueError(f"must be a finite number, got {value}")
+    return value
+
+
+# Every number of a scene: a real number, never a boolean, never .inf or .nan.
+Real = Annotated[float, BeforeValidator(_number), AfterValidator(_finite)]
+WholeNumber = Annotated[int, BeforeValidator(_number)]
+
+
+Point = tuple[Real, Real]
 
 
 class Pose(Strict):
-    x: float
-    y: float
-    theta: float = 0.0
+    x: Real
+    y: Real
+    theta: Real = 0.0
 
     @model_validator(mode="before")
     @classmethod
@@ -37,24 +58,19 @@ class Pose(Strict):
         """Accept the compact ``[x, y, theta]`` / ``[x, y]`` form used in scene files."""
         if isinstance(value, (list, tuple)):
             if len(value) not in (2, 3):
-                raise ValueError("a pose is [x, y] or [x, y, theta]")
+                raise ValueError(f"a pose is [x, y] or [x, y, theta] (metres, radians), got {len(value)} values")
             return dict(zip(("x", "y", "theta"), value, strict=False))
-        return value
-
-    @field_validator("x", "y", "theta")
-    @classmethod
-    def _finite(cls, value: float) -> float:
-        if not math.isfinite(value):
-            raise ValueError("must be a finite number")
+        if not isinstance(value, dict | Pose):
+            raise ValueError("a pose is [x, y] or [x, y, theta] (metres, radians), e.g. [1.5, 2.0, 0]")
         return value
 
 
 class Clock(Strict):
-    date: dt.date = dt.date(2026, 11, 25)
+    date: Annotated[dt.date, PlainValidator(as_date), PlainSerializer(lambda d: d.isoformat())] = dt.date(2026, 11, 25)
     timezone: str = "Europe/Madrid"
     start: ClockTime = "09:00"
     end: ClockTime = "14:00"
-    rate: float = Field(60.0, gt=0, description="sim seconds per wall second")
+    rate: Real = Field(60.0, gt=0, le=1_000_000, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
 
 
@@ -69,11 +85,13 @@ class Clock(Strict):
             raise ValueError(f"unknown time zone {value!r}") from None
         return value
 
-    @model_validator(mode="after")
-    def _order(self) -> Clock:
-        if parse_clock(self.end) <= parse_clock(self.start):
-            raise ValueError("clock.end must be after clock.start")
-        return self
+    @field_validator("end")
+    @classmethod
+    def _order(cls, value: str, info: ValidationInfo) -> str:
+        start = info.data.get("start")
+        if start is not None and parse_clock(value) <= parse_clock(start):
+            raise ValueError(f"the day's end {value!r} must be after its start {start!r}")
+        return value
 
     @property
     def start_s(self) -> float:
@@ -85,15 +103,15 @@ class Clock(Strict):
 
 
 class Room(Strict):
-    name: str
+    name: Name
     polygon: list[Point] = Field(min_length=3)
 
 
 class Door(Strict):
-    name: str
-    between: tuple[str, str]
+    name: Name
+    between: tuple[Name, Name]
     position: Point
-    width: float = Field(1.0, gt=0)
+    width: Real = Field(1.0, gt=0, le=20.0)
 
 
 def _shape(value: Any) -> GeometryShape:
@@ -112,8 +130,8 @@ Shape = Annotated[GeometryShape, PlainValidator(_shape), PlainSerializer(shape_t
 
 
 class SceneObject(Strict):
-    name: str
-    kind: str = Field(description="tv, table, round_table, stretcher, bed, poster, ...")
+    name: Name
+    kind: Name = Field(description="tv, table, round_table, stretcher, bed, poster, ...")
     pose: Pose
     footprint: Shape
     interaction: Shape
@@ -127,32 +145,30 @@ class Waypoint(Strict):
 
 
 class PersonSpec(Strict):
-    name: str
+    name: Name
     role: Literal["resident", "new_resident", "staff", "therapist", "visitor"] = "resident"
     pose: Pose
     waypoints: list[Waypoint] = []
-    interacting_with: list[str] = Field(default_factory=list,
-                                        description="people this one is in conversation with (all day); "
-                                                    "interactions with objects come from the agenda")
+    interacting_with: list[Name] = Field(default_factory=list,
+                                         description="people this one is in conversation with (all day); "
+                                                     "interactions with objects come from the agenda")
 
-    @model_validator(mode="after")
-    def _waypoints_in_order(self) -> PersonSpec:
-        times = [parse_clock(w.time) for w in self.waypoints]
-        if any(b <= a for a, b in zip(times, times[1:], strict=False)):
-            raise ValueError("waypoints must be in strictly increasing time order")
-        return self
+
+# Bounds a real robot meets; a value beyond them is a typo (radius: 50), not a robot.
+MAX_ROBOT_RADIUS_M = 2.0
+MAX_SPEED_MPS = 5.0
 
 
 class RobotSpec(Strict):
-    name: str = "robot"
+    name: Name = "robot"
     pose: Pose
-    radius: float = Field(0.3, gt=0)
+    radius: Real = Field(0.3, gt=0, le=MAX_ROBOT_RADIUS_M, description="m")
     kinematics: Literal["differential", "omnidirectional"] = "differential"
-    max_speed: float = Field(0.6, gt=0, description="m/s")
-    max_angular_speed: float = Field(1.2, gt=0, description="rad/s")
-    max_acceleration: float = Field(0.8, gt=0, description="m/s^2")
-    laser_range: float = Field(5.0, gt=0)
-    laser_rays: int = Field(91, ge=3)
+    max_speed: Real = Field(0.6, gt=0, le=MAX_SPEED_MPS, description="m/s")
+    max_angular_speed: Real = Field(1.2, gt=0, le=20.0, description="rad/s")
+    max_acceleration: Real = Field(0.8, gt=0, le=20.0, description="m/s^2")
+    laser_range: Real = Field(5.0, gt=0, le=100.0, description="m")
+    laser_rays: WholeNumber = Field(91, ge=3, le=4096)
 
 
 class PoseGoal(Strict):
@@ -160,22 +176,39 @@ class PoseGoal(Strict):
 
 
 class RoomGoal(Strict):
-    room: str
+    room: Name
 
 
 class ObjectGoal(Strict):
-    object: str
+    object: Name
 
 
 class PersonGoal(Strict):
-    person: str
+    person: Name
 
 
-Goal = PoseGoal | RoomGoal | ObjectGoal | PersonGoal
+_GOAL_KINDS = ("pose", "room", "object", "person")
+
+
+def _goal_kind(value: Any) -> str | None:
+    """Which goal a mapping is, by its key; None lets pydantic report "not one of them"."""
+    if isinstance(value, PoseGoal | RoomGoal | ObjectGoal | PersonGoal):
+        return next(k for k in _GOAL_KINDS if hasattr(value, k))
+    if isinstance(value, dict):
+        kinds = [k for k in _GOAL_KINDS if k in value]
+        return kinds[0] if len(kinds) == 1 else None
+    return None
+
+
+Goal = Annotated[Annotated[PoseGoal, Tag("pose")] | Annotated[RoomGoal, Tag("room")]
+                 | Annotated[ObjectGoal, Tag("object")] | Annotated[PersonGoal, Tag("person")],
+                 Discriminator(_goal_kind, custom_error_type="goal_kind",
+                               custom_error_message="a goal is one of {pose: [x, y, theta]}, {room: NAME}, "
+                                                    "{object: NAME} or {person: NAME}")]
 
 
 class Mission(Strict):
-    id: str
+    id: Name
     time: ClockTime
     goal: Goal
     description: str = ""
@@ -208,15 +241,15 @@ class DoorChange(Strict):
     """A door opened or closed at a sim time (a world event the simulator carries out)."""
 
     at: ClockTime
-    door: str
+    door: Name
     open: bool
 
 
 
 class Scene(Strict):
-    name: str
+    name: Name
     description: str = ""
-    resolution: float = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
+    resolution: Real = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
     clock: Clock = Clock()
     walls: list[list[Point]] = Field(min_length=1, description="polylines")
     rooms: list[Room] = Field(min_length=1)
@@ -229,48 +262,6 @@ class Scene(Strict):
     agenda_changes: list[AgendaChange] = []
     door_changes: list[DoorChange] = []
     missions: list[Mission] = []
-
-    @model_validator(mode="after")
-    def _references(self) -> Scene:
-        """Cross-references by name, so a misspelt room or object fails here and not mid-run."""
-        for kind, items in (("room", self.rooms), ("object", self.objects), ("person", self.people),
-                            ("door", self.doors)):
-            seen: set[str] = set()
-            for item in items:
-                if item.name in seen:
-                    raise ValueError(f"duplicate {kind} name {item.name!r}")
-                seen.add(item.name)
-        rooms = {r.name for r in self.rooms}
-        objects = {o.name for o in self.objects}
-        people = {p.name for p in self.people}
-        for door in self.doors:
-            for room in door.between:
-                if room not in rooms:
-                    raise ValueError(f"door {door.name!r} names unknown room {room!r}")
-        doors = {d.name for d in self.doors}
-        for change in self.door_changes:
-            if change.door not in doors:
-                raise ValueError(f"door_changes names unknown door {change.door!r}")
-        for person in self.people:
-            for other in person.interacting_with:
-                if other in objects:
-                    raise ValueError(f"person {person.name!r}: interacting_with names the object {other!r}; "
-                                     "links to objects come from the agenda: add an activity on it with "
-                                     f"{person.name!r} among its participants")
-                if other not in people or other == person.name:
-                    raise ValueError(f"person {person.name!r} interacts with unknown person {other!r}")
-        for mission in self.missions:
-            goal = mission.goal
-            if isinstance(goal, RoomGoal) and goal.room not in rooms:
-                raise ValueError(f"mission {mission.id!r} targets unknown room {goal.room!r}")
-            if isinstance(goal, ObjectGoal) and goal.object not in objects:
-                raise ValueError(f"mission {mission.id!r} targets unknown object {goal.object!r}")
-            if isinstance(goal, PersonGoal) and goal.person not in people:
-                raise ValueError(f"mission {mission.id!r} targets unknown person {goal.person!r}")
-        ids = [m.id for m in self.missions]
-        if len(ids) != len(set(ids)):
-            raise ValueError("mission ids must be unique")
-        return self
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:

@@ -6,8 +6,14 @@ import os
 from collections.abc import Iterator
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from tests.support import ProcessGroup, process_group
+
+# Property tests judge results, not speed (speed goals live in tools/bench_*.py): no per-example
+# deadline, which a loaded 2-core machine would turn into flaky failures.
+settings.register_profile("chronav", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("chronav")
 
 # Unit tests never need a Rerun sink; system tests opt back in explicitly.
 os.environ.setdefault("RERUN", "off")

@@ -78,10 +78,13 @@ class NoSystemError(AgendaToolError):
 # ---------------------------------------------------------------------------------------------
 
 def _pydantic_problems(exc: Any) -> str:
+    """pydantic's errors in the user's words (scenes/yamlio.user_message), one per field."""
+    from scenes.yamlio import user_message
+
     parts = []
     for error in exc.errors():
-        where = ".".join(str(p) for p in error["loc"])
-        message = "required" if error["type"] == "missing" else str(error["msg"]).removeprefix("Value error, ")
+        where = ".".join(str(p) for p in error["loc"] if not (isinstance(p, str) and "function-" in p))
+        message = user_message(error)
         parts.append(f"{where}: {message}" if where else message)
     return "; ".join(parts)
 
@@ -314,19 +317,27 @@ def snapshot(graph: Any) -> dict[str, Any]:
 def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
     from rich.console import Console
     from rich.table import Table
+    from rich.text import Text
+
+    from scenes.names import shown
+
+    def cell(value: object) -> Text:
+        # Names come from other people's files and commands: never markup, never terminal escapes.
+        return Text(shown(value, 120))
 
     console = Console(file=out, highlight=False, soft_wrap=True)
-    title = f"agenda of {data['graph']} at {data['now'] or '?'}: {len(data['activities'])} activities"
+    title = Text(f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {len(data['activities'])} activities")
     table = Table(title=title, title_justify="left")
     for column in ("id", "name", "object", "start", "end", "state", "participants", "R now"):
         table.add_column(column, overflow="fold")
     for row in data["activities"]:
         r = row["object_R"]
-        table.add_row(row["id"], row["name"], row["object"], row["start"], row["end"], row["state"],
-                      ", ".join(row["participants"]), "-" if r is None else f"{r:.2f}")
+        table.add_row(cell(row["id"]), cell(row["name"]), cell(row["object"]), cell(row["start"]), cell(row["end"]),
+                      cell(row["state"]), cell(", ".join(map(str, row["participants"]))),
+                      "-" if r is None else f"{r:.2f}")
     console.print(table)
     objects = ", ".join(_object_text(o) for o in data["objects"])
-    console.print(f"objects: {objects or 'none yet'}", markup=False)
+    console.print(shown(f"objects: {objects or 'none yet'}", 10_000), markup=False)
 
 
 def _r_text(row: dict[str, Any]) -> str:
@@ -366,10 +377,12 @@ class ChangeWatcher:
         if self.done:
             return
         now = now_s(self.graph)
-        if self.as_json:
+        if self.as_json:  # JSON escapes control characters itself
             line = json.dumps({"t_s": now, "time": _clock_text(now), "kind": kind, **fields, "text": text})
         else:
-            line = f"{_clock_text(now)} {text}"
+            from scenes.names import shown
+
+            line = f"{_clock_text(now)} {shown(text, 2_000)}"
         self.out.write(line + "\n")
         self.out.flush()
         self.lines += 1
@@ -450,7 +463,9 @@ TIMEOUT_HELP = "Seconds to wait for the agenda agent's answer."
 
 
 def _fail(command: str, exc: AgendaToolError) -> None:
-    typer.echo(f"chronav agenda {command}: {exc}", err=True)
+    from scenes.names import shown
+
+    typer.echo("\n".join(shown(line, 2_000) for line in f"chronav agenda {command}: {exc}".splitlines()), err=True)
     raise typer.Exit(exc.exit_code)
 
 
@@ -473,14 +488,19 @@ def _change(command: str, build: Callable[[], dict[str, Any]], conn: Connection,
                    "`chronav agenda list`: the agent may have applied it)", err=True)
         raise typer.Exit(130) from None
     if as_json:
-        shown = {k: v for k, v in change.items() if k != "text"}
+        sent = {k: v for k, v in change.items() if k != "text"}
         typer.echo(json.dumps({"accepted": answer.accepted, "message": answer.message, "request": answer.request,
-                               "graph": address.graph, "change": shown}))
+                               "graph": address.graph, "change": sent}))
     if answer.accepted:
         if not as_json:
-            typer.echo(f"accepted: {answer.message}")
+            from scenes.names import shown
+
+            typer.echo(f"accepted: {shown(answer.message, 2_000)}")
         return
-    typer.echo(f"chronav agenda {command}: {answer.message}", err=True)
+    from scenes.names import shown
+
+    typer.echo("\n".join(shown(line, 2_000) for line in f"chronav agenda {command}: {answer.message}".splitlines()),
+               err=True)
     raise typer.Exit(1)
 
 

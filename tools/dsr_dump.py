@@ -106,9 +106,20 @@ def dump(
                                    "seconds (0 = until Ctrl-C)."),
     timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
                                   "again for the state."),
+    output_format: str = typer.Option("table", "--format",
+                                      help="table, json, or agm-xml (RoboComp AGM world XML, for AGM "
+                                           "tools; not with --follow)."),
 ) -> None:
     """Join a running graph read-only and print it (table or JSON), or follow changes live."""
     import orjson
+
+    if output_format not in ("table", "json", "agm-xml"):
+        typer.echo(f"chronav dsr dump: --format {output_format!r}: use table, json or agm-xml", err=True)
+        raise typer.Exit(2)
+    if output_format == "agm-xml" and (follow or json_output):
+        typer.echo("chronav dsr dump: --format agm-xml writes one snapshot: drop --follow and --json", err=True)
+        raise typer.Exit(2)
+    json_output = json_output or output_format == "json"
 
     from dsr import SIGNALS
     from dsr.process import exit_on_sigterm
@@ -129,7 +140,11 @@ def dump(
             require_system(graph, target)
             document = {"graph": name, **graph.to_document(),
                         "stats": graph.replica.stats.as_dict()}
-            if json_output:
+            if output_format == "agm-xml":
+                from grammar.agm_world import agm_world_xml
+
+                sys.stdout.write(agm_world_xml(graph.to_networkx()))
+            elif json_output:
                 sys.stdout.write(orjson.dumps(document).decode() + "\n")
             else:
                 _print_tables(graph)

@@ -24,6 +24,8 @@ def _fail(message: str, code: int = 2) -> None:
 
 @grammar_app.command("check")
 def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or target (.aggt) files"),
+          no_includes: bool = typer.Option(False, "--no-includes",
+                                           help="check each file alone, without reading its includes"),
           as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
     """Parse each file; print file:line:col: message for the first error of each broken file."""
     from grammar.errors import GrammarError
@@ -35,78 +37,148 @@ def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or targe
             if path.suffix == ".aggt":
                 target = load_target(path)
                 results.append({"file": str(path), "ok": True, "kind": "target",
-                                "nodes": len(target.pattern.nodes), "links": len(target.pattern.links)})
+                                "nodes": len(target.pattern.nodes), "links": len(target.pattern.links),
+                                "warnings": []})
             else:
-                grammar = load_grammar(path)
+                grammar = load_grammar(path, includes=not no_includes)
                 results.append({"file": str(path), "ok": True, "kind": "grammar", "name": grammar.name,
                                 "dialect": grammar.dialect, "rules": len(grammar.rules),
-                                "types": len(grammar.types.parents), "includes": len(grammar.includes)})
+                                "hierarchical": sum(r.hierarchical for r in grammar.rules),
+                                "combos": len(grammar.combos), "types": len(grammar.types.parents),
+                                "includes": len(grammar.includes),
+                                "skipped_includes": list(grammar.skipped_includes),
+                                "warnings": [str(w) for w in grammar.warnings]})
         except GrammarError as err:
             typer.echo(str(err), err=True)
             results.append({"file": str(path), "ok": False, "error": str(err), "line": err.line,
                             "column": err.column, "message": err.message})
+    for r in results:
+        for warning in r.get("warnings", ()):
+            typer.echo(warning, err=True)
     failed = [r for r in results if not r["ok"]]
     if as_json:
         typer.echo(json.dumps({"ok": not failed, "files": results}))
     else:
         for r in results:
-            if not r["ok"]:
-                continue
-            if r["kind"] == "target":
-                typer.echo(f"{r['file']}: OK (target, {r['nodes']} nodes, {r['links']} links)")
-            else:
-                typer.echo(f"{r['file']}: OK ({r['dialect']} grammar {r['name']!r}, {r['rules']} rules, "
-                           f"{r['types']} types)")
+            if r["ok"]:
+                typer.echo(f"{r['file']}: OK ({_summary(r)})")
         if not failed:
             typer.echo(f"{len(results)} file(s) OK")
     if failed:
         raise typer.Exit(1)
 
 
+def _summary(r: dict[str, Any]) -> str:
+    if r["kind"] == "target":
+        return f"target, {r['nodes']} nodes, {r['links']} links"
+    parts = [f"{r['dialect']} grammar {r['name']!r}", f"{r['rules']} rules"]
+    if r["hierarchical"]:
+        parts.append(f"{r['hierarchical']} hierarchical")
+    if r["combos"]:
+        parts.append(f"{r['combos']} combo rules (parsed, not planned: AGM removed them in 2017)")
+    parts.append(f"{r['types']} types")
+    if r["includes"]:
+        parts.append(f"{r['includes']} included files")
+    if r["skipped_includes"]:
+        parts.append(f"{len(r['skipped_includes'])} includes not read")
+    return ", ".join(parts)
+
+
 def _parse_time(text: str | None) -> float | None:
-    """``HH:MM`` (or ``HH:MM:SS``) or plain seconds since midnight."""
+    """``HH:MM`` (or ``HH:MM:SS``): the one clock syntax of every command (scenes/clock.py)."""
     from scenes.clock import parse_clock
 
     if text is None:
         return None
     try:
-        return parse_clock(text) if ":" in text else float(text)
-    except ValueError:
-        _fail(f"--at {text!r}: expected HH:MM, HH:MM:SS or seconds since midnight")
+        return parse_clock(text)
+    except ValueError as exc:
+        _fail(f"--at: {exc}")
     return None
 
 
 def _load_world(scene: Path, at_s: float | None) -> Any:
-    """A ``.json`` file is a networkx node-link graph; anything else is a scene: its symbolic
-    graph (rooms, doors, robot, people, objects, the day's activities with their state at
-    ``at_s``, by default the scene clock's start)."""
-    if scene.suffix == ".json":
-        from networkx.readwrite import json_graph
+    """A ``.json`` file is a networkx node-link graph, a ``.xml`` file an AGM world; anything
+    else is a scene: its symbolic graph (rooms, doors, robot, people, objects, the day's
+    activities with their state at ``at_s``, by default the scene clock's start)."""
+    if scene.suffix.lower() in (".json", ".xml"):
+        from grammar.agm_world import load_world
 
-        try:
-            data = json.loads(scene.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            _fail(f"{scene}: cannot read symbolic graph: {exc}")
-        edges_key = "links" if "links" in data else "edges"
-        try:
-            return json_graph.node_link_graph(data, directed=True, multigraph=True, edges=edges_key)
-        except (KeyError, TypeError, ValueError) as exc:
-            _fail(f"{scene}: not a node-link graph: {exc}")
+        return load_world(scene)
     from agents.world.dsr_readers import symbolic_view
     from agents.world.offline import graph_at
-    from agents.world.scene_world import load_world
+    from agents.world.scene_world import load_world as load_scene_world
     from scenes.yamlio import SourceError
 
     try:
-        world = load_world(scene)
+        world = load_scene_world(scene)
     except SourceError as exc:
         _fail(str(exc))
     return symbolic_view(graph_at(world, world.scene.clock.start_s if at_s is None else at_s))
 
 
-def plan_command(scene: Path = typer.Argument(..., help="scene file, or a .json node-link symbolic graph"),
-                 mission: str = typer.Option(..., "--mission", "-m",
-                                             help="room:NAME, object:NAME, person:NAME, group:P1+P2, wait:ACTIVITY"),
+def _step_json(step: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {"rule": step.rule, "bindings": dict(step.bindings), "cost": step.cost,
+                           "hierarchical": step.hierarchical, "agm_bindings": dict(step.agm_bindings)}
+    if step.hierarchical:
+        out["expansion"] = ([_step_json(s) for s in step.expansion.steps] if step.expansion is not None else None)
+        out["expansion_error"] = step.expansion_error
+    return out
+
+
+def _step_lines(steps: Any, indent: str = "  ", prefix: str = "") -> list[str]:
+    lines: list[str] = []
+    for i, step in enumerate(steps, 1):
+        number = f"{prefix}{i}"
+        bindings = " ".join(f"{var}={name}" for var, name in step.bindings.items())
+        mark = "*" if step.hierarchical else ""
+        lines.append(f"{indent}{number}. {mark}{step.rule}  {bindings}")
+        if step.hierarchical and step.expansion is not None:
+            lines.append(f"{indent}   expands into ({len(step.expansion.steps)} step(s), "
+                         f"cost {step.expansion.cost:g}):")
+            lines += _step_lines(step.expansion.steps, indent + "   ", f"{number}.")
+        elif step.hierarchical:
+            lines.append(f"{indent}   not expanded yet: {step.expansion_error}")
+    return lines
+
+
+def _report(result: Any, what: str, payload: dict[str, Any], as_json: bool) -> None:
+    """Print a plan (or why there is none) in chronav's form and AGM's plan-file form."""
+    payload.update(found=result.found, expanded=result.expanded, generated=result.generated)
+    if result.found:
+        payload.update(cost=result.cost, target_bindings=dict(result.target_bindings),
+                       steps=[_step_json(s) for s in result.steps], agm_plan=result.agm_lines())
+    else:
+        payload["reason"] = result.reason
+        payload["diagnosis"] = result.diagnosis.to_dict() if result.diagnosis is not None else None
+    if as_json:
+        typer.echo(json.dumps(payload))
+    elif result.found:
+        typer.echo(f"plan for {what}: {len(result.steps)} step(s), cost {result.cost:g}, "
+                   f"{result.expanded} state(s) expanded")
+        for line in _step_lines(result.steps):
+            typer.echo(line)
+        typer.echo("AGM plan:")
+        for line in result.agm_lines():
+            typer.echo(f"  {line}")
+    if not result.found:
+        typer.echo(f"no plan for {what}: {result.reason}", err=True)
+        if result.diagnosis is not None:
+            for line in result.diagnosis.lines()[1:]:
+                typer.echo(f"  {line}", err=True)
+        raise typer.Exit(1)
+
+
+def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, or a world file (.json node-link "
+                                                                   "graph, .xml AGM world)"),
+                 mission: Optional[str] = typer.Option(None, "--mission", "-m",
+                                                       help="room:NAME, object:NAME, person:NAME, group:P1+P2, "
+                                                            "wait:ACTIVITY"),
+                 world_file: Optional[Path] = typer.Option(None, "--world", "-w",
+                                                           help="AGM world (.xml) or node-link graph (.json); "
+                                                                "use with --target, as AGM's agglplan"),
+                 target_file: Optional[Path] = typer.Option(None, "--target", "-t",
+                                                            help="target file (.aggt), with --world"),
                  grammar_file: Optional[Path] = typer.Option(None, "--grammar", "-g",
                                                              help="grammar file (default: shipped social_navigation.aggl)"),
                  robot: Optional[str] = typer.Option(None, "--robot", help="robot node name if there are several"),
@@ -114,38 +186,42 @@ def plan_command(scene: Path = typer.Argument(..., help="scene file, or a .json 
                                                   help="time of day (HH:MM) for the activities' state"),
                  max_expansions: int = typer.Option(20_000, "--max-expansions", min=1),
                  as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
-    """Plan a mission on a scene and print each step with its variable bindings."""
+    """Plan a mission on a scene (SCENE --mission M), or a target on a world as AGM's agglplan
+    (--world W --target T --grammar G); print each step with its bindings and the AGM plan file."""
     from grammar.errors import GrammarError, MissionError, PlanningError
-    from grammar.missions import plan_mission
-    from grammar.parser import default_grammar_path, load_grammar
+    from grammar.parser import default_grammar_path, load_grammar, load_target
 
+    agm_mode = world_file is not None or target_file is not None
+    if agm_mode:
+        if world_file is None or target_file is None:
+            _fail("--world and --target go together: chronav plan --world W.xml --target T.aggt --grammar G.aggl")
+        if scene is not None or mission is not None or at is not None or robot is not None:
+            _fail("with --world/--target, give no SCENE, --mission, --robot or --at")
+    elif scene is None or mission is None:
+        _fail("give SCENE --mission M, or --world W.xml --target T.aggt [--grammar G.aggl]")
     try:
         grammar = load_grammar(grammar_file or default_grammar_path())
-        world = _load_world(scene, _parse_time(at))
-        result = plan_mission(grammar, world, mission, robot=robot, max_expansions=max_expansions)
+        if agm_mode:
+            from grammar.planner import Planner
+
+            assert world_file is not None and target_file is not None
+            target = load_target(target_file)
+            world = _load_world(world_file, None)
+            result = Planner(grammar, world).plan(target, max_expansions=max_expansions)
+            payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file}
+            what = f"target {str(target_file)!r}"
+        else:
+            from grammar.missions import plan_mission
+
+            assert scene is not None and mission is not None
+            world = _load_world(scene, _parse_time(at))
+            result = plan_mission(grammar, world, mission, robot=robot, max_expansions=max_expansions)
+            payload = {"mission": mission, "grammar": grammar.file}
+            what = repr(mission)
     except (GrammarError, MissionError, PlanningError) as err:
         _fail(str(err))
         return
-    if as_json:
-        payload: dict[str, Any] = {"mission": mission, "grammar": grammar.file, "found": result.found,
-                                   "expanded": result.expanded, "generated": result.generated}
-        if result.found:
-            payload.update(cost=result.cost, target_bindings=dict(result.target_bindings),  # type: ignore[union-attr]
-                           steps=[{"rule": s.rule, "bindings": dict(s.bindings), "cost": s.cost}
-                                  for s in result.steps])  # type: ignore[union-attr]
-        else:
-            payload["reason"] = result.reason  # type: ignore[union-attr]
-        typer.echo(json.dumps(payload))
-    elif result.found:
-        steps = result.steps  # type: ignore[union-attr]
-        typer.echo(f"plan for {mission!r}: {len(steps)} step(s), cost {result.cost:g}, "  # type: ignore[union-attr]
-                   f"{result.expanded} state(s) expanded")
-        for i, step in enumerate(steps, 1):
-            bindings = " ".join(f"{var}={name}" for var, name in step.bindings.items())
-            typer.echo(f"  {i}. {step.rule}  {bindings}")
-    if not result.found:
-        typer.echo(f"no plan for {mission!r}: {result.reason}", err=True)  # type: ignore[union-attr]
-        raise typer.Exit(1)
+    _report(result, what, payload, as_json)
 
 
 def register(app: typer.Typer) -> None:

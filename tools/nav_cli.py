@@ -33,7 +33,8 @@ def _clock(text: str | None, option: str) -> float | None:
     try:
         return parse_clock(text)
     except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint=option) from None
+        _fail(f"{option}: {exc}")  # the same words as `chronav plan --at` (one clock parser)
+    return None
 
 
 def _planner(name: str | None, baseline: bool, departure_time: bool) -> str:

@@ -43,7 +43,8 @@ class AgendaAgent(Agent):
         for text in node.attrs.get("changes", []):
             try:
                 self.day = apply_change(self.day, parse_change(text), known_objects=self.world.object_names,
-                                        known_rooms=self.world.room_names)
+                                        known_rooms=self.world.room_names,
+                                        known_people=self.world.person_names)
             except AgendaChangeError as exc:
                 self.log.warning("could not replay a recorded change: %s", exc)
 
@@ -72,7 +73,7 @@ class AgendaAgent(Agent):
         try:
             change = parse_change(change_json)
             new_day = apply_change(self.day, change, known_objects=self.world.object_names,
-                                   known_rooms=self.world.room_names)
+                                   known_rooms=self.world.room_names, known_people=self.world.person_names)
         except AgendaChangeError as exc:
             self.rec.event(f"{format_clock(now_s)} agenda change from {origin} refused: {exc}", level="WARN")
             return False, str(exc)

@@ -16,6 +16,10 @@ from scenes.geometry import posed_polygon
 from scenes.model import Scene
 
 DOOR_LEAF_OVERLAP_M = 0.05   # a closed leaf overlaps the wall on each side, so no gap is left
+# Clearance the navigation keeps beyond the robot's body when planning (the controller cuts
+# corners a little when following a path); goal poses chosen by the executive respect it too,
+# and `chronav scene check` checks goals against it.
+PLANNING_MARGIN_M = 0.15
 
 
 def scene_walls(scene: Scene) -> list[Wall]:

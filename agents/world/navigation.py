@@ -17,13 +17,11 @@ from agents.lib.socialmap.types import Room, Wall
 from agents.lib.socialmap.planners import DEFAULT_PLANNER, check_planner
 from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMapParams, StaticMap, build_social_map,
                                              build_static_map)
-from agents.world.building import closed_door_walls, scene_rooms, scene_walls
+from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_rooms, scene_walls
 from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
 from scenes.model import Scene
 
-# Clearance the navigation keeps beyond the robot's body when planning (the controller cuts
-# corners a little when following a path); goal poses chosen by the executive respect it too.
-PLANNING_MARGIN_M = 0.15
+# PLANNING_MARGIN_M (building.py, where the scene check reads it without importing the planner).
 # The navigation expects to average this fraction of the robot's top speed (arrival-time R(t)).
 CRUISE_FRACTION = 0.7
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import shapely
 
 from agents.lib.agenda.chronemics import ChronemicsParams
 from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_trajectory_csv
@@ -30,6 +31,7 @@ from agents.world.navigation import NavigationMaps
 from agents.world.scene_world import SceneWorld, load_world
 from agents.world.timeline import world_at
 from dsr import DSRGraph
+from scenes.clock import format_clock
 from scenes.loader import LoadedScene
 from scenes.yamlio import SourceError
 
@@ -125,7 +127,8 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
     try:
         path = plan(smap, start, goal, method=method, planner=planner, cruise_speed_mps=maps.cruise_speed)
     except PlanningError as exc:
-        raise OfflineError(f"no path from {start} to {goal} at {t_s:.0f} s: {exc}", no_path=True) from None
+        raise OfflineError(f"no path from ({start[0]:g}, {start[1]:g}) to ({goal[0]:g}, {goal[1]:g}) m at "
+                           f"{format_clock(t_s)}: {exc}", no_path=True) from None
     points = np.vstack([path.points_m])
     report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
     return {
@@ -139,9 +142,24 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
     }
 
 
+def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
+    """A trajectory none of whose samples is in the scene's rooms belongs to another scene (or
+    another frame): measuring it would report distances to people it never met."""
+    scene = world.scene
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    inside = shapely.intersects_xy(building, traj[:, 1], traj[:, 2])
+    if not inside.any():
+        xmin, ymin, xmax, ymax = scene.bounds
+        raise OfflineError(f"{source}: no sample of the trajectory lies in a room of {scene.name!r} (samples span "
+                           f"x {traj[:, 1].min():g}..{traj[:, 1].max():g} m, y {traj[:, 2].min():g}.."
+                           f"{traj[:, 2].max():g} m; the building spans x {xmin:g}..{xmax:g} m, y {ymin:g}..{ymax:g} m); "
+                           "is it a trajectory of this scene?")
+
+
 def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None) -> dict[str, Any]:
     maps = SceneMaps.load(scene)
     traj = read_trajectory_csv(trajectory_csv)
+    _check_on_map(maps.world, traj, trajectory_csv)
     if at_s is None:
         first = float(traj[0, 0])
         at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s

@@ -10,14 +10,21 @@ scripted change fails at ``chronav scene check`` instead of minutes into a run.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
+import shapely
+
 from agents.lib.agenda import (AgendaChangeError, AgendaDay, AgendaError, AgendaSourceError, AgendaValidationError,
-                               apply_change, expand_day, load_scene_agenda, parse_change)
+                               apply_change, expand_day, parse_change, validate_day)
+from agents.lib.agenda.yaml_source import scene_agenda
+from agents.lib.socialmap.grid import grid_shape
+from agents.lib.socialmap.types import SocialMapInputError
+from agents.world.building import PLANNING_MARGIN_M
 from scenes.clock import parse_clock
 from scenes.loader import LoadedScene, load_scene
-from scenes.model import Scene
+from scenes.model import PoseGoal, RoomGoal, Scene
 from scenes.yamlio import SourceError
 
 
@@ -44,6 +51,7 @@ class SceneWorld:
     loaded: LoadedScene
     agenda: AgendaDay
     scripted: tuple[ScriptedChange, ...]
+    notes: tuple[str, ...] = ()  # what staff usually want to know but is allowed (overlapping activities)
 
     @property
     def scene(self) -> Scene:
@@ -61,10 +69,14 @@ class SceneWorld:
     def room_names(self) -> frozenset[str]:
         return frozenset(r.name for r in self.scene.rooms)
 
+    @property
+    def person_names(self) -> frozenset[str]:
+        return frozenset(p.name for p in self.scene.people)
+
     def apply(self, day: AgendaDay, change: ScriptedChange) -> AgendaDay:
         """``change`` applied to ``day`` exactly as the agenda agent applies it."""
         return apply_change(day, parse_change(change.text), known_objects=self.object_names,
-                            known_rooms=self.room_names)
+                            known_rooms=self.room_names, known_people=self.person_names)
 
 
 def scripted_changes(scene: Scene) -> tuple[ScriptedChange, ...]:
@@ -80,29 +92,74 @@ def _agenda_error(exc: Exception, loaded: LoadedScene) -> SourceError:
     """Agenda errors name "file:line" in their findings; keep that position for the scene check."""
     scene_file = str(loaded.path)
     if isinstance(exc, AgendaSourceError):
-        problem = exc.problems[0]
-        return SourceError(problem.file, problem.line or 1, 1, problem.key, problem.message)
+        return exc.problems[0]
     if isinstance(exc, AgendaValidationError) and exc.report.errors:
         finding = exc.report.errors[0]
-        file, _, line = finding.source.rpartition(":")
-        if file and line.isdigit():
-            return SourceError(file, int(line), 1, "agenda", finding.message)
-        return SourceError(scene_file, 1, 1, "agenda", finding.message)
-    return SourceError(scene_file, 1, 1, "agenda", str(exc))
+        where = re.match(r"^(.*):(\d+)(?: .*)?$", finding.source)
+        if where:
+            return SourceError(where[1], int(where[2]), None, "agenda", finding.message)
+        return SourceError(scene_file, None, None, "agenda", finding.message)
+    return SourceError(scene_file, None, None, "agenda", str(exc))
+
+
+def _check_navigable(loaded: LoadedScene) -> None:
+    """The map the navigation will build: not too large, and every mission goal reachable from the
+    robot's start (a goal on a wall or in a walled-off box would leave the mission "active" until
+    the run times out).  Free space is the building less the walls grown by the robot's radius plus
+    the planning margin, all doors open: what the navigation's static map blocks, as polygons
+    (cheap, and without importing the planner into every agent that loads a scene)."""
+    scene = loaded.scene
+    try:
+        grid_shape(scene.bounds, scene.resolution)
+    except SocialMapInputError as exc:
+        raise loaded.error(("resolution",), str(exc)) from None
+    clearance = scene.robot.radius + PLANNING_MARGIN_M
+    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
+    free = building.difference(walls.buffer(clearance)) if not walls.is_empty else building
+    robot = scene.robot.pose
+    parts = list(getattr(free, "geoms", [free]))
+    start = next((part for part in parts if part.covers(shapely.Point(robot.x, robot.y))), None)
+    if start is None:
+        raise loaded.error(("robot", "pose"), f"the robot at ({robot.x:g}, {robot.y:g}) is within {clearance:.2f} m "
+                           "(its radius plus the planning margin) of a wall or outside the rooms: the navigation "
+                           "cannot start there; move it further into the room")
+    for i, mission in enumerate(scene.missions):
+        goal = mission.goal
+        if isinstance(goal, PoseGoal):
+            x, y = goal.pose.x, goal.pose.y
+            point = shapely.Point(x, y)
+            if not free.covers(point):
+                raise loaded.error(("missions", i, "goal", "pose"), f"goal ({x:g}, {y:g}) of mission {mission.id!r} "
+                                   f"is within {clearance:.2f} m (the robot's radius plus the planning margin) of "
+                                   "a wall: the robot cannot stand there; move the goal into the room")
+            if not start.covers(point):
+                raise loaded.error(("missions", i, "goal", "pose"), f"goal ({x:g}, {y:g}) of mission {mission.id!r} "
+                                   f"cannot be reached from the robot's start ({robot.x:g}, {robot.y:g}): walls "
+                                   "close it off (is a door missing, or narrower than the robot?)")
+        elif isinstance(goal, RoomGoal):
+            room = next(r for r in scene.rooms if r.name == goal.room)
+            if not start.intersects(shapely.Polygon(room.polygon).buffer(-1e-6)):
+                raise loaded.error(("missions", i, "goal", "room"), f"room {goal.room!r} of mission {mission.id!r} "
+                                   f"cannot be reached from the robot's start ({robot.x:g}, {robot.y:g}): no door "
+                                   "wide enough for the robot leads there")
 
 
 def resolve_world(loaded: LoadedScene) -> SceneWorld:
     """The agenda of a loaded scene placed on its date, and its scripted changes checked by applying
     them in order (SourceError at the offending ``agenda_changes`` entry)."""
     scene = loaded.scene
+    _check_navigable(loaded)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise loaded.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
     try:
-        day = expand_day(load_scene_agenda(loaded.path), scene.clock.date, scene.clock.timezone,
-                         {o.name for o in scene.objects}, known_rooms={r.name for r in scene.rooms})
+        day = expand_day(scene_agenda(loaded.located, loaded.path.parent), scene.clock.date, scene.clock.timezone,
+                         {o.name for o in scene.objects}, known_rooms={r.name for r in scene.rooms},
+                         known_people={p.name for p in scene.people})
     except AgendaError as exc:
         raise _agenda_error(exc, loaded) from None
-    world = SceneWorld(loaded, day, scripted_changes(scene))
+    notes = tuple(f.message for f in validate_day(day, None).infos)
+    world = SceneWorld(loaded, day, scripted_changes(scene), notes)
     check = day
     for change in world.scripted:
         try:

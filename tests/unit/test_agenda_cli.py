@@ -262,7 +262,7 @@ def nobody_env() -> dict[str, str]:
     (["add", "tv", "25:00", "26:00"], "start: '25:00' is not a valid clock time (00:00 to 24:00)"),
     (["add", "tv", "10:00", "09:00"], "end: end '09:00' is not after start '10:00'"),
     (["add", "tv", "10", "11:00"], "start: '10' is not a time: use HH:MM"),
-    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: String should match pattern"),
+    (["add", "tv", "09:00", "10:00", "--id", "my game"], "id: an id is one word without spaces, got 'my game'"),
     (["move", "tv-0908"], "say the new time: --start HH:MM and/or --end HH:MM"),
     (["move", "tv-0908", "--start", "10:00", "--end", "09:30"], "--end '09:30' is not after --start '10:00'"),
     (["move", "tv-0908", "--end", "half past"], "--end: 'half past' is not a time"),
@@ -280,8 +280,8 @@ def test_load_reports_file_errors_with_lines_before_sending(nobody_env: dict[str
                    '  - {name: Quiz, objet: tv, start: "10:00", end: "11:00"}\n')
     result = runner.invoke(app, ["agenda", "load", str(bad)], env=nobody_env)
     assert result.exit_code == 1
-    assert f"{bad}:4: activities[0].start: '25:00' is not a valid clock time" in result.stderr
-    assert f"{bad}:6: activities[1].objet: unknown key; did you mean 'object'?" in result.stderr
+    assert f"{bad}:4:5: activities[0].start: '25:00' is not a valid clock time" in result.stderr
+    assert f"{bad}:6:18: activities[1].objet: unknown key 'objet' (did you mean 'object'?)" in result.stderr
 
     ics = tmp_path / "bad.ics"
     ics.write_text((REPO_ROOT / "tests" / "data" / "agenda_bad.ics").read_text())
@@ -429,3 +429,40 @@ def test_watch_follows_a_change_live(live: LiveSystem) -> None:
     assert by_kind["object"]["object"]["R"] == pytest.approx(expected_r())
     assert by_kind["request"]["event"] == "accepted" and "add: tv-0908" in by_kind["request"]["text"]
     assert all(e["time"] == "09:05" for e in events)
+
+
+# ---------------------------------------------------------------------------------------------
+# Hostile input to the live agent (issue 12): refused fast, the agent keeps answering.
+# ---------------------------------------------------------------------------------------------
+
+HOSTILE = REPO_ROOT / "tests" / "data" / "hostile"
+
+
+def test_secondly_recurrence_is_refused_and_the_agent_keeps_answering(live: LiveSystem) -> None:
+    result = live.invoke("load", str(HOSTILE / "secondly.ics"), "--timeout", "20")
+    assert result.exit_code == 1, result.output
+    assert "RRULE:FREQ=SECONDLY" in result.stderr and "CHRONAV_LIMIT_RECURRENCE_STEPS" in result.stderr
+    assert live.world.nodes_of_type("activity") == []
+    after = live.invoke("add", "tv", "09:08", "09:40")
+    assert after.exit_code == 0, after.output
+
+
+def test_participant_not_in_the_scene_is_refused(live: LiveSystem) -> None:
+    result = live.invoke("add", "tv", "09:08", "09:40", "--participants", "senior_1, bob")
+    assert result.exit_code == 1, result.output
+    assert "participant 'bob' is not a person of the scene" in result.stderr
+    assert "people: senior_1, therapist" in result.stderr
+    assert live.world.nodes_of_type("activity") == []
+
+
+def test_names_from_the_graph_are_shown_without_terminal_escapes() -> None:
+    hostile = "\x1b[2J\x1b]0;pwned\x07[bold]x"
+    data = {"graph": "g", "now": "09:05", "activities": [
+        {"id": "a", "name": hostile, "object": "tv", "start": "09:08", "end": "09:40", "state": "upcoming",
+         "participants": [hostile], "object_R": 1.5}],
+        "objects": [{"name": hostile, "R": 1.5, "band": "green", "active": False}]}
+    out = StringIO()
+    tool.print_snapshot(data, out)
+    text = out.getvalue()
+    assert "\x1b" not in text and "\x07" not in text
+    assert "\\x1b[2J" in text and "[bold]x" in text  # shown, escaped, not interpreted as markup

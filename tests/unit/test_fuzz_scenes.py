@@ -40,7 +40,7 @@ def check_scene_file(path: Path) -> None:
     try:
         load_scene(path)
     except SourceError as exc:
-        assert exc.line >= 1 and exc.column >= 1, exc
+        assert (exc.line is None or exc.line >= 1) and (exc.column is None or exc.column >= 1), exc
         assert exc.message.strip(), exc
         assert Path(exc.file).name == path.name or Path(exc.file).parent == path.parent, \
             f"error names {exc.file!r}, not the scene or its agenda file: {exc}"

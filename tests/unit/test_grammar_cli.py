@@ -68,8 +68,10 @@ def test_plan_json_and_no_plan_and_errors(tmp_path: Path) -> None:
     assert result.exit_code == 0
     payload = json.loads(result.stdout)
     assert payload["found"] and payload["cost"] == 1
-    assert payload["steps"] == [{"rule": "changeRoom", "cost": 1.0,
-                                 "bindings": {"robot": "robot", "r1": "hall", "r2": "gym", "d": "d1"}}]
+    bindings = {"robot": "robot", "r1": "hall", "r2": "gym", "d": "d1"}
+    assert payload["steps"] == [{"rule": "changeRoom", "cost": 1.0, "bindings": bindings, "hierarchical": False,
+                                 "agm_bindings": bindings}]
+    assert payload["agm_plan"] == ["changeRoom@{'robot': 'robot', 'r1': 'hall', 'r2': 'gym', 'd': 'd1'}"]
     missing = runner.invoke(app, ["plan", str(scene), "-m", "room:attic", "--json"])
     assert missing.exit_code == 1 and json.loads(missing.stdout)["found"] is False
     assert "no node named 'attic'" in missing.stderr
@@ -90,4 +92,30 @@ def test_plan_on_a_shipped_scene_at_a_time_of_day() -> None:
     steps = json.loads(result.stdout)["steps"]
     assert steps and steps[-1]["rule"] == "changeRoom" and steps[-1]["bindings"]["r2"] == "dining_room"
     bad_time = runner.invoke(app, ["plan", str(scene), "-m", "room:dining_room", "--at", "25:00"])
-    assert bad_time.exit_code == 2 and "--at '25:00'" in bad_time.stderr
+    assert bad_time.exit_code == 2 and "--at: '25:00' is not a valid clock time" in bad_time.stderr
+
+
+def test_no_plan_names_the_blocking_rule_condition_and_facts(tmp_path: Path) -> None:
+    """Issue 11 item 4: an object whose interaction space is in use says who uses it."""
+    graph = graph_from_mapping(
+        {"hall": {"type": "room"}, "gym": {"type": "room"}, "d1": {"type": "door"}, "robot": {"type": "omnirobot"},
+         "ot_table": {"type": "object"}, "resident_3": {"type": "person", "role": "resident"}},
+        [("hall", "gym", "connected", {"door": "d1"}), ("robot", "hall", "in"), ("ot_table", "gym", "in"),
+         ("resident_3", "gym", "in"), ("resident_3", "ot_table", "interacting")])
+    world = tmp_path / "busy.json"
+    world.write_text(json.dumps(nx.node_link_data(graph, edges="links")))
+    result = runner.invoke(app, ["plan", str(world), "-m", "object:ot_table"])
+    assert result.exit_code == 1
+    lines = result.stderr.splitlines()
+    assert lines[0].startswith("no plan for 'object:ot_table': no sequence of rules reaches the target")
+    assert "  never reached: robot -near-> ot_table" in lines
+    blocked = [line for line in lines if line.startswith("  blocked: ")]
+    assert blocked[0].startswith("  blocked: goToObject(robot=robot, o=ot_table): where not exists { p:person  "
+                                 "p->o(interacting) } (")
+    assert blocked[0].endswith("fails: resident_3 -interacting-> ot_table")
+    payload = json.loads(runner.invoke(app, ["plan", str(world), "-m", "object:ot_table", "--json"]).stdout)
+    blocker = payload["diagnosis"]["blockers"][0]
+    assert blocker["rule"] == "goToObject" and blocker["focus"] == {"robot": "robot", "o": "ot_table"}
+    assert blocker["pos"]["file"].endswith("social_navigation.aggl") and blocker["pos"]["line"] > 0
+    assert blocker["witnesses"] == [{"var": "p", "node": "resident_3", "type": "person", "attrs": {}}]
+    assert payload["diagnosis"]["unmet"] == ["robot -near-> ot_table"]

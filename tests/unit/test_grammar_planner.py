@@ -260,3 +260,49 @@ def test_astar_with_heuristic_and_pruning_finds_the_uniform_cost_optimum(case: t
     assert fast.found == slow.found, (getattr(fast, "reason", ""), getattr(slow, "reason", ""))
     if isinstance(fast, Plan) and isinstance(slow, Plan):
         assert fast.cost == slow.cost
+
+
+@st.composite
+def random_centres_with_people(draw: st.DrawFn) -> tuple[nx.MultiDiGraph, str]:
+    """Rooms in a row or a ring, objects and people in them, some people interacting with one
+    another or with an object, a running group activity: every mission kind is drawn."""
+    n = draw(st.integers(2, 5))
+    nodes: dict[str, Any] = {f"room{i}": {"type": "room"} for i in range(n)}
+    edges: list[tuple[Any, ...]] = []
+    for i in range(n - 1 + draw(st.integers(0, 1))):
+        nodes[f"door{i}"] = {"type": "door", "open": draw(st.integers(0, 5)) > 0}
+        edges.append((f"room{i}", f"room{(i + 1) % n}", "connected", {"door": f"door{i}"}))
+    nodes["robot"] = {"type": "omnirobot"}
+    edges.append(("robot", f"room{draw(st.integers(0, n - 1))}", "in"))
+    people = [f"p{i}" for i in range(draw(st.integers(1, 4)))]
+    objects = [f"o{i}" for i in range(draw(st.integers(1, 3)))]
+    for name in people + objects:
+        nodes[name] = {"type": "person" if name in people else "object"}
+        edges.append((name, f"room{draw(st.integers(0, n - 1))}", "in"))
+    for a, b in draw(st.lists(st.tuples(st.sampled_from(people), st.sampled_from(people + objects)), max_size=3)):
+        if a != b:
+            edges.append((a, b, "interacting"))
+    if len(people) >= 2 and draw(st.booleans()):
+        nodes["game"] = {"type": "activity", "state": "running"}
+        edges += [("game", objects[0], "has"), (people[0], "game", "participant"), (people[1], "game", "participant")]
+    kinds = [f"room:room{draw(st.integers(0, n - 1))}", f"object:{draw(st.sampled_from(objects))}",
+             f"person:{draw(st.sampled_from(people))}"]
+    if len(people) >= 2:
+        kinds.append(f"group:{people[0]}+{people[1]}")
+    return graph_from_mapping(nodes, edges), draw(st.sampled_from(kinds))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(random_centres_with_people())
+def test_pruning_keeps_the_optimum_for_every_mission_kind(case: tuple[nx.MultiDiGraph, str]) -> None:
+    """Relevance (typed, and without rules that only remove links nobody needs absent) never
+    changes whether a plan exists or its cost."""
+    graph, mission = case
+    g = load_grammar(default_grammar_path())
+    parsed = parse_mission(mission)
+    planner = Planner(g, with_mission_node(graph, parsed))
+    fast = planner.plan(parsed.target, max_expansions=50_000)
+    slow = planner.plan(parsed.target, heuristic="zero", prune=False, max_expansions=50_000)
+    assert fast.found == slow.found, (mission, getattr(fast, "reason", ""), getattr(slow, "reason", ""))
+    if isinstance(fast, Plan) and isinstance(slow, Plan):
+        assert fast.cost == slow.cost, (mission, fast.steps, slow.steps)

@@ -152,5 +152,5 @@ def test_read_trajectory_csv_errors_name_file_and_line(tmp_path: Path, text: str
 
 
 def test_missing_csv_file_is_a_clear_error(tmp_path: Path) -> None:
-    with pytest.raises(TrajectoryFormatError, match="cannot read"):
+    with pytest.raises(TrajectoryFormatError, match="absent.csv: no such file"):
         read_trajectory_csv(tmp_path / "absent.csv")

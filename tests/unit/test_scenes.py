@@ -75,7 +75,8 @@ def test_mission_to_unknown_room_is_refused(tmp_path: Path) -> None:
     text = BASE + "missions:\n  - {id: m, time: '10:00', goal: {room: kitchen}}\n"
     with pytest.raises(SourceError) as info:
         load_scene(_write(tmp_path, text))
-    assert "unknown room 'kitchen'" in info.value.message
+    assert info.value.key == "missions[0].goal.room" and info.value.line == 8
+    assert "no room named 'kitchen'" in info.value.message
 
 
 def test_yaml_syntax_error_has_position(tmp_path: Path) -> None:

@@ -12,7 +12,7 @@ from agents.lib.agenda.changes import (AddChange, AgendaChange, AgendaChangeErro
 from agents.lib.agenda.expand import AgendaSource, derive_id, expand_day
 from agents.lib.agenda.ics_source import IcsAgenda, load_ics_file, parse_ics
 from agents.lib.agenda.model import (Activity, ActivitySpec, ActivityState, ActivityWindow, AgendaDay,
-                                 AgendaError, AgendaSourceError, SourceProblem, UnknownActivityError,
+                                 AgendaError, AgendaSourceError, UnknownActivityError,
                                  activity_state)
 from agents.lib.agenda.validate import (AgendaValidationError, Finding, Severity, ValidationReport,
                                     validate_activities, validate_day)
@@ -23,7 +23,7 @@ __all__ = [
     "Activity", "ActivitySpec", "ActivityState", "ActivityWindow", "AddChange", "AgendaChange",
     "AgendaChangeError", "AgendaDay", "AgendaError", "AgendaSource", "AgendaSourceError",
     "AgendaValidationError", "CancelChange", "Finding", "IcsAgenda", "LoadChange", "MoveChange",
-    "Severity", "SourceProblem", "UnknownActivityError", "ValidationReport", "activity_state",
+    "Severity", "UnknownActivityError", "ValidationReport", "activity_state",
     "add_activity", "apply_change", "cancel_activity", "derive_id", "expand_day",
     "load_activities", "load_agenda_file", "load_ics_file", "load_scene_agenda", "load_yaml_file",
     "move_activity", "parse_agenda_text", "parse_change", "parse_ics",

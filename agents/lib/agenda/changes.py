@@ -20,6 +20,7 @@ from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, Ac
                                  wall_seconds)
 from agents.lib.agenda.validate import ValidationReport, validate_activities
 from agents.lib.agenda.yaml_source import parse_agenda_text
+from scenes.yamlio import user_message
 
 LoadMode = Literal["replace", "merge"]
 
@@ -34,7 +35,8 @@ def _refuse(report: ValidationReport) -> None:
 
 
 def add_activity(day: AgendaDay, spec: ActivitySpec, *, known_objects: Collection[str] | None,
-                 known_rooms: Collection[str] | None = None) -> AgendaDay:
+                 known_rooms: Collection[str] | None = None,
+                 known_people: Collection[str] | None = None) -> AgendaDay:
     """The day plus one activity; its id is derived (``tv-1100``) unless the spec gives one."""
     if not spec.source:
         spec = spec.model_copy(update={"source": "added at run time"})
@@ -47,7 +49,7 @@ def add_activity(day: AgendaDay, spec: ActivitySpec, *, known_objects: Collectio
         raise AgendaChangeError(f"refused: id {spec.id!r} is already used by "
                                 f"{day.get(spec.id).source}; choose another id or leave it out")
     (draft,) = assign_ids([draft], taken=day.ids())
-    _refuse(validate_activities([draft], known_objects, known_rooms))
+    _refuse(validate_activities([draft], known_objects, known_rooms, known_people))
     return day.with_activities([*day.activities, draft.to_activity()])
 
 
@@ -111,7 +113,8 @@ def move_activity(day: AgendaDay, activity_id: str, *, start: str | None = None,
 
 def load_activities(day: AgendaDay, sources: Iterable[AgendaSource], *, mode: LoadMode,
                     known_objects: Collection[str] | None,
-                    known_rooms: Collection[str] | None = None) -> AgendaDay:
+                    known_rooms: Collection[str] | None = None,
+                    known_people: Collection[str] | None = None) -> AgendaDay:
     """Replace the day's agenda with the sources', or merge them in (same id -> replaced).
 
     Ids are derived from the loaded sources alone, so loading an edited file again updates its
@@ -120,7 +123,7 @@ def load_activities(day: AgendaDay, sources: Iterable[AgendaSource], *, mode: Lo
     if mode not in ("replace", "merge"):
         raise AgendaChangeError(f"refused: load mode must be 'replace' or 'merge', not {mode!r}")
     drafts = assign_ids(drafts_for_day(sources, day.date, day.zone))
-    _refuse(validate_activities(drafts, known_objects, known_rooms))
+    _refuse(validate_activities(drafts, known_objects, known_rooms, known_people))
     loaded = [d.to_activity() for d in drafts]
     if mode == "replace":
         return day.with_activities(loaded)
@@ -179,17 +182,34 @@ def parse_change(data: str | bytes | dict[str, Any]) -> AddChange | CancelChange
             return _CHANGE.validate_python(data)
         return _CHANGE.validate_json(data)
     except ValidationError as exc:
-        details = "; ".join(f"{'.'.join(str(p) for p in e['loc']) or 'change'}: {e['msg']}"
-                            for e in exc.errors())
+        parts = [".".join(str(p) for p in e["loc"] if not (isinstance(p, str) and "function-" in p))
+                 for e in exc.errors()]
+        details = "; ".join(f"{part or 'change'}: {user_message(e)}" for part, e in zip(parts, exc.errors(),
+                                                                                    strict=True))
         raise AgendaChangeError(f"refused: malformed agenda change ({details})") from None
 
 
 def apply_change(day: AgendaDay, change: AddChange | CancelChange | MoveChange | LoadChange, *,
                  known_objects: Collection[str] | None,
-                 known_rooms: Collection[str] | None = None) -> AgendaDay:
+                 known_rooms: Collection[str] | None = None,
+                 known_people: Collection[str] | None = None) -> AgendaDay:
     """Dispatch one change; the result is a new day, or AgendaChangeError and nothing changed."""
+    try:
+        return _apply(day, change, known_objects=known_objects, known_rooms=known_rooms, known_people=known_people)
+    except AgendaChangeError:
+        raise
+    except AgendaSourceError as exc:  # found while expanding (a recurrence rule out of bounds)
+        raise AgendaChangeError(f"refused: {exc}") from None
+    except AgendaError as exc:
+        raise AgendaChangeError(f"refused: {exc}") from None
+
+
+def _apply(day: AgendaDay, change: AddChange | CancelChange | MoveChange | LoadChange, *,
+           known_objects: Collection[str] | None, known_rooms: Collection[str] | None,
+           known_people: Collection[str] | None) -> AgendaDay:
     if isinstance(change, AddChange):
-        return add_activity(day, change.activity, known_objects=known_objects, known_rooms=known_rooms)
+        return add_activity(day, change.activity, known_objects=known_objects, known_rooms=known_rooms,
+                            known_people=known_people)
     if isinstance(change, CancelChange):
         return cancel_activity(day, change.id)
     if isinstance(change, MoveChange):
@@ -200,5 +220,5 @@ def apply_change(day: AgendaDay, change: AddChange | CancelChange | MoveChange |
         except AgendaSourceError as exc:
             raise AgendaChangeError(f"refused: {change.source} has errors:\n{exc}") from None
         return load_activities(day, sources, mode=change.mode, known_objects=known_objects,
-                               known_rooms=known_rooms)
+                               known_rooms=known_rooms, known_people=known_people)
     raise AgendaChangeError(f"refused: unknown change {type(change).__name__}")

@@ -155,15 +155,16 @@ def drafts_for_day(sources: Iterable[AgendaSource], day: dt.date, zone: dt.tzinf
 
 def expand_day(sources: Iterable[AgendaSource], day: dt.date, tz: str | ZoneInfo,
                known_objects: Collection[str] | None, *,
-               known_rooms: Collection[str] | None = None) -> AgendaDay:
+               known_rooms: Collection[str] | None = None,
+               known_people: Collection[str] | None = None) -> AgendaDay:
     """The validated agenda of ``day`` in the centre's zone ``tz``.
 
     ``known_objects``: the scene's object names (None skips that check, e.g. to lint a file
-    alone).  Raises AgendaValidationError listing every error (unknown object, end not after
+    alone); likewise ``known_rooms`` and ``known_people`` (participants).  Raises AgendaValidationError listing every error (unknown object, end not after
     start, duplicate id); overlaps are only infos, see ``validate_day``.
     """
     name = zone_name(tz)
     zone = load_zone(name)
     drafts = assign_ids(drafts_for_day(sources, day, zone))
-    validate_activities(drafts, known_objects, known_rooms).raise_if_errors()
+    validate_activities(drafts, known_objects, known_rooms, known_people).raise_if_errors()
     return AgendaDay(date=day, tz=name, activities=tuple(d.to_activity() for d in drafts))

@@ -1,10 +1,15 @@
 """Agenda activities from iCalendar (.ics) files, the format staff calendars already export.
 
-Why parse with ``icalendar`` and expand with ``dateutil.rrule`` ourselves: icalendar resolves
-time zones (IANA TZIDs, Windows names and the file's own VTIMEZONE blocks) but does not expand
-recurrences; dateutil does RRULE arithmetic but knows nothing of EXDATE in other zones or of
-RECURRENCE-ID overrides.  Recurrences are expanded in the *wall-clock time of the event's own
-zone*, so a daily 10:00 therapy in Europe/Madrid stays at 10:00 across a DST change.
+Why ``icalendar`` plus ``recurring-ical-events``: icalendar resolves time zones (IANA TZIDs,
+Windows names and the file's own VTIMEZONE blocks); recurring-ical-events expands RRULE, RDATE,
+EXDATE and RECURRENCE-ID overrides over a time span, in the *wall-clock time of the event's own
+zone*, so a daily 10:00 therapy in Europe/Madrid stays at 10:00 across a DST change.  We expand
+only around the simulated day, and first bound the work a rule needs to get there
+(``RECURRENCE_STEPS``, docs/limits.md): ``FREQ=SECONDLY`` without COUNT or UNTIL would otherwise
+walk millions of steps and hang `scene check` or the live agenda agent.  What we add: each
+event is checked at load time with its line (so expansion cannot fail later), an override
+inherits what it does not repeat from its series, and durations are real seconds (a one-hour
+event across the spring-forward gap ends at 03:30).
 
 Conventions (docs/agenda.md):
 - object: ``X-CHRONAV-OBJECT``, else ``LOCATION`` (the object's name in the scene);
@@ -19,14 +24,17 @@ from __future__ import annotations
 import datetime as dt
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import icalendar
+import recurring_ical_events
 from dateutil import rrule
 
-from agents.lib.agenda.model import AgendaSourceError, SourceProblem, local_midnight
+from agents.lib.agenda.model import AgendaSourceError, local_midnight, problem
+from scenes.limits import ICS_BYTES, RECURRENCE_STEPS
+from scenes.yamlio import SourceError
 
 UTC = dt.timezone.utc
 _UNESCAPED_COMMA = re.compile(r"(?<!\\),")
@@ -109,75 +117,123 @@ def _to_frame(moment: Moment, frame: dt.tzinfo) -> dt.datetime:
 
 @dataclass(frozen=True)
 class IcsAgenda:
-    """A parsed .ics file: its events, and their expansion for one day of the centre."""
+    """A parsed .ics file: its events (checked, for messages and metadata), the calendars as read
+    (what recurring-ical-events expands), and the expansion for one day of the centre."""
 
     source: str
     events: tuple[IcsEvent, ...]
+    calendars: tuple[icalendar.Calendar, ...] = field(default=(), compare=False, repr=False)
 
     def occurrences(self, day: dt.date, centre: dt.tzinfo) -> list[IcsOccurrence]:
-        """Every occurrence that overlaps ``day`` (local midnight to midnight in ``centre``)."""
+        """Every occurrence that overlaps ``day`` (local midnight to midnight in ``centre``).
+
+        Only around the day is expanded (the longest event's length before it, for events that
+        run into the day), with recurring-ical-events; a rule that would need more than
+        RECURRENCE_STEPS steps to get there is refused first (AgendaSourceError at its line)."""
         day_start = local_midnight(day, centre)
         day_end = local_midnight(day + dt.timedelta(days=1), centre)
+        longest = max([dt.timedelta(0), *(e.duration for e in self.events),
+                       *(end - start for e in self.events for start, end in _rdate_periods(e))])
+        low, high = day_start - longest - dt.timedelta(days=1), day_end + dt.timedelta(days=1)
+        _check_steps(self.events, high, day)
         masters = {e.uid: e for e in self.events if e.recurrence_id is None}
-        changes: dict[str, list[Moment]] = {}
+        overrides = {(e.uid, _key(e.recurrence_id)): e for e in self.events if e.recurrence_id is not None}
         found: list[IcsOccurrence] = []
-        for event in self.events:
-            if event.recurrence_id is not None:
-                changes.setdefault(event.uid, []).append(event.recurrence_id)
-                frame = _frame(event, centre)
-                own = _occurrence(_inherit(event, masters.get(event.uid)),
-                                  _to_frame(event.start, frame), None, frame)
-                if own.start < day_end and own.end > day_start:
-                    found.append(own)
-        for event in masters.values():
-            frame = _frame(event, centre)
-            skip_starts, skip_days = _excluded(event, changes.get(event.uid, []), frame)
-            for naive_start, own_end in _instance_starts(event, frame, day_start, day_end):
-                if naive_start in skip_starts or naive_start.date() in skip_days:
+        for component in _expand(self.calendars, low, high, self.source):
+                uid = _text(component.get("UID")) or ""
+                rid = component.get("RECURRENCE-ID")
+                override = overrides.get((uid, _key(rid.dt))) if rid is not None else None
+                event = _inherit(override, masters.get(uid)) if override is not None else masters.get(uid)
+                if event is None:  # an override whose series is not in the file
+                    event = next((e for e in self.events if e.uid == uid), None)
+                if event is None:
                     continue
+                frame = _frame(event, centre)
+                naive_start = _to_frame(component["DTSTART"].dt, frame)
+                own_end = None if override is not None else dict(_rdate_periods(event, frame)).get(naive_start)
                 occurrence = _occurrence(event, naive_start, own_end, frame)
                 if occurrence.start < day_end and occurrence.end > day_start:
                     found.append(occurrence)
         return found
 
 
-def _excluded(event: IcsEvent, changed: list[Moment],
-              frame: dt.tzinfo) -> tuple[set[dt.datetime], set[dt.date]]:
-    """Instance starts (naive, in the series' frame) removed by EXDATE or replaced by an override.
-
-    Compared as wall-clock times of the series' own zone, so an EXDATE written in UTC still
-    removes the Madrid occurrence it names.  A DATE value removes that day's instances.
-    """
-    starts: set[dt.datetime] = set()
-    days: set[dt.date] = set()
-    for moment in (*event.exdates, *changed):
-        if isinstance(moment, dt.datetime):
-            starts.add(_to_frame(moment, frame))
-        else:
-            days.add(moment)
-    return starts, days
+def _expand(calendars: Iterable[icalendar.Calendar], low: dt.datetime, high: dt.datetime,
+            source: str) -> list[icalendar.Event]:
+    """The VEVENT occurrences between ``low`` and ``high``, by recurring-ical-events."""
+    found: list[icalendar.Event] = []
+    for calendar in calendars:
+        try:
+            found.extend(recurring_ical_events.of(calendar, components=["VEVENT"]).between(low, high))
+        except Exception as exc:  # noqa: BLE001 - a file the library cannot expand is a file to fix
+            raise AgendaSourceError([problem(source, None, "cannot expand the recurrences (recurring-ical-"
+                                             f"events: {type(exc).__name__}: {str(exc)[:200]}); check RRULE, "
+                                             "RDATE, EXDATE and RECURRENCE-ID")]) from None
+    return found
 
 
-def _instance_starts(event: IcsEvent, frame: dt.tzinfo, day_start: dt.datetime,
-                     day_end: dt.datetime) -> list[tuple[dt.datetime, dt.datetime | None]]:
-    """Naive wall-clock starts (in the event's frame) that may touch the day, with RDATE ends."""
-    first = _naive(event.start)
-    if not event.rrules and not event.rdates:
-        return [(first, None)]
-    own_ends: dict[dt.datetime, dt.datetime | None] = {}
-    rules = rrule.rruleset()
-    rules.rdate(first)
-    for body in event.rrules:
-        rules.rrule(rrule.rrulestr(body, dtstart=first))
-    for rdate, rdate_end in event.rdates:
-        start = _to_frame(rdate, frame)
-        rules.rdate(start)
-        if rdate_end is not None:
-            own_ends[start] = _to_frame(rdate_end, frame)
-    slack = max(event.duration, dt.timedelta(0)) + dt.timedelta(days=1)
-    low = day_start.astimezone(frame).replace(tzinfo=None) - slack
-    high = day_end.astimezone(frame).replace(tzinfo=None) + dt.timedelta(days=1)
-    return [(start, own_ends.get(start)) for start in rules.between(low, high, inc=True)]
+def _rdate_periods(event: IcsEvent, frame: dt.tzinfo | None = None) -> list[tuple[dt.datetime, dt.datetime]]:
+    """RDATE periods (start, end) of an event, naive in ``frame``: such an occurrence brings its own end."""
+    periods = []
+    for start, end in event.rdates:
+        if end is not None:
+            periods.append((_naive(start), _naive(end)) if frame is None
+                           else (_to_frame(start, frame), _to_frame(end, frame)))
+    return periods
+
+
+_FREQ_SECONDS = {"SECONDLY": 1, "MINUTELY": 60, "HOURLY": 3600, "DAILY": 86400, "WEEKLY": 7 * 86400,
+                 "MONTHLY": 28 * 86400, "YEARLY": 365 * 86400}
+# BY* parts that multiply the occurrences of each period, for the frequencies coarser than theirs.
+_EXPANDS = {"BYSECOND": 1, "BYMINUTE": 60, "BYHOUR": 3600, "BYDAY": 86400, "BYMONTHDAY": 86400,
+            "BYYEARDAY": 86400, "BYWEEKNO": 7 * 86400, "BYMONTH": 28 * 86400}
+
+
+def recurrence_steps(rule: icalendar.vRecur, start: Moment, horizon: dt.datetime) -> float:
+    """An upper estimate of the steps a recurrence iterator takes from ``start`` to ``horizon``.
+
+    Iterators (dateutil's, under recurring-ical-events) walk every period from DTSTART, so a
+    ``FREQ=SECONDLY`` rule started a month before the simulated day takes millions of steps even
+    if only a few of them fall on that day."""
+    freq = str((rule.get("FREQ") or ["DAILY"])[0]).upper()
+    unit = _FREQ_SECONDS.get(freq, 86400)
+    interval = max(1, int((rule.get("INTERVAL") or [1])[0]))
+    first = start if isinstance(start, dt.datetime) else dt.datetime.combine(start, dt.time(0, 0))
+    first = first if first.tzinfo is not None else first.replace(tzinfo=horizon.tzinfo)
+    untils = rule.get("UNTIL")
+    if untils:
+        until = untils[0]
+        until = until if isinstance(until, dt.datetime) else dt.datetime.combine(until, dt.time(23, 59, 59))
+        until = until if until.tzinfo is not None else until.replace(tzinfo=first.tzinfo)
+        horizon = min(horizon, until)
+    span = max(0.0, (horizon - first).total_seconds())
+    steps = span / (unit * interval) + 1
+    for part, part_unit in _EXPANDS.items():
+        values = rule.get(part)
+        if values and part_unit < unit:
+            steps *= len(values) * (5 if part == "BYDAY" and freq == "MONTHLY" else
+                                    53 if part == "BYDAY" and freq == "YEARLY" else 1)
+    counts = rule.get("COUNT")
+    if counts and not any(rule.get(part) for part in (*_EXPANDS, "BYSETPOS")):
+        steps = min(steps, float(counts[0]))
+    return steps
+
+
+def _check_steps(events: Iterable[IcsEvent], horizon: dt.datetime, day: dt.date) -> None:
+    limit = RECURRENCE_STEPS.value()
+    problems = []
+    for event in events:
+        for body in event.rrules:
+            rule = icalendar.vRecur.from_ical(body)
+            steps = recurrence_steps(rule, event.start, horizon)
+            if steps > limit:
+                freq = str((rule.get("FREQ") or ["?"])[0]).upper()
+                problems.append(problem(event.file, event.line, (
+                    f"UID={event.uid}: RRULE:FREQ={freq} from {_show(event.start)} takes about {steps:,.0f} "
+                    f"steps to reach the simulated day {day.isoformat()}; chronav follows at most {limit:,} "
+                    f"({RECURRENCE_STEPS.env}): add COUNT or UNTIL, use a coarser FREQ, or start the series "
+                    "closer to the simulated day")))
+    if problems:
+        raise AgendaSourceError(problems)
 
 
 def _occurrence(event: IcsEvent, naive_start: dt.datetime, own_end: dt.datetime | None,
@@ -295,6 +351,25 @@ def _until_in_frame(body: icalendar.vRecur, start: Moment) -> str:
     return rule.to_ical().decode()
 
 
+def _date_until_includes_its_day(vevent: icalendar.Event, start: Moment) -> None:
+    """``UNTIL=20250402`` on a series of timed events means "up to and including the 2nd" (what
+    calendar apps show); RFC 5545 wants a date-time there, so write it as one before expanding."""
+    rules = vevent.get("RRULE")
+    if rules is None or not isinstance(start, dt.datetime):
+        return
+    fixed = []
+    for rule in rules if isinstance(rules, list) else [rules]:
+        untils = rule.get("UNTIL")
+        if untils and not isinstance(untils[0], dt.datetime):
+            rule = icalendar.vRecur(rule)
+            end_of_day = dt.datetime.combine(untils[0], dt.time(23, 59, 59))
+            rule["UNTIL"] = [end_of_day.replace(tzinfo=start.tzinfo).astimezone(UTC) if start.tzinfo else end_of_day]
+        fixed.append(rule)
+    vevent.pop("RRULE")
+    for rule in fixed:
+        vevent.add("RRULE", rule)
+
+
 def _show(moment: Moment) -> str:
     if isinstance(moment, dt.datetime):
         zone = f" {moment.tzinfo}" if moment.tzinfo is not None else ""
@@ -329,7 +404,7 @@ def _duration(event: icalendar.Event, start: Moment, problems: list[str]) -> dt.
     return None
 
 
-_SINGLE_VALUED = ("DTSTART", "DTEND", "DURATION", "RECURRENCE-ID")
+_SINGLE_VALUED = ("UID", "DTSTART", "DTEND", "DURATION", "RECURRENCE-ID", "STATUS")
 
 
 def _parse_event(event: icalendar.Event, file: str, line: int | None) -> tuple[IcsEvent | None, list[str]]:
@@ -386,7 +461,7 @@ def _vevent_lines(text: str) -> list[int]:
             if line.strip().upper() == "BEGIN:VEVENT"]
 
 
-def _check_series(events: Iterable[IcsEvent], problems: list[SourceProblem]) -> None:
+def _check_series(events: Iterable[IcsEvent], problems: list[SourceError]) -> None:
     seen: dict[tuple[str, object], IcsEvent] = {}
     masters = {e.uid for e in events if e.recurrence_id is None}
     for event in events:
@@ -394,13 +469,13 @@ def _check_series(events: Iterable[IcsEvent], problems: list[SourceProblem]) -> 
         if key in seen:
             what = ("event" if event.recurrence_id is None
                     else f"change to the {event.recurrence_id} occurrence")
-            problems.append(SourceProblem(event.file, event.line, f"UID={event.uid}: a second {what} with "
+            problems.append(problem(event.file, event.line, f"UID={event.uid}: a second {what} with "
                                           f"this UID (first at line {seen[key].line}); give each event its "
                                           "own UID"))
         else:
             seen[key] = event
         if event.recurrence_id is not None and event.object is None and event.uid not in masters:
-            problems.append(SourceProblem(event.file, event.line, f"UID={event.uid}: no object: set "
+            problems.append(problem(event.file, event.line, f"UID={event.uid}: no object: set "
                                           "X-CHRONAV-OBJECT (or LOCATION)"))
 
 
@@ -410,45 +485,53 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
         try:
             data = data.decode("utf-8-sig")
         except UnicodeDecodeError as exc:
-            raise AgendaSourceError([SourceProblem(source, None, f"not UTF-8 text (byte {exc.start}); "
+            raise AgendaSourceError([problem(source, None, f"not UTF-8 text (byte {exc.start}); "
                                                    "iCalendar files are UTF-8: export it again")]) from None
     text = data.removeprefix("\ufeff")  # a byte-order mark, as some Windows exports write
+    if len(text) > ICS_BYTES.value():  # also received as text, by `chronav agenda load`
+        raise AgendaSourceError([problem(source, None, f"{len(text):,} characters; an .ics file may have at most "
+                                         f"{ICS_BYTES.value():,} ({ICS_BYTES.env})")])
     try:
         calendars = icalendar.Calendar.from_ical(text, multiple=True)
     except ValueError as exc:
-        raise AgendaSourceError([SourceProblem(source, None, f"not a valid iCalendar file: {exc}")]) from None
+        raise AgendaSourceError([problem(source, None, f"not a valid iCalendar file: {exc}")]) from None
     except (AttributeError, TypeError, KeyError, IndexError) as exc:
         # icalendar's own crashes on malformed input (icalendar 7: a VTIMEZONE with two TZIDs is
         # an AttributeError); still a file to fix, never an agent to kill.
-        raise AgendaSourceError([SourceProblem(source, None, "not a valid iCalendar file (the parser failed: "
+        raise AgendaSourceError([problem(source, None, "not a valid iCalendar file (the parser failed: "
                                                f"{type(exc).__name__}: {exc}); check VTIMEZONE and "
                                                "repeated properties")]) from None
     vevents = [event for calendar in calendars for event in calendar.walk("VEVENT")]
     if not calendars:
-        raise AgendaSourceError([SourceProblem(source, None, "no complete VCALENDAR found: is this an .ics "
+        raise AgendaSourceError([problem(source, None, "no complete VCALENDAR found: is this an .ics "
                                                "file, and does it end with END:VCALENDAR?")])
     lines = _vevent_lines(text)
     if len(lines) != len(vevents):
         lines = [None] * len(vevents)  # type: ignore[list-item]
     events: list[IcsEvent] = []
-    problems: list[SourceProblem] = []
+    problems: list[SourceError] = []
     for vevent, line in zip(vevents, lines, strict=True):
         parsed, messages = _parse_event(vevent, source, line)
         uid = _text(vevent.get("UID")) or f"line-{line}"
-        problems.extend(SourceProblem(source, line, f"UID={uid}: {message}") for message in messages)
+        problems.extend(problem(source, line, f"UID={uid}: {message}") for message in messages)
         if parsed is not None:
             events.append(parsed)
+            _date_until_includes_its_day(vevent, parsed.start)
     _check_series(events, problems)
     if problems:
         raise AgendaSourceError(problems)
-    return IcsAgenda(source=source, events=tuple(events))
+    return IcsAgenda(source=source, events=tuple(events), calendars=tuple(calendars))
 
 
 def load_ics_file(path: str | Path) -> IcsAgenda:
     path = Path(path)
     try:
+        size = path.stat().st_size
+        if size > ICS_BYTES.value():
+            raise AgendaSourceError([problem(str(path), None, f"{size:,} bytes; an .ics file may have at most "
+                                             f"{ICS_BYTES.value():,} ({ICS_BYTES.env})")])
         data = path.read_bytes()
     except OSError as exc:
-        raise AgendaSourceError([SourceProblem(str(path), None,
-                                               f"cannot read file: {exc.strerror}")]) from None
+        raise AgendaSourceError([problem(str(path), None,
+                                         f"cannot read file: {exc.strerror}")]) from None
     return parse_ics(data, str(path))

@@ -22,17 +22,26 @@ from dataclasses import dataclass
 from typing import Annotated
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
-from pydantic import (BaseModel, ConfigDict, Field, StringConstraints, ValidationInfo,
+from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, ValidationInfo,
                       field_validator, model_validator)
 
 from scenes.clock import CLOCK_PATTERN, format_clock, parse_clock
+from scenes.names import check_name, shown
+from scenes.yamlio import SourceError
 
 SECONDS_PER_DAY = 86400.0
 
 
-NonEmptyStr = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)]
-ActivityId = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=100,
-                                              pattern=r"^\S+$")]
+def _one_word(value: str) -> str:
+    if any(ch.isspace() for ch in value):
+        raise ValueError(f"an id is one word without spaces, got {shown(value, 60)!r}")
+    return value
+
+
+# Names and ids staff type: bounded, printable (scenes/names.py); an id is also one word.
+NonEmptyStr = Annotated[str, StringConstraints(strip_whitespace=True), AfterValidator(check_name)]
+ActivityId = Annotated[str, StringConstraints(strip_whitespace=True), AfterValidator(check_name),
+                       AfterValidator(_one_word)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -43,27 +52,20 @@ class AgendaError(Exception):
     """Base of every agenda error, so an agent can refuse bad input without crashing."""
 
 
-@dataclass(frozen=True)
-class SourceProblem:
-    """One thing wrong in an input file, located so that staff can find and fix it."""
-
-    file: str
-    line: int | None
-    message: str
-    key: str = ""
-
-    def __str__(self) -> str:
-        where = f"{self.file}:{self.line}" if self.line is not None else self.file
-        return f"{where}: {self.key}: {self.message}" if self.key else f"{where}: {self.message}"
+def problem(file: str, line: int | None, message: str, key: str = "", column: int | None = None) -> SourceError:
+    """One located problem of an agenda file: the same SourceError every input file uses."""
+    return SourceError(file, line, column, key, message)
 
 
 class AgendaSourceError(AgendaError, ValueError):
-    """An agenda file (YAML or .ics) could not be read; lists *every* problem found, one a line."""
+    """An agenda file (YAML or .ics) could not be read; lists *every* problem found, one a line.
 
-    def __init__(self, problems: list[SourceProblem]) -> None:
+    Each problem is a :class:`scenes.yamlio.SourceError` (file, line, column, key, message)."""
+
+    def __init__(self, problems: list[SourceError]) -> None:
         if not problems:
             raise ValueError("AgendaSourceError needs at least one problem")
-        self.problems: tuple[SourceProblem, ...] = tuple(problems)
+        self.problems: tuple[SourceError, ...] = tuple(problems)
         super().__init__("\n".join(str(p) for p in self.problems))
 
 
@@ -239,7 +241,7 @@ class Activity(BaseModel):
     room: str | None = None
     start_s: float
     end_s: float
-    participants: tuple[str, ...] = ()
+    participants: tuple[NonEmptyStr, ...] = ()
     state: ActivityState = ActivityState.SCHEDULED
     source: str
     kind: str | None = None

@@ -16,6 +16,8 @@ from typing import Protocol
 
 from agents.lib.agenda.model import AgendaDay, AgendaError
 from scenes.clock import format_clock
+from scenes.limits import ACTIVITIES_PER_DAY
+from scenes.names import check_name, shown
 
 
 class ActivityLike(Protocol):
@@ -37,6 +39,10 @@ class ActivityLike(Protocol):
     def source(self) -> str: ...
     @property
     def cancelled(self) -> bool: ...
+    @property
+    def participants(self) -> tuple[str, ...]: ...
+    @property
+    def kind(self) -> str | None: ...
 
 
 class Severity(enum.StrEnum):
@@ -49,7 +55,8 @@ class Finding:
     """One observation about the agenda, naming the activity and where it was written."""
 
     severity: Severity
-    code: str  # unknown_object | unknown_room | end_not_after_start | duplicate_id | overlap
+    code: str  # unknown_object | unknown_room | unknown_participant | bad_name | too_many |
+    #            end_not_after_start | duplicate_id | overlap
     message: str
     activity_id: str
     source: str
@@ -91,23 +98,50 @@ class AgendaValidationError(AgendaError):
 
 
 def _label(activity: ActivityLike) -> str:
-    return f"activity {activity.id!r} ({activity.name}, {activity.source})"
+    return f"activity {shown(activity.id, 60)!r} ({shown(activity.name, 60)}, {shown(activity.source, 200)})"
 
 
 def _unknown(kind: str, value: str, known: Collection[str]) -> str:
     close = difflib.get_close_matches(value, list(known), n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
     listed = ", ".join(sorted(known)) if known else "none"
-    return f"no {kind} named {value!r} in the centre{hint} (known {kind}s: {listed})"
+    return f"no {kind} named {shown(value, 60)!r} in the centre{hint} (known {kind}s: {listed})"
+
+
+def _bad_names(item: ActivityLike) -> list[str]:
+    """Names that are too long or hold control characters (they end up in terminals and the DSR)."""
+    problems = []
+    for label, value in (("id", item.id), ("name", item.name), ("object", item.object), ("room", item.room),
+                         ("kind", item.kind), *(("participant", p) for p in item.participants)):
+        if value is None:
+            continue
+        try:
+            check_name(value)
+        except ValueError as exc:
+            problems.append(f"{label}: {exc}")
+    return problems
 
 
 def validate_activities(activities: Iterable[ActivityLike], known_objects: Collection[str] | None,
-                        known_rooms: Collection[str] | None = None) -> ValidationReport:
-    """Every error and info about these activities; ``None`` skips the object/room check."""
+                        known_rooms: Collection[str] | None = None,
+                        known_people: Collection[str] | None = None) -> ValidationReport:
+    """Every error and info about these activities; ``None`` skips the object/room/people check."""
     items = list(activities)
     findings: list[Finding] = []
+    limit = ACTIVITIES_PER_DAY.value()
+    if len(items) > limit:
+        first = items[0]
+        return ValidationReport((Finding(Severity.ERROR, "too_many",
+                                         f"{len(items):,} activities on one day; chronav handles at most {limit:,} "
+                                         f"({ACTIVITIES_PER_DAY.env}); is a recurrence rule too frequent?",
+                                         first.id, first.source),))
     seen: dict[str, ActivityLike] = {}
     for item in items:
+        names = _bad_names(item)
+        if names:
+            findings.extend(Finding(Severity.ERROR, "bad_name", f"activity from {shown(item.source, 200)}: {text}",
+                                    shown(item.id, 60), item.source) for text in names)
+            continue
         if item.id in seen:
             findings.append(Finding(Severity.ERROR, "duplicate_id",
                                     f"{_label(item)}: id already used by {seen[item.id].source}; "
@@ -126,6 +160,15 @@ def validate_activities(activities: Iterable[ActivityLike], known_objects: Colle
             findings.append(Finding(Severity.ERROR, "unknown_room",
                                     f"{_label(item)}: {_unknown('room', item.room, known_rooms)}",
                                     item.id, item.source))
+        if known_people is not None:
+            for person in item.participants:
+                if person not in known_people:
+                    close = difflib.get_close_matches(person, list(known_people), n=1)
+                    hint = f"; did you mean {close[0]!r}?" if close else ""
+                    listed = ", ".join(sorted(known_people)) or "none"
+                    findings.append(Finding(Severity.ERROR, "unknown_participant",
+                                            f"{_label(item)}: participant {shown(person, 60)!r} is not a person of "
+                                            f"the scene{hint} (people: {listed})", item.id, item.source))
     findings.extend(_overlaps(items))
     return ValidationReport(tuple(findings))
 
@@ -146,13 +189,15 @@ def _overlaps(items: list[ActivityLike]) -> list[Finding]:
                 lo, hi = second.start_s, min(first.end_s, second.end_s)
                 findings.append(Finding(
                     Severity.INFO, "overlap",
-                    f"activities {first.id!r} ({first.source}) and {second.id!r} ({second.source}) "
+                    f"activities {shown(first.id, 60)!r} ({shown(first.source)}) and {shown(second.id, 60)!r} "
+                    f"({shown(second.source)}) "
                     f"overlap on object {object_name!r} from {format_clock(lo)} to {format_clock(hi)}; "
                     "allowed, the object's R(t) takes the larger value", second.id, second.source))
     return findings
 
 
 def validate_day(day: AgendaDay, known_objects: Collection[str] | None,
-                 known_rooms: Collection[str] | None = None) -> ValidationReport:
+                 known_rooms: Collection[str] | None = None,
+                 known_people: Collection[str] | None = None) -> ValidationReport:
     """Report on a built day (its ids and intervals are already valid; objects and overlaps may not be)."""
-    return validate_activities(day.activities, known_objects, known_rooms)
+    return validate_activities(day.activities, known_objects, known_rooms, known_people)

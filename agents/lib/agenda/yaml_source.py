@@ -1,8 +1,11 @@
 """Agenda activities written in YAML: a standalone file (``activities: [...]``) or a scene's ``agenda:``.
 
-Why we walk PyYAML's composed nodes instead of ``safe_load``: the nodes keep line numbers, so an
-error says ``agenda.yaml:14: activities[2].start: ...``; and scalars stay the text staff typed,
-so an unquoted ``start: 11:00`` is read as "11:00", not as the YAML 1.1 sexagesimal number 660.
+Why through ``scenes/yamlio.py``: it is chronav's one YAML reader (bounded depth, aliases and
+sizes; duplicate keys refused; a byte-order mark accepted) and its one located error type,
+``SourceError``.  The agenda reads the activities as the text staff typed (``text_data``), so an
+unquoted ``start: 11:00`` is "11:00" and ``name: 123`` is the name "123".  Unlike a scene, an
+agenda reports *every* problem at once (``AgendaSourceError`` holds them all): staff fix a file in
+one go.
 
 Also here: :func:`load_agenda_file`, which picks the reader by file suffix, because scenes
 reference agenda files of either format.
@@ -14,153 +17,119 @@ import difflib
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import ValidationError
 
 from agents.lib.agenda.ics_source import IcsAgenda, load_ics_file, parse_ics
-from agents.lib.agenda.model import ActivitySpec, AgendaSourceError, SourceProblem
+from agents.lib.agenda.model import ActivitySpec, AgendaSourceError
+from scenes.limits import YAML_BYTES
+from scenes.yamlio import (KeyPath, LocatedYaml, SourceError, load_located, load_located_file, read_text_file,
+                           user_message)
 
-_NULL_TAG = "tag:yaml.org,2002:null"
 SPEC_KEYS: tuple[str, ...] = tuple(k for k in ActivitySpec.model_fields if k != "source")
+_EXAMPLE = '{name: ..., object: ..., start: "11:00", end: "12:00"}'
 
 
-def _line(node: yaml.Node) -> int:
-    return node.start_mark.line + 1
-
-
-def _plain(node: yaml.Node, file: str, key: str, problems: list[SourceProblem]) -> Any:
-    """A value node -> the text as typed (None for null), or a list of such texts."""
-    if isinstance(node, yaml.ScalarNode):
-        return None if node.tag == _NULL_TAG else node.value
-    if isinstance(node, yaml.SequenceNode):
+def _plain(value: Any, located: LocatedYaml, path: KeyPath, problems: list[SourceError]) -> Any:
+    """A value -> the text as typed (None for null), or a list of such texts."""
+    if value is None or isinstance(value, str):
+        return value
+    if isinstance(value, list):
         items = []
-        for index, item in enumerate(node.value):
-            if not isinstance(item, yaml.ScalarNode):
-                problems.append(SourceProblem(file, _line(item), "expected a plain value",
-                                              f"{key}[{index}]"))
+        for index, item in enumerate(value):
+            if item is not None and not isinstance(item, str):
+                problems.append(located.error((*path, index), "expected a plain value, not a list or a mapping"))
                 continue
-            items.append(None if item.tag == _NULL_TAG else item.value)
+            items.append(item)
         return items
-    problems.append(SourceProblem(file, _line(node), "expected a value or a list, not a mapping", key))
+    problems.append(located.error(path, "expected a value or a list, not a mapping"))
     return None
 
 
-def _message(error: dict[str, Any]) -> str:
-    if error["type"] == "missing":
-        return "required key is missing"
-    message = str(error["msg"])
-    return message.removeprefix("Value error, ")
-
-
-def _activity(node: yaml.Node, file: str, path: str, problems: list[SourceProblem]) -> ActivitySpec | None:
-    if not isinstance(node, yaml.MappingNode):
-        problems.append(SourceProblem(file, _line(node), "an activity must be a mapping such as "
-                                      "{name: ..., object: ..., start: \"11:00\", end: \"12:00\"}", path))
+def _activity(item: Any, located: LocatedYaml, path: KeyPath, problems: list[SourceError]) -> ActivitySpec | None:
+    if not isinstance(item, dict):
+        problems.append(located.error(path, f"an activity must be a mapping such as {_EXAMPLE}"))
         return None
     before = len(problems)
     data: dict[str, Any] = {}
-    lines: dict[str, tuple[int, yaml.Node]] = {}
-    for key_node, value_node in node.value:
-        key = str(key_node.value)
-        if key in lines:
-            problems.append(SourceProblem(file, _line(key_node), f"duplicate key (first on line "
-                                          f"{lines[key][0]})", f"{path}.{key}"))
-            continue
-        lines[key] = (_line(key_node), value_node)
+    for key, value in item.items():
         if key not in SPEC_KEYS:
-            close = difflib.get_close_matches(key, SPEC_KEYS, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
-            problems.append(SourceProblem(file, _line(key_node), f"unknown key; {hint}allowed keys: "
-                                          f"{', '.join(SPEC_KEYS)}", f"{path}.{key}"))
+            close = difflib.get_close_matches(str(key), SPEC_KEYS, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            problems.append(located.error((*path, key), f"unknown key {str(key)!r}{hint}; allowed keys: "
+                                          f"{', '.join(SPEC_KEYS)}"))
             continue
-        data[key] = _plain(value_node, file, f"{path}.{key}", problems)
+        data[key] = _plain(value, located, (*path, key), problems)
     if len(problems) > before:
         return None
-    data["source"] = f"{file}:{_line(node)}"
+    line, _ = located.where(path)
+    data["source"] = f"{located.file}:{line}"
     try:
         return ActivitySpec.model_validate(data)
     except ValidationError as exc:
         for error in exc.errors():
-            loc = error["loc"]
-            key = str(loc[0]) if loc else ""
-            line = _line(node)
-            if key in lines:
-                line, value_node = lines[key]
-                if len(loc) > 1 and isinstance(loc[1], int) and isinstance(value_node, yaml.SequenceNode):
-                    line = _line(value_node.value[loc[1]])
-            label = f"{path}.{key}" + (f"[{loc[1]}]" if len(loc) > 1 else "") if key else path
-            problems.append(SourceProblem(file, line, _message(error), label))
+            loc = tuple(p for p in error["loc"] if not (isinstance(p, str) and "function-" in p))
+            problems.append(located.error((*path, *loc), user_message(error)))
         return None
 
 
-def specs_from_node(node: yaml.Node | None, file: str, path: str = "activities") -> list[ActivitySpec]:
-    """A YAML sequence of activity mappings -> specs; every problem is reported, with its line."""
-    if node is None or (isinstance(node, yaml.ScalarNode) and node.tag == _NULL_TAG):
+def specs_from_located(located: LocatedYaml, path: KeyPath) -> list[ActivitySpec]:
+    """The YAML sequence of activity mappings at ``path`` -> specs; every problem is reported, with its line."""
+    value = located.text_data(path)
+    if value is None:
         return []
-    if not isinstance(node, yaml.SequenceNode):
-        raise AgendaSourceError([SourceProblem(file, _line(node), "expected a list of activities "
-                                               "(each line starting with '- ')", path)])
-    problems: list[SourceProblem] = []
-    specs = [_activity(item, file, f"{path}[{index}]", problems) for index, item in enumerate(node.value)]
+    if not isinstance(value, list):
+        raise AgendaSourceError([located.error(path, "expected a list of activities (each line starting "
+                                               "with '- ')")])
+    problems: list[SourceError] = []
+    specs = [_activity(item, located, (*path, index), problems) for index, item in enumerate(value)]
     if problems:
         raise AgendaSourceError(problems)
     return [spec for spec in specs if spec is not None]
 
 
-def _compose(text: str, file: str) -> yaml.Node | None:
+def _located(text: str, file: str) -> LocatedYaml:
     try:
-        return yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = mark.line + 1 if mark is not None else None
-        raise AgendaSourceError([SourceProblem(file, line, f"YAML syntax error: {exc.problem}")]) from None
-    except yaml.YAMLError as exc:
-        raise AgendaSourceError([SourceProblem(file, None, f"YAML error: {exc}")]) from None
-
-
-def _mapping_value(root: yaml.MappingNode, key: str) -> yaml.Node | None:
-    return next((value for k, value in root.value if k.value == key), None)
+        return load_located(text, file)
+    except SourceError as exc:
+        raise AgendaSourceError([exc]) from None
 
 
 def parse_yaml_agenda(text: str, file: str) -> list[ActivitySpec]:
     """A standalone agenda file: a mapping with one key ``activities`` holding the list."""
-    root = _compose(text, file)
-    if root is None:
+    located = _located(text, file)
+    if located.data is None:
         return []
-    if not isinstance(root, yaml.MappingNode):
-        raise AgendaSourceError([SourceProblem(file, _line(root), "an agenda file is a mapping with "
-                                               "one key, 'activities:', holding the list")])
-    for key_node, _ in root.value:
-        if key_node.value != "activities":
-            raise AgendaSourceError([SourceProblem(
-                file, _line(key_node), "unknown top-level key; an agenda file has only 'activities:'",
-                str(key_node.value))])
-    return specs_from_node(_mapping_value(root, "activities"), file, "activities")
-
-
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
-        raise AgendaSourceError([SourceProblem(str(path), None, f"cannot read file: {reason}")]) from None
+    if not isinstance(located.data, dict):
+        raise AgendaSourceError([located.error((), "an agenda file is a mapping with one key, "
+                                               "'activities:', holding the list")])
+    for key in located.data:
+        if key != "activities":
+            close = difflib.get_close_matches(str(key), ["activities"], n=1)
+            hint = " (did you mean 'activities'?)" if close else ""
+            raise AgendaSourceError([located.error((key,), f"unknown top-level key {str(key)!r}{hint}; an "
+                                                   "agenda file has only 'activities:'")])
+    return specs_from_located(located, ("activities",))
 
 
 def load_yaml_file(path: str | Path) -> list[ActivitySpec]:
     path = Path(path)
-    return parse_yaml_agenda(_read_text(path), str(path))
+    try:
+        text = read_text_file(path, max_bytes=YAML_BYTES.value(), limit_env=YAML_BYTES.env, what="YAML file")
+    except SourceError as exc:
+        raise AgendaSourceError([exc]) from None
+    return parse_yaml_agenda(text, str(path))
 
 
 def load_agenda_file(path: str | Path) -> list[ActivitySpec | IcsAgenda]:
     """Read an agenda file of either format, chosen by suffix (.ics, .yaml, .yml)."""
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix == ".ics":
+    if suffix in (".ics", ".ical"):
         return [load_ics_file(path)]
     if suffix in (".yaml", ".yml"):
         return list(load_yaml_file(path))
-    raise AgendaSourceError([SourceProblem(str(path), None, "unknown agenda format: use a .ics "
-                                           "(iCalendar) or a .yaml file")])
+    raise AgendaSourceError([SourceError(str(path), None, None, "", "unknown agenda format: use a .ics "
+                                         "(iCalendar) or a .yaml file")])
 
 
 def parse_agenda_text(text: str, fmt: str, source: str) -> list[ActivitySpec | IcsAgenda]:
@@ -169,29 +138,34 @@ def parse_agenda_text(text: str, fmt: str, source: str) -> list[ActivitySpec | I
         return [parse_ics(text, source)]
     if fmt == "yaml":
         return list(parse_yaml_agenda(text, source))
-    raise AgendaSourceError([SourceProblem(source, None,
-                                           f"unknown agenda format {fmt!r}: use 'ics' or 'yaml'")])
+    raise AgendaSourceError([SourceError(source, None, None, "",
+                                         f"unknown agenda format {fmt!r}: use 'ics' or 'yaml'")])
+
+
+def scene_agenda(located: LocatedYaml, scene_dir: Path) -> list[ActivitySpec | IcsAgenda]:
+    """The agenda of a scene already read: its ``agenda:`` list plus its ``agenda_file`` (relative to
+    the scene's folder).  Errors name the scene file and line; the scene schema itself is checked by
+    the scene loader (scenes/loader.py), not here."""
+    if not isinstance(located.data, dict):
+        return []
+    sources: list[ActivitySpec | IcsAgenda] = list(specs_from_located(located, ("agenda",)))
+    ref = located.text_data(("agenda_file",))
+    if isinstance(ref, str):
+        target = Path(ref)
+        target = target if target.is_absolute() else scene_dir / target
+        if not target.is_file():
+            raise AgendaSourceError([located.error(("agenda_file",), f"agenda file {ref!r} not found "
+                                                   f"(looked for {target})")])
+        sources.extend(load_agenda_file(target))
+    return sources
 
 
 def load_scene_agenda(scene_path: str | Path) -> list[ActivitySpec | IcsAgenda]:
-    """The agenda of a scene: its ``agenda:`` list plus its ``agenda_file`` (relative to the scene).
-
-    Read from the scene's own nodes so errors name the scene file and line; the scene schema
-    itself (scenes/model.py) is checked by the scene loader, not here.
-    """
+    """The agenda of a scene file (see :func:`scene_agenda`)."""
     scene_path = Path(scene_path)
-    file = str(scene_path)
-    root = _compose(_read_text(scene_path), file)
-    if not isinstance(root, yaml.MappingNode):
-        return []
-    sources: list[ActivitySpec | IcsAgenda] = list(
-        specs_from_node(_mapping_value(root, "agenda"), file, "agenda"))
-    ref = _mapping_value(root, "agenda_file")
-    if isinstance(ref, yaml.ScalarNode) and ref.tag != _NULL_TAG:
-        target = Path(ref.value)
-        target = target if target.is_absolute() else scene_path.parent / target
-        if not target.exists():
-            raise AgendaSourceError([SourceProblem(file, _line(ref), f"agenda file {ref.value!r} not found "
-                                                   f"(looked for {target})", "agenda_file")])
-        sources.extend(load_agenda_file(target))
-    return sources
+    try:
+        located = load_located_file(scene_path)
+    except SourceError as exc:
+        raise AgendaSourceError([exc]) from None
+    return scene_agenda(located, scene_path.parent)
+

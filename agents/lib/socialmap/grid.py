@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.socialmap.types import Room, SocialMapInputError, Wall
+from scenes.limits import GRID_CELLS
 
 COST_DTYPE = np.float32
 CostArray = NDArray[np.float32]
@@ -43,6 +44,39 @@ class GridParams(BaseModel):
     personal_cost: float = Field(4.0, gt=0, description="seed 5.2.1: four times the free cost")
 
 
+class GridTooLargeError(SocialMapInputError):
+    """The area and cell size ask for more cells than GRID_CELLS; raised before anything is allocated."""
+
+
+def grid_shape(bounds: Sequence[float], resolution: float, max_cells: int | None = None) -> tuple[int, int]:
+    """(rows, cols) of the grid covering ``bounds`` at ``resolution``, checked against the cell limit.
+
+    Why here, before any array exists: a 2 km x 2 km room at 5 cm is 1.6e9 cells (6.4 GB per
+    layer), and 10^6 m asks numpy for petabytes; the check costs nothing and says what to change."""
+    if len(bounds) != 4:
+        raise SocialMapInputError(f"bounds must be (xmin, ymin, xmax, ymax), got {bounds!r}")
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)) or xmax <= xmin or ymax <= ymin:
+        raise SocialMapInputError(f"bounds must be finite with xmin < xmax and ymin < ymax, got {bounds!r}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise SocialMapInputError(f"resolution must be a positive number of metres, got {resolution!r}")
+    width, height = xmax - xmin, ymax - ymin
+    cols = max(1, math.ceil(width / resolution - 1e-9))
+    rows = max(1, math.ceil(height / resolution - 1e-9))
+    limit = GRID_CELLS.value() if max_cells is None else max_cells
+    if rows * cols > limit:
+        coarsest = math.sqrt(width * height / limit)
+        raise GridTooLargeError(
+            f"the map is {_metres(width)} m x {_metres(height)} m; at {resolution:g} m cells that is {cols:,} x {rows:,} = "
+            f"{rows * cols:,} cells, more than the limit of {limit:,} ({GRID_CELLS.env}); use cells of at least "
+            f"{coarsest:.3g} m (the scene's `resolution`), a smaller building, or raise the limit")
+    return rows, cols
+
+
+def _metres(value: float) -> str:
+    return f"{value:,.0f}" if value >= 100 else f"{value:g}"
+
+
 @dataclass(frozen=True, slots=True)
 class GridSpec:
     """Where the grid lies: lower-left corner, cell size and shape."""
@@ -55,14 +89,9 @@ class GridSpec:
 
     @classmethod
     def from_bounds(cls, bounds: Sequence[float], resolution: float) -> GridSpec:
-        if len(bounds) != 4:
-            raise SocialMapInputError(f"bounds must be (xmin, ymin, xmax, ymax), got {bounds!r}")
-        xmin, ymin, xmax, ymax = (float(b) for b in bounds)
-        if not all(math.isfinite(v) for v in (xmin, ymin, xmax, ymax)) or xmax <= xmin or ymax <= ymin:
-            raise SocialMapInputError(f"bounds must be finite with xmin < xmax and ymin < ymax, got {bounds!r}")
-        cols = max(1, math.ceil((xmax - xmin) / resolution - 1e-9))
-        rows = max(1, math.ceil((ymax - ymin) / resolution - 1e-9))
-        return cls(x0=xmin, y0=ymin, resolution=float(resolution), rows=rows, cols=cols)
+        """The grid over ``bounds``; GridTooLargeError when it would exceed GRID_CELLS."""
+        rows, cols = grid_shape(bounds, resolution)
+        return cls(x0=float(bounds[0]), y0=float(bounds[1]), resolution=float(resolution), rows=rows, cols=cols)
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -40,11 +40,19 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
+from scenes.limits import TRAJECTORY_SAMPLES
+from scenes.yamlio import SourceError, read_text_file
+
 FloatArray = NDArray[np.float64]
 
 ZONE_NAMES: tuple[str, ...] = ("intimate", "personal", "social")
 PSI_BANDS: tuple[str, ...] = ("intimate", "personal", "social", "public")
 TRAJECTORY_HEADER: tuple[str, ...] = ("t", "x", "y", "theta")
+# A trajectory's times are seconds on the sim clock (since midnight, up to the end of the next day)
+# or relative to its start; anything beyond is a unit mistake (ms, epoch seconds) or garbage.
+MAX_TRAJECTORY_TIME_S = 2 * 86400.0
+# Positions are metres in a building's frame; farther than this is not a building.
+MAX_COORDINATE_M = 100_000.0
 
 
 class MetricsInputError(ValueError):
@@ -225,10 +233,12 @@ def read_trajectory_csv(path: str | Path) -> FloatArray:
     Blank lines are skipped. Any other problem raises TrajectoryFormatError("FILE:LINE: ...").
     """
     path = Path(path)
+    max_rows = TRAJECTORY_SAMPLES.value()
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TrajectoryFormatError(f"{path}: cannot read ({exc})") from exc
+        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env,
+                              what="trajectory CSV")  # a UTF-8 byte-order mark is dropped
+    except SourceError as exc:
+        raise TrajectoryFormatError(str(exc)) from None
     rows: list[list[float]] = []
     header_seen = False
     last_t = -math.inf
@@ -255,12 +265,29 @@ def read_trajectory_csv(path: str | Path) -> FloatArray:
             if not math.isfinite(value):
                 raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell!r} is not finite")
             values.append(value)
+        if not 0.0 <= values[0] <= MAX_TRAJECTORY_TIME_S:
+            raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(cells[0])} s is not a time of the "
+                                        f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s, i.e. up to 48:00)")
+        if max(abs(values[1]), abs(values[2])) > MAX_COORDINATE_M:
+            raise TrajectoryFormatError(f"{path}:{lineno}: position ({cell_text(cells[1])}, {cell_text(cells[2])}) "
+                                        f"is more than {MAX_COORDINATE_M:,.0f} m from the origin; positions are "
+                                        "metres in the scene's frame")
         if values[0] < last_t:
             raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
         last_t = values[0]
         rows.append(values)
+        if len(rows) > max_rows:
+            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} samples ({TRAJECTORY_SAMPLES.env})")
     if not header_seen:
         raise TrajectoryFormatError(f"{path}:1: empty file, expected header 't,x,y,theta'")
     if not rows:
         raise TrajectoryFormatError(f"{path}: header only, no samples")
+    if rows[-1][0] - rows[0][0] <= 0.0:
+        raise TrajectoryFormatError(f"{path}: the trajectory lasts 0 s ({len(rows)} sample(s), all at "
+                                    f"t = {rows[0][0]:g} s); metrics need at least two samples at different times")
     return np.asarray(rows, dtype=np.float64)
+
+
+def cell_text(cell: str) -> str:
+    """A CSV cell as quoted in a message, cut short (a cell may be megabytes long)."""
+    return cell if len(cell) <= 30 else cell[:27] + "..."

@@ -348,10 +348,11 @@ def plan_on_grid(cost: NDArray[np.floating] | TimeCosts, spec: GridSpec, start_x
     try:
         found = search_cells(cost, cells[0], cells[1], heuristic=method == "astar", c_min=c_min,
                              workspace=workspace)
-    except StartOccupied as exc:
-        raise StartOccupied(f"start ({start_xy[0]:g}, {start_xy[1]:g}): {exc}") from None
-    except GoalOccupied as exc:
-        raise GoalOccupied(f"goal ({goal_xy[0]:g}, {goal_xy[1]:g}): {exc}") from None
+    except StartOccupied as exc:  # messages in metres: the (row, col) of a cell means nothing to a user
+        why = "forbidden at departure" if "departure" in str(exc) else "blocked"
+        raise StartOccupied(f"start ({start_xy[0]:.2f}, {start_xy[1]:.2f}) m is {why}") from None
+    except GoalOccupied:
+        raise GoalOccupied(f"goal ({goal_xy[0]:.2f}, {goal_xy[1]:.2f}) m is blocked") from None
     except NoPathFound:
         raise NoPathFound(f"no path from ({start_xy[0]:g}, {start_xy[1]:g}) to "
                           f"({goal_xy[0]:g}, {goal_xy[1]:g})") from None

@@ -100,7 +100,7 @@ from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpacePara
 from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, cheapest_cell,
                                            planning_grid, resolve_planner)
 from agents.lib.socialmap.roles import RoleParams, role_scale
-from agents.lib.socialmap.search import Path, SearchWorkspace, TimeCosts, plan_on_grid
+from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
 from agents.lib.agenda.model import ActivityWindow
 from agents.lib.socialmap.types import Person, Room, SocialMapInputError, SocialObject, Wall
 from agents.lib.socialmap.zones import (
@@ -387,8 +387,39 @@ def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[fl
     speed = params.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
     if not speed > 0.0:
         raise ValueError(f"cruise speed must be > 0, got {speed}")
+    try:
+        return _plan(social_map, start_xy, goal_xy, method=method, planner=name, speed=speed, workspace=workspace)
+    except (StartOccupied, GoalOccupied) as exc:
+        xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
+        raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
+
+
+def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
+    """Why a point is not traversable, in metres and in the map's own terms."""
+    x, y = xy
+    grid = social_map.params.grid
+    point = shapely.Point(x, y)
+    static = social_map.static[social_map.spec.cell_of(x, y)]
+    if not np.isfinite(static):
+        return (f"it is outside every room or within {grid.robot_radius_m:.2f} m (the robot's radius plus "
+                "margin) of a wall")
+    for space in social_map.object_spaces:
+        if space.footprint.distance(point) <= grid.robot_radius_m:
+            return f"it is {space.footprint.distance(point):.2f} m from the footprint of object {space.name!r}"
+    for person in social_map.people:
+        distance = math.hypot(person.x - x, person.y - y)
+        if distance <= grid.person_radius_m + grid.robot_radius_m + 0.5:
+            return f"it is {distance:.2f} m from {person.name!r} (a body or intimate zone)"
+    for space in social_map.object_spaces:
+        if space.interaction.covers(point):
+            return f"it is in the interaction space of {space.name!r}, forbidden while its activity runs"
+    return "a person's or an object's space covers it"
+
+
+def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *, method: str,
+          planner: str, speed: float, workspace: SearchWorkspace | None) -> Path:
     # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
-    c_min = cheapest_cell(social_map, name)
-    costs = social_map.time_costs(speed) if name == "social" else None
-    grid = planning_grid(social_map, name) if costs is None else costs
+    c_min = cheapest_cell(social_map, planner)
+    costs = social_map.time_costs(speed) if planner == "social" else None
+    grid = planning_grid(social_map, planner) if costs is None else costs
     return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace)
