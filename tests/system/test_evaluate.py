@@ -2,7 +2,7 @@
 seed) on this machine and the same pair on a Dask LocalCluster of 2 workers; the report's tables are
 `chronav metrics` on the runs' trajectories, and two runs with one seed agree within 1 %.
 
-Four launches in all (two at a time), shared by every test of the module.
+Four launches in all (both sweeps at once, each two at a time), shared by every test of the module.
 """
 
 from __future__ import annotations
@@ -33,20 +33,20 @@ TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 PLANNERS = "social,baseline"
 
 
-def _evaluate(out: Path, *extra: str, timeout_s: float = 600) -> dict[str, Any]:
-    """`chronav evaluate TINY ... --json` as a user runs it; its JSON plus the exit code."""
-    group = ProcessGroup()
+def _start(group: ProcessGroup, out: Path, *extra: str) -> tuple[subprocess.Popen[bytes], Path]:
+    """`chronav evaluate TINY ... --json` as a user runs it, in the background."""
     log = out.parent / f"{out.name}.log"
+    proc = group.spawn(["-m", "tools.cli", "evaluate", str(TINY), "--planners", PLANNERS, "--seeds", "1",
+                        "--out", str(out), "--timeout", "300", "--json", *extra], env={"RERUN": "on"}, log_path=log)
+    return proc, log
+
+
+def _result(proc: subprocess.Popen[bytes], log: Path, timeout_s: float = 900) -> dict[str, Any]:
+    """Its JSON plus the exit code."""
     try:
-        proc = group.spawn(["-m", "tools.cli", "evaluate", str(TINY), "--planners", PLANNERS, "--seeds", "1",
-                            "--out", str(out), "--timeout", "300", "--json", *extra],
-                           env={"RERUN": "on"}, log_path=log)
-        try:
-            proc.wait(timeout=timeout_s)
-        except subprocess.TimeoutExpired:
-            pytest.fail(f"chronav evaluate did not finish; log:\n{log.read_text()[-3000:]}")
-    finally:
-        group.close()
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"chronav evaluate did not finish; log:\n{log.read_text()[-3000:]}")
     text = log.read_text()
     line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
     assert line is not None, f"no JSON result; log:\n{text[-3000:]}"
@@ -55,15 +55,19 @@ def _evaluate(out: Path, *extra: str, timeout_s: float = 600) -> dict[str, Any]:
 
 @pytest.fixture(scope="module")
 def sweeps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
+    """Both sweeps at once (4 launches, 2 by 2): the same pair here and on the cluster."""
     from distributed import LocalCluster
 
     base = tmp_path_factory.mktemp("evaluate")
-    local = _evaluate(base / "local", "--jobs", "2")
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
-        address = cluster.scheduler_address.removeprefix("tcp://")
-        dask = _evaluate(base / "dask", "--executor", f"dask://{address}")
-    return {"local": local, "dask": dask}
+    group = ProcessGroup()
+    try:
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:
+            local = _start(group, base / "local", "--jobs", "2")
+            dask = _start(group, base / "dask", "--executor", f"dask://{cluster.scheduler_address.removeprefix('tcp://')}")
+            return {"local": _result(*local), "dask": _result(*dask)}
+    finally:
+        group.close()
 
 
 def _key(row: dict[str, Any]) -> tuple:
