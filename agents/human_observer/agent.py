@@ -19,7 +19,7 @@ from agents.world.dsr_readers import running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
 from agents.world.interactions import interaction_pairs, scene_conversations
-from agents.world.motion import people_at
+from agents.world.motion import PersonState, people_at
 from agents.world.vocabulary import WORLD
 from agents.world.vocabulary import now_s as now_of
 from scenes.geometry import angle_difference
@@ -68,15 +68,14 @@ class HumanObserverAgent(Agent):
         mark_observed(self.graph, self.config.name, now_s)
         log_people(self.rec, self.tracks)
 
-    def _noise(self, truth: object, now_s: float) -> np.random.Generator:
+    def _noise(self, truth: PersonState, now_s: float) -> np.random.Generator:
         """The sensor noise of one detection, drawn from (seed, person, what is seen), not from one
         stream: this loop is not in lockstep with the clock, so how many clock values it sees differs
         from run to run, and a stream would give another world each time (chronav evaluate's seeds).
         A still person keeps one error while still (keyed by their pose: a biased detector); a
         walking one gets fresh noise every 0.1 s of sim time."""
-        key = f"t{round(now_s * 10)}" if truth.moving else \
-            f"p{truth.x:.3f},{truth.y:.3f},{truth.theta:.3f}"  # type: ignore[attr-defined]
-        return np.random.default_rng([self.seed, zlib.crc32(f"{truth.name}|{key}".encode())])  # type: ignore[attr-defined]
+        key = f"t{round(now_s * 10)}" if truth.moving else f"p{truth.x:.3f},{truth.y:.3f},{truth.theta:.3f}"
+        return np.random.default_rng([self.seed, zlib.crc32(f"{truth.name}|{key}".encode())])
 
     def _publish(self, name: str, role: str, pose: tuple[float, float, float], now_s: float) -> None:
         """Write a person when new, or moved or turned enough: sensor jitter is not news."""

@@ -158,6 +158,7 @@ class SimRobotAgent(Agent):
                     self._advance(min(dt, 5.0), Velocity())
 
     def _due_now(self) -> bool:
+        """A pending mission's time has come (the executive is about to start it)."""
         return any(n.attrs.get("state") == "pending" and float(n.attrs.get("time_s", math.inf)) <= self.now_s
                    for n in self.graph.nodes_of_type("mission"))
 
