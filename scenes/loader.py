@@ -11,6 +11,9 @@ import difflib
 from dataclasses import dataclass
 from pathlib import Path
 
+import math
+
+import numpy as np
 import shapely
 import shapely.ops
 
@@ -18,7 +21,9 @@ from scenes.clock import parse_clock
 from scenes.geometry import posed_polygon
 
 from scenes.model import Scene
-from scenes.yamlio import LocatedYaml, SourceError, load_located_file, validate_located
+from scenes.occupancy import OccupancyMap, load_occupancy
+from scenes.raster import cells_in_polygon
+from scenes.yamlio import KeyPath, LocatedYaml, SourceError, load_located_file, validate_located
 
 SCENES_DIR = Path(__file__).resolve().parent
 
@@ -192,6 +197,106 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
             clear(key, pose.x, pose.y, what, robot.radius, "the robot's radius")
 
 
+ROOM_SAMPLES = 4_000           # cell centres sampled per room to measure how much of it is wall
+ROOM_MAX_BLOCKED = 0.5         # a room more than half on walls was drawn over the wrong part of the map
+
+
+def _load_map(scene: Scene, located: LocatedYaml, path: Path) -> Scene:
+    """The scene standing on its map: the map read (errors name the map's file and key), the grid
+    resolution taken from it."""
+    assert scene.map is not None
+    key: KeyPath = ("map", "file") if isinstance(located.data.get("map"), dict) else ("map",)
+    map_path = Path(scene.map.file)
+    if not map_path.is_absolute():
+        map_path = path.parent / map_path
+    if map_path.suffix.lower() not in (".yaml", ".yml"):
+        raise located.error(key, f"{scene.map.file!r} is not a map_server .yaml: name the map's yaml file "
+                                 "(it names the image and gives its resolution and origin)")
+    if not map_path.is_file():
+        raise located.error(key, f"map file {scene.map.file!r} not found (paths are relative to the scene file)")
+    occupancy = load_occupancy(map_path)
+    if occupancy.resolution > 1.0:
+        raise located.error(key, f"the map's resolution is {occupancy.resolution:g} m per pixel; chronav plans on "
+                                 "cells of at most 1 m")
+    if "resolution" in scene.model_fields_set and not math.isclose(scene.resolution, occupancy.resolution,
+                                                                    rel_tol=1e-9):
+        raise located.error(("resolution",), f"a scene on a map plans on the map's own cells: resolution must be "
+                                             f"{occupancy.resolution:g} (the map's) or left out")
+    return scene.with_occupancy(occupancy)
+
+
+def _check_on_map(scene: Scene, located: LocatedYaml) -> None:
+    """Rooms lie on the map and mostly on its floor; nobody stands or walks on its walls."""
+    occupancy: OccupancyMap = scene.occupancy
+    assert scene.map is not None
+    unknown_is_wall = scene.map.unknown == "wall"
+    blocked = occupancy.blocked(unknown_is_wall)
+    xmin, ymin, xmax, ymax = occupancy.extent
+    res = occupancy.resolution
+    name = Path(scene.map.file).name
+
+    def why(row: int, col: int) -> str:
+        kind = "an unknown" if occupancy.values[row, col] < 0 else "an occupied"
+        hint = (" (unknown cells are walls; write map: {file: ..., unknown: free} to treat them as floor)"
+                if kind == "an unknown" else "")
+        return f"{kind} cell of the map: {occupancy.describe_cell(row, col)}{hint}"
+
+    def free_at(key: KeyPath, x: float, y: float, what: str) -> None:
+        cell = occupancy.cell_of(x, y)
+        if cell is None:
+            raise located.error(key, f"{what} at ({x:g}, {y:g}) is outside the map {name} "
+                                     f"(x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g})")
+        if blocked[cell]:
+            raise located.error(key, f"{what} at ({x:g}, {y:g}) is on {why(*cell)}")
+
+    for i, room in enumerate(scene.rooms):
+        polygon = shapely.Polygon(room.polygon)
+        rxmin, rymin, rxmax, rymax = polygon.bounds
+        if rxmin < xmin - 1e-9 or rymin < ymin - 1e-9 or rxmax > xmax + 1e-9 or rymax > ymax + 1e-9:
+            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} reaches beyond the map {name} "
+                                                        f"(x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g})")
+        c0, c1 = max(0, math.floor((rxmin - xmin) / res)), min(occupancy.cols, math.ceil((rxmax - xmin) / res))
+        r0, r1 = max(0, math.floor((rymin - ymin) / res)), min(occupancy.rows, math.ceil((rymax - ymin) / res))
+        stride = max(1, math.ceil(math.sqrt(max(1, (c1 - c0) * (r1 - r0)) / ROOM_SAMPLES)))
+        cols, rows = np.arange(c0, c1, stride), np.arange(r0, r1, stride)
+        inside = cells_in_polygon(polygon, xmin + (cols + 0.5) * res, ymin + (rows + 0.5) * res)
+        walls = blocked[np.ix_(rows, cols)] & inside
+        if not inside.any():
+            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} covers no cell of the map")
+        if walls.sum() > ROOM_MAX_BLOCKED * inside.sum():
+            centre = polygon.representative_point()
+            wr, wc = np.nonzero(walls)
+            nearest = np.argmin((cols[wc] - (centre.x - xmin) / res) ** 2 + (rows[wr] - (centre.y - ymin) / res) ** 2)
+            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} lies on walls of the map: "
+                                f"{100 * walls.sum() / inside.sum():.0f}% of its cells are, e.g. "
+                                f"{why(int(rows[wr[nearest]]), int(cols[wc[nearest]]))}")
+    free_at(("robot", "pose"), scene.robot.pose.x, scene.robot.pose.y, "robot")
+    for i, person in enumerate(scene.people):
+        free_at(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
+        route = [person.pose, *(w.pose for w in person.waypoints)]
+        for j, waypoint in enumerate(person.waypoints):
+            free_at(("people", i, "waypoints", j, "pose"), waypoint.pose.x, waypoint.pose.y,
+                    f"waypoint of {person.name!r}")
+        for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
+            steps = max(1, math.ceil(math.hypot(b.x - a.x, b.y - a.y) / (res / 4)))
+            f = np.linspace(0.0, 1.0, steps + 1)
+            cols = np.floor((a.x + f * (b.x - a.x) - xmin) / res).astype(np.int64)
+            rows = np.floor((a.y + f * (b.y - a.y) - ymin) / res).astype(np.int64)
+            on_map = (rows >= 0) & (rows < occupancy.rows) & (cols >= 0) & (cols < occupancy.cols)
+            hits = np.nonzero(blocked[rows[on_map], cols[on_map]])[0]
+            if len(hits):
+                cell = (int(rows[on_map][hits[0]]), int(cols[on_map][hits[0]]))
+                raise located.error(("people", i, "waypoints", j),
+                                    f"{person.name!r} would walk through {why(*cell)}, going from "
+                                    f"({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint around it")
+    for i, door in enumerate(scene.doors):
+        free_at(("doors", i, "position"), door.position[0], door.position[1], f"door {door.name!r}")
+    for i, mission in enumerate(scene.missions):
+        pose = getattr(mission.goal, "pose", None)
+        if pose is not None:
+            free_at(("missions", i, "goal", "pose"), pose.x, pose.y, f"goal of mission {mission.id!r}")
+
+
 def load_scene(name_or_path: str | Path) -> LoadedScene:
     """Read, validate and geometry-check a scene; raise SourceError (file:line:col: key: msg)."""
     path = resolve_scene_path(name_or_path)
@@ -200,7 +305,11 @@ def load_scene(name_or_path: str | Path) -> LoadedScene:
         raise SourceError(str(path), 1, 1, "", "a scene file must be a YAML mapping")
     scene = validate_located(Scene, located)
     _check_references(scene, located)
+    if scene.map is not None:
+        scene = _load_map(scene, located, path)
     _check_geometry(scene, located)
+    if scene.map is not None:
+        _check_on_map(scene, located)
     loaded = LoadedScene(scene=scene, path=path, located=located)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise located.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")

@@ -13,7 +13,7 @@ import datetime as dt
 from typing import Annotated, Any, Literal
 
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, PlainSerializer,
-                      PlainValidator, Tag, ValidationInfo, field_validator, model_validator)
+                      PlainValidator, PrivateAttr, Tag, ValidationInfo, field_validator, model_validator)
 
 from scenes.clock import ClockTime, parse_clock
 from scenes.geometry import Circle, Rectangle, Trapezoid, shape_from_spec, shape_to_dict
@@ -246,12 +246,26 @@ class DoorChange(Strict):
 
 
 
+class MapRef(Strict):
+    """A building map in the ROS map_server format (scenes/occupancy.py), relative to the scene."""
+
+    file: str = Field(min_length=1, description="map_server .yaml naming a .pgm/.png image")
+    unknown: Literal["wall", "free"] = Field("wall", description="what the map's unknown cells are")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_path(cls, value: Any) -> Any:
+        """Accept the short form ``map: building.yaml``."""
+        return {"file": value} if isinstance(value, str) else value
+
+
 class Scene(Strict):
     name: Name
     description: str = ""
     resolution: Real = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
     clock: Clock = Clock()
-    walls: list[list[Point]] = Field(min_length=1, description="polylines")
+    map: MapRef | None = Field(None, description="building map (ROS map_server format); its occupied cells are walls")
+    walls: list[list[Point]] = Field(default_factory=list, description="polylines (at least one unless a map is given)")
     rooms: list[Room] = Field(min_length=1)
     doors: list[Door] = []
     objects: list[SceneObject] = []
@@ -262,10 +276,34 @@ class Scene(Strict):
     agenda_changes: list[AgendaChange] = []
     door_changes: list[DoorChange] = []
     missions: list[Mission] = []
+    # The map read from ``map.file`` (scenes/occupancy.OccupancyMap), attached by scenes/loader.py.
+    _occupancy: Any = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _walls_or_map(self) -> Scene:
+        if not self.walls and self.map is None:
+            raise ValueError("a scene needs walls (polylines) or a map (map: building.yaml)")
+        return self
+
+    def with_occupancy(self, occupancy: Any) -> Scene:
+        """This scene standing on its loaded map: the grid takes the map's resolution, the bounds its extent."""
+        scene = self.model_copy(update={"resolution": occupancy.resolution})
+        scene._occupancy = occupancy
+        return scene
+
+    @property
+    def occupancy(self) -> Any:
+        """The scene's map (scenes/occupancy.OccupancyMap), or None for a scene of polylines only."""
+        if self.map is not None and self._occupancy is None:
+            raise RuntimeError(f"scene {self.name!r} has a map that was not loaded: load it with scenes.loader.load_scene")
+        return self._occupancy
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
-        """(xmin, ymin, xmax, ymax) of walls and rooms."""
+        """(xmin, ymin, xmax, ymax) of walls and rooms; the map's extent when the scene has a map
+        (so the cost grid is the map's grid, cell for cell)."""
+        if self.occupancy is not None:
+            return self.occupancy.extent
         xs = [p[0] for wall in self.walls for p in wall] + [p[0] for r in self.rooms for p in r.polygon]
         ys = [p[1] for wall in self.walls for p in wall] + [p[1] for r in self.rooms for p in r.polygon]
         return (min(xs), min(ys), max(xs), max(ys))

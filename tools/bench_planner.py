@@ -25,7 +25,23 @@ Keys (medians over repeated runs; ms unless the key says otherwise):
   expanded_N             cells expanded by our A* (arrival-time)
   numba_compile_s        first compilation of the search kernels in a fresh cache (subprocess)
   numba_cache_load_s     warm-up in this process with the on-disk cache
-Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7]
+
+A real building (issue 17): a 100 m x 60 m occupancy map at 5 cm (2,000 x 1,200 cells, ROS
+map_server PGM, tools/building_maps.large_floor) with the rooms and doors `chronav scene from-map`
+proposes, 12 people and 4 objects; the plan crosses the floor (generated in a temporary directory):
+  map_load_ms            the scene loaded and checked (yaml, map image, rooms and people on the map)
+                         and its static map built (rooms rasterised, wall cells inflated)
+  scene_yaml_ms_map      of which: parsing the scene file once (scenes/yamlio.py; the agenda loader
+                         parses it a second time)
+  map_image_ms_map       of which: reading the map (yaml + 2.4 MB PGM -> OccupancyGrid values)
+  static_map_ms_map      of which: the static map (rooms rasterised, wall cells inflated)
+  social_map_ms_map      the agents' DSR at the time and the social map built on that static map
+  plan_ms_map            A* across the floor on a fresh social map (arrival-time table included)
+  path_cli_s_map         `chronav path` on that scene, a fresh process (imports, loading, plan,
+                         metrics): the issue's "under 1 s including loading"
+  path_cli_s_icra        the same command on icra_usecase (14 m x 7 m), measured in the same run
+  map_cells              cells of the map
+Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map]
 """
 
 from __future__ import annotations
@@ -180,11 +196,106 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
     })
 
 
+def map_scene(folder: Path) -> tuple[Path, tuple[float, float], tuple[float, float]]:
+    """The large floor as a scene: from-map rooms and doors, people and objects in the rooms;
+    the start and goal of the plan (the most open spots of the first and last rooms along x)."""
+    import yaml
+
+    from scenes.from_map import layout_from_map
+    from scenes.occupancy import load_occupancy
+    from tools.building_maps import large_floor
+
+    large_floor().write(folder / "floor.yaml")
+    layout = layout_from_map(load_occupancy(folder / "floor.yaml"))
+    rng = np.random.default_rng(11)
+    rooms = sorted(layout.rooms, key=lambda r: min(x for x, _ in r.polygon))
+    spots = []
+    for room in rooms:
+        xs, ys = zip(*room.polygon, strict=True)
+        spots.append(((min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2))
+    start, goal = spots[0], spots[-1]
+    middle = spots[1:-1]
+    picks = rng.choice(len(middle), size=min(16, len(middle)), replace=False)
+    people = [{"name": f"p{i}", "role": "resident", "pose": [middle[k][0], middle[k][1] + 1.0, 0.0]}
+              for i, k in enumerate(picks[:12])]
+    objects = [{"name": f"tv{i}", "kind": "tv", "pose": [middle[k][0], middle[k][1] - 1.5, 1.5708],
+                "footprint": {"shape": "rectangle", "length": 0.2, "width": 1.2},
+                "interaction": {"shape": "trapezoid", "height": 2.8, "near_width": 1.2, "far_width": 3.2}}
+               for i, k in enumerate(picks[12:16])]
+    scene = {"name": "large_floor", "map": "floor.yaml",
+             "rooms": [{"name": r.name, "polygon": [list(p) for p in r.polygon]} for r in layout.rooms],
+             "doors": [{"name": d.name, "between": list(d.between), "position": list(d.position), "width": d.width}
+                       for d in layout.doors],
+             "objects": objects, "people": people,
+             "robot": {"pose": [start[0], start[1], 0.0]},
+             "agenda": [{"id": f"game{i}", "name": "Game", "object": o["name"], "start": "11:00", "end": "11:45",
+                         "participants": []} for i, o in enumerate(objects)],
+             "missions": [{"id": "across", "time": "11:00", "goal": {"pose": [goal[0], goal[1], 0.0]}}]}
+    path = folder / "large_floor.yaml"
+    # Leaf lists in flow style, as `chronav scene from-map` writes them.
+    path.write_text(yaml.safe_dump(scene, sort_keys=False, default_flow_style=None, width=1_000_000), encoding="utf-8")
+    return path, start, goal
+
+
+def cli_seconds(args: list[str], repeats: int) -> float:
+    """Median wall time of `python -m tools.cli ARGS` in a fresh process (exit status checked)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "tools.cli", *args], cwd=REPO_ROOT, check=True, capture_output=True,
+                       env=dict(os.environ, PYTHONPATH=str(REPO_ROOT)))
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def bench_map(repeats: int, results: dict[str, Any]) -> None:
+    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.socialmap.social_map import plan
+    from agents.world.building import _occupancy_layer
+    from agents.world.navigation import NavigationMaps
+    from agents.world.offline import SceneMaps
+
+    with tempfile.TemporaryDirectory() as tmp:
+        scene, start, goal = map_scene(Path(tmp))
+
+        def load() -> SceneMaps:
+            maps = SceneMaps.load(scene)
+            maps.nav.static()
+            return maps
+
+        from scenes.occupancy import load_occupancy
+        from scenes.yamlio import load_located_file
+
+        load_ms, maps = median_ms(load, max(1, repeats // 2))
+        yaml_ms, _ = median_ms(lambda: load_located_file(scene), repeats)
+        image_ms, _ = median_ms(lambda: load_occupancy(scene.parent / "floor.yaml"), repeats)
+        def fresh_static() -> Any:
+            _occupancy_layer.cache_clear()   # inflate the wall cells again, as a fresh process does
+            return NavigationMaps.for_scene(maps.world.scene).static()
+
+        static_ms, _ = median_ms(fresh_static, max(1, repeats // 2))
+        social_ms, smap = median_ms(lambda: maps.nav.build(SceneMaps(maps.world, maps.nav).graph(T_S), T_S), repeats)
+        ws = SearchWorkspace()
+        plan_ms, path = median_ms_after(lambda: maps.nav.build(maps.graph(T_S), T_S),
+                                        lambda m: plan(m, start, goal, cruise_speed_mps=maps.cruise_speed, workspace=ws),
+                                        repeats)
+        where = ["--at", "11:00", "--from", f"{start[0]},{start[1]}", "--to", f"{goal[0]},{goal[1]}", "--json"]
+        cli_map = cli_seconds(["path", str(scene), *where], 3)
+        cli_icra = cli_seconds(["path", "icra_usecase", "--at", "11:15", "--from", "12,2", "--to", "1,1", "--json"], 3)
+    results.update({"map_cells": int(smap.spec.rows * smap.spec.cols), "map_load_ms": round(load_ms, 1),
+                    "scene_yaml_ms_map": round(yaml_ms, 1), "map_image_ms_map": round(image_ms, 1),
+                    "static_map_ms_map": round(static_ms, 1),
+                    "social_map_ms_map": round(social_ms, 1), "plan_ms_map": round(plan_ms, 1),
+                    "plan_length_m_map": round(path.length_m, 2), "path_cli_s_map": round(cli_map, 3),
+                    "path_cli_s_icra": round(cli_icra, 3)})
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="200,500,1000,2000", help="cells per side, comma-separated")
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--skip-compile", action="store_true", help="do not time a fresh numba compile")
+    parser.add_argument("--skip-map", action="store_true", help="do not time the 100 m x 60 m building map")
     options = parser.parse_args(argv)
     results: dict[str, Any] = {"world_size_m": WORLD_M, "people": N_PEOPLE, "objects": N_OBJECTS,
                                "ref_plan_counts_csr_build": 0}
@@ -196,6 +307,8 @@ def main(argv: list[str] | None = None) -> None:
     results["numba_cache_load_s"] = round(time.perf_counter() - start, 3)
     for size in (int(s) for s in options.sizes.split(",") if s):
         bench_size(size, options.repeats, results)
+    if not options.skip_map:
+        bench_map(options.repeats, results)
     print(json.dumps(results))
 
 

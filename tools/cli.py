@@ -19,6 +19,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.agenda",        # chronav agenda ...
     "tools.launch",        # chronav launch / chronav demo
     "tools.chaos",         # chronav chaos (fault injection)
+    "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
     "tools.evaluate",      # chronav evaluate (planner studies)
 )
 

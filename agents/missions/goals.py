@@ -18,6 +18,7 @@ from shapely.geometry.base import BaseGeometry
 
 from scenes.geometry import posed_polygon
 from agents.lib.socialmap.types import Person, SocialObject
+from agents.world.building import FreeArea
 from agents.world.navigation import PLANNING_MARGIN_M
 from scenes.model import Scene
 
@@ -47,15 +48,11 @@ class FreeSpace:
     def __init__(self, scene: Scene, objects: Sequence[SocialObject]) -> None:
         # The planner's inflation (body + margin) plus a cell, so a chosen goal is always traversable.
         clearance = scene.robot.radius + PLANNING_MARGIN_M + scene.resolution
-        building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
-        walls = shapely.MultiLineString([w for w in scene.walls if len(w) >= 2]).buffer(clearance)
-        footprints = shapely.union_all([posed_polygon(o.footprint, o.x, o.y, o.theta) for o in objects]
-                                       or [shapely.Polygon()]).buffer(clearance)
-        self.region: BaseGeometry = building.difference(walls).difference(footprints)
-        shapely.prepare(self.region)
+        # The building's walls (polylines and a map's wall cells) come from the world model.
+        self.area = FreeArea(scene, [posed_polygon(o.footprint, o.x, o.y, o.theta) for o in objects], clearance)
 
     def ok(self, x: float, y: float, people: Iterable[Person], ignore: str | None = None) -> bool:
-        if not self.region.contains(shapely.Point(x, y)):
+        if not self.area.contains(x, y):
             return False
         return all(math.hypot(p.x - x, p.y - y) >= PERSON_KEEP_OUT_M for p in people if p.name != ignore)
 

@@ -24,7 +24,7 @@ from agents.runtime.drawing.bodies import log_robot
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
-from agents.world.building import closed_door_walls, footprint_polygons
+from agents.world.building import closed_door_walls, footprint_polygons, scene_occupancy
 from agents.world.dsr_readers import closed_doors
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_robot
 from agents.world.motion import people_at
@@ -56,7 +56,8 @@ class SimRobotAgent(Agent):
         self.omni = robot.kinematics == "omnidirectional"
         self.limits = Limits(robot.max_speed, robot.max_angular_speed, robot.max_acceleration)
         self._fixed_segments = np.vstack([polyline_segments(scene.walls), polygon_segments(footprint_polygons(scene))])
-        self.laser = Laser(self._fixed_segments, robot.laser_rays, robot.laser_range)
+        self._occupancy = scene_occupancy(scene)   # a building map's wall cells, if the scene has a map
+        self.laser = Laser(self._fixed_segments, robot.laser_rays, robot.laser_range, occupancy=self._occupancy)
         self._closed_doors: frozenset[str] = frozenset()
         self.rate = float(self.config.option("rate", str(scene.clock.rate)))
         # Sim seconds per wall second while agents plan (busy); 0 holds the clock until they are done,
@@ -230,6 +231,8 @@ class SimRobotAgent(Agent):
         segs = self.laser.segments
         if len(segs):
             nearest = min(nearest, float(np.min(project_on_segments((x, y), segs[:, :2], segs[:, 2:]).distance)))
+        if self._occupancy is not None:
+            nearest = min(nearest, self._occupancy.clearance(x, y, reach_m=max(2 * self._contact_m, 0.5)))
         return nearest
 
     def _open_trajectory(self):  # noqa: ANN202 - text file or None

@@ -1,7 +1,9 @@
 """A simulated 2-D laser: rays cast against walls, object footprints and people.
 
-Why vectorised segment intersection in numpy instead of a grid ray-march: exact ranges at any
+Why vectorised segment intersection in numpy for polylines and footprints: exact ranges at any
 resolution for the elastic band's bubbles, and ~0.1 ms for 91 rays against a few hundred segments.
+A building map's walls are thousands of cells: those are ray-marched on the map's grid
+(``OccupancyLayer.ray_ranges``), whose cost does not grow with the size of the building.
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import shapely
+
+from agents.lib.socialmap.occupancy import OccupancyLayer
 
 PERSON_RADIUS_M = 0.25
 
@@ -32,8 +36,9 @@ class Laser:
     """Fixed obstacles are given once; people (moving) are passed to every scan."""
 
     def __init__(self, segments: np.ndarray, n_rays: int, max_range: float,
-                 fov: float = 2 * np.pi * 240 / 360) -> None:
+                 fov: float = 2 * np.pi * 240 / 360, occupancy: OccupancyLayer | None = None) -> None:
         self.segments = segments
+        self.occupancy = occupancy
         self.max_range = max_range
         self.angles = np.linspace(-fov / 2, fov / 2, n_rays)
 
@@ -53,6 +58,8 @@ class Laser:
                 u = (ap[..., 0] * d[..., 1] - ap[..., 1] * d[..., 0]) / denom
             hit = (np.abs(denom) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
             ranges = np.minimum(ranges, np.where(hit, t, np.inf).min(axis=1))
+        if self.occupancy is not None:
+            ranges = np.minimum(ranges, self.occupancy.ray_ranges(x, y, self.angles + theta, self.max_range))
         if len(people_xy):
             # Ray-circle intersection, nearest positive root.
             oc = np.asarray(people_xy, dtype=float)[None, :, :] - np.array([x, y])   # (1, P, 2)

@@ -2,18 +2,24 @@
 
 Why one module: the simulator's laser and bumper, the social map's walls and the executive's free
 space must agree on where a closed door's leaf is and what blocks; each used to derive it itself.
+A scene on a building map (``map:``, scenes/occupancy.py) has walls of two kinds, the polylines and
+the map's wall cells (:func:`scene_occupancy`); every consumer takes both from here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+from functools import lru_cache
 
 import shapely
 from shapely.geometry import Polygon
 
+from agents.lib.socialmap.grid import GridSpec
+from agents.lib.socialmap.occupancy import OccupancyLayer
 from agents.lib.socialmap.types import Room, Wall
 from scenes.geometry import posed_polygon
 from scenes.model import Scene
+from scenes.occupancy import OccupancyMap
 
 DOOR_LEAF_OVERLAP_M = 0.05   # a closed leaf overlaps the wall on each side, so no gap is left
 # Clearance the navigation keeps beyond the robot's body when planning (the controller cuts
@@ -62,3 +68,43 @@ def footprint_polygons(scene: Scene) -> list[Polygon]:
 def room_at(scene: Scene, x: float, y: float) -> str | None:
     """Name of the room containing (x, y) (first match), or None."""
     return scene.room_at(x, y)
+
+
+@lru_cache(maxsize=8)
+def _occupancy_layer(occupancy: OccupancyMap, unknown_is_wall: bool) -> OccupancyLayer:
+    """One layer per loaded map (its inflations are cached on it, so build it once per process)."""
+    spec = GridSpec(x0=occupancy.x0, y0=occupancy.y0, resolution=occupancy.resolution,
+                    rows=occupancy.rows, cols=occupancy.cols)
+    return OccupancyLayer(spec, occupancy.blocked(unknown_is_wall), outside_blocked=unknown_is_wall,
+                          name=occupancy.yaml_path.name)
+
+
+def scene_occupancy(scene: Scene) -> OccupancyLayer | None:
+    """The wall cells of the scene's building map (occupied, and unknown unless ``unknown: free``);
+    None for a scene of polylines only."""
+    occupancy = scene.occupancy
+    if occupancy is None or scene.map is None:
+        return None
+    return _occupancy_layer(occupancy, scene.map.unknown == "wall")
+
+
+class FreeArea:
+    """Where the robot's centre may stand: inside the rooms, ``clearance`` away from every wall
+    (polylines, and the map's wall cells inflated as the planner inflates them) and footprint."""
+
+    def __init__(self, scene: Scene, footprints: Sequence[Polygon], clearance_m: float) -> None:
+        building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+        walls = [w for w in scene.walls if len(w) >= 2]
+        if walls:
+            building = building.difference(shapely.MultiLineString(walls).buffer(clearance_m))
+        if footprints:
+            building = building.difference(shapely.union_all(list(footprints)).buffer(clearance_m))
+        self.region = building
+        shapely.prepare(self.region)
+        self.occupancy = scene_occupancy(scene)
+        self.clearance_m = clearance_m
+
+    def contains(self, x: float, y: float) -> bool:
+        if not self.region.contains(shapely.Point(x, y)):
+            return False
+        return self.occupancy is None or not self.occupancy.inflated_at(x, y, self.clearance_m)

@@ -17,7 +17,7 @@ from agents.lib.socialmap.types import Room, Wall
 from agents.lib.socialmap.planners import DEFAULT_PLANNER, check_planner
 from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMapParams, StaticMap, build_social_map,
                                              build_static_map)
-from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_rooms, scene_walls
+from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_occupancy, scene_rooms, scene_walls
 from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
 from scenes.model import Scene
 
@@ -50,6 +50,7 @@ class NavigationMaps:
     def __post_init__(self) -> None:
         self._walls = scene_walls(self.scene)
         self._rooms = scene_rooms(self.scene)
+        self._occupancy = scene_occupancy(self.scene)
 
     def _layout(self, route_rooms: Sequence[str], closed: Sequence[str]) -> tuple[list[Wall], list[Room]]:
         rooms = [room for room in self._rooms if room.name in route_rooms] if route_rooms else self._rooms
@@ -59,7 +60,8 @@ class NavigationMaps:
         key = (tuple(sorted(route_rooms)), tuple(sorted(closed)))
         if key not in self._statics:
             walls, rooms = self._layout(route_rooms, closed)
-            self._statics[key] = build_static_map(self.scene.bounds, walls, rooms, self.params)
+            self._statics[key] = build_static_map(self.scene.bounds, walls, rooms, self.params,
+                                                  occupancy=self._occupancy)
         return self._statics[key]
 
     def build(self, graph: Any, now_s: float, route_rooms: Sequence[str] = ()) -> SocialMap:
@@ -70,4 +72,4 @@ class NavigationMaps:
         walls, rooms = self._layout(route_rooms, closed)
         return build_social_map(self.scene.bounds, walls, dsr_people(graph), dsr_objects(graph),
                                 dsr_activity_windows(graph), now_s, self.params, rooms=rooms,
-                                static=self.static(route_rooms, closed))
+                                static=self.static(route_rooms, closed), occupancy=self._occupancy)

@@ -32,6 +32,7 @@ def workdir(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
     for companion in SCENES_DIR.iterdir():
         if companion.suffix in (".ics", ".yml") or companion.name.startswith("agenda"):
             shutil.copy(companion, path / companion.name)
+    shutil.copytree(SCENES_DIR / "maps", path / "maps")   # building maps (map_ward)
     yield path
 
 
@@ -42,8 +43,8 @@ def check_scene_file(path: Path) -> None:
     except SourceError as exc:
         assert (exc.line is None or exc.line >= 1) and (exc.column is None or exc.column >= 1), exc
         assert exc.message.strip(), exc
-        assert Path(exc.file).name == path.name or Path(exc.file).parent == path.parent, \
-            f"error names {exc.file!r}, not the scene or its agenda file: {exc}"
+        assert Path(exc.file).name == path.name or Path(exc.file).resolve().is_relative_to(path.parent.resolve()), \
+            f"error names {exc.file!r}, not the scene or a file it references (agenda, map): {exc}"
 
 
 def test_shipped_scenes_load() -> None:

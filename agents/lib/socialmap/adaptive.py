@@ -23,6 +23,7 @@ import shapely
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from shapely.geometry.base import BaseGeometry
 
+from agents.lib.socialmap.occupancy import OccupancyLayer
 from agents.lib.socialmap.personal_space import PersonalSpace, contour_distance, sigma_for_contour
 from agents.lib.socialmap.types import Person
 
@@ -98,11 +99,23 @@ def adapt_space(space: PersonalSpace, distances: Sequence[float], level: float,
                       adapted=tuple(adapted))
 
 
+def occupancy_distances(people: Sequence[Person], occupancy: OccupancyLayer | None, max_range_m: float) -> np.ndarray:
+    """Like :func:`wall_distances`, against the wall cells of a building map."""
+    out = np.full((len(people), 4), np.inf)
+    if occupancy is None:
+        return out
+    for i, person in enumerate(people):
+        out[i] = occupancy.ray_ranges(person.x, person.y, np.asarray(_SIDE_ANGLES) + person.theta, max_range_m)
+    return out
+
+
 def adapt_spaces(people: Sequence[Person], spaces: Sequence[PersonalSpace], walls: BaseGeometry | None,
-                 level: float, robot_diameter_m: float, params: AdaptiveParams) -> list[Adaptation]:
-    """Adapt every person's space (rays cast in one vectorised shapely call)."""
+                 level: float, robot_diameter_m: float, params: AdaptiveParams,
+                 occupancy: OccupancyLayer | None = None) -> list[Adaptation]:
+    """Adapt every person's space (rays cast in one vectorised shapely call against the polylines,
+    and on the grid against a building map's wall cells, ``occupancy``)."""
     if not params.enabled:
         return [Adaptation(space=s, wall_distance_m=(math.inf,) * 4, adapted=()) for s in spaces]
     max_range = robot_diameter_m + params.margin_m + params.d_max_m
-    distances = wall_distances(people, walls, max_range)
+    distances = np.minimum(wall_distances(people, walls, max_range), occupancy_distances(people, occupancy, max_range))
     return [adapt_space(space, row, level, robot_diameter_m, params) for space, row in zip(spaces, distances, strict=True)]

@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -26,6 +27,10 @@ from shapely.geometry.base import BaseGeometry
 
 from agents.lib.socialmap.types import Room, SocialMapInputError, Wall
 from scenes.limits import GRID_CELLS
+from scenes.raster import cells_in_polygon
+
+if TYPE_CHECKING:
+    from agents.lib.socialmap.occupancy import OccupancyLayer
 
 COST_DTYPE = np.float32
 CostArray = NDArray[np.float32]
@@ -225,15 +230,19 @@ def walls_geometry(walls: Sequence[Wall]) -> BaseGeometry | None:
     return shapely.MultiLineString([list(w.points) for w in walls])
 
 
-def static_grid(spec: GridSpec, walls: Sequence[Wall], rooms: Sequence[Room], params: GridParams) -> CostArray:
+def static_grid(spec: GridSpec, walls: Sequence[Wall], rooms: Sequence[Room], params: GridParams,
+                occupancy: OccupancyLayer | None = None) -> CostArray:
     """The part of the grid that only changes when the building does: free cost inside the rooms
-    (everywhere if no room is given), blocked outside them and within the robot radius of a wall."""
+    (everywhere if no room is given), blocked outside them and within the robot radius of a wall
+    (polylines, and the wall cells of a building map: ``occupancy``, inflated the same way)."""
     if rooms:
         building = shapely.union_all([shapely.Polygon(r.polygon) for r in rooms])
         grid = np.full(spec.shape, BLOCKED, dtype=COST_DTYPE)
-        found = geometry_mask(spec, building)
-        if found is not None:
-            rows, cols, mask = found
+        window = None if building.is_empty else spec.window(*building.bounds)
+        if window is not None:
+            rows, cols = window
+            # The same cells as geometry_mask (centre in the polygon), by scan line: rooms cover the map.
+            mask = cells_in_polygon(building, spec.xs(cols), spec.ys(rows))
             view = grid[rows, cols]
             view[mask] = params.free_cost
     else:
@@ -248,4 +257,6 @@ def static_grid(spec: GridSpec, walls: Sequence[Wall], rooms: Sequence[Room], pa
             if patch is not None:
                 patches.append(patch)
     compose_into(grid, patches)
+    if occupancy is not None:
+        grid[occupancy.sample(occupancy.inflated(params.robot_radius_m), spec)] = BLOCKED
     return grid

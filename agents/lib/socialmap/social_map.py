@@ -97,6 +97,7 @@ from agents.lib.socialmap.layers import (
 )
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
+from agents.lib.socialmap.occupancy import OccupancyLayer
 from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, cheapest_cell,
                                            planning_grid, resolve_planner)
 from agents.lib.socialmap.roles import RoleParams, role_scale
@@ -142,12 +143,13 @@ class SocialMapParams(BaseModel):
 
 @dataclass(frozen=True, slots=True)
 class StaticMap:
-    """The building part of the map (walls, rooms), reused across rebuilds."""
+    """The building part of the map (walls, rooms, a building map's wall cells), reused across rebuilds."""
 
     spec: GridSpec
     grid: CostArray
     walls: BaseGeometry | None
     key: tuple[Any, ...]
+    occupancy: OccupancyLayer | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -295,36 +297,41 @@ def _check_unique(kind: str, names: Sequence[str]) -> None:
         seen.add(name)
 
 
-def build_static_map(bounds: Sequence[float], walls: Sequence[Wall], rooms: Sequence[Room] = (),
-                     params: SocialMapParams | None = None) -> StaticMap:
-    """Rasterise the building once: walls inflated by the robot radius, outside the rooms blocked."""
-    params = params or SocialMapParams()
-    spec = GridSpec.from_bounds(bounds, params.grid.resolution_m)
+def _static_key(bounds: Sequence[float], walls: Sequence[Wall], rooms: Sequence[Room], params: SocialMapParams,
+                occupancy: OccupancyLayer | None) -> tuple[Any, ...]:
     key = (tuple(bounds), tuple(walls), tuple(rooms), params.grid.resolution_m, params.grid.robot_radius_m,
            params.grid.free_cost)
-    return StaticMap(spec=spec, grid=static_grid(spec, walls, rooms, params.grid), walls=walls_geometry(walls), key=key)
+    return key if occupancy is None else (*key, occupancy.key)
+
+
+def build_static_map(bounds: Sequence[float], walls: Sequence[Wall], rooms: Sequence[Room] = (),
+                     params: SocialMapParams | None = None, *, occupancy: OccupancyLayer | None = None) -> StaticMap:
+    """Rasterise the building once: walls (polylines and a building map's wall cells, ``occupancy``)
+    inflated by the robot radius, outside the rooms blocked."""
+    params = params or SocialMapParams()
+    spec = GridSpec.from_bounds(bounds, params.grid.resolution_m)
+    return StaticMap(spec=spec, grid=static_grid(spec, walls, rooms, params.grid, occupancy),
+                     walls=walls_geometry(walls), key=_static_key(bounds, walls, rooms, params, occupancy),
+                     occupancy=occupancy)
 
 
 def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Sequence[Person],
                      objects: Sequence[SocialObject], activities: Sequence[ActivityWindow], t_s: float,
                      params: SocialMapParams | None = None, *, rooms: Sequence[Room] = (),
-                     static: StaticMap | None = None) -> SocialMap:
+                     static: StaticMap | None = None, occupancy: OccupancyLayer | None = None) -> SocialMap:
     """Compose the social map at time ``t_s`` (seconds since local midnight).
 
-    Pass ``static`` (from build_static_map with the same bounds, walls, rooms and grid params) to
-    skip rasterising the building on every rebuild; a mismatching one is an error."""
+    Pass ``static`` (from build_static_map with the same bounds, walls, rooms, grid params and
+    ``occupancy``) to skip rasterising the building on every rebuild; a mismatching one is an error."""
     params = params or SocialMapParams()
     if not math.isfinite(t_s):
         raise SocialMapInputError(f"t_s must be finite, got {t_s!r}")
     _check_unique("person", [p.name for p in people])
     _check_unique("object", [o.name for o in objects])
     if static is None:
-        static = build_static_map(bounds, walls, rooms, params)
-    else:
-        expected = (tuple(bounds), tuple(walls), tuple(rooms), params.grid.resolution_m,
-                    params.grid.robot_radius_m, params.grid.free_cost)
-        if static.key != expected:
-            raise SocialMapInputError("static map was built for other bounds, walls, rooms or grid parameters")
+        static = build_static_map(bounds, walls, rooms, params, occupancy=occupancy)
+    elif static.key != _static_key(bounds, walls, rooms, params, occupancy):
+        raise SocialMapInputError("static map was built for other bounds, walls, rooms, building map or grid parameters")
     spec = static.spec
     grid_params = params.grid
     people = tuple(people)
@@ -333,7 +340,7 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     # People: role-scaled spaces, adapted to walls, grouped, densities on windows, cost bands.
     base_spaces = [PersonalSpace.from_params(params.personal_space, role_scale(p, params.roles)) for p in people]
     adaptations = adapt_spaces(people, base_spaces, static.walls, params.zones.level(params.adaptive.zone),
-                               2.0 * grid_params.robot_radius_m, params.adaptive)
+                               2.0 * grid_params.robot_radius_m, params.adaptive, occupancy=static.occupancy)
     spaces = [a.space for a in adaptations]
     groups = group_people(people, spaces, params.groups)
     windows = density_windows(spec, people, spaces, groups, params.zones)
