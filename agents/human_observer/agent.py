@@ -9,6 +9,7 @@ network does); the tracker smooths them and publishes a person only when it has 
 from __future__ import annotations
 
 import math
+import zlib
 
 import numpy as np
 
@@ -18,7 +19,7 @@ from agents.world.dsr_readers import running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
 from agents.world.interactions import interaction_pairs, scene_conversations
-from agents.world.motion import people_at
+from agents.world.motion import PersonState, people_at
 from agents.world.vocabulary import WORLD
 from agents.world.vocabulary import now_s as now_of
 from scenes.geometry import angle_difference
@@ -37,7 +38,7 @@ class HumanObserverAgent(Agent):
         self.noise_xy = float(self.config.option("noise_xy", "0.02"))
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
         self.smoothing = float(self.config.option("smoothing", "0.5"))
-        self.rng = np.random.default_rng(int(self.config.option("seed", "7")))
+        self.seed = int(self.config.option("seed", "7"))
         self.tracks: dict[str, tuple[float, float, float]] = {}
         self.published: dict[str, tuple[float, float, float]] = {}
         self._last_t: float | None = None
@@ -49,8 +50,9 @@ class HumanObserverAgent(Agent):
         self._last_t = now_s
         self.rec.set_time(now_s)
         for truth in people_at(self.scene, now_s):
-            det = (truth.x + self.rng.normal(0, self.noise_xy), truth.y + self.rng.normal(0, self.noise_xy),
-                   truth.theta + self.rng.normal(0, self.noise_theta))
+            rng = self._noise(truth, now_s)
+            det = (truth.x + rng.normal(0, self.noise_xy), truth.y + rng.normal(0, self.noise_xy),
+                   truth.theta + rng.normal(0, self.noise_theta))
             prev = self.tracks.get(truth.name)
             if prev is None or truth.moving or math.hypot(det[0] - prev[0], det[1] - prev[1]) > 0.5:
                 track = det  # new, walking or re-acquired: no smoothing lag
@@ -65,6 +67,15 @@ class HumanObserverAgent(Agent):
                                                          scene_conversations(self.scene)))
         mark_observed(self.graph, self.config.name, now_s)
         log_people(self.rec, self.tracks)
+
+    def _noise(self, truth: PersonState, now_s: float) -> np.random.Generator:
+        """The sensor noise of one detection, drawn from (seed, person, what is seen), not from one
+        stream: this loop is not in lockstep with the clock, so how many clock values it sees differs
+        from run to run, and a stream would give another world each time (chronav evaluate's seeds).
+        A still person keeps one error while still (keyed by their pose: a biased detector); a
+        walking one gets fresh noise every 0.1 s of sim time."""
+        key = f"t{round(now_s * 10)}" if truth.moving else f"p{truth.x:.3f},{truth.y:.3f},{truth.theta:.3f}"
+        return np.random.default_rng([self.seed, zlib.crc32(f"{truth.name}|{key}".encode())])
 
     def _publish(self, name: str, role: str, pose: tuple[float, float, float], now_s: float) -> None:
         """Write a person when new, or moved or turned enough: sensor jitter is not news."""
