@@ -107,4 +107,6 @@ def test_hostile_payloads_never_change_or_kill_a_replica(procs, tmp_path):
     assert proc.poll() is None
     log = (tmp_path / "agenda.log").read_text()
     assert "dropped message from chronav/chronav/delta/fuzzer" in log
-    assert "dropped message from chronav/chronav/state/fuzzer" in log
+    # States refused for the same reason as the deltas share that reason's log budget (20 lines,
+    # then a count); the counters above prove every one was refused.
+    assert "dropped message from chronav/chronav/state/fuzzer" in log or "refused for this reason" in log
