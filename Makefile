@@ -9,7 +9,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,eval]'
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -23,6 +23,7 @@ bench: $(STAMP)
 	$(BIN)/python tools/bench_dsr.py
 	$(BIN)/python tools/bench_planner.py
 	$(BIN)/python tools/bench_planner_symbolic.py
+	$(BIN)/python tools/bench_evaluate.py
 
 clean:
 	rm -rf $(VENV) recordings/*.rrd

@@ -20,6 +20,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.launch",        # chronav launch / chronav demo
     "tools.chaos",         # chronav chaos (fault injection)
     "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
+    "tools.evaluate",      # chronav evaluate (planner studies)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -177,8 +177,12 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                hang_timeout_s: float = DEFAULT_HANG_TIMEOUT_S,
                startup_timeout_s: float = DEFAULT_STARTUP_TIMEOUT_S,
                agent_options: dict[str, list[str]] | None = None,
-               on_tick: Callable[[dict[str, object]], None] | None = None) -> RunResult:
-    """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C."""
+               on_tick: Callable[[dict[str, object]], None] | None = None,
+               metrics_report: bool = True) -> RunResult:
+    """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C.
+
+    ``metrics_report=False`` skips the social-vs-baseline metrics the demo logs into the recording
+    (``chronav evaluate`` measures each run itself, whatever its planner)."""
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
     from dsr import DSRError, join
@@ -275,7 +279,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                         break
                 graph_logger.maybe_log(graph, status.get("now_s"), force=True)
         interrupted = interrupted or stop_requested["flag"]
-        if record and not interrupted:
+        if record and metrics_report and not interrupted:
             metrics = _report(loaded.path, run_dir, missions, recorder)
     except (LaunchError, DSRError) as exc:    # e.g. the launcher could not join its own router
         error = str(exc)

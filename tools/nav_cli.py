@@ -2,7 +2,8 @@
 
 Why offline commands: a care-home engineer tuning a scene wants to see, in a second, which route
 the robot would take at 11:15 and how it scores, without launching six processes.  Both commands
-build the social map exactly as the navigation agent does (agents/social_navigation/offline.py).
+build the social map exactly as the navigation agent does (agents/world/offline.py), and plan
+with the same planners (``--planner``, agents/lib/socialmap/planners.py).
 """
 
 from __future__ import annotations
@@ -36,6 +37,19 @@ def _clock(text: str | None, option: str) -> float | None:
     return None
 
 
+def _planner(name: str | None, baseline: bool, departure_time: bool) -> str:
+    """--planner NAME, or its older spellings --baseline / --departure-time (not both kinds at once)."""
+    from agents.lib.socialmap.planners import UnknownPlannerError, resolve_planner
+
+    if baseline and departure_time:
+        raise typer.BadParameter("give one of --baseline and --departure-time (or --planner NAME)",
+                                 param_hint="--baseline")
+    try:
+        return resolve_planner(name, baseline=baseline, arrival_time=False if departure_time else None)
+    except UnknownPlannerError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--planner") from None
+
+
 def _fail(message: str, code: int = 2) -> None:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code)
@@ -51,6 +65,10 @@ def register(app: typer.Typer) -> None:
                      departure_time: bool = typer.Option(False, "--departure-time",
                                                          help="price interaction spaces at --at (the seeds), "
                                                               "not at the time the robot reaches them"),
+                     planner: str = typer.Option(None, "--planner",
+                                                 help="social (default), departure, static, baseline or inflation "
+                                                      "(docs/evaluate.md); --baseline and --departure-time are "
+                                                      "the same as baseline and departure"),
                      method: str = typer.Option("astar", help="astar or dijkstra"),
                      as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
         """Plan one path on SCENE's social map at a given time and score it."""
@@ -60,9 +78,10 @@ def register(app: typer.Typer) -> None:
         assert t_s is not None
         if method not in ("astar", "dijkstra"):
             raise typer.BadParameter("use astar or dijkstra", param_hint="--method")
+        chosen = _planner(planner, baseline, departure_time)
         try:
-            result = plan_offline(scene, t_s, _xy(start, "--from"), _xy(goal, "--to"), baseline=baseline,
-                                  arrival_time=not departure_time, method=method)
+            result = plan_offline(scene, t_s, _xy(start, "--from"), _xy(goal, "--to"), planner=chosen,
+                                  method=method)
         except OfflineError as exc:
             _fail(str(exc), 1 if exc.no_path else 2)
             return
@@ -72,7 +91,7 @@ def register(app: typer.Typer) -> None:
         from rich.console import Console
         from rich.table import Table
 
-        table = Table(title=f"{'baseline' if baseline else 'social'} path on {result['scene']} at {at}")
+        table = Table(title=f"{chosen} path on {result['scene']} at {at}")
         table.add_column("quantity")
         table.add_column("value", justify="right")
         table.add_row("cost (cost-weighted m)", f"{result['cost']:.2f}")

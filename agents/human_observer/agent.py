@@ -37,6 +37,7 @@ DRAW_EVERY_S = 0.5
 PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
 PUBLISH_SPEED_MPS = 0.1
+TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing still
 STILL_DEADBAND_MPS = 0.15    # an estimated speed below this is sensor noise on a still person
 
 
@@ -87,9 +88,9 @@ class HumanObserverAgent(Agent):
                 estimates[name] = (x, y, theta, vx, vy)
         else:
             detections = []
-            for name, role, x, y, theta, _vx, _vy in rows:
+            for name, role, x, y, theta, vx, vy in rows:
                 self.roles[name] = role
-                rng = self._noise(name, now_s)
+                rng = self._noise(name, now_s, (x, y, theta) if math.hypot(vx, vy) < TRUTH_STILL_MPS else None)
                 detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
                                             theta + rng.normal(0, self.noise_theta)))
             for name, track in self.tracker.update(now_s, detections).items():
@@ -125,11 +126,15 @@ class HumanObserverAgent(Agent):
                    {name: e[3:] for name, e in estimates.items()},
                    {name: [(x, y) for _, x, y in trail] for name, trail in self.trails.items()}, predictions)
 
-    def _noise(self, name: str, now_s: float) -> np.random.Generator:
-        """The sensor noise of one detection, drawn from (seed, person, time): this loop is not in
-        lockstep with the clock, so how many clock values it sees differs from run to run, and one
-        stream would give another world each time."""
-        return np.random.default_rng([self.seed, zlib.crc32(f"{name}|{round(now_s * 10)}".encode())])
+    def _noise(self, name: str, now_s: float, still_pose: tuple[float, float, float] | None) -> np.random.Generator:
+        """The sensor noise of one detection, drawn from (seed, person, what is seen), not from one
+        stream: this loop is not in lockstep with the clock, so how many clock values it sees differs
+        from run to run, and a stream would give another world each time (chronav evaluate's seeds).
+        A still person keeps one error while still (keyed by their pose: a biased detector), so the
+        track settles on one estimate however many frames were seen; a walking one gets fresh noise
+        every 0.1 s of sim time."""
+        key = f"t{round(now_s * 10)}" if still_pose is None else "p{:.3f},{:.3f},{:.3f}".format(*still_pose)
+        return np.random.default_rng([self.seed, zlib.crc32(f"{name}|{key}".encode())])
 
     def _publish(self, name: str, role: str, estimate: tuple[float, float, float, float, float], now_s: float) -> None:
         """Write a person when new, or moved, turned or changed speed enough: sensor jitter is not news."""

@@ -66,6 +66,10 @@ class SimRobotAgent(Agent):
         self.laser = Laser(self._fixed_segments, robot.laser_rays, robot.laser_range, occupancy=self._occupancy)
         self._closed_doors: frozenset[str] = frozenset()
         self.rate = float(self.config.option("rate", str(scene.clock.rate)))
+        # Sim seconds per wall second while agents plan (busy); 0 holds the clock until they are done,
+        # so a run's sim times do not depend on how fast this machine plans (chronav evaluate).
+        self.busy_rate = float(self.config.option("busy_rate", str(BUSY_RATE)))
+        self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
         # The bumper: a move that brings the body into contact is refused; moving away always works.
         self._contact_m = robot.radius * 0.9
@@ -146,14 +150,14 @@ class SimRobotAgent(Agent):
                                float(robot.attrs.get("cmd_omega", 0.0)))
             else:
                 self._waiting_since = self._waiting_since or wall_now
-                if wall_now - self._waiting_since < WATCHDOG_WALL_S:
+                if wall_now - self._waiting_since < self.watchdog_s:
                     return
                 cmd = Velocity()  # stale command: brake, keep time flowing
             self._advance(self.control_dt, cmd)
         elif mode == "starting":
             return
         elif mode == "busy":
-            dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * BUSY_RATE - (self.now_s - self._sim_anchor)))
+            dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * self.busy_rate - (self.now_s - self._sim_anchor)))
             if dt > 0:
                 self._advance(dt, Velocity())
         else:
@@ -164,9 +168,16 @@ class SimRobotAgent(Agent):
                 self.skip_to(min(target, end_s, self.now_s + MAX_SKIP_S))
                 self.rec.event(f"idle: clock skipped to {self.now_s:.0f} s")
             else:
-                dt = (wall_now - self._wall_anchor) * self.rate - (self.now_s - self._sim_anchor)
+                # A mission is due and the executive is starting it: time runs as while agents plan.
+                rate = self.busy_rate if self._due_now() else self.rate
+                dt = (wall_now - self._wall_anchor) * rate - (self.now_s - self._sim_anchor)
                 if dt > 0:
                     self._advance(min(dt, 5.0), Velocity())
+
+    def _due_now(self) -> bool:
+        """A pending mission's time has come (the executive is about to start it)."""
+        return any(n.attrs.get("state") == "pending" and float(n.attrs.get("time_s", math.inf)) <= self.now_s
+                   for n in self.graph.nodes_of_type("mission"))
 
     def skip_to(self, t_s: float) -> None:
         """Jump the sim clock to ``t_s`` with the robot at rest, and carry out what is due by then

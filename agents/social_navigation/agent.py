@@ -34,7 +34,7 @@ from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupied
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.runtime.drawing.social_map import log_social_map
-from agents.world.navigation import PLANNING_MARGIN_M, NavigationMaps
+from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
@@ -99,7 +99,8 @@ class SocialNavigationAgent(Agent):
         robot = self.scene.robot
         # Plan with a clearance margin beyond the body: the controller cuts corners a little.
         margin = float(self.config.option("clearance_margin", str(PLANNING_MARGIN_M)))
-        self.maps = NavigationMaps.for_scene(self.scene, margin)
+        # The run's planner (-o planner=NAME, agents/lib/socialmap/planners.py): plan() and the maps use it.
+        self.maps = NavigationMaps.for_scene(self.scene, margin, self.config.option("planner", DEFAULT_PLANNER))
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
                                      max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
@@ -269,8 +270,8 @@ class SocialNavigationAgent(Agent):
         except PlanningError:
             return  # keep the current band; the goal may be momentarily blocked by a passer-by
         self.map = new_map
-        old_cost = path_cost(new_map.cost, new_map.spec, self._remaining_global(pose))
-        new_cost = path_cost(new_map.cost, new_map.spec, new_path.points_m)
+        old_cost = path_cost(new_map.planning_grid, new_map.spec, self._remaining_global(pose))
+        new_cost = path_cost(new_map.planning_grid, new_map.spec, new_path.points_m)
         self._maybe_log_map(now_s)
         if math.isinf(old_cost) or (old_cost > REPLAN_GAIN * new_cost and old_cost - new_cost > REPLAN_MIN_GAIN):
             why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"

@@ -18,7 +18,7 @@ from agents.world.vocabulary import (AGENDA, CLOCK, GROUND_TRUTH_PEOPLE, WORLD, 
 from scenes.geometry import Shape, shape_keys
 from scenes.model import RobotSpec, Scene, SceneObject
 
-R_EPSILON = 1e-3
+R_DECIMALS = 3   # R(t) as published: a finer change is not news, and live and offline round alike
 IDENTITY = {"x": 0.0, "y": 0.0, "theta": 0.0}
 
 
@@ -224,9 +224,11 @@ def write_activities(graph: Any, day_now: AgendaDay) -> bool:
 
 
 def object_r(day: AgendaDay, object_name: str, now_s: float, params: ChronemicsParams) -> tuple[float, int, bool]:
-    """(R, colour band, running) of one object at ``now_s``."""
+    """(R, colour band, running) of one object at ``now_s``; R rounded to ``R_DECIMALS`` so that
+    the agenda agent (which writes only changes) and the offline graph (written once) hold the
+    same value at any time."""
     own = [w for w in day.windows() if w.object == object_name]
-    r = r_of_t(now_s, own, params)
+    r = round(r_of_t(now_s, own, params), R_DECIMALS)
     return r, r_band(r, params), any(w.running_at(now_s) for w in own)
 
 
@@ -237,7 +239,7 @@ def write_object_r(graph: Any, day: AgendaDay, now_s: float, params: ChronemicsP
         for node in graph.nodes_of_type(NodeType.OBJECT):
             r, band, running = object_r(day, node.name, now_s, params)
             values[node.name] = r
-            if abs(float(node.attrs.get("R", -1.0)) - r) > R_EPSILON or node.attrs.get("active") != running \
+            if node.attrs.get("R") != r or node.attrs.get("active") != running \
                     or node.attrs.get("R_band") != band:
                 graph.update_node(node.id, attrs={"R": r, "R_band": band, "active": running})
     return values

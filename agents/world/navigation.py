@@ -14,7 +14,9 @@ from typing import Any
 
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall
-from agents.lib.socialmap.social_map import SocialMap, SocialMapParams, StaticMap, build_social_map, build_static_map
+from agents.lib.socialmap.planners import DEFAULT_PLANNER, check_planner
+from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMapParams, StaticMap, build_social_map,
+                                             build_static_map)
 from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_occupancy, scene_rooms, scene_walls
 from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
 from scenes.model import Scene
@@ -35,9 +37,14 @@ class NavigationMaps:
     _statics: dict[tuple[tuple[str, ...], tuple[str, ...]], StaticMap] = field(default_factory=dict, repr=False)
 
     @classmethod
-    def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M) -> NavigationMaps:
+    def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M,
+                  planner: str = DEFAULT_PLANNER) -> NavigationMaps:
+        """``planner`` (agents/lib/socialmap/planners.py) is the one navigation parameter a study
+        varies: maps built here plan with it by default (``plan(smap, ...)``) and judge paths on
+        its grid (``smap.planning_grid``); UnknownPlannerError names the choices."""
         robot = scene.robot
-        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m))
+        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m),
+                                 planner=PlannerParams(mode=check_planner(planner)))
         return cls(scene, params, CRUISE_FRACTION * robot.max_speed)
 
     def __post_init__(self) -> None:

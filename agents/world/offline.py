@@ -137,20 +137,20 @@ def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.
 
 
 def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal: tuple[float, float], *,
-                 baseline: bool = False, arrival_time: bool = True, method: str = "astar") -> dict[str, Any]:
-    """One plan plus its metrics, as a JSON-ready dict."""
+                 planner: str = "social", method: str = "astar") -> dict[str, Any]:
+    """One plan with ``planner`` (agents/lib/socialmap/planners.py) plus its metrics, as a JSON-ready dict."""
     maps = SceneMaps.load(scene)
     smap = maps.at(t_s)
     try:
-        path = plan(smap, start, goal, method=method, baseline=baseline, arrival_time=arrival_time,
-                    cruise_speed_mps=maps.cruise_speed)
+        path = plan(smap, start, goal, method=method, planner=planner, cruise_speed_mps=maps.cruise_speed)
     except PlanningError as exc:
         raise OfflineError(f"no path from ({start[0]:g}, {start[1]:g}) to ({goal[0]:g}, {goal[1]:g}) m at "
                            f"{format_clock(t_s)}: {exc}", no_path=True) from None
     points = np.vstack([path.points_m])
     report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
     return {
-        "scene": maps.world.scene.name, "t_s": t_s, "baseline": baseline, "arrival_time": arrival_time,
+        "scene": maps.world.scene.name, "t_s": t_s, "planner": planner, "baseline": planner == "baseline",
+        "arrival_time": planner == "social",
         "method": method, "cost": path.cost, "length_m": path.length_m, "expanded": path.expanded,
         "points": points.round(3).tolist(),
         "objects": {s.name: {"R": s.r, "band": s.band, "active": s.active} for s in smap.object_spaces},

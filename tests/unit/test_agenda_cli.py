@@ -27,6 +27,7 @@ from agents.agenda.agent import AgendaAgent
 from agents.runtime.config import AgentConfig
 from agents.runtime.recording import Recorder
 from agents.lib.agenda.chronemics import ChronemicsParams, r_of_t
+from agents.world.dsr_writers import R_DECIMALS
 from agents.lib.agenda.model import ActivityWindow
 from agents.world.dsr_writers import object_attrs
 from dsr import DSRGraph, ZenohSettings, join
@@ -44,8 +45,9 @@ _graph_numbers = itertools.count()
 
 
 def expected_r(start_s: float = START_S, end_s: float = END_S, now_s: float = NOW_S) -> float:
-    return r_of_t(now_s, [ActivityWindow(object="tv", start_s=start_s, end_s=end_s, cancelled=False)],
-                  ChronemicsParams())
+    """R(t) of the tv as the agenda agent publishes it (rounded to R_DECIMALS)."""
+    return round(r_of_t(now_s, [ActivityWindow(object="tv", start_s=start_s, end_s=end_s, cancelled=False)],
+                        ChronemicsParams()), R_DECIMALS)
 
 
 # ---------------------------------------------------------------------------------------------

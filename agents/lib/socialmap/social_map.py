@@ -4,7 +4,8 @@ and the tests.
     static = build_static_map(bounds, walls, rooms, params)          # once per building
     smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
     path = plan(smap, start_xy, goal_xy)                               # social, arrival-time R
-    base = plan(smap, start_xy, goal_xy, baseline=True)                # non-social baseline
+    base = plan(smap, start_xy, goal_xy, planner="baseline")           # non-social baseline
+                                     # (planners.py: social, departure, static, baseline, inflation)
     path = plan(smap, robot_xy, goal_xy, replanner=replanner)          # again, reusing earlier searches
 
 Layers (Nav2 style, composed by cell-wise maximum, grid.py):
@@ -46,6 +47,10 @@ forbidden_while_active (per object)            False       affordance IV-A ("can
 planner.cruise_speed_mps                       0.25 m/s    ours: mean speeds (d_t / tau) in seed
                                                            Tables 1-2 are 0.13-0.26 m/s
 planner.arrival_time                           True        ours (beyond the seeds; False = seed)
+planner.mode                                   social      planners.py (social, departure, static, baseline,
+                                                           inflation: one name per run)
+planner.inflation.cost_scaling_factor          3.0 /m      Nav2 nav2_params.yaml (planners.py)
+planner.inflation.inflation_radius_m           1.2 m       ours (planners.py; Nav2's default is 0.55 m)
 planner.time_step_s                            1 s         ours (R changes over minutes)
 planner.horizon_factor                         3           ours: arrival table covers 3 (width + height)
 search: 8-connected, step L (c_a + c_b) / 2    -           /work/shared/notes/planner.md (seed: Dijkstra,
@@ -95,6 +100,8 @@ from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, pred
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
+from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, cheapest_cell,
+                                           planning_grid, resolve_planner)
 from agents.lib.socialmap.roles import RoleParams, role_scale
 from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
@@ -118,6 +125,8 @@ class PlannerParams(BaseModel):
     arrival_time: bool = Field(True, description="R at arrival time (False: at departure, as the seeds)")
     time_step_s: float = Field(1.0, gt=0, description="time resolution of the arrival-time table")
     horizon_factor: float = Field(3.0, gt=0, description="table covers trips up to this x (width + height)")
+    mode: PlannerName = Field(DEFAULT_PLANNER, description="which planner plan() uses by default (planners.py)")
+    inflation: InflationParams = InflationParams()
 
 
 class SocialMapParams(BaseModel):
@@ -219,6 +228,12 @@ class SocialMap:
             self._cache["cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
                                                         *self.prediction_patches, *self.interaction_patches))
         return self._cache["cost"]
+
+    @property
+    def planning_grid(self) -> CostArray:
+        """The grid of this map's planner (``params.planner.mode``) at ``t_s``: what a current path
+        is judged on (for ``social`` the departure-time grid, as ``cost``)."""
+        return planning_grid(self, self.params.planner.mode)
 
     def zones(self) -> list[GroupZones]:
         """Zone polygons per group (contoured on first use, then cached)."""
@@ -379,27 +394,29 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
 
 
 def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,
-         method: str = "astar", baseline: bool = False, arrival_time: bool | None = None,
-         cruise_speed_mps: float | None = None, workspace: SearchWorkspace | None = None,
-         replanner: Replanner | None = None) -> Path:
-    """Plan on the social map (A* or Dijkstra).
+         method: str = "astar", planner: str | None = None, baseline: bool = False,
+         arrival_time: bool | None = None, cruise_speed_mps: float | None = None,
+         workspace: SearchWorkspace | None = None, replanner: Replanner | None = None) -> Path:
+    """Plan on the social map (A* or Dijkstra) with one of the planners of planners.py.
 
-    ``baseline=True`` plans on the physical grid (walls, bodies, footprints; no social cost).
-    ``arrival_time`` (default from params) prices each interaction space at the time the robot
-    would reach it at ``cruise_speed_mps``; False prices it at the map's time (the seeds).
+    ``planner`` defaults to ``params.planner.mode`` (``departure`` when ``params.planner.arrival_time``
+    is False).  ``baseline=True`` (the physical grid: walls, bodies, footprints) and
+    ``arrival_time=False`` (R at the map's time, the seeds) are the older spellings of the
+    ``baseline`` and ``departure`` planners.  ``social`` prices each interaction space at the time
+    the robot would reach it at ``cruise_speed_mps``.
     Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py), or the
     same ``replanner`` to repeated A* plans to one goal on successive maps to reuse what the earlier
     searches learned (replan.py: same optimal costs, far fewer cells expanded; keep one replanner
-    per kind of plan, social or baseline)."""
-    planner = social_map.params.planner
-    if arrival_time is None:
-        arrival_time = planner.arrival_time
-    speed = planner.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
+    per planner)."""
+    params = social_map.params.planner
+    default = params.mode if params.arrival_time or params.mode != "social" else "departure"
+    name = resolve_planner(planner, baseline=baseline, arrival_time=arrival_time, default=default)
+    speed = params.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
     if not speed > 0.0:
         raise ValueError(f"cruise speed must be > 0, got {speed}")
     try:
-        return _plan(social_map, start_xy, goal_xy, method=method, baseline=baseline, arrival_time=arrival_time,
-                     speed=speed, workspace=workspace, replanner=replanner)
+        return _plan(social_map, start_xy, goal_xy, method=method, planner=name, speed=speed, workspace=workspace,
+                     replanner=replanner)
     except (StartOccupied, GoalOccupied) as exc:
         xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
         raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
@@ -428,16 +445,10 @@ def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
 
 
 def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *, method: str,
-          baseline: bool, arrival_time: bool, speed: float, workspace: SearchWorkspace | None,
-          replanner: Replanner | None) -> Path:
-    grid_params = social_map.params.grid
-    if baseline:
-        return plan_on_grid(social_map.physical, social_map.spec, start_xy, goal_xy, method=method,
-                            c_min=grid_params.free_cost, workspace=workspace, searcher=replanner)
+          planner: str, speed: float, workspace: SearchWorkspace | None, replanner: Replanner | None) -> Path:
     # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
-    c_min = min(grid_params.free_cost, grid_params.social_cost, grid_params.personal_cost,
-                social_map.params.chronemics.r_min)
-    costs = social_map.time_costs(speed) if arrival_time else None
-    grid = social_map.cost if costs is None else costs
+    c_min = cheapest_cell(social_map, planner)
+    costs = social_map.time_costs(speed) if planner == "social" else None
+    grid = planning_grid(social_map, planner) if costs is None else costs
     return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace,
                         searcher=replanner)

@@ -1,0 +1,139 @@
+"""Issue 16 acceptance on the tiny scene: `chronav evaluate` launches real runs (two planners, one
+seed) on this machine and the same pair on a Dask LocalCluster of 2 workers; the report's tables are
+`chronav metrics` on the runs' trajectories, and two runs with one seed agree within 1 %.
+
+Four launches in all (both sweeps at once, each two at a time), shared by every test of the module.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import hashlib
+import json
+import math
+import re
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from agents.lib.socialmap.metrics import read_trajectory_csv
+from tests.support import REPO_ROOT, ProcessGroup
+from tools.cli import app
+from tools.evaluate_report import format_value
+from tools.evaluate_table import META_COLUMNS, flatten_metrics, read_table
+
+pytestmark = pytest.mark.slow
+
+TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
+PLANNERS = "social,baseline"
+
+
+def _start(group: ProcessGroup, out: Path, *extra: str) -> tuple[subprocess.Popen[bytes], Path]:
+    """`chronav evaluate TINY ... --json` as a user runs it, in the background."""
+    log = out.parent / f"{out.name}.log"
+    proc = group.spawn(["-m", "tools.cli", "evaluate", str(TINY), "--planners", PLANNERS, "--seeds", "1",
+                        "--out", str(out), "--timeout", "300", "--json", *extra], env={"RERUN": "on"}, log_path=log)
+    return proc, log
+
+
+def _result(proc: subprocess.Popen[bytes], log: Path, timeout_s: float = 900) -> dict[str, Any]:
+    """Its JSON plus the exit code."""
+    try:
+        proc.wait(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"chronav evaluate did not finish; log:\n{log.read_text()[-3000:]}")
+    text = log.read_text()
+    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
+    assert line is not None, f"no JSON result; log:\n{text[-3000:]}"
+    return {**json.loads(line), "returncode": proc.returncode}
+
+
+@pytest.fixture(scope="module")
+def sweeps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
+    """Both sweeps at once (4 launches, 2 by 2): the same pair here and on the cluster."""
+    from distributed import LocalCluster
+
+    base = tmp_path_factory.mktemp("evaluate")
+    group = ProcessGroup()
+    try:
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:
+            local = _start(group, base / "local", "--jobs", "2")
+            dask = _start(group, base / "dask", "--executor", f"dask://{cluster.scheduler_address.removeprefix('tcp://')}")
+            return {"local": _result(*local), "dask": _result(*dask)}
+    finally:
+        group.close()
+
+
+def _key(row: dict[str, Any]) -> tuple:
+    return row["scene"], row["planner"], row["seed"], row["mission"]
+
+
+def test_both_executors_run_every_combination(sweeps: dict[str, dict[str, Any]]) -> None:
+    for name, sweep in sweeps.items():
+        assert sweep["returncode"] == 0, (name, sweep)
+        assert (sweep["runs"], sweep["launched"], sweep["ok"], sweep["pending"]) == (2, 2, 2, 0), sweep
+        rows = read_table(Path(sweep["table"]["parquet"]))
+        assert sorted(r["planner"] for r in rows) == ["baseline", "social"]
+        for row in rows:
+            assert row["state"] == "done" and Path(row["rrd"]).stat().st_size > 0, row
+            assert json.loads((Path(row["run_dir"]) / "evaluate.json").read_text())["planner"] == row["planner"]
+        with open(sweep["table"]["csv"], newline="") as handle:
+            assert len(list(csv.DictReader(handle))) == len(rows)
+
+
+def test_table_and_report_are_chronav_metrics_of_the_runs(sweeps: dict[str, dict[str, Any]], tmp_path: Path) -> None:
+    sweep = sweeps["local"]
+    rows = read_table(Path(sweep["table"]["parquet"]))
+    summary = {(r["planner"], r["metric"]): float(r["mean"])
+               for r in csv.DictReader(open(Path(sweep["out"]) / "summary.csv", newline=""))}
+    report = Path(sweep["report"]).read_text()
+    for row in rows:
+        # Cut the mission out of the run's trajectory ourselves, from the launcher's result.json.
+        mission = json.loads((Path(row["run_dir"]) / "result.json").read_text())["missions"][row["mission"]]
+        trajectory = read_trajectory_csv(Path(row["run_dir"]) / "trajectory.csv")
+        inside = (trajectory[:, 0] >= mission["started_s"] - 1e-6) & (trajectory[:, 0] <= mission["finished_s"] + 1e-6)
+        own = tmp_path / f"{row['planner']}.csv"
+        np.savetxt(own, trajectory[inside], delimiter=",", header="t,x,y,theta", comments="", fmt="%.17g")
+        result = CliRunner().invoke(app, ["metrics", str(TINY), str(own), "--json"])
+        assert result.exit_code == 0, result.output
+        expected = flatten_metrics(json.loads(result.stdout)["metrics"])
+        measured = {k: v for k, v in row.items() if k not in META_COLUMNS}
+        assert set(measured) == set(expected)
+        for metric, value in expected.items():
+            assert measured[metric] == pytest.approx(value, rel=1e-9, abs=1e-12), metric
+            assert summary[(row["planner"], metric)] == pytest.approx(value, rel=1e-9, abs=1e-12), metric
+            assert f"<td>{format_value(value)} (n=1)</td>" in report, (row["planner"], metric)
+
+
+def test_two_runs_with_one_seed_agree_within_one_percent(sweeps: dict[str, dict[str, Any]]) -> None:
+    local = {_key(r): r for r in read_table(Path(sweeps["local"]["table"]["parquet"]))}
+    remote = {_key(r): r for r in read_table(Path(sweeps["dask"]["table"]["parquet"]))}
+    assert local.keys() == remote.keys()
+    for key, row in local.items():
+        other = remote[key]
+        assert row["run_dir"] != other["run_dir"]
+        for metric, value in row.items():
+            if metric in META_COLUMNS:
+                continue
+            assert math.isclose(value, other[metric], rel_tol=0.01, abs_tol=1e-9), (key, metric, value, other[metric])
+
+
+def test_report_is_one_self_contained_file_that_says_what_ran(sweeps: dict[str, dict[str, Any]]) -> None:
+    sweep = sweeps["local"]
+    out, report = Path(sweep["out"]), Path(sweep["report"]).read_text()
+    assert not re.search(r'<img[^>]+src="(?!data:image/png;base64,)', report), "every image is embedded"
+    embedded = re.findall(r'src="data:image/png;base64,([^"]+)"', report)
+    pngs = sorted(out.glob("*.png"))
+    assert {p.name for p in pngs} >= {"paths_eval_tiny_cross.png", "r_of_t_eval_tiny.png",
+                                      "box_distance_travelled_m.png"}
+    assert {base64.b64decode(e) for e in embedded} >= {p.read_bytes() for p in pngs}
+    assert hashlib.sha256(TINY.read_bytes()).hexdigest() in report
+    assert "chronav 0." in report and "<td>seeds</td><td>1</td>" in report
+    assert "Wilcoxon" in report and ".rrd" in report
+

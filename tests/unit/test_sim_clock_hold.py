@@ -1,0 +1,48 @@
+"""The simulator's `busy_rate=0` (what `chronav evaluate` passes): sim time waits while the agents
+plan and while a due mission is being started, instead of running on with the wall clock."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from agents.runtime.config import AgentConfig
+from agents.runtime.recording import Recorder
+from agents.sim_robot.agent import SimRobotAgent
+from dsr import DSRGraph
+from scenes.loader import SCENES_DIR
+
+SCENE = SCENES_DIR / "icra_usecase.yaml"
+
+
+def _sim(tmp_path: Path, **options: str) -> tuple[DSRGraph, SimRobotAgent]:
+    tmp_path.mkdir(parents=True)
+    graph = DSRGraph(agent="test")
+    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path, options=options))
+    sim.setup(graph, Recorder("sim_robot", None, None))
+    return graph, sim
+
+
+def _run(sim: SimRobotAgent, wall_s: float) -> float:
+    before = sim.now_s
+    deadline = time.monotonic() + wall_s
+    while time.monotonic() < deadline:
+        sim.step()
+        time.sleep(0.01)
+    return sim.now_s - before
+
+
+@pytest.mark.parametrize("situation", ["planning", "mission due"])
+def test_busy_rate_zero_holds_the_clock(tmp_path: Path, situation: str) -> None:
+    runs = {}
+    for rate in ("0", "1"):
+        graph, sim = _sim(tmp_path / f"{situation}-{rate}", busy_rate=rate)
+        if situation == "planning":   # an intention is active but nothing drives yet
+            graph.insert_node(type="intention", name="intention/m/0", attrs={"state": "active", "kind": "navigate"})
+        else:                         # the mission's time has come; the executive has not started it
+            graph.insert_node(type="mission", name="mission/m", attrs={"state": "pending", "time_s": sim.now_s})
+        runs[rate] = _run(sim, 0.4)
+    assert runs["0"] == 0.0
+    assert runs["1"] > 0.1

@@ -1,0 +1,280 @@
+"""`chronav evaluate SCENE...`: a reproducible study of planners across scenes and seeds.
+
+Why a command and not a script: researchers compare planners on the same scenes with many seeds;
+the study must be one line to run again, give the same numbers (a seed fixes the simulated world,
+the clock runs in lockstep with the controller), and say what produced it.  The pieces:
+
+- tools/evaluate_sweep.py: scene x planner x seed runs, each a full isolated launch, on this machine
+  (``--jobs J``) or a Dask cluster (``--executor dask://HOST:PORT``), with a ledger for ``--resume``;
+- tools/evaluate_table.py: one row per mission with every metric of ``chronav metrics``;
+- tools/evaluate_stats.py, evaluate_figures.py, evaluate_report.py: tables, tests, plots, report.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shlex
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import typer
+
+SWEEP_FILE = "sweep.json"
+
+
+class EvaluateError(Exception):
+    """A study that cannot start as asked; the message says what to change."""
+
+
+def _check_extras() -> None:
+    """matplotlib and pyarrow come with chronav's `eval` extra: say so before launching anything."""
+    import importlib.util
+
+    missing = [name for name in ("matplotlib", "pyarrow") if importlib.util.find_spec(name) is None]
+    if missing:
+        raise EvaluateError(f"chronav evaluate needs {' and '.join(missing)}: install chronav's eval extra "
+                            "(pip install -e '.[eval]', which make test and make demo do)")
+
+
+def parse_planners(text: str | None) -> list[str]:
+    from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, check_planner
+
+    if text is None:
+        return list(PLANNERS)
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names:
+        raise EvaluateError("--planners: name at least one planner, e.g. social,baseline")
+    if len(set(names)) != len(names):
+        raise EvaluateError(f"--planners {text}: a planner is named twice")
+    try:
+        return [check_planner(name) for name in names]
+    except UnknownPlannerError as exc:
+        raise EvaluateError(f"--planners: {exc}") from None
+
+
+def resolve_scenes(names: list[str]) -> list[Path]:
+    """Each scene's file, loaded once to fail early with the file, line and key of an error."""
+    from agents.world.scene_world import load_world
+    from scenes.yamlio import SourceError
+
+    paths = []
+    for name in names:
+        try:
+            paths.append(load_world(name).path.resolve())
+        except SourceError as exc:
+            raise EvaluateError(str(exc)) from None
+    stems = [p.stem for p in paths]
+    if len(set(stems)) != len(stems):
+        raise EvaluateError("two scenes share a file name (" + ", ".join(sorted({s for s in stems if stems.count(s) > 1}))
+                            + "); the table names scenes by file name: rename one")
+    return paths
+
+
+def prepare_out_dir(out: Path | None, resume: bool) -> Path:
+    from tools.evaluate_sweep import LEDGER
+
+    if out is None:
+        if resume:
+            raise EvaluateError("--resume continues the sweep in --out DIR: give that directory")
+        out = Path.cwd() / "evaluations" / datetime.now().strftime("%Y%m%d-%H%M%S")
+    out = out.absolute()
+    if (out / LEDGER).exists() and not resume:
+        raise EvaluateError(f"{out} already holds a sweep ({LEDGER}); continue it with --resume, or choose "
+                            "another --out")
+    if resume and not (out / LEDGER).exists():
+        raise EvaluateError(f"--resume: {out} holds no sweep to continue (no {LEDGER}); run without --resume")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise EvaluateError(f"cannot create {out}: {exc.strerror}; choose another --out") from None
+    return out
+
+
+def run_sweep(specs: list[Any], executor: Any, out_dir: Path, timeout_s: float,
+              on_result: Any = None) -> tuple[list[dict[str, Any]], bool]:
+    """Run ``specs`` on ``executor``; each result goes to the ledger as it arrives.  Returns the
+    results and whether the sweep was interrupted (Ctrl-C: the runs under way are stopped)."""
+    from tools.evaluate_sweep import append_ledger
+
+    results: list[dict[str, Any]] = []
+    stream = executor.results(specs, out_dir / "runs", timeout_s)
+    try:
+        for result in stream:
+            if not result.get("interrupted"):
+                append_ledger(out_dir, result)
+            results.append(result)
+            if on_result is not None:
+                on_result(result)
+    except KeyboardInterrupt:
+        executor.interrupt()
+        stream.close()
+        return results, True
+    return results, any(r.get("interrupted") for r in results)
+
+
+class _Progress:
+    """A rich progress bar with ETA on a terminal; one plain line per finished run otherwise."""
+
+    def __init__(self, total: int, quiet: bool) -> None:
+        from rich.console import Console
+
+        self.total, self.done, self.started = total, 0, time.monotonic()
+        self.console = Console(stderr=True)
+        self.bar = None
+        if not quiet and sys.stderr.isatty():
+            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,
+                                       TimeRemainingColumn)
+
+            self.bar = Progress(TextColumn("[bold]evaluate[/bold] {task.description}"), BarColumn(),
+                                MofNCompleteColumn(), TextColumn("elapsed"), TimeElapsedColumn(),
+                                TextColumn("ETA"), TimeRemainingColumn(), console=self.console)
+            self.task = self.bar.add_task("starting", total=total)
+        self.quiet = quiet
+
+    def __enter__(self) -> _Progress:
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+    def advance(self, result: dict[str, Any]) -> None:
+        from tools.evaluate_sweep import RunSpec
+
+        self.done += 1
+        spec = RunSpec.from_dict(result["spec"])
+        what = f"{spec.label}: {result.get('outcome')} ({float(result.get('wall_s', 0.0)):.0f} s)"
+        if self.bar is not None:
+            self.bar.update(self.task, advance=1, description=what)
+            return
+        if self.quiet:
+            return
+        elapsed = time.monotonic() - self.started
+        eta = elapsed / self.done * (self.total - self.done)
+        self.console.print(f"[evaluate] {self.done}/{self.total} {what}; elapsed {elapsed / 60:.1f} min, "
+                           f"ETA {eta / 60:.1f} min", highlight=False, markup=False, soft_wrap=True)
+
+
+def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int, out: Path | None,
+             executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str) -> dict[str, Any]:
+    """The whole study; returns what ``--json`` prints."""
+    from tools.evaluate_figures import all_figures
+    from tools.evaluate_report import provenance, write_report
+    from tools.evaluate_sweep import RunSpec, finished, parse_executor, plan_sweep, read_ledger
+    from tools.evaluate_table import write_table
+    from tools.launch import check_timeout, LaunchError
+
+    _check_extras()
+    chosen = parse_planners(planners)
+    if seeds < 1:
+        raise EvaluateError("--seeds: give at least 1")
+    try:
+        check_timeout(timeout_s)
+    except LaunchError as exc:
+        raise EvaluateError(str(exc)) from None
+    scene_paths = resolve_scenes(scenes)
+    out_dir = prepare_out_dir(out, resume)
+    seed_list = list(range(first_seed, first_seed + seeds))
+    specs = plan_sweep(scene_paths, chosen, seed_list)
+    try:
+        executor = parse_executor(executor_text, jobs)
+    except ValueError as exc:
+        raise EvaluateError(str(exc)) from None
+    prov = provenance(scene_paths, chosen, seed_list, executor_text, jobs, command)
+    (out_dir / SWEEP_FILE).write_text(json.dumps({**prov, "runs": [s.to_dict() for s in specs]}, indent=2))
+    earlier = read_ledger(out_dir) if resume else {}
+    todo = [s for s in specs if s.key not in earlier]
+    started = time.monotonic()
+    try:
+        with _Progress(len(todo), quiet) as progress:
+            new, interrupted = run_sweep(todo, executor, out_dir, timeout_s, on_result=progress.advance)
+    finally:
+        close = getattr(executor, "close", None)
+        if close is not None:
+            close()
+    sweep_wall_s = time.monotonic() - started
+    wanted = {s.key for s in specs}
+    runs = {key: r for key, r in earlier.items() if key in wanted}
+    for result in new:
+        if finished(result) or result["key"] not in runs:
+            runs[result["key"]] = result
+    ordered = [runs[s.key] for s in specs if s.key in runs]
+    rows = [row for run in ordered if finished(run) for row in run["rows"]]
+    pending = sum(1 for s in specs if s.key not in runs or not finished(runs[s.key]))
+    parquet, csv = write_table(rows, out_dir)
+    from agents.world.offline import SceneMaps
+
+    maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
+    figures = all_figures(rows, maps, out_dir, chosen)
+    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
+    launched = [r for r in new if not r.get("interrupted")]
+    failed = [{"run": RunSpec.from_dict(r["spec"]).label, "outcome": r.get("outcome"), "error": r.get("error")}
+              for r in ordered if not r.get("ok")]
+    return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
+            "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
+            "ok": sum(1 for r in ordered if r.get("ok")), "failed": failed, "pending": pending,
+            "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
+            "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
+            "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("evaluate")
+    def evaluate_command(
+            scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
+            planners: str = typer.Option(None, "--planners", show_default=False,
+                                         help="comma-separated, of social, departure, static, baseline, inflation "
+                                              "(default: all of them)"),
+            seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
+            first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
+            jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="runs at once on this machine (--executor local)"),
+            out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
+            executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
+            resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
+            timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
+            as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+        """Run every SCENE x planner x seed as a full launch, then write the table and DIR/report.html.
+
+        Each run is isolated (own router, credentials and run directory under DIR/runs). Exit 0 when
+        every run completed every mission, 1 when some did not (the report says which), 2 on bad
+        input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
+        from rich.console import Console
+
+        err = Console(stderr=True)
+        command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+        try:
+            summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
+                               executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
+                               command=command)
+        except EvaluateError as exc:
+            err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+            raise typer.Exit(2) from None
+        if as_json:
+            typer.echo(json.dumps(summary))
+        else:
+            _print_summary(summary, Console())
+        if summary["interrupted"]:
+            raise typer.Exit(130)
+        raise typer.Exit(0 if not summary["failed"] and not summary["pending"] else 1)
+
+
+def _print_summary(summary: dict[str, Any], out: Any) -> None:
+    line = {"highlight": False, "markup": False, "soft_wrap": True}
+    for failure in summary["failed"]:
+        out.print(f"not ok: {failure['run']}: {failure['outcome']}"
+                  + (f" ({failure['error']})" if failure.get("error") else ""), **line)
+    out.print(f"table: {summary['table']['parquet']} (and .csv)", **line)
+    out.print(f"report: {summary['report']}", **line)
+    rate = summary.get("runs_per_min")
+    speed = f", {rate:.2f} runs/min" if rate is not None and math.isfinite(rate) else ""
+    state = "INTERRUPTED" if summary["interrupted"] else "done"
+    out.print(f"{state}: {summary['ok']}/{summary['runs']} runs completed every mission "
+              f"({summary['launched']} launched, {summary['resumed']} resumed{speed})"
+              + (f"; {summary['pending']} to run: add --resume --out {summary['out']}" if summary["pending"] else ""),
+              **line)

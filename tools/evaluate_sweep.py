@@ -1,0 +1,328 @@
+"""A sweep: every scene x planner x seed as one isolated run of the whole system, locally or on Dask.
+
+Why each run is its own ``python -m tools.evaluate_sweep`` process: a run is a full ``chronav
+launch`` (router on a free port, the run's own credentials and run directory, six agents as
+processes; tools/launch.run_system), and the launcher installs signal handlers, which Python
+allows only in a main thread.  The local pool and Dask both run tasks in threads, so each task
+starts one such process and waits for it; runs share nothing but the machine.
+
+The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/socialmap/planners.py).  The
+seed goes to every agent as ``-o seed=N``: each agent that draws random numbers (today the human
+observer's sensor noise; the people simulation of issue 15 next) seeds its generator with it, so
+one seed is one simulated world.  The simulator gets ``-o busy_rate=0``: its clock waits while the
+executive and the navigation plan instead of running on in real time, and ``watchdog_s=30``: a
+command that comes late (a slow replan on a loaded machine) is waited for instead of braking after
+one wall second, so sim times (when the robot leaves, what R and the people are then) and the
+driven path do not depend on how loaded the machine is.
+
+Finished runs are appended to ``DIR/runs.jsonl`` as they end (one JSON object per run with its
+table rows); ``--resume`` skips the runs found there, so an interrupted sweep continues where it
+stopped.  A run counts as finished unless it was interrupted or could not run at all (its
+missions may still have failed: that is a result).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import uuid
+from collections.abc import Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+LEDGER = "runs.jsonl"
+WORKER_LOGS = "worker-logs"
+#: wall seconds the simulator waits for a late velocity command before braking (default 1 s)
+LOCKSTEP_WATCHDOG_S = 30.0
+#: wall seconds a run may take beyond its --timeout (stopping agents, merging the recording)
+CLEANUP_GRACE_S = 180.0
+
+
+@dataclass(frozen=True, order=True)
+class RunSpec:
+    """One run of a sweep: a scene file, a planner and a seed."""
+
+    scene: str     # absolute path of the scene file
+    planner: str
+    seed: int
+
+    @property
+    def key(self) -> str:
+        return f"{self.scene}|{self.planner}|{self.seed}"
+
+    @property
+    def label(self) -> str:
+        return f"{Path(self.scene).stem}/{self.planner}/seed {self.seed}"
+
+    @property
+    def slug(self) -> str:
+        return f"{Path(self.scene).stem}-{self.planner}-s{self.seed}"
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RunSpec:
+        return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]))
+
+
+def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int]) -> list[RunSpec]:
+    """Every combination, seed by seed: a sweep stopped half way already holds whole seeds."""
+    return [RunSpec(str(scene), planner, seed) for seed in seeds for scene in scenes for planner in planners]
+
+
+def agent_options(spec: RunSpec) -> dict[str, list[str]]:
+    """``-o`` options of each agent for one run: the seed for all, the planner for the navigation."""
+    from tools.launch import AGENTS
+
+    options = {name: [f"seed={spec.seed}"] for name in AGENTS}
+    options["social_navigation"].append(f"planner={spec.planner}")
+    # Lockstep without wall-clock escapes: sim time waits while the agents plan, and a late command
+    # (a slow replan on a loaded machine) is waited for instead of braking after 1 wall second.
+    options["sim_robot"] += ["busy_rate=0", f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]
+    return options
+
+
+# ---------------------------------------------------------------------------------------------
+# One run (inside its own process).
+# ---------------------------------------------------------------------------------------------
+
+def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float) -> dict[str, Any]:
+    """Launch the system for ``spec`` (headless, recorded) and measure its missions."""
+    from tools.console import outcome
+    from tools.evaluate_table import mission_rows
+    from tools.launch import run_system
+
+    result = run_system(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=True,
+                        agent_options=agent_options(spec), metrics_report=False)
+    rrd = str(result.rrd_path) if result.rrd_path else None
+    host = socket.gethostname()
+    (result.run_dir / "evaluate.json").write_text(json.dumps({**spec.to_dict(), "host": host}))
+    rows = [] if result.interrupted else mission_rows(
+        scene=spec.scene, planner=spec.planner, seed=spec.seed, run_dir=result.run_dir, rrd=rrd,
+        missions=result.missions, host=host, run_wall_s=result.wall_s)
+    return {"key": spec.key, "spec": spec.to_dict(), "ok": result.ok, "outcome": outcome(result),
+            "error": result.error, "interrupted": result.interrupted, "run_dir": str(result.run_dir), "rrd": rrd,
+            "host": host, "wall_s": result.wall_s, "rows": rows}
+
+
+def failed_result(spec: RunSpec, message: str, *, interrupted: bool = False) -> dict[str, Any]:
+    """The result of a run that could not run (or was cut short): no rows, not finished."""
+    return {"key": spec.key, "spec": spec.to_dict(), "ok": False, "outcome": "interrupted" if interrupted else "error",
+            "error": message, "interrupted": interrupted, "run_dir": None, "rrd": None,
+            "host": socket.gethostname(), "wall_s": 0.0, "rows": []}
+
+
+def finished(result: dict[str, Any]) -> bool:
+    """A run that counts (its missions may have failed), as opposed to one to run again."""
+    return not result.get("interrupted") and result.get("error") is None and result.get("run_dir") is not None
+
+
+def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
+                 live: set[subprocess.Popen[bytes]] | None = None) -> dict[str, Any]:
+    """One run in its own process (its own session), waited for; the task body of every executor.
+
+    ``live`` (local executor) collects the running processes so that Ctrl-C can be passed on."""
+    spec = RunSpec.from_dict(spec_data)
+    logs = Path(runs_dir) / WORKER_LOGS
+    logs.mkdir(parents=True, exist_ok=True)
+    stem = f"{spec.slug}-{uuid.uuid4().hex[:8]}"
+    result_file, log_file = logs / f"{stem}.json", logs / f"{stem}.log"
+    args = [sys.executable, "-m", "tools.evaluate_sweep", "--spec", json.dumps(spec.to_dict()),
+            "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file)]
+    with log_file.open("wb") as log:
+        # Always recorded (RERUN=on whatever the worker's environment says): the report links each run.
+        proc = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                                env={**os.environ, "RERUN": "on"})
+        if live is not None:
+            live.add(proc)
+        try:
+            proc.wait(timeout=timeout_s + CLEANUP_GRACE_S)
+        except subprocess.TimeoutExpired:
+            _kill_group(proc)
+            return failed_result(spec, f"the run did not end within {timeout_s + CLEANUP_GRACE_S:.0f} s; "
+                                       f"log: {log_file}")
+        finally:
+            if live is not None:
+                live.discard(proc)
+    try:
+        return json.loads(result_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        lines = log_file.read_text(encoding="utf-8", errors="replace").strip().splitlines()
+        last = lines[-1] if lines else "no output"
+        return failed_result(spec, f"the run's process ended (exit {proc.returncode}) without a result: {last} "
+                                   f"(log: {log_file})", interrupted=proc.returncode in (130, -2))
+
+
+def _kill_group(proc: subprocess.Popen[bytes]) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=60)
+    except (ProcessLookupError, subprocess.TimeoutExpired):
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
+
+
+# ---------------------------------------------------------------------------------------------
+# Executors: where the runs happen.
+# ---------------------------------------------------------------------------------------------
+
+class Executor(Protocol):
+    def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
+        """Run every spec; yield each result as its run ends (any order)."""
+
+    def interrupt(self) -> None:
+        """Stop the runs under way (Ctrl-C): they end cleanly and are not recorded."""
+
+
+class LocalExecutor:
+    """``jobs`` runs at once on this machine."""
+
+    def __init__(self, jobs: int) -> None:
+        self.jobs = jobs
+        self._live: set[subprocess.Popen[bytes]] = set()
+        self._stop = threading.Event()
+
+    def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
+        pending = list(specs)
+        with ThreadPoolExecutor(max_workers=self.jobs, thread_name_prefix="evaluate") as pool:
+            running: set[Future[dict[str, Any]]] = set()
+            try:
+                while pending or running:
+                    while pending and len(running) < self.jobs and not self._stop.is_set():
+                        spec = pending.pop(0)
+                        running.add(pool.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, self._live))
+                    if not running:
+                        return
+                    done, running = wait(running, return_when=FIRST_COMPLETED)
+                    for future in done:
+                        yield future.result()
+            except KeyboardInterrupt:
+                self.interrupt()     # before the pool waits for its threads: their runs must stop
+                raise
+
+    def interrupt(self) -> None:
+        self._stop.set()
+        for proc in list(self._live):
+            try:
+                os.killpg(proc.pid, signal.SIGINT)    # the launcher stops its agents and merges
+            except ProcessLookupError:
+                pass
+
+
+class DaskExecutor:
+    """Each run a task on an existing Dask cluster (``dask://HOST:PORT``, the scheduler's address).
+
+    A task launches one run on its worker (under ``runs_dir`` on that machine) and returns the
+    run's table rows and recording path; workers need chronav installed, nothing shared."""
+
+    def __init__(self, address: str) -> None:
+        from distributed import Client
+
+        self.address = address
+        self.client = Client(address, timeout="20s")
+        self._futures: list[Any] = []
+
+    def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
+        from distributed import as_completed
+
+        sweep = uuid.uuid4().hex[:8]
+        by_key = {}
+        for index, spec in enumerate(specs):
+            future = self.client.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, pure=False,
+                                        key=f"chronav-evaluate-{sweep}-{index}-{spec.slug}")
+            by_key[future.key] = spec
+            self._futures.append(future)
+        for future in as_completed(self._futures):
+            spec = by_key[future.key]
+            try:
+                yield future.result()
+            except Exception as exc:  # noqa: BLE001 - a worker lost or a task error: report, go on
+                yield failed_result(spec, f"the Dask task failed: {type(exc).__name__}: {exc}")
+
+    def interrupt(self) -> None:
+        self.client.cancel(self._futures)
+
+    def close(self) -> None:
+        self.client.close()
+
+
+def parse_executor(text: str, jobs: int) -> LocalExecutor | DaskExecutor:
+    """``local`` or ``dask://HOST:PORT``; ValueError in the user's words otherwise."""
+    if text == "local":
+        return LocalExecutor(jobs)
+    if text.startswith("dask://"):
+        address = text.removeprefix("dask://")
+        host, sep, port = address.rpartition(":")
+        if not sep or not host or not port.isdigit():
+            raise ValueError(f"--executor {text}: expected dask://HOST:PORT, the address of a Dask scheduler")
+        try:
+            return DaskExecutor(f"tcp://{host}:{port}")
+        except ImportError:
+            raise ValueError("--executor dask://...: Dask is not installed; install chronav's `eval` extra "
+                             "(pip install 'chronav[eval]')") from None
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"--executor {text}: cannot reach a Dask scheduler there ({exc}); start one "
+                             "(`dask scheduler`, then `dask worker HOST:PORT` on each machine)") from None
+    raise ValueError(f"--executor {text}: use local or dask://HOST:PORT")
+
+
+# ---------------------------------------------------------------------------------------------
+# The ledger of finished runs (resume).
+# ---------------------------------------------------------------------------------------------
+
+def read_ledger(out_dir: Path) -> dict[str, dict[str, Any]]:
+    """Finished runs recorded under ``out_dir`` by key (a torn last line is ignored)."""
+    path = out_dir / LEDGER
+    found: dict[str, dict[str, Any]] = {}
+    if not path.exists():
+        return found
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            result = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(result, dict) and finished(result):
+            found[str(result["key"])] = result
+    return found
+
+
+def append_ledger(out_dir: Path, result: dict[str, Any]) -> None:
+    with (out_dir / LEDGER).open("a", encoding="utf-8") as handle:
+        handle.write(json.dumps(result) + "\n")
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tools.evaluate_sweep --spec JSON ...``: one run, its result as a JSON file."""
+    parser = argparse.ArgumentParser(prog="python -m tools.evaluate_sweep")
+    parser.add_argument("--spec", required=True)
+    parser.add_argument("--runs-dir", required=True, type=Path)
+    parser.add_argument("--timeout", required=True, type=float)
+    parser.add_argument("--result", required=True, type=Path)
+    args = parser.parse_args(argv)
+    spec = RunSpec.from_dict(json.loads(args.spec))
+    started = time.monotonic()
+    result = execute_run(spec, args.runs_dir, args.timeout)
+    result["task_wall_s"] = time.monotonic() - started
+    tmp = args.result.with_suffix(".tmp")
+    tmp.write_text(json.dumps(result))
+    tmp.replace(args.result)
+    return 130 if result["interrupted"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

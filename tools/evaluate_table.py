@@ -1,0 +1,152 @@
+"""The table of a study: one row per (scene, planner, seed, mission) with every metric of the mission.
+
+Why the metrics come from ``metrics_offline`` on a per-mission trajectory file: the promise of
+``chronav evaluate`` is that its numbers are what ``chronav metrics SCENE TRAJ.csv`` prints for the
+same stretch of the run.  So each mission's rows of the run's ``trajectory.csv`` are written to
+``<run>/missions/<mission>.csv`` and measured by the command's own library function, and *every*
+number it returns becomes a column (nested names joined with a dot: ``d_min_person_m.senior_1``).
+A metric added to ``chronav metrics`` later (the dynamic ones of issue 15) becomes a column, a box
+plot and a line of the report's tables without a change here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: columns that describe a row; every other column is a metric
+META_COLUMNS: tuple[str, ...] = (
+    "scene", "planner", "seed", "mission", "state", "mission_time_s", "started_s", "finished_s", "at_s",
+    "trajectory_csv", "run_dir", "rrd", "host", "run_wall_s",
+)
+MISSIONS_DIR = "missions"
+TABLE_STEM = "table"
+
+
+def flatten_metrics(metrics: Mapping[str, Any], prefix: str = "") -> dict[str, float]:
+    """Every number of a metrics report as one flat ``name -> float`` dict (texts are skipped:
+    they describe how a metric is measured, e.g. ``psi_basis``)."""
+    out: dict[str, float] = {}
+    for key, value in metrics.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            out.update(flatten_metrics(value, f"{name}."))
+        elif isinstance(value, bool | int | float):
+            out[name] = float(value)
+    return out
+
+
+def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_s: float, path: Path) -> int:
+    """The mission's samples of the run's trajectory as a ``t,x,y,theta`` CSV; returns how many."""
+    from tools.report import _mission_rows
+
+    rows = _mission_rows(trajectory, started_s, finished_s)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", encoding="utf-8") as handle:
+        handle.write("t,x,y,theta\n")
+        for t, x, y, theta in rows.tolist():    # Python floats: repr round-trips exactly
+            handle.write(f"{t!r},{x!r},{y!r},{theta!r}\n")
+    return len(rows)
+
+
+def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dict[str, float]]:
+    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``.
+
+    The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
+    too (issue 15's ``people.csv``), pass the mission's slice of them here."""
+    from agents.world.offline import metrics_offline
+
+    report = metrics_offline(scene, trajectory_csv, None)
+    return float(report["at_s"]), flatten_metrics(report["metrics"])
+
+
+def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, rrd: str | None,
+                 missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float) -> list[dict[str, Any]]:
+    """One row per mission of a finished run: its state, times and (when done) its metrics."""
+    from agents.lib.socialmap.metrics import MetricsInputError, read_trajectory_csv
+
+    traj_path = Path(run_dir) / "trajectory.csv"
+    try:
+        trajectory = read_trajectory_csv(traj_path)
+    except MetricsInputError:
+        trajectory = None    # stopped before the robot drove: no mission has samples
+    rows = []
+    for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0.0))):
+        row: dict[str, Any] = {
+            "scene": Path(scene).stem, "planner": planner, "seed": int(seed), "mission": mission_id,
+            "state": str(mission.get("state")), "mission_time_s": _num(mission.get("time_s")),
+            "started_s": _num(mission.get("started_s")), "finished_s": _num(mission.get("finished_s")),
+            "at_s": math.nan, "trajectory_csv": None, "run_dir": str(run_dir), "rrd": rrd, "host": host,
+            "run_wall_s": float(run_wall_s),
+        }
+        if trajectory is not None and row["state"] == "done" and math.isfinite(row["started_s"]) \
+                and math.isfinite(row["finished_s"]):
+            csv_path = Path(run_dir) / MISSIONS_DIR / f"{mission_id}.csv"
+            if write_mission_trajectory(trajectory, row["started_s"], row["finished_s"], csv_path) >= 2:
+                row["trajectory_csv"] = str(csv_path)
+                row["at_s"], metrics = measure_mission(scene, csv_path)
+                row.update(metrics)
+        rows.append(row)
+    return rows
+
+
+def _num(value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def metric_columns(rows: Iterable[Mapping[str, Any]]) -> list[str]:
+    """Every metric column present in any row, in first-seen order."""
+    seen: dict[str, None] = {}
+    for row in rows:
+        for key in row:
+            if key not in META_COLUMNS:
+                seen.setdefault(key, None)
+    return list(seen)
+
+
+def to_arrow(rows: Sequence[Mapping[str, Any]]) -> Any:
+    """The rows as a pyarrow Table: meta columns first, metrics after, missing metrics null."""
+    import pyarrow as pa
+
+    columns = [*META_COLUMNS, *metric_columns(rows)]
+    data: dict[str, list[Any]] = {name: [] for name in columns}
+    for row in rows:
+        for name in columns:
+            value = row.get(name)
+            data[name].append(None if isinstance(value, float) and math.isnan(value) else value)
+    types = {name: pa.string() for name in ("scene", "planner", "mission", "state", "trajectory_csv", "run_dir",
+                                            "rrd", "host")}
+    types["seed"] = pa.int64()
+    arrays = [pa.array(data[name], type=types.get(name, pa.float64())) for name in columns]
+    return pa.Table.from_arrays(arrays, names=columns)
+
+
+def write_table(rows: Sequence[Mapping[str, Any]], out_dir: Path) -> tuple[Path, Path]:
+    """``table.parquet`` and ``table.csv`` under ``out_dir`` (same columns, same rows)."""
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    table = to_arrow(rows)
+    parquet, csv = out_dir / f"{TABLE_STEM}.parquet", out_dir / f"{TABLE_STEM}.csv"
+    pq.write_table(table, parquet)
+    pacsv.write_csv(table, csv)
+    return parquet, csv
+
+
+def read_table(path: Path) -> list[dict[str, Any]]:
+    """A study's rows back from its Parquet file (nulls as NaN for metrics)."""
+    import pyarrow.parquet as pq
+
+    rows = pq.read_table(path).to_pylist()
+    for row in rows:
+        for key, value in row.items():
+            if value is None and key not in META_COLUMNS:
+                row[key] = math.nan
+    return rows
