@@ -17,14 +17,16 @@ from typing import Any
 
 import shapely
 
-from agents.missions.goals import (FreeSpace, GoalError, GoalPose, pose_facing_group, pose_facing_person,
-                                   pose_in_room, pose_near_object, pose_past_door)
+from agents.missions.goals import (SOCIAL_DISTANCE_M, FreeSpace, GoalError, GoalPose, pose_facing_group,
+                                   pose_facing_person, pose_in_room, pose_near_object, pose_past_door)
 from agents.world.dsr_readers import dsr_objects, dsr_people
 from agents.world.vocabulary import ActivityView, EdgeType, IntentionKind, NodeType, activities, activity_id_of
 from scenes.geometry import posed_polygon
 from scenes.model import Scene
 
 PERSON_MOVED_REPLAN_M = 1.0   # the approached person (or a group's centre) moved this far: plan again
+GOAL_OFF_SOCIAL_M = 0.3       # a standing person is this much nearer or farther than social distance: plan again
+PERSON_STILL_MPS = 0.1
 
 
 class Rule:
@@ -199,10 +201,29 @@ class PlanStep:
             if not names <= positions.keys():
                 return True
             now = _centre([positions[n] for n in names])
-            return math.hypot(now[0] - self.reference[0], now[1] - self.reference[1]) > PERSON_MOVED_REPLAN_M
+            if math.hypot(now[0] - self.reference[0], now[1] - self.reference[1]) > PERSON_MOVED_REPLAN_M:
+                return True
+            if self.rule == Rule.APPROACH_PERSON and _still(graph, self.bindings[Var.PERSON]):
+                # Less than a metre on, but she has stopped, maybe where the goal was (a goal set
+                # in front of a walker lies on her way): a goal off social distance is wrong.  Only
+                # once she stands: while she walks, the metre rule follows her.
+                gap = math.hypot(now[0] - self.issued_goal.x, now[1] - self.issued_goal.y)
+                return abs(gap - SOCIAL_DISTANCE_M) > GOAL_OFF_SOCIAL_M
+            return False
         if self.rule == Rule.GO_TO_OBJECT:
             point = shapely.Point(self.issued_goal.x, self.issued_goal.y)
             return any(space.contains(point) for space in busy_spaces(graph, dsr_objects(graph)))
+        return False
+
+
+def _still(graph: Any, name: str) -> bool:
+    """Is the person standing (the observer's velocity estimate below PERSON_STILL_MPS)?"""
+    node = graph.get_node_by_name(name)
+    if node is None:
+        return False
+    try:
+        return math.hypot(float(node.attrs.get("vx", 0.0)), float(node.attrs.get("vy", 0.0))) < PERSON_STILL_MPS
+    except (TypeError, ValueError):
         return False
 
 

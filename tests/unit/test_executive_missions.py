@@ -211,6 +211,22 @@ def test_person_mission_approaches_the_person_and_follows_her(tmp_path: Path) ->
     assert centre.mission("p").state == MissionState.DONE
 
 
+def test_person_mission_replans_when_she_stops_where_the_goal_was(tmp_path: Path) -> None:
+    """Regression (issue 15, center_day live): the goal set in front of the walking nurse lay on her
+    way; she stopped less than a metre on, beside it, and the robot arrived 0.6 m from her."""
+    centre = Centre(day_with(tmp_path, '{id: p, time: "09:45", goal: {person: nurse_marta}}'), tmp_path)
+    # replanned 1.4 m on (09:45:04), she stops 0.7 m further (09:45:06), by the goal she walked to
+    for second in (0, 2, 4, *range(5, 13)):
+        centre.at(f"09:45:{second:02d}")
+        centre.execute()
+    nx, ny, _ = centre.person("nurse_marta")
+    assert math.hypot(nx - 15.2, ny - 4.6) < 0.1, "she stands by the sideboard"
+    goal = centre.intention("p").goal
+    assert goal is not None and facing(goal, nx, ny) < 0.05
+    assert math.hypot(goal[0] - nx, goal[1] - ny) == pytest.approx(SOCIAL_DISTANCE_M, abs=0.1)
+    assert centre.mission("p").replans >= 2, "once as she walked on, once when she stopped"
+
+
 def test_group_mission_faces_the_groups_centre(tmp_path: Path) -> None:
     centre = Centre(day_with(tmp_path, '{id: g, time: "09:35", goal: {group: [res_carla, visitor_luis]}}'), tmp_path)
     centre.at("09:35")
