@@ -248,14 +248,14 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], mission: MissionKey, maps: A
 def r_curves(maps: Any, step_s: float = 60.0) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Each object's R over the scene's day, as the agenda agent computes it (agenda changes included)."""
     from agents.world.dsr_writers import object_r
-    from agents.world.timeline import world_at
+    from agents.world.timeline import agenda_at
 
     scene = maps.world.scene
     params = maps.nav.params.chronemics
     times = np.arange(scene.clock.start_s, scene.clock.end_s + step_s / 2, step_s)
     curves = {obj.name: np.empty(len(times)) for obj in scene.objects}
     for i, t in enumerate(times):
-        day = world_at(maps.world, float(t)).agenda
+        day = agenda_at(maps.world, float(t))
         for obj in scene.objects:
             curves[obj.name][i] = object_r(day, obj.name, float(t), params)[0]
     return times, curves
