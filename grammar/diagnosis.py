@@ -269,6 +269,17 @@ def _effect_removes(formula: Formula | None, label: str) -> bool:
     return False
 
 
+def _sub_exprs(e: Expr) -> list[Expr]:
+    """The expressions directly inside ``e`` (one walk for every question asked of an expression)."""
+    if isinstance(e, Compare):
+        return [e.left, e.right]
+    if isinstance(e, Not):
+        return [e.expr]
+    if isinstance(e, (And, Or, ListLit)):
+        return list(e.items)
+    return []
+
+
 def _attrs_read(exprs: Iterable[Expr]) -> set[str]:
     out: set[str] = set()
     stack = list(exprs)
@@ -276,28 +287,19 @@ def _attrs_read(exprs: Iterable[Expr]) -> set[str]:
         e = stack.pop()
         if isinstance(e, AttrRef):
             out.add(e.attr)
-        elif isinstance(e, Compare):
-            stack += [e.left, e.right]
-        elif isinstance(e, Not):
-            stack.append(e.expr)
-        elif isinstance(e, (And, Or, ListLit)):
-            stack.extend(e.items)
+        stack += _sub_exprs(e)
     return out
 
 
 def _expr_pos(expr: Expr) -> SourcePos | None:
+    """The first position found breadth-first (the outermost expression that knows its place)."""
     stack = [expr]
     while stack:
         e = stack.pop(0)
         pos = getattr(e, "pos", None)
         if pos is not None:
             return pos
-        if isinstance(e, Compare):
-            stack += [e.left, e.right]
-        elif isinstance(e, Not):
-            stack.append(e.expr)
-        elif isinstance(e, (And, Or, ListLit)):
-            stack.extend(e.items)
+        stack += _sub_exprs(e)
     return None
 
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -237,59 +237,84 @@ def _check_geometries(argument: str, geoms: Mapping[str, object]) -> None:
                                     f"({shapely.is_valid_reason(geom)})")
 
 
+def _csv_records(path: Path, header: tuple[str, ...], what: str, max_rows: int) -> Iterator[tuple[int, list[str]]]:
+    """(line number, stripped cells) of each row of a CSV after its header, blank lines skipped.
+
+    Why one reader for trajectory.csv and people.csv: the same bounded read, header and column
+    checks and the same located messages (``FILE:LINE: ...``) for both files a user hands in."""
+    try:
+        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env,
+                              what=what)  # a UTF-8 byte-order mark is dropped
+    except SourceError as exc:
+        raise TrajectoryFormatError(str(exc)) from None
+    names = ",".join(header)
+    header_seen = False
+    count = 0
+    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
+        if not fields or all(not f.strip() for f in fields):
+            continue
+        cells = [f.strip() for f in fields]
+        if not header_seen:
+            if tuple(c.lower() for c in cells) != header:
+                raise TrajectoryFormatError(f"{path}:{lineno}: expected header '{names}', "
+                                            f"got {cell_text(','.join(cells))!r}")
+            header_seen = True
+            continue
+        if len(cells) != len(header):
+            raise TrajectoryFormatError(f"{path}:{lineno}: expected {len(header)} values ({names}), "
+                                        f"got {len(cells)}")
+        count += 1
+        if count > max_rows:
+            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} rows ({TRAJECTORY_SAMPLES.env})")
+        yield lineno, cells
+    if not header_seen:
+        raise TrajectoryFormatError(f"{path}:1: empty file, expected header '{names}'")
+
+
+def _numbers(path: Path, lineno: int, columns: Sequence[str], cells: Sequence[str]) -> list[float]:
+    """The cells as finite floats, or a located error naming the column."""
+    values: list[float] = []
+    for column, cell in zip(columns, cells, strict=True):
+        try:
+            value = float(cell)
+        except ValueError:
+            raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not a number") \
+                from None
+        if not math.isfinite(value):
+            raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not finite")
+        values.append(value)
+    return values
+
+
+def _check_sample(path: Path, lineno: int, txy: Sequence[float], cells: Sequence[str], last_t: float) -> None:
+    """A sample's time ``txy[0]`` is of the simulated day and not before the previous one; its
+    position ``txy[1:3]`` is near the origin.  ``cells`` are the same three as written (messages
+    quote what the user wrote)."""
+    t, x, y = txy[:3]
+    if not 0.0 <= t <= MAX_TRAJECTORY_TIME_S:
+        raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(cells[0])} s is not a time of the "
+                                    f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s, i.e. up to 48:00)")
+    if max(abs(x), abs(y)) > MAX_COORDINATE_M:
+        raise TrajectoryFormatError(f"{path}:{lineno}: position ({cell_text(cells[1])}, {cell_text(cells[2])}) is more than "
+                                    f"{MAX_COORDINATE_M:,.0f} m from the origin; positions are metres in the "
+                                    "scene's frame")
+    if t < last_t:
+        raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {t})")
+
+
 def read_trajectory_csv(path: str | Path) -> FloatArray:
     """Read a ``t,x,y,theta`` CSV (s, m, m, rad) into an (N, 4) array.
 
     Blank lines are skipped. Any other problem raises TrajectoryFormatError("FILE:LINE: ...").
     """
     path = Path(path)
-    max_rows = TRAJECTORY_SAMPLES.value()
-    try:
-        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env,
-                              what="trajectory CSV")  # a UTF-8 byte-order mark is dropped
-    except SourceError as exc:
-        raise TrajectoryFormatError(str(exc)) from None
     rows: list[list[float]] = []
-    header_seen = False
     last_t = -math.inf
-    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
-        if not fields or all(not f.strip() for f in fields):
-            continue
-        cells = [f.strip() for f in fields]
-        if not header_seen:
-            if tuple(c.lower() for c in cells) != TRAJECTORY_HEADER:
-                raise TrajectoryFormatError(f"{path}:{lineno}: expected header 't,x,y,theta', "
-                                            f"got {','.join(cells)!r}")
-            header_seen = True
-            continue
-        if len(cells) != 4:
-            raise TrajectoryFormatError(f"{path}:{lineno}: expected 4 values (t,x,y,theta), "
-                                        f"got {len(cells)}")
-        values: list[float] = []
-        for column, cell in zip(TRAJECTORY_HEADER, cells, strict=True):
-            try:
-                value = float(cell)
-            except ValueError:
-                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: "
-                                            f"{cell!r} is not a number") from None
-            if not math.isfinite(value):
-                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell!r} is not finite")
-            values.append(value)
-        if not 0.0 <= values[0] <= MAX_TRAJECTORY_TIME_S:
-            raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(cells[0])} s is not a time of the "
-                                        f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s, i.e. up to 48:00)")
-        if max(abs(values[1]), abs(values[2])) > MAX_COORDINATE_M:
-            raise TrajectoryFormatError(f"{path}:{lineno}: position ({cell_text(cells[1])}, {cell_text(cells[2])}) "
-                                        f"is more than {MAX_COORDINATE_M:,.0f} m from the origin; positions are "
-                                        "metres in the scene's frame")
-        if values[0] < last_t:
-            raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
+    for lineno, cells in _csv_records(path, TRAJECTORY_HEADER, "trajectory CSV", TRAJECTORY_SAMPLES.value()):
+        values = _numbers(path, lineno, TRAJECTORY_HEADER, cells)
+        _check_sample(path, lineno, values, cells, last_t)
         last_t = values[0]
         rows.append(values)
-        if len(rows) > max_rows:
-            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} samples ({TRAJECTORY_SAMPLES.env})")
-    if not header_seen:
-        raise TrajectoryFormatError(f"{path}:1: empty file, expected header 't,x,y,theta'")
     if not rows:
         raise TrajectoryFormatError(f"{path}: header only, no samples")
     if rows[-1][0] - rows[0][0] <= 0.0:
@@ -313,53 +338,15 @@ def read_people_csv(path: str | Path) -> PeopleTracks:
 
     Any problem raises TrajectoryFormatError("FILE:LINE: ...")."""
     path = Path(path)
-    max_rows = TRAJECTORY_SAMPLES.value() * 50
-    try:
-        text = read_text_file(path, max_bytes=max_rows * 128, limit_env=TRAJECTORY_SAMPLES.env, what="people CSV")
-    except SourceError as exc:
-        raise TrajectoryFormatError(str(exc)) from None
     rows: list[tuple[float, str, float, float, float, float, float, str, str]] = []
-    header_seen = False
     last_t = -math.inf
-    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
-        if not fields or all(not f.strip() for f in fields):
-            continue
-        cells = [f.strip() for f in fields]
-        if not header_seen:
-            if tuple(c.lower() for c in cells) != PEOPLE_HEADER:
-                raise TrajectoryFormatError(f"{path}:{lineno}: expected header '{','.join(PEOPLE_HEADER)}', "
-                                            f"got {cell_text(','.join(cells))!r}")
-            header_seen = True
-            continue
-        if len(cells) != len(PEOPLE_HEADER):
-            raise TrajectoryFormatError(f"{path}:{lineno}: expected {len(PEOPLE_HEADER)} values "
-                                        f"({','.join(PEOPLE_HEADER)}), got {len(cells)}")
+    for lineno, cells in _csv_records(path, PEOPLE_HEADER, "people CSV", TRAJECTORY_SAMPLES.value() * 50):
         t_cell, name, role, *numbers, group = cells
-        values = []
-        for column, cell in zip(("t", "x", "y", "theta", "vx", "vy"), [t_cell, *numbers], strict=True):
-            try:
-                value = float(cell)
-            except ValueError:
-                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not a number") \
-                    from None
-            if not math.isfinite(value):
-                raise TrajectoryFormatError(f"{path}:{lineno}: column {column!r}: {cell_text(cell)!r} is not finite")
-            values.append(value)
+        values = _numbers(path, lineno, ("t", "x", "y", "theta", "vx", "vy"), [t_cell, *numbers])
         if not name:
             raise TrajectoryFormatError(f"{path}:{lineno}: column 'name' is empty; each row is one person")
-        if not 0.0 <= values[0] <= MAX_TRAJECTORY_TIME_S:
-            raise TrajectoryFormatError(f"{path}:{lineno}: column 't': {cell_text(t_cell)} s is not a time of the "
-                                        f"simulated day (0 to {MAX_TRAJECTORY_TIME_S:,.0f} s)")
-        if max(abs(values[1]), abs(values[2])) > MAX_COORDINATE_M:
-            raise TrajectoryFormatError(f"{path}:{lineno}: position is more than {MAX_COORDINATE_M:,.0f} m from "
-                                        "the origin; positions are metres in the scene's frame")
-        if values[0] < last_t:
-            raise TrajectoryFormatError(f"{path}:{lineno}: time goes backwards ({last_t} -> {values[0]})")
+        _check_sample(path, lineno, values, [t_cell, *numbers], last_t)
         last_t = values[0]
         rows.append((values[0], cell_text(name), values[1], values[2], values[3], values[4], values[5], group,
                      cell_text(role)))
-        if len(rows) > max_rows:
-            raise TrajectoryFormatError(f"{path}:{lineno}: more than {max_rows:,} rows ({TRAJECTORY_SAMPLES.env})")
-    if not header_seen:
-        raise TrajectoryFormatError(f"{path}:1: empty file, expected header '{','.join(PEOPLE_HEADER)}'")
     return tracks_from_rows(rows)
