@@ -139,6 +139,19 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
                 raise located.error(("missions", i, "goal", "group", j), f"{member!r} is named twice in the group")
 
 
+
+def _room_areas(scene: Scene) -> dict[str, shapely.geometry.base.BaseGeometry]:
+    """Each room's floor as ``Scene.room_at`` resolves it: its polygon less the rooms listed before
+    it.  Why: a corridor drawn around rooms (``scene from-map`` lists the rooms inside a loop
+    first) has doors on its inner walls, which its outline alone does not show."""
+    areas: dict[str, shapely.geometry.base.BaseGeometry] = {}
+    taken = shapely.Polygon()
+    for room in scene.rooms:
+        polygon = shapely.Polygon(room.polygon)
+        areas[room.name] = polygon.difference(taken) if taken.intersects(polygon) else polygon
+        taken = taken.union(polygon)
+    return areas
+
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
     for index, room in enumerate(scene.rooms):  # before the union: GEOS fails on invalid polygons
         if not shapely.Polygon(room.polygon).is_valid:
@@ -187,14 +200,14 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
             if (a.x, a.y) != (b.x, b.y) and shapely.LineString([(a.x, a.y), (b.x, b.y)]).crosses(walls):
                 raise located.error(("people", i, "waypoints", j), f"{person.name!r} would walk through a "
                                     f"wall from ({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint at the door")
-    polygons = {room.name: shapely.Polygon(room.polygon) for room in scene.rooms}
+    areas = _room_areas(scene)
     for i, door in enumerate(scene.doors):
         x, y = door.position
         key = ("doors", i, "position")
         inside(key, x, y, f"door {door.name!r}")
         point = shapely.Point(x, y)
         for room in door.between:
-            gap = polygons[room].exterior.distance(point)
+            gap = areas[room].boundary.distance(point)
             if gap > DOOR_ON_WALL_TOLERANCE_M:
                 raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is not on the outline of room "
                                     f"{room!r} ({gap:.2f} m from it); a door sits on the wall between its two "

@@ -89,6 +89,24 @@ def test_scene_from_map_passes_the_check_and_plans_between_rooms(tmp_path: Path)
     assert again.exit_code == 2 and "--force" in again.output
 
 
+def test_scene_from_map_of_rooms_inside_a_corridor_loop_passes_the_check(tmp_path: Path) -> None:
+    """Regression: a corridor that runs round a block of rooms is one room whose outline is the
+    building's; the doors on its inner walls were refused as 'not on the outline of room'."""
+    from tools.building_maps import large_floor
+
+    large_floor(60.0, 40.0, 0.1).write(tmp_path / "floor_map.yaml")
+    out = tmp_path / "floor.yaml"
+    runner = CliRunner()
+    result = runner.invoke(app, ["scene", "from-map", str(tmp_path / "floor_map.yaml"), "--out", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    scene = yaml.safe_load(out.read_text())
+    rooms = {room["name"]: shapely.Polygon(room["polygon"]) for room in scene["rooms"]}
+    assert any(rooms[name].exterior.distance(shapely.Point(door["position"])) > 1.0
+               for door in scene["doors"] for name in door["between"]), "a door on a corridor's inner wall"
+    check = runner.invoke(app, ["scene", "check", str(out)])
+    assert check.exit_code == 0, check.output
+
+
 def test_scene_from_map_explains_a_map_without_floor(tmp_path: Path) -> None:
     (tmp_path / "w.pgm").write_bytes(b"P5\n4 3\n255\n" + bytes(12))
     (tmp_path / "w.yaml").write_text("image: w.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\n"
