@@ -294,19 +294,18 @@ class SimRobotAgent(Agent):
 
     def _update_people(self) -> None:
         """Bring the crowd to the sim time: staff's agenda changes from the DSR's log, the robot
-        while it drives (people avoid it then; at rest nobody reacts to it)."""
+        (people avoid it while it drives, and walk round it and stand clear of it at rest)."""
         log = self.graph.get_node_by_name(AGENDA)
         if log is not None:
             manual = manual_changes(log.attrs.get("applied", []), log.attrs.get("changes", []), self.world)
             if manual != self.feed.manual:
                 self.feed = WorldFeed(self.world, manual)
-        robot = None
+        s = self.state
+        vx = vy = 0.0
         if self._last_mode == "driving":
-            s = self.state
             vx = s.velocity.vx * math.cos(s.theta) - s.velocity.vy * math.sin(s.theta)
             vy = s.velocity.vx * math.sin(s.theta) + s.velocity.vy * math.cos(s.theta)
-            robot = RobotBody(s.x, s.y, vx, vy, self.scene.robot.radius)
-        self.crowd.advance(self.now_s, self.feed, robot)
+        self.crowd.advance(self.now_s, self.feed, RobotBody(s.x, s.y, vx, vy, self.scene.robot.radius))
         self._people = self.crowd.at(self.now_s)
 
     def _publish(self) -> None:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from agents.lib.agenda import AgendaChangeError, AgendaDay, apply_change, parse_change
 from agents.lib.crowd.crowd import Crowd
-from agents.lib.crowd.model import Agenda, Appointment, PersonTruth
+from agents.lib.crowd.model import Agenda, Appointment, PersonTruth, RobotBody
 from agents.world.crowd_scene import building_of, walker_of
 from agents.world.scene_world import SceneWorld
 from agents.world.timeline import agenda_at, doors_at
@@ -38,6 +38,12 @@ def new_crowd(world: SceneWorld) -> Crowd:
     scene = world.scene
     return Crowd(building_of(scene), [walker_of(scene, p) for p in scene.people], seed=scene.crowd.seed,
                  start_s=scene.clock.start_s, robot_radius_m=scene.robot.radius)
+
+
+def resting_robot(world: SceneWorld) -> RobotBody:
+    """The robot as the offline commands have it: at rest at the scene's pose (they never drive it)."""
+    robot = world.scene.robot
+    return RobotBody(robot.pose.x, robot.pose.y, 0.0, 0.0, robot.radius)
 
 
 def appointments(day: AgendaDay) -> tuple[Appointment, ...]:
@@ -113,6 +119,7 @@ class _Day:
     def __init__(self, world: SceneWorld) -> None:
         self.world = world
         self.feed = WorldFeed(world)
+        self.robot = resting_robot(world)
         self.crowd = new_crowd(world)
         self.snapshots: list[Crowd] = [self.crowd.clone()]
 
@@ -124,7 +131,7 @@ class _Day:
         start = crowd.start_s
         while crowd.t_s < t_s - 1e-9:
             boundary = start + (math.floor((crowd.t_s - start) / SNAPSHOT_EVERY_S) + 1) * SNAPSHOT_EVERY_S
-            crowd.advance(min(t_s, boundary), self.feed)
+            crowd.advance(min(t_s, boundary), self.feed, self.robot)
             if crowd.t_s >= boundary and crowd.t_s > self.snapshots[-1].t_s:
                 self.snapshots.append(crowd.clone())
         return crowd.at(t_s)

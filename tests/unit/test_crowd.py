@@ -16,7 +16,7 @@ from agents.lib.crowd.model import RobotBody
 from agents.lib.crowd.routes import NoRoute, Router
 from agents.world.interactions import observed_conversations
 from agents.world.crowd_scene import building_of, walker_of
-from agents.world.people import WorldFeed, new_crowd, people_at
+from agents.world.people import WorldFeed, new_crowd, people_at, resting_robot
 from agents.world.scene_world import load_world
 from scenes.clock import parse_clock
 from scenes.loader import load_scene
@@ -140,11 +140,11 @@ def test_residents_wander_and_chat_in_pairs_facing_each_other(day) -> None:  # n
 def test_one_seed_gives_one_day_whatever_the_slicing_and_offline_going_back(world) -> None:  # noqa: ANN001
     times = [parse_clock(t) for t in ("09:41:10", "09:27:30", "10:05:00")]
     offline = {t: people_at(world, t) for t in times}          # out of order: restarts from a snapshot
-    live, feed = new_crowd(world), WorldFeed(world)
+    live, feed, robot = new_crowd(world), WorldFeed(world), resting_robot(world)   # the robot never drives
     for t in sorted(times):
         while live.t_s < t - 0.1:
-            live.advance(min(t, live.t_s + 0.1), feed)          # the simulator's 0.1 s control steps
-        live.advance(t, feed)
+            live.advance(min(t, live.t_s + 0.1), feed, robot)   # the simulator's 0.1 s control steps
+        live.advance(t, feed, robot)
         assert live.at(t) == offline[t]
     scene = world.scene
     crowd = Crowd(building_of(scene), [walker_of(scene, p) for p in scene.people], seed=99,
@@ -191,3 +191,23 @@ def test_people_avoid_the_robot_only_while_it_drives(world) -> None:  # noqa: AN
         closest[driving] = nearest
     assert closest[False] < 0.45, "without a driving robot someone walks the line through its place"
     assert closest[True] >= 0.3 + 0.25 - 0.05, "while it drives, people keep clear of its body"
+
+
+@pytest.mark.parametrize("reacts", [True, False])
+def test_nobody_walks_into_or_stands_at_the_resting_robot(reacts: bool) -> None:
+    """Regression (bench_day, center_day): the robot rested in the dining room after a mission and
+    a resident chose a place 0.37 m from its centre; the next mission began in contact with her.
+    At rest the robot is an obstacle people walk round and a place nobody picks to stand."""
+    world = load_world("center_day")
+    robot = RobotBody(16.48, 4.81, 0.0, 0.0, world.scene.robot.radius)
+    crowd, feed = new_crowd(world), WorldFeed(world)
+    start = parse_clock("09:46")
+    crowd.advance(start, feed, None)     # the morning before it parked there: no robot for anyone
+    gaps = []
+    for t in np.arange(start + 5.0, parse_clock("11:15"), 5.0):
+        crowd.advance(float(t), feed, robot if reacts else None)
+        gaps += [math.hypot(p.x - robot.x, p.y - robot.y) - robot.radius for p in crowd.at(float(t))]
+    if reacts:
+        assert min(gaps) > 0.3, "people keep clear of the resting robot's body"
+    else:
+        assert min(gaps) < 0.3, "without the robot in their world someone stands where it rests"

@@ -23,7 +23,8 @@ deterministic):
    Visitors keep company with the person they visit.
 
 Walking follows a route through door gaps and around furniture (routes.py); ORCA (orca.py)
-avoids the others and, while it drives, the robot.  A walker that makes no progress for
+avoids the others and the robot (a moving body while it drives, an obstacle at rest; nobody
+picks a place to stand next to the resting robot).  A walker that makes no progress for
 ``STUCK_S`` replans its route, and settles where it is when it is already close.
 
 When nobody walks and nothing scripted moves (and the robot does not drive), nothing can change
@@ -68,6 +69,7 @@ SPOT_PEOPLE_M = 1.0         # ... and from other people and where they are going
 SPOT_CORNER_M = 0.9         # ... and off the corners routes turn at (where others will walk)
 SIDESTEP_RAD = 0.9          # a walker blocked for half of STUCK_S steps this much to a side
 ROBOT_MARGIN_M = 0.1        # people give the robot this much more than its body
+ROBOT_CLEARANCE_M = 0.6     # nobody picks a place to stand nearer the resting robot's body than this
 PASSAGE_WIDTH_M = 3.0       # a room narrower than this is a corridor: people pass, they do not stay
 FIRST_DECISION = 2**31      # the random stream index of the start-of-day draw
 SCRIPT_VELOCITY_DT_S = 0.05
@@ -133,7 +135,7 @@ class Crowd:
         self.vel = np.zeros((n, 2))
         self.prev = (self.pos.copy(), self.theta.copy(), self.vel.copy())
         self._robot_index = n
-        self._robot_parked = True
+        self._robot_parked: tuple[float, float] | None = PARKED   # where the resting robot stands (None: it drives)
         self._robot_radius = robot_radius_m + ROBOT_MARGIN_M
         self._closed: frozenset[str] = frozenset()
         self._routers: dict[frozenset[str], Router] = {}
@@ -198,8 +200,8 @@ class Crowd:
         """Compute states up to the first step at or after ``t_s``.
 
         ``world(t)`` gives the appointments and closed doors in force at step time t (and when they
-        next change); ``robot`` is where the robot is and how it moves while it drives (None: it
-        does not drive, and nobody reacts to it)."""
+        next change); ``robot`` is where the robot is and how it moves (at rest: zero velocity, an
+        obstacle; None: no robot, nobody reacts to it)."""
         while self.t_s < t_s - 1e-9:
             self._step(world, robot, t_s)
 
@@ -277,10 +279,23 @@ class Crowd:
         return not len(corners) or float(np.min(np.hypot(*(corners - (x, y)).T))) >= SPOT_CORNER_M
 
     def _fits(self, x: float, y: float) -> bool:
-        """A body can stand at (x, y): in the building, clear of walls and furniture."""
+        """A body can stand at (x, y): in the building, clear of walls, furniture and the resting robot."""
+        rest = self._robot_parked
+        if rest is not None and math.hypot(x - rest[0], y - rest[1]) < self._robot_radius + ROBOT_CLEARANCE_M:
+            return False
         return bool(shapely.contains_xy(self._building_poly, x, y)
                     and self._wall_lines.distance(shapely.Point(x, y)) >= 0.3
                     and self._footprints.distance(shapely.Point(x, y)) >= 0.3)
+
+    def _park(self, robot: RobotBody | None) -> None:
+        """The robot at rest is furniture to the people: an obstacle ORCA walkers go round (max speed
+        0), and no one chooses to stand where it is.  ``None``: no robot in this world."""
+        rest = PARKED if robot is None else (robot.x, robot.y)
+        if rest != self._robot_parked:
+            self.orca.place(self._robot_index, *rest)
+            self.orca.set_max_speed(self._robot_index, 0.0)
+            self.orca.prefer(self._robot_index, 0.0, 0.0)
+            self._robot_parked = rest
 
     # ------------------------------------------------------------------------------------ agenda
     def _read_agenda(self, agenda: Agenda) -> None:
@@ -387,6 +402,8 @@ class Crowd:
     # ------------------------------------------------------------------------------------ step
     def _step(self, agenda_at: Callable[[float], Agenda], robot: RobotBody | None, until_s: float) -> None:
         t = self.t_s
+        if robot is None or not robot.driving:
+            self._park(robot)   # first: the places people choose on this step keep clear of it
         agenda = agenda_at(t)
         self._doors(agenda.closed_doors)
         self._read_agenda(agenda)
@@ -401,7 +418,7 @@ class Crowd:
         have = self.theta[[p.index for p in standing]] if standing else np.zeros(0)
         off = np.abs((want - have + math.pi) % (2 * math.pi) - math.pi) > 1e-6
         turning = [p for p, o in zip(standing, off, strict=True) if o] if off.any() else []
-        if not walking and not scripted_moving and not turning and robot is None:
+        if not walking and not scripted_moving and not turning and (robot is None or not robot.driving):
             self._quiet_jump(t, agenda, until_s)
             return
         self.prev = (self.pos.copy(), self.theta.copy(), self.vel.copy())
@@ -414,15 +431,11 @@ class Crowd:
             self.orca.place(person.index, x0, y0, vx, vy)
             self.orca.set_max_speed(person.index, max(2.0, math.hypot(vx, vy)))
             self.orca.prefer(person.index, vx, vy)
-        if robot is not None:
+        if robot is not None and robot.driving:
             self.orca.place(self._robot_index, robot.x, robot.y, robot.vx, robot.vy)
             self.orca.set_max_speed(self._robot_index, max(2.0, math.hypot(robot.vx, robot.vy)))
             self.orca.prefer(self._robot_index, robot.vx, robot.vy)
-            self._robot_parked = False
-        elif not self._robot_parked:
-            self.orca.place(self._robot_index, *PARKED)
-            self.orca.set_max_speed(self._robot_index, 0.0)
-            self._robot_parked = True
+            self._robot_parked = None
         self.orca.step()
         self.k += 1
         t1 = self.t_s

@@ -123,10 +123,15 @@ class PersonTruth:
 
 @dataclass(frozen=True)
 class RobotBody:
-    """The robot as people avoid it (only while it drives)."""
+    """The robot as people avoid it: while it drives, a moving body; at rest (zero velocity), an
+    obstacle they walk round and do not choose to stand at."""
 
     x: float
     y: float
     vx: float
     vy: float
     radius: float
+
+    @property
+    def driving(self) -> bool:
+        return self.vx != 0.0 or self.vy != 0.0
