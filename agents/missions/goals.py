@@ -85,9 +85,11 @@ def pose_near_object(obj: SocialObject, free: FreeSpace, people: Sequence[Person
 
 def pose_facing_person(person: Person, free: FreeSpace, people: Sequence[Person],
                        robot_xy: tuple[float, float]) -> GoalPose:
-    """In front of the person at social distance, facing them; swing sideways if the front is taken."""
+    """In front of the person at social distance, facing them; swing sideways if the front is taken,
+    and round to her side or back only if nothing in front is free (a walker heading for a wall or
+    a table has no free front for a moment: better approached from the side than not at all)."""
     candidates: list[tuple[float, float, float | None]] = []
-    for swing_deg in (0, 20, -20, 40, -40, 60, -60, 80, -80):
+    for swing_deg in (0, 20, -20, 40, -40, 60, -60, 80, -80, 100, -100, 120, -120, 140, -140, 160, -160, 180):
         angle = person.theta + math.radians(swing_deg)
         x = person.x + SOCIAL_DISTANCE_M * math.cos(angle)
         y = person.y + SOCIAL_DISTANCE_M * math.sin(angle)
@@ -97,7 +99,7 @@ def pose_facing_person(person: Person, free: FreeSpace, people: Sequence[Person]
     try:
         return _nearest(candidates, robot_xy)
     except GoalError:
-        raise GoalError(f"no free pose in front of {person.name!r}") from None
+        raise GoalError(f"no free pose around {person.name!r} at {SOCIAL_DISTANCE_M:g} m") from None
 
 
 def pose_facing_group(members: Sequence[Person], free: FreeSpace, people: Sequence[Person],

@@ -21,11 +21,12 @@ from agents.missions.goals import (SOCIAL_DISTANCE_M, FreeSpace, GoalError, Goal
                                    pose_facing_person, pose_in_room, pose_near_object, pose_past_door)
 from agents.world.dsr_readers import dsr_objects, dsr_people
 from agents.world.vocabulary import ActivityView, EdgeType, IntentionKind, NodeType, activities, activity_id_of
-from scenes.geometry import posed_polygon
+from scenes.geometry import angle_difference, posed_polygon
 from scenes.model import Scene
 
 PERSON_MOVED_REPLAN_M = 1.0   # the approached person (or a group's centre) moved this far: plan again
 GOAL_OFF_SOCIAL_M = 0.3       # a standing person is this much nearer or farther than social distance: plan again
+GOAL_OFF_FACING_RAD = 0.2     # ... or the goal no longer faces her by this much: plan again
 PERSON_STILL_MPS = 0.1
 
 
@@ -205,10 +206,15 @@ class PlanStep:
                 return True
             if self.rule == Rule.APPROACH_PERSON and _still(graph, self.bindings[Var.PERSON]):
                 # Less than a metre on, but she has stopped, maybe where the goal was (a goal set
-                # in front of a walker lies on her way): a goal off social distance is wrong.  Only
-                # once she stands: while she walks, the metre rule follows her.
-                gap = math.hypot(now[0] - self.issued_goal.x, now[1] - self.issued_goal.y)
-                return abs(gap - SOCIAL_DISTANCE_M) > GOAL_OFF_SOCIAL_M
+                # in front of a walker lies on her way): a goal off social distance, or facing
+                # where she was, is wrong.  Only once she stands: while she walks, the metre rule
+                # follows her.
+                goal = self.issued_goal
+                gap = math.hypot(now[0] - goal.x, now[1] - goal.y)
+                if abs(gap - SOCIAL_DISTANCE_M) > GOAL_OFF_SOCIAL_M:
+                    return True
+                bearing = math.atan2(now[1] - goal.y, now[0] - goal.x)
+                return goal.theta is not None and abs(angle_difference(goal.theta, bearing)) > GOAL_OFF_FACING_RAD
             return False
         if self.rule == Rule.GO_TO_OBJECT:
             point = shapely.Point(self.issued_goal.x, self.issued_goal.y)

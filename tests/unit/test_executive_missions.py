@@ -227,6 +227,23 @@ def test_person_mission_replans_when_she_stops_where_the_goal_was(tmp_path: Path
     assert centre.mission("p").replans >= 2, "once as she walked on, once when she stopped"
 
 
+def test_a_goal_at_social_distance_that_no_longer_faces_her_is_planned_again(tmp_path: Path) -> None:
+    """Regression (center_day live): the goal set while she walked was 1.5 m from where she stopped
+    (within the distance tolerance) but faced where she had been; the robot ended 0.6 rad off."""
+    from agents.missions.goals import GoalPose
+
+    centre = Centre(day_with(tmp_path, '{id: p, time: "09:45", goal: {person: nurse_marta}}'), tmp_path)
+    for second in range(6, 13):
+        centre.at(f"09:45:{second:02d}")
+        centre.execute()
+    nx, ny, _ = centre.person("nurse_marta")
+    step = next(s for s in centre.agents["executive"]._steps["p"] if s.issued_goal is not None)
+    assert not step.diverged(centre.graph), "the goal it was given faces her at social distance"
+    step.issued_goal = GoalPose(16.5257, 5.3446, -2.03102)    # the live run's: 1.52 m away, 0.6 rad off
+    step.reference = (nx, ny)
+    assert step.diverged(centre.graph)
+
+
 def test_group_mission_faces_the_groups_centre(tmp_path: Path) -> None:
     centre = Centre(day_with(tmp_path, '{id: g, time: "09:35", goal: {group: [res_carla, visitor_luis]}}'), tmp_path)
     centre.at("09:35")
