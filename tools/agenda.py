@@ -35,7 +35,8 @@ from typing import Any, TextIO
 
 import typer
 
-from tools.connection import ConnectionProblem, Target, open_replica, require_system, resolve_target
+from tools.connection import (CONNECT_HELP, GRAPH_HELP, RUN_HELP, ConnectionProblem, Target, open_replica,
+                              require_system, resolve_target)
 from tools.runs import TOOL_AGENT_PREFIX, Role
 
 AGENDA_AGENT = "agenda"
@@ -455,10 +456,6 @@ class Connection:
     run: str | None
 
 
-CONNECT_HELP = "Zenoh router endpoint, e.g. tcp/127.0.0.1:7447 (default $CHRONAV_ZENOH_CONNECT)."
-GRAPH_HELP = "Graph name = the run id (default $CHRONAV_GRAPH)."
-RUN_HELP = ("A run of `chronav launch`: 'latest' (your newest live run), a run directory, or a run id under "
-            "./recordings ($CHRONAV_RUNS).")
 TIMEOUT_HELP = "Seconds to wait for the agenda agent's answer."
 
 

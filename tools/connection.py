@@ -21,6 +21,13 @@ from typing import Any
 
 from tools.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
 
+# The help of the options every command that reaches a running system takes (one wording: they
+# resolve alike, resolve_target below).
+RUN_HELP = ("A run of `chronav launch`: 'latest' (your newest live run), a run directory, or a run id under "
+            "./recordings ($CHRONAV_RUNS).")
+GRAPH_HELP = "Graph name (default: the run's, $CHRONAV_GRAPH or 'chronav')."
+CONNECT_HELP = "Zenoh endpoint(s) tcp/HOST:PORT (default: the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."
+
 HOW_TO_FIND = ("start one with `chronav launch SCENE`, then point this command at it with --run latest, "
                "--run <run directory>, or --connect tcp/HOST:PORT --graph <run id> (with the run's credentials)")
 

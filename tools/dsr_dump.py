@@ -19,6 +19,8 @@ from typing import Any
 
 import typer
 
+from tools.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
+
 dsr_app = typer.Typer(help="Inspect the replicated DSR graph.", no_args_is_help=True)
 
 
@@ -100,12 +102,9 @@ def _short(attrs: dict[str, Any]) -> str:
 def dump(
     json_output: bool = typer.Option(False, "--json", help="Print JSON instead of tables."),
     follow: bool = typer.Option(False, "--follow", "-f", help="Keep printing changes live."),
-    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
-                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
-    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
-                                   "$CHRONAV_GRAPH or 'chronav')."),
-    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
-                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    graph_name: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    connect: list[str] = typer.Option([], "--connect", help=CONNECT_HELP),
     duration: float = typer.Option(0.0, "--duration", help="With --follow: stop after this many "
                                    "seconds (0 = until Ctrl-C)."),
     timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
@@ -210,12 +209,9 @@ def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
 @dsr_app.command("stats")
 def stats(
     json_output: bool = typer.Option(False, "--json", help="Print JSON instead of a table."),
-    run: str = typer.Option(None, "--run", help="A run of `chronav launch`: 'latest' (your newest live "
-                            "run), a run directory, or a run id under ./recordings ($CHRONAV_RUNS)."),
-    graph_name: str = typer.Option(None, "--graph", help="Graph name (default: the run's, "
-                                   "$CHRONAV_GRAPH or 'chronav')."),
-    connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) tcp/HOST:PORT (default: "
-                                      "the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."),
+    run: str = typer.Option(None, "--run", help=RUN_HELP),
+    graph_name: str = typer.Option(None, "--graph", help=GRAPH_HELP),
+    connect: list[str] = typer.Option([], "--connect", help=CONNECT_HELP),
     timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
                                   "again for the answers."),
 ) -> None:
