@@ -79,6 +79,13 @@ class Net:
         for replica in self.replicas.values():
             replica.maintain()
 
+    def route(self, sender: str, *receivers: str) -> None:
+        """From now on ``sender``'s deltas reach only ``receivers`` (lost on the way to the rest)."""
+        def deliver(payload: bytes) -> None:
+            for name in receivers:
+                self.replicas[name]._on_delta(Sample(wire.delta_key("chronav", sender), payload))
+        self.replicas[sender]._publisher = Publisher(deliver)
+
 
 def state_sample(replica: Replica, payload: bytes | None = None) -> Sample:
     graph = replica.graph
@@ -340,8 +347,7 @@ def test_a_member_ahead_of_us_triggers_anti_entropy():
     a, b, c = net.add("a"), net.add("b"), net.add("c")
     net.maintain()
     # c writes; the delta reaches b but is lost on its way to a; then b's digests show it
-    c._publisher = Publisher(lambda payload: b._on_delta(Sample(wire.delta_key("chronav", "c"),
-                                                                payload)))
+    net.route("c", "b")
     c.graph.insert_node("object", "missed")
     b.publish_digest()
     b.publish_digest()
@@ -405,8 +411,7 @@ def test_anti_entropy_settles_for_a_writer_that_left():
     net = Net()
     a, b, c = net.add("a"), net.add("b"), net.add("c")
     net.maintain()
-    c._publisher = Publisher(lambda payload: b._on_delta(Sample(wire.delta_key("chronav", "c"),
-                                                                payload)))
+    net.route("c", "b")
     c.graph.insert_node("object", "missed")
     a._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "c"),
                                 "kind": zenoh.SampleKind.DELETE})())

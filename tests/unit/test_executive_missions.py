@@ -17,7 +17,7 @@ import shapely
 from agents.agenda.agent import AgendaAgent
 from agents.executive.agent import MAX_REPLANS, ExecutiveAgent
 from agents.human_observer.agent import HumanObserverAgent
-from agents.missions.goals import SOCIAL_DISTANCE_M
+from agents.missions.goals import SOCIAL_DISTANCE_M, GoalPose
 from agents.object_recognition.agent import ObjectRecognitionAgent
 from agents.runtime.config import AgentConfig
 from agents.runtime.recording import Recorder
@@ -230,8 +230,6 @@ def test_person_mission_replans_when_she_stops_where_the_goal_was(tmp_path: Path
 def test_a_goal_at_social_distance_that_no_longer_faces_her_is_planned_again(tmp_path: Path) -> None:
     """Regression (center_day live): the goal set while she walked was 1.5 m from where she stopped
     (within the distance tolerance) but faced where she had been; the robot ended 0.6 rad off."""
-    from agents.missions.goals import GoalPose
-
     centre = Centre(day_with(tmp_path, '{id: p, time: "09:45", goal: {person: nurse_marta}}'), tmp_path)
     for second in range(6, 13):
         centre.at(f"09:45:{second:02d}")
