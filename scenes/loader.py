@@ -143,14 +143,17 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
 def _room_areas(scene: Scene) -> dict[str, shapely.geometry.base.BaseGeometry]:
     """Each room's floor as ``Scene.room_at`` resolves it: its polygon less the rooms listed before
     it.  Why: a corridor drawn around rooms (``scene from-map`` lists the rooms inside a loop
-    first) has doors on its inner walls, which its outline alone does not show."""
+    first) has doors on its inner walls, which its outline alone does not show.  A room the earlier
+    ones cover whole keeps its polygon (an empty floor has no boundary to measure a door against)."""
     areas: dict[str, shapely.geometry.base.BaseGeometry] = {}
     taken = shapely.Polygon()
     for room in scene.rooms:
         polygon = shapely.Polygon(room.polygon)
-        areas[room.name] = polygon.difference(taken) if taken.intersects(polygon) else polygon
+        floor = polygon.difference(taken) if taken.intersects(polygon) else polygon
+        areas[room.name] = polygon if floor.is_empty else floor
         taken = taken.union(polygon)
     return areas
+
 
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
     for index, room in enumerate(scene.rooms):  # before the union: GEOS fails on invalid polygons

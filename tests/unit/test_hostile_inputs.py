@@ -50,6 +50,7 @@ CASES: list[tuple[list[str], int, str]] = [
     (["scene", "check", _h("goal_walled_off.yaml")], 1, "cannot be reached from the robot's start (1, 1)"),
     (["scene", "check", _h("door_ok.yaml")], 0, "door_ok.yaml: ok (2 rooms"),
     (["scene", "check", _h("door_off_wall.yaml")], 1, "is not on the outline of room 'west'"),
+    (["scene", "check", _h("door_of_covered_room.yaml")], 1, "is not on the outline of room 'closet'"),
     (["scene", "check", _h("door_solid_wall.yaml")], 1, "door 'd' at (3, 3.2) is on solid wall"),
     (["scene", "check", _h("radius_50.yaml")], 1, "robot.radius: must be at most 2.0, got 50"),
     (["scene", "check", _h("max_speed_inf.yaml")], 1, "robot.max_speed: must be at most 5.0, got inf"),
