@@ -33,7 +33,7 @@ from dsr.hlc import HybridLogicalClock
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
                        check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
-from dsr.outbox import Outbox
+from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, SignalHub
 
 if TYPE_CHECKING:
@@ -134,7 +134,7 @@ class DSRGraph:
         #: write policy checked on local writes (set by the transport when join() has one;
         #: None: every local write is allowed, as in library use)
         self.local_policy: Any = None
-        #: largest HLC of the local deltas handed to the publisher so far
+        #: largest HLC published through outboxes this graph has detached (published_hlc())
         self.sent_hlc = 0
         #: type of the node whose delete_node() is removing its edges (local policy checks)
         self._cascade: str | None = None
@@ -266,21 +266,17 @@ class DSRGraph:
                     self._undo(tx)
                 raise
             self._tx_depth -= 1
-            payload = None
-            top = 0
+            out = None
             if outer:
                 self._tx = None
                 if tx.out_nodes or tx.out_edges:
                     self._check_size(tx)
-                payload = self._commit(tx)
-                top = self.clock.last
+                outbox = self._outbox
+                out = self._commit(tx, outbox)
         finally:
             self._lock.release()
-        publish = self._publish
-        if payload is not None and publish is not None:
-            publish(payload)
-            if top > self.sent_hlc:
-                self.sent_hlc = top
+        if out is not None:
+            outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
 
     def _check_size(self, tx: _Transaction) -> None:
         """Refuse (and undo) a write whose delta receivers would drop as too large."""
@@ -300,12 +296,11 @@ class DSRGraph:
                 "bytes per message (CHRONAV_DSR_MAX_DELTA_BYTES): split it into smaller "
                 "transactions")
 
-    def _commit(self, tx: _Transaction) -> bytes | None:
+    def _commit(self, tx: _Transaction, outbox: Outbox | None) -> Outgoing | None:
         self._signals.post(tx.events)
         if not tx.out_nodes and not tx.out_edges:
             return None
         self._version += 1
-        outbox = self._outbox
         return outbox.add(tx.out_nodes, tx.out_edges, self.clock.last) \
             if outbox is not None else None
 
@@ -362,7 +357,7 @@ class DSRGraph:
         values = check_attrs(attrs)
         if self.read_only:
             raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
-        payload = None
+        out = None
         with self._lock:
             if self._tx is None:
                 if node_id not in self._view:
@@ -379,17 +374,16 @@ class DSRGraph:
                 self._version += 1
                 outbox = self._outbox
                 if outbox is not None:
-                    payload = outbox.add_attrs(node_id, regs, hlc)
+                    out = outbox.add_attrs(node_id, regs, hlc)
             else:
                 self._update_node_tx(node_id, values)
                 return
-        if event is not None:
-            self._signals.post([event])
-        publish = self._publish
-        if payload is not None and publish is not None:
-            publish(payload)
-            if hlc > self.sent_hlc:
-                self.sent_hlc = hlc
+        try:
+            if event is not None:
+                self._signals.post([event])
+        finally:
+            if out is not None:
+                outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
 
     def update_nodes(self, updates: dict[int, Attrs]) -> None:
         """Set attributes of many visible nodes at once: one stamp, one delta, one lock.
@@ -404,7 +398,7 @@ class DSRGraph:
             for node_id, values in checked.items():
                 self._update_node_tx(node_id, values)
             return
-        payload = None
+        out = None
         with self._lock:
             if self._tx is not None:          # another thread's transaction: wait for it
                 for node_id, values in checked.items():
@@ -435,13 +429,12 @@ class DSRGraph:
             self._version += 1
             outbox = self._outbox
             if outbox is not None:
-                payload = outbox.add_entries(entries, hlc)
-        self._signals.post(events)
-        publish = self._publish
-        if payload is not None and publish is not None:
-            publish(payload)
-            if hlc > self.sent_hlc:
-                self.sent_hlc = hlc
+                out = outbox.add_entries(entries, hlc)
+        try:
+            self._signals.post(events)
+        finally:
+            if out is not None:
+                outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
 
     def published_hlc(self) -> int:
         """Every local write stamped up to this HLC has been handed to the publisher."""
@@ -667,6 +660,7 @@ class DSRGraph:
                 self._outbox = Outbox(self._encoder, publish, linger_s=linger_s)
         if old is not None:
             old.close()
+            self.sent_hlc = max(self.sent_hlc, old.sent_top)
 
     def flush(self) -> None:
         """Publish coalesced deltas now instead of within the linger time."""

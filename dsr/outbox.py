@@ -1,16 +1,21 @@
-"""Adaptive coalescing of outgoing deltas.
+"""Adaptive coalescing of outgoing deltas, published in stamp order.
 
-Why: each Zenoh sample costs the receiver a fixed ~20-50 us of Python work (callback, decode,
-checks), whatever its size, so an agent writing thousands of attributes per second would
-saturate its peers.  The first delta after a quiet period is sent at once (no latency cost on
-the request/response path); deltas that follow within `linger_s` of the previous send are
-joined into one pending delta (a join of delta-states is a valid delta) and sent by a flusher
-thread at most `linger_s` later, or as soon as `max_entries` elements are pending.
+Why coalesce: each Zenoh sample costs the receiver a fixed ~20-50 us of Python work (callback,
+decode, checks), whatever its size, so an agent writing thousands of attributes per second
+would saturate its peers.  The first delta after a quiet period is sent at once (no latency
+cost on the request/response path); deltas that follow within `linger_s` of the previous send
+are joined into one pending delta (a join of delta-states is a valid delta) and sent by a
+flusher thread at most `linger_s` later, or as soon as `max_entries` elements are pending.
 
-Order: receivers take a writer's deltas as arriving in stamp order (a delta's top stamp is their
-watermark of that writer, dsr/transport.py), so a send must never overtake an older one.  A
-batch the flusher has taken is in flight until published; meanwhile nothing goes out directly
-(it queues behind), and the flusher and flush() send one batch at a time.
+Why order: receivers take a writer's deltas as arriving in stamp order (a delta's top stamp is
+their watermark of that writer, dsr/transport.py), so a send must never overtake an older one.
+Payloads leave from several threads (writers publish their own direct deltas after releasing
+the graph lock; the flusher publishes batches), and any of them may be descheduled between
+taking its payload and publishing it.  So every payload gets a ticket when it leaves the
+outbox, under the outbox lock and therefore in stamp order (writers stamp and hand their delta
+over under the graph lock), and send() publishes tickets strictly in ticket order.  Whoever
+takes an Outgoing must send() it, even on error: a missing ticket holds back every later one
+(for at most TURN_TIMEOUT_S, after which the order gives way and an error is logged).
 """
 
 from __future__ import annotations
@@ -19,12 +24,24 @@ import logging
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 
 from dsr import crdt, wire
 from dsr.crdt import ElementState
 
 log = logging.getLogger(__name__)
 EdgeKey = tuple[int, int, str]
+
+#: how long a payload waits for an older one to be published before it goes anyway
+TURN_TIMEOUT_S = 2.0
+
+
+@dataclass(slots=True, frozen=True)
+class Outgoing:
+    """One payload that has left the outbox: its place in the send order and its top stamp."""
+    ticket: int
+    payload: bytes
+    top: int
 
 
 class Outbox:
@@ -36,28 +53,28 @@ class Outbox:
         self.max_entries = max_entries
         self._lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
-        self._send_lock = threading.Lock()   # one batch taken and published at a time
-        self._in_flight = 0                  # batches taken, not yet published
         self._nodes: dict[int, ElementState] = {}
         self._edges: dict[EdgeKey, ElementState] = {}
         self._last_send = 0.0
         self._pending_top = 0
+        self._tickets = 0                         # next ticket to give (under _lock)
+        self._turn = 0                            # next ticket allowed to publish
+        self._turn_changed = threading.Condition()
         #: largest HLC of the deltas this outbox has published (see DSRGraph.published_hlc)
         self.sent_top = 0
         self._closed = False
         self._thread: threading.Thread | None = None
         self.messages = 0
 
+    # ------------------------------------------------------------------ taking payloads
     def add(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState],
-            top: int = 0) -> bytes | None:
-        """Queue a delta whose stamps are at most `top`; returns a payload the caller must
-        publish now (or None if queued)."""
+            top: int = 0) -> Outgoing | None:
+        """Queue a delta whose stamps are at most `top`; returns an Outgoing the caller must
+        send() now (or None if queued)."""
         with self._lock:
             now = time.perf_counter()
             if self._direct_ok(now):
-                self._last_send = now
-                self.messages += 1
-                return self._encode(nodes, edges)
+                return self._issue(self._encode(nodes, edges), top, now)
             if top > self._pending_top:
                 self._pending_top = top
             for node_id, state in nodes.items():
@@ -72,9 +89,8 @@ class Outbox:
                     self._edges[key] = edge
                 else:
                     crdt.join_states(pending, edge)
-            if len(self._nodes) + len(self._edges) >= self.max_entries and not self._in_flight:
-                taken = self._take(now, in_flight=False)   # the caller publishes it next
-                return taken[0] if taken is not None else None
+            if len(self._nodes) + len(self._edges) >= self.max_entries:
+                return self._take(now)            # the caller sends it next
             if self._thread is None:
                 self._thread = threading.Thread(target=self._run, name="dsr-outbox", daemon=True)
                 self._thread.start()
@@ -82,26 +98,22 @@ class Outbox:
             return None
 
     def add_attrs(self, node_id: int, regs: dict[str, tuple[int, int, object]],
-                  top: int) -> bytes | None:
+                  top: int) -> Outgoing | None:
         """add() for one node's attribute update (the hot path: no intermediate objects)."""
         now = time.perf_counter()
         if self._direct_ok(now):
             with self._lock:
                 if self._direct_ok(now):
-                    self._last_send = now
-                    self.messages += 1
-                    return self._encoder.node_attrs(node_id, regs)
+                    return self._issue(self._encoder.node_attrs(node_id, regs), top, now)
         return self.add({node_id: ElementState(attrs=regs)}, {}, top)
 
-    def add_entries(self, entries: list[dict[str, object]], top: int) -> bytes | None:
+    def add_entries(self, entries: list[dict[str, object]], top: int) -> Outgoing | None:
         """add() for a batch of node attribute updates already in wire form ({"id", "attrs"})."""
         now = time.perf_counter()
         with self._lock:   # a big batch is worth a sample of its own: no lingering for it
-            if not self._nodes and not self._edges and not self._in_flight and (
+            if not self._nodes and not self._edges and (
                     len(entries) * 4 >= self.max_entries or now - self._last_send >= self.linger_s):
-                self._last_send = now
-                self.messages += 1
-                return self._encoder.encode(entries, [])
+                return self._issue(self._encoder.encode(entries, []), top, now)
         return self.add({entry["id"]: ElementState(attrs=entry["attrs"])  # type: ignore[misc]
                          for entry in entries}, {}, top)
 
@@ -110,38 +122,51 @@ class Outbox:
                                     [wire.edge_entry(k, s) for k, s in edges.items()])
 
     def _direct_ok(self, now: float) -> bool:
-        """May a delta go out at once, on the writer's thread?  Only with nothing queued or in
-        flight before it (it would overtake them) and after a quiet `linger_s`."""
-        return not self._nodes and not self._edges and not self._in_flight \
-            and now - self._last_send >= self.linger_s
+        """May a delta go out at once, on the writer's thread?  Only with nothing queued (the
+        queued writes are older: their batch must get the earlier ticket) and after a quiet
+        `linger_s`."""
+        return not self._nodes and not self._edges and now - self._last_send >= self.linger_s
 
-    def _take(self, now: float, in_flight: bool = True) -> tuple[bytes, int] | None:
-        """The pending delta as one payload (caller holds _lock); counted in flight until
-        _send() has published it, unless the caller publishes it itself right away."""
+    def _issue(self, payload: bytes, top: int, now: float) -> Outgoing:
+        """Give a payload its ticket (caller holds _lock)."""
+        ticket = self._tickets
+        self._tickets = ticket + 1
+        self._last_send = now
+        self.messages += 1
+        return Outgoing(ticket, payload, top)
+
+    def _take(self, now: float) -> Outgoing | None:
+        """The pending delta as one ticketed payload (caller holds _lock)."""
         if not self._nodes and not self._edges:
             return None
         nodes, edges = self._nodes, self._edges
         self._nodes, self._edges = {}, {}
         top, self._pending_top = self._pending_top, 0
-        self._last_send = now
-        self.messages += 1
-        if in_flight:
-            self._in_flight += 1
-        return self._encode(nodes, edges), top
+        return self._issue(self._encode(nodes, edges), top, now)
 
-    def _send(self, taken: tuple[bytes, int] | None) -> None:
-        if taken is None:
+    # ------------------------------------------------------------------ publishing
+    def send(self, out: Outgoing | None) -> None:
+        """Publish `out` once every older ticket is published (on the caller's thread)."""
+        if out is None:
             return
+        turn = self._turn_changed
+        with turn:
+            if not turn.wait_for(lambda: self._turn >= out.ticket, timeout=TURN_TIMEOUT_S):
+                log.error("DSR outbox: delta %d waited %.1f s for an older one (%d) that was "
+                          "never sent; publishing out of order", out.ticket, TURN_TIMEOUT_S,
+                          self._turn)
         try:
-            self._publish(taken[0])
+            self._publish(out.payload)
         except Exception:  # noqa: BLE001 - session closing under us; state stays for anti-entropy
             log.warning("DSR outbox: publish failed", exc_info=True)
         else:
-            if taken[1] > self.sent_top:
-                self.sent_top = taken[1]
+            if out.top > self.sent_top:
+                self.sent_top = out.top
         finally:
-            with self._lock:
-                self._in_flight -= 1
+            with turn:
+                if out.ticket + 1 > self._turn:
+                    self._turn = out.ticket + 1
+                turn.notify_all()
 
     def _run(self) -> None:
         while True:
@@ -153,17 +178,19 @@ class Outbox:
                 delay = self._last_send + self.linger_s - time.perf_counter()
             if delay > 0:
                 time.sleep(delay)
-            with self._send_lock:
-                with self._lock:
-                    payload = self._take(time.perf_counter())
-                self._send(payload)
+            with self._lock:
+                out = self._take(time.perf_counter())
+            self.send(out)
 
     def flush(self) -> None:
-        """Send whatever is pending now (on the caller's thread), after any batch in flight."""
-        with self._send_lock:
-            with self._lock:
-                payload = self._take(time.perf_counter())
-            self._send(payload)
+        """Send whatever is pending now (on the caller's thread); returns once every payload
+        that left the outbox before the call has been published."""
+        with self._lock:
+            out = self._take(time.perf_counter())
+            issued = self._tickets
+        self.send(out)
+        with self._turn_changed:
+            self._turn_changed.wait_for(lambda: self._turn >= issued, timeout=TURN_TIMEOUT_S)
 
     def close(self) -> None:
         self.flush()

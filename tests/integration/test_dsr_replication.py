@@ -27,7 +27,8 @@ def test_three_concurrent_writers_converge(procs, tmp_path):
     statuses = [read_status(p) for p in paths]
     done: dict[str, int] = {}
     for status in statuses:
-        assert status["stats"]["rejected"] == 0 and status["stats"]["errors"] == 0
+        assert status["stats"]["rejected"] == 0 and status["stats"]["errors"] == 0, \
+            {key: status["stats"].get(key) for key in ("rejects", "last_reject", "errors")}
         for kind, count in status["ops"].items():
             done[kind] = done.get(kind, 0) + count
     for kind in ("insert_node", "update_node", "delete_node", "insert_edge", "delete_edge"):

@@ -1,10 +1,13 @@
-"""A writer's deltas leave in stamp order, whoever sends them.
+"""A writer's deltas leave in stamp order, whoever sends them and whoever is descheduled.
 
-Regression: the flusher thread took a batch and, descheduled on a loaded machine for longer than
-the linger time, published it after a newer delta the writer had sent directly.  Receivers take
-a delta's top stamp as their watermark of that writer, so the older batch's writes then looked
-forged when another member's state relayed them (tests/integration/test_dsr_replication.py,
-three concurrent writers, failed about once in twenty runs under load).
+Regressions, both found by tests/integration/test_dsr_replication.py (three concurrent writers)
+failing now and then under CPU load with a false "forged stamp": receivers take a delta's top
+stamp as their watermark of that writer, so an older delta published after a newer one looked
+forged when another member's state relayed its writes.
+- The flusher thread took a batch and, descheduled for longer than the linger time, published it
+  after a newer delta the writer had sent directly.
+- A writer thread took a direct delta and, descheduled after releasing the graph lock but before
+  publishing, was overtaken by the flusher's batch of another thread's newer writes.
 """
 
 from __future__ import annotations
@@ -16,35 +19,98 @@ import orjson
 
 from dsr import wire
 from dsr.crdt import ElementState
+from dsr.graph import DSRGraph
 from dsr.outbox import Outbox
 
 
 def _stamps(payload: bytes) -> list[int]:
-    return [reg[0] for node in orjson.loads(payload)["nodes"] for reg in node["attrs"].values()]
+    """The attribute stamps of a delta (its inserts' stamps too: their meta register)."""
+    stamps = []
+    for node in orjson.loads(payload)["nodes"]:
+        stamps += [reg[0] for reg in node.get("attrs", {}).values()]
+        if "meta" in node:
+            stamps.append(node["meta"][0])
+    return stamps
 
 
 def _write(stamp: int) -> dict[int, ElementState]:
     return {stamp: ElementState(attrs={"v": (stamp, 1, stamp)})}
 
 
+def _sent_stamps(published: list[bytes]) -> list[int]:
+    return [s for payload in published for s in _stamps(payload)]
+
+
 def test_a_direct_send_never_overtakes_a_batch_in_flight() -> None:
     published: list[bytes] = []
     in_publish, release = threading.Event(), threading.Event()
 
-    def publish(payload: bytes) -> None:   # the flusher's publish, stalled until released
-        in_publish.set()
-        release.wait(5.0)
+    def publish(payload: bytes) -> None:   # stalls the second payload (the flusher's batch)
+        if published:
+            in_publish.set()
+            release.wait(5.0)
         published.append(payload)
 
     outbox = Outbox(wire.DeltaEncoder("g", "a", 1), publish, linger_s=0.001)
-    first = outbox.add(_write(1), {}, top=1)
-    assert first is not None, "after a quiet time a delta goes out at once"
-    published.append(first)                                   # the writer publishes it
+    outbox.send(outbox.add(_write(1), {}, top=1))
+    assert published, "after a quiet time a delta goes out at once"
     assert outbox.add(_write(2), {}, top=2) is None            # within the linger: queued
     assert in_publish.wait(5.0), "the flusher took the batch and is publishing it"
     time.sleep(0.01)                                           # well past the linger time
-    assert outbox.add(_write(3), {}, top=3) is None, "queued behind the batch in flight"
+    third = outbox.add(_write(3), {}, top=3)
+    sender = threading.Thread(target=outbox.send, args=(third,))
+    sender.start()
+    time.sleep(0.05)
+    assert _sent_stamps(published) == [1], "the newer delta waits for the batch in flight"
     release.set()
+    sender.join(5.0)
+    outbox.close()
+    assert _sent_stamps(published) == [1, 2, 3]
+    assert outbox.sent_top == 3
+
+
+def test_a_batch_never_overtakes_a_direct_delta_its_writer_has_not_sent_yet() -> None:
+    published: list[bytes] = []
+    outbox = Outbox(wire.DeltaEncoder("g", "a", 1), published.append, linger_s=0.001)
+    stalled = outbox.add(_write(1), {}, top=1)    # writer A: a direct delta, then descheduled
+    assert stalled is not None
+    assert outbox.add(_write(2), {}, top=2) is None   # writer B, within the linger: queued
+    time.sleep(0.05)                                  # the flusher has long taken B's batch
+    assert published == [], "the batch waits for the older direct delta"
+    outbox.send(stalled)                              # writer A runs again
     outbox.flush()
     outbox.close()
-    assert [s for payload in published for s in _stamps(payload)] == [1, 2, 3]
+    assert _sent_stamps(published) == [1, 2]
+
+
+def test_concurrent_writer_threads_publish_in_stamp_order() -> None:
+    """Through the graph, as agents write: several threads, direct sends and batches mixed,
+    with a publisher that sometimes yields the CPU mid-publish."""
+    published: list[bytes] = []
+
+    def publish(payload: bytes) -> None:
+        if len(published) % 7 == 3:
+            time.sleep(0.0005)
+        published.append(payload)
+
+    graph = DSRGraph("writer", replica_id=5)
+    graph.attach(publish, linger_s=0.0002)
+    node_ids = [graph.insert_node("thing", f"thing_{i}").id for i in range(4)]
+
+    def writer(node_id: int) -> None:
+        for step in range(300):
+            graph.update_node(node_id, {"step": step})
+            if step % 50 == 0:
+                time.sleep(0.001)
+
+    threads = [threading.Thread(target=writer, args=(i,)) for i in node_ids]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(30.0)
+    graph.flush()
+    tops = [max(_stamps(payload) or [0]) for payload in published]
+    lows = [min(_stamps(payload) or [0]) for payload in published]
+    assert all(lows[i] > tops[i - 1] for i in range(1, len(tops))), \
+        "a delta's stamps are all above every stamp published before it"
+    assert graph.published_hlc() == max(tops)
