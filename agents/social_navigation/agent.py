@@ -29,6 +29,7 @@ from agents.world.freshness import observed_up_to
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap import elastic_band as eb
 from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
+from agents.lib.socialmap.grid import blocked_core
 from agents.lib.socialmap import arrival, replan
 from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupied
@@ -55,17 +56,22 @@ STALL_TIMEOUT_S = 60.0
 BLOCKED_WAIT_S = 30.0   # sim seconds an intention waits for people to clear a blocked way before failing
 
 
-def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
-    """Cost of a polyline on a grid with the planner's semantics (L * mean of the two cells)."""
-    if len(points) < 2:
-        return 0.0
+def densify(points: np.ndarray, step_m: float) -> np.ndarray:
+    """The polyline's vertices and points in between, at most ``step_m`` apart."""
     seg = np.diff(points, axis=0)
     lengths = np.hypot(seg[:, 0], seg[:, 1])
     samples = [points[:1]]
     for start, delta, length in zip(points[:-1], seg, lengths, strict=True):
-        n = max(1, int(math.ceil(length / (spec.resolution / 2))))
+        n = max(1, int(math.ceil(length / step_m)))
         samples.append(start + delta * (np.arange(1, n + 1)[:, None] / n))
-    dense = np.vstack(samples)
+    return np.vstack(samples)
+
+
+def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
+    """Cost of a polyline on a grid with the planner's semantics (L * mean of the two cells)."""
+    if len(points) < 2:
+        return 0.0
+    dense = densify(points, spec.resolution / 2)
     rows = np.clip(((dense[:, 1] - spec.y0) / spec.resolution).astype(int), 0, grid.shape[0] - 1)
     cols = np.clip(((dense[:, 0] - spec.x0) / spec.resolution).astype(int), 0, grid.shape[1] - 1)
     costs = grid[rows, cols]
@@ -116,8 +122,12 @@ class SocialNavigationAgent(Agent):
         self.last_answered = -1.0
         self.last_replan_s = -math.inf
         self.started_s = 0.0
+        #: the longest path adopted for the intention (m): its time budget is
+        #: STALL_TIMEOUT_S + 4 x this at cruise speed (the band itself shrinks as the robot advances)
+        self.budget_m = 0.0
         self.follower = BandFollower(self.drive, self.control)
         self.map: SocialMap | None = None
+        self._wall_core: tuple[np.ndarray, np.ndarray] | None = None   # (static grid, blocked_core of it)
         self.replanner = Replanner()   # reuses earlier searches to the same goal (and their buffers)
         replan.warm_up()               # numba: load (or compile) the kernels now, not on the first plan
         arrival.warm_up()
@@ -181,6 +191,7 @@ class SocialNavigationAgent(Agent):
         self.goal = intention.goal
         self.route_rooms = intention.rooms
         self.started_s = now_s
+        self.budget_m = 0.0
         self.follower.reset()
         self.band = None
         self.blocked_since = None
@@ -229,6 +240,7 @@ class SocialNavigationAgent(Agent):
         self.global_points = points
         self._best_distance, self._progress_s = math.inf, now_s  # a new path: measure progress afresh
         self.band = eb.band_from_path(points, (), self.band_params)
+        self.budget_m = max(self.budget_m, self.band.length_m)
         self.last_replan_s = now_s
         self._publish_path(points, now_s, reason, cost, replan)
 
@@ -283,9 +295,11 @@ class SocialNavigationAgent(Agent):
         pose = self.graph.world_pose(robot.id)
         obstacles = self._laser_points(robot, pose)
         try:
-            self.band = eb.step(self.band, obstacles, robot_pose=pose, params=self.band_params)
+            band = eb.step(self.band, obstacles, robot_pose=pose, params=self.band_params)
         except eb.BandInputError:
-            pass
+            band = self.band
+        self.band = band if not self._cuts_walls(band.points, pose) else \
+            eb.band_from_path(np.vstack([[pose[0], pose[1]], self._remaining_global(pose)]), (), self.band_params)
         out = self.follower.command(pose, self.band.points, self.control_dt, goal_theta=self.goal[2])
         cmd = out.command
         vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
@@ -301,7 +315,7 @@ class SocialNavigationAgent(Agent):
             self.rec.event(f"{format_clock(now_s)} reached goal of {intention.name} "
                            f"({now_s - self.started_s:.0f} s)")
             return
-        if now_s - self.started_s > STALL_TIMEOUT_S + 4 * self.band.length_m / max(self.cruise, 0.05):
+        if now_s - self.started_s > STALL_TIMEOUT_S + 4 * self.budget_m / max(self.cruise, 0.05):
             self._fail("timed out before reaching the goal")
             return
         remaining = self.band.length_m  # the band is cut behind the robot: it shrinks as it advances
@@ -329,6 +343,27 @@ class SocialNavigationAgent(Agent):
             return
         points = self._route(pose, path)
         self._adopt(points, now_s, "replanned (no progress: recovery)", path.cost)
+
+    def _cuts_walls(self, points: np.ndarray, pose: tuple[float, float, float]) -> bool:
+        """Does the band pass through a wall (deeper than half the inflation margin)?
+
+        The band sees walls only through the laser, and its contraction outweighs the repulsion
+        of a wall seen edge-on: on a door jamb it can slide across the wall (a robot once drove
+        into the jamb of center_a's door_pt and stayed stuck there).  The map knows the walls,
+        so a band that cuts them is dropped for the global path (which the map judged free)."""
+        smap = self.map
+        if smap is None or len(points) < 2:
+            return False
+        if self._wall_core is None or self._wall_core[0] is not smap.static:
+            depth = smap.params.grid.robot_radius_m * 0.5
+            self._wall_core = (smap.static, blocked_core(smap.static, smap.spec, depth))
+        core = self._wall_core[1]
+        spec = smap.spec
+        dense = densify(points, spec.resolution / 2)
+        far = np.hypot(dense[:, 0] - pose[0], dense[:, 1] - pose[1]) > ESCAPE_SKIP_M
+        rows = np.clip(((dense[far, 1] - spec.y0) / spec.resolution).astype(int), 0, core.shape[0] - 1)
+        cols = np.clip(((dense[far, 0] - spec.x0) / spec.resolution).astype(int), 0, core.shape[1] - 1)
+        return bool(np.any(core[rows, cols]))
 
     def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
         """Speed factor from the free space ahead in the direction of motion (laser), and whether

@@ -169,3 +169,49 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
         assert nav.map is not None and nav.goal is not None
         fresh = plan(nav.map, (pose[0], pose[1]), nav.goal[:2], cruise_speed_mps=nav.cruise)
         assert cost * nav.map.spec.resolution == pytest.approx(fresh.cost, rel=1e-7)
+
+
+def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two regressions, driven in lockstep on center_a from the corridor into physical therapy:
+    - the elastic band's contraction slid it across the jamb of door_pt (it sees walls only
+      through the laser); the robot followed it into the wall and stayed there, backing off;
+    - a 55 m drive on a 100 m x 60 m building map failed 'timed out before reaching the goal'
+      2 m short of it: the time budget was computed from the band's remaining length, which
+      shrinks as the robot advances, against the time since the start.  A 2 s slack here (60 s
+      live) makes a drive of a few metres show it."""
+    from agents.lib.socialmap.grid import blocked_core
+    from agents.social_navigation import agent as navigation
+    from agents.social_navigation.agent import SocialNavigationAgent
+
+    monkeypatch.setattr(navigation, "STALL_TIMEOUT_S", 2.0)
+    graph, agents = world("center_a", tmp_path)
+    set_clock(graph, agents, "11:30")
+    agents["executive"].step()
+    graph.dispatch()
+    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
+    nav.setup(graph, Recorder("social_navigation", None, None))
+    nav.step()
+    graph.dispatch()
+    assert nav.intention_id is not None and nav.map is not None
+    intention_id = nav.intention_id
+    walls = blocked_core(nav.map.static, nav.map.spec, nav.map.params.grid.robot_radius_m * 0.5)
+    spec = nav.map.spec
+    robot = graph.get_node_by_name("robot")
+    sim = agents["sim_robot"]
+    sim.rate = 1e6                     # lockstep as fast as the test can go
+    in_walls = []
+    for _ in range(1500):
+        sim.step()
+        graph.dispatch()
+        nav.step()
+        graph.dispatch()
+        x, y, _ = graph.world_pose(robot.id)
+        if walls[int((y - spec.y0) / spec.resolution), int((x - spec.x0) / spec.resolution)]:
+            in_walls.append((round(x, 2), round(y, 2)))
+        if graph.get_node(intention_id).attrs.get("state") != "active":
+            break
+    assert not in_walls, f"the robot drove into a wall at {in_walls[:3]}"
+    node = graph.get_node(intention_id)
+    assert node.attrs.get("state") == "done", node.attrs
+    assert sim.now_s - parse_clock("11:30") > 2.0 + 1.0, "a drive longer than the slack alone"

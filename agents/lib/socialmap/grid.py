@@ -260,3 +260,19 @@ def static_grid(spec: GridSpec, walls: Sequence[Wall], rooms: Sequence[Room], pa
     if occupancy is not None:
         grid[occupancy.sample(occupancy.inflated(params.robot_radius_m), spec)] = BLOCKED
     return grid
+
+
+def blocked_core(static: CostArray, spec: GridSpec, depth_m: float) -> NDArray[np.bool_]:
+    """The blocked cells of a static grid that stay blocked after peeling ``depth_m`` off every
+    blocked region: where the robot's centre would be less than (inflation - depth_m) from a wall.
+
+    Why: the static grid inflates walls by the robot radius, and a local planner (the elastic
+    band) legitimately grazes that margin at corners; what it must never do is cut through a wall
+    or a door jamb, which this core still marks however thin the wall is."""
+    from scipy import ndimage
+
+    blocked = np.isinf(static)
+    cells = int(depth_m / spec.resolution)
+    if cells <= 0:
+        return blocked
+    return ndimage.binary_erosion(blocked, iterations=cells, border_value=1)
