@@ -323,9 +323,11 @@ class SocialNavigationAgent(Agent):
             self._best_distance, self._progress_s = remaining, now_s
         elif now_s - self._progress_s > STALL_S:
             # Recovery (as Nav2's): no progress for a while, so plan afresh from where the robot is.
+            # The pose is answered with a stop: unanswered, the lockstep simulator would wait for
+            # its wall-clock watchdog (a second) before it brakes and lets time flow again.
             self._progress_s = now_s
             self._recover(robot, now_s)
-            return
+            vx = vy = omega = 0.0
         self.graph.update_node(robot.id, attrs={"cmd_vx": vx, "cmd_vy": vy, "cmd_omega": omega,
                                                 "cmd_stamp": pose_stamp})
         if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:

@@ -215,3 +215,29 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
     node = graph.get_node(intention_id)
     assert node.attrs.get("state") == "done", node.attrs
     assert sim.now_s - parse_clock("11:30") > 2.0 + 1.0, "a drive longer than the slack alone"
+
+
+def test_a_recovery_still_answers_the_pose(tmp_path: Path) -> None:
+    """Regression: the step that found no progress replanned and returned without a command, so
+    the lockstep simulator stood still for its wall-clock watchdog (1 s) after every recovery."""
+    from agents.social_navigation.agent import STALL_S, SocialNavigationAgent
+
+    graph, agents = world("center_a", tmp_path)
+    set_clock(graph, agents, "11:30")
+    agents["executive"].step()
+    graph.dispatch()
+    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
+    nav.setup(graph, Recorder("social_navigation", None, None))
+    nav.step()
+    graph.dispatch()
+    sim, robot = agents["sim_robot"], graph.get_node_by_name("robot")
+    sim.rate = 1e6
+    sim.step()
+    graph.dispatch()
+    nav._best_distance, nav._progress_s = 0.0, sim.now_s - STALL_S - 1.0   # no progress for a while
+    nav.step()
+    graph.dispatch()
+    attrs = graph.get_node(robot.id).attrs
+    assert nav._progress_s == pytest.approx(sim.now_s), "the stall was noticed and recovered from"
+    assert attrs.get("cmd_stamp", -1.0) >= attrs["pose_stamp"], "the pose was answered"
+    assert (attrs["cmd_vx"], attrs["cmd_vy"]) == (0.0, 0.0), "with a stop"
