@@ -60,21 +60,56 @@ def _live(windows: Iterable[ActivityWindow]) -> list[ActivityWindow]:
 
 def r_profile(times_s: ArrayLike, windows: Sequence[ActivityWindow], params: ChronemicsParams) -> NDArray[np.float64]:
     """R(t) at many times at once (the planner samples it along arrival times)."""
+    return r_profiles(times_s, [windows], params)[0]
+
+
+def r_profiles(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]],
+               params: ChronemicsParams) -> NDArray[np.float64]:
+    """R(t) of several objects (``windows[k]``: object k's activities) at many times: row k is
+    object k's. Why all at once and in few array passes: the planner samples every interaction
+    space over its arrival-time horizon on each (re)plan (15 objects x 1,200 times at 1000^2), and
+    one object at a time, a dozen passes each, took 0.6 ms of a 2.7 ms replan."""
     t = np.asarray(times_s, dtype=np.float64)
-    result = np.full(t.shape, params.r_min)
+    live = [_live(own) for own in windows]
+    result = np.full((len(live), *t.shape), params.r_min)
+    starts, ends, owners = _window_columns(live, t.ndim)
+    if owners.size == 0:
+        return result
+    # Where t lies on each window's ramps: 1 - (start - t) / ramp_before before the start,
+    # 1 - (t - end) / ramp_after after the end (1 or more inside, 0 or less beyond the ramps).
+    # R grows with it, so an object's dearest window is the one where it is largest.
+    reach = 1.0 - np.maximum(_ramp(starts - t, params.ramp_before_s), _ramp(t - ends, params.ramp_after_s))
+    first, owning = _groups(owners)
+    if first.size < owners.size:
+        reach = np.maximum.reduceat(reach, first, axis=0)
     span = params.r_max - params.r_min
-    for window in _live(windows):
-        value = np.where((t >= window.start_s) & (t <= window.end_s), params.r_max, params.r_min)
-        if params.ramp_before_s > 0.0:
-            before = (t < window.start_s) & (t > window.start_s - params.ramp_before_s)
-            rising = params.r_min + span * (1.0 - (window.start_s - t) / params.ramp_before_s)
-            value = np.where(before, rising, value)
-        if params.ramp_after_s > 0.0:
-            after = (t > window.end_s) & (t < window.end_s + params.ramp_after_s)
-            falling = params.r_min + span * (1.0 - (t - window.end_s) / params.ramp_after_s)
-            value = np.where(after, falling, value)
-        result = np.maximum(result, value)
+    result[owning] = np.where(reach >= 1.0, params.r_max, params.r_min + span * np.maximum(reach, 0.0))
     return result
+
+
+def _ramp(ahead_s: NDArray[np.float64], ramp_s: float) -> NDArray[np.float64]:
+    """How far along a ramp of ``ramp_s`` a time ``ahead_s`` before its window lies, in ramps
+    (<= 0 inside the window; with no ramp, +inf outside it)."""
+    if ramp_s > 0.0:
+        return ahead_s / ramp_s
+    return np.where(ahead_s > 0.0, np.inf, -np.inf)
+
+
+def _window_columns(live: Sequence[Sequence[ActivityWindow]],
+                    ndim: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Every window's start and end as a column that broadcasts against ``ndim``-dimensional
+    times, and the index of the object owning it (objects in order)."""
+    flat = [w for own in live for w in own]
+    shape = (len(flat),) + (1,) * ndim
+    starts = np.array([w.start_s for w in flat], dtype=np.float64).reshape(shape)
+    ends = np.array([w.end_s for w in flat], dtype=np.float64).reshape(shape)
+    return starts, ends, np.repeat(np.arange(len(live)), [len(own) for own in live])
+
+
+def _groups(owners: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """For sorted, non-empty ``owners``: where each owner's run starts, and the owners."""
+    first = np.flatnonzero(np.r_[True, owners[1:] != owners[:-1]])
+    return first, owners[first]
 
 
 def r_of_t(t_s: float, windows: Sequence[ActivityWindow], params: ChronemicsParams) -> float:
@@ -84,10 +119,18 @@ def r_of_t(t_s: float, windows: Sequence[ActivityWindow], params: ChronemicsPara
 
 def active_mask(times_s: ArrayLike, windows: Sequence[ActivityWindow]) -> NDArray[np.bool_]:
     """True where some non-cancelled activity runs: ``ActivityWindow.running_at`` at many times."""
+    return active_masks(times_s, [windows])[0]
+
+
+def active_masks(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]]) -> NDArray[np.bool_]:
+    """``active_mask`` of several objects at once (row k: ``windows[k]``)."""
     t = np.asarray(times_s, dtype=np.float64)
-    result = np.zeros(t.shape, dtype=bool)
-    for window in _live(windows):
-        result |= (t >= window.start_s) & (t < window.end_s)
+    live = [_live(own) for own in windows]
+    result = np.zeros((len(live), *t.shape), dtype=bool)
+    starts, ends, owners = _window_columns(live, t.ndim)
+    if owners.size:
+        first, owning = _groups(owners)
+        result[owning] = np.logical_or.reduceat((t >= starts) & (t < ends), first, axis=0)
     return result
 
 
@@ -98,9 +141,20 @@ def is_active(t_s: float, windows: Sequence[ActivityWindow]) -> bool:
 def interaction_cost_profile(times_s: ArrayLike, windows: Sequence[ActivityWindow], params: ChronemicsParams,
                              forbidden_while_active: bool) -> NDArray[np.float64]:
     """The grid cost of an interaction space over time: R(t), or inf while active if forbidden."""
-    cost = r_profile(times_s, windows, params)
-    if forbidden_while_active:
-        cost = np.where(active_mask(times_s, windows), math.inf, cost)
+    return interaction_cost_profiles(times_s, [windows], params, [forbidden_while_active])[0]
+
+
+def interaction_cost_profiles(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]],
+                              params: ChronemicsParams, forbidden_while_active: Sequence[bool]) -> NDArray[np.float64]:
+    """``interaction_cost_profile`` of several objects at once (row k: ``windows[k]`` and
+    ``forbidden_while_active[k]``)."""
+    if len(forbidden_while_active) != len(windows):
+        raise ValueError("one forbidden_while_active flag per object's windows")
+    cost = r_profiles(times_s, windows, params)
+    forbidden = [k for k, flag in enumerate(forbidden_while_active) if flag]
+    if forbidden:
+        active = active_masks(times_s, [windows[k] for k in forbidden])
+        cost[forbidden] = np.where(active, math.inf, cost[forbidden])
     return cost
 
 

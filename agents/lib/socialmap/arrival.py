@@ -25,7 +25,8 @@ from agents.lib.socialmap.grid import CostArray
 from agents.lib.socialmap.layers import CellMask
 from agents.lib.socialmap.search import TimeCosts
 
-CostProfile = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+# times (n,) -> every space's cost at those times, shape (spaces, n)
+CostProfiles = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 
 _MAX_DISTINCT = 64   # distinct static costs inside one space handled by the compiled pass
@@ -107,27 +108,36 @@ def encode_spaces(base: CostArray, masks: Sequence[CellMask | None], *,
     return grid, labels
 
 
-def time_costs(base: CostArray, masks: Sequence[CellMask | None], profiles: Sequence[CostProfile],
+def time_costs(base: CostArray, masks: Sequence[CellMask | None], profiles: CostProfiles,
                t0_s: float, cruise_speed_mps: float, resolution_m: float, time_step_s: float,
                horizon_m: float, *, in_place: bool = False) -> TimeCosts:
     """The search's arrival-time grid and table: one table row per label, one column per
     ``time_step_s`` of travel at ``cruise_speed_mps`` up to ``horizon_m`` (longer trips use the
-    last column). ``profiles[k](times)`` is space k's cost at those times (inf: forbidden)."""
+    last column). ``profiles(times)[k]`` is space k's cost at those times (inf: forbidden)."""
     if cruise_speed_mps <= 0.0 or time_step_s <= 0.0:
         raise ValueError("cruise speed and time step must be > 0")
     grid, labels = encode_spaces(base, masks, in_place=in_place)
+    return TimeCosts(grid=grid, table=cost_table(labels, profiles, t0_s, cruise_speed_mps, time_step_s, horizon_m),
+                     cells_per_bin=cruise_speed_mps * time_step_s / resolution_m)
+
+
+def cost_table(labels: Sequence[tuple[frozenset[int], float]], profiles: CostProfiles, t0_s: float,
+               cruise_speed_mps: float, time_step_s: float, horizon_m: float) -> NDArray[np.float64]:
+    """The table of ``time_costs`` for ``labels`` (from encode_spaces): row k is label k's cost
+    per time bin, the dearest of its static cost and of the spaces covering it."""
     bins = max(1, math.ceil(horizon_m / cruise_speed_mps / time_step_s) + 1)
     times = t0_s + (np.arange(bins) + 0.5) * time_step_s
     times[0] = t0_s
-    per_space = {k: np.asarray(profiles[k](times), dtype=np.float64)
-                 for k in sorted({k for covering, _ in labels for k in covering})}
-    table = np.ones((max(1, len(labels)), bins))
-    for row, (covering, static) in enumerate(labels):
-        spaces = iter(covering)
-        np.maximum(static, per_space[next(spaces)], out=table[row])
-        for k in spaces:   # a cell in several spaces costs the dearest
+    if not labels:
+        return np.ones((1, bins))
+    per_space = np.asarray(profiles(times), dtype=np.float64)
+    spaces = [sorted(covering) for covering, _ in labels]
+    statics = np.array([static for _, static in labels], dtype=np.float64)
+    table = np.maximum(statics[:, np.newaxis], per_space[[own[0] for own in spaces]])
+    for row, own in enumerate(spaces):
+        for k in own[1:]:   # a cell in several spaces costs the dearest
             np.maximum(table[row], per_space[k], out=table[row])
-    return TimeCosts(grid=grid, table=table, cells_per_bin=cruise_speed_mps * time_step_s / resolution_m)
+    return table
 
 
 def warm_up() -> None:

@@ -66,6 +66,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from agents.lib.socialmap.incremental import IncrementalTimeCosts
 from agents.lib.socialmap.search import (
     _TIE_BREAK,
     SQRT2,
@@ -97,23 +98,26 @@ def truncate_down(values: NDArray[np.floating]) -> NDArray[np.float32]:
 
 
 @numba.njit(cache=True, nogil=True)
-def _update_bounds(flat, bits, row_min_bits, bounds, seeds, collect):  # type: ignore[no-untyped-def]
+def _update_bounds(flat, bits, row_min_bits, bounds, seeds, collect, windows, cols):  # type: ignore[no-untyped-def]
     """Write each cell's truncated lower-bound cost (its cost, or its table row's minimum for an
-    arrival-time cell) into ``bounds`` (as bits). With ``collect``, return how many fell, their
-    indices first in ``seeds``."""
+    arrival-time cell) into ``bounds`` (as bits), over the cells of ``windows`` (n, 4: r0, r1,
+    c0, c1; overlaps allowed). With ``collect``, return how many fell, their indices first in
+    ``seeds``."""
     count = 0
-    for i in range(bits.shape[0]):
-        b = bits[U(i)]
-        if b & _SIGN:
-            b = row_min_bits[int(-flat[U(i)]) - 1]
-        else:
-            b &= _TRUNCATE_MASK
-        old = bounds[U(i)]
-        if b != old:
-            if collect and b < old:
-                seeds[U(count)] = i
-                count += 1
-            bounds[U(i)] = b
+    for w in range(windows.shape[0]):
+        for row in range(windows[w, 0], windows[w, 1]):
+            for i in range(row * cols + windows[w, 2], row * cols + windows[w, 3]):
+                b = bits[U(i)]
+                if b & _SIGN:
+                    b = row_min_bits[int(-flat[U(i)]) - 1]
+                else:
+                    b &= _TRUNCATE_MASK
+                old = bounds[U(i)]
+                if b != old:
+                    if collect and b < old:
+                        seeds[U(count)] = i
+                        count += 1
+                    bounds[U(i)] = b
     return count
 
 
@@ -231,6 +235,9 @@ class Replanner:
         self._backward = SearchWorkspace()   # its g and closed marks are X's stored values
         self._key: tuple[int, int, int, float] | None = None
         self._bounds = np.empty(0, dtype=np.float32)
+        # Builds the arrival-time grids of the maps it searches (social_map.plan), so that the
+        # bounds' pass covers only the windows that changed (incremental.py).
+        self.costs = IncrementalTimeCosts()
         self._seeds = np.empty(0, dtype=np.int32)
         self._learned: LearnedBounds | None = None
         self._backward_expanded = 0
@@ -252,10 +259,16 @@ class Replanner:
         if self._bounds.shape[0] != cells:
             self._bounds = np.empty(cells, dtype=np.float32)
             self._seeds = np.empty(cells, dtype=np.int32)
+            self.costs.synced(False)   # the new bounds hold nothing yet: a full pass
         row_min = truncate_down(problem.table.min(axis=1) if problem.table is not None else np.zeros(1))
         self._key = None   # until the bounds and X agree again
+        ours = cost is self.costs.current   # its changes since our last pass are known
+        windows = self.costs.changes() if ours else None
+        if windows is None:
+            windows = np.array([[0, problem.rows, 0, problem.cols]], dtype=np.int64)
         cheaper = _update_bounds(problem.flat, problem.flat.view(np.uint32), row_min.view(np.uint32),
-                                 self._bounds.view(np.uint32), self._seeds, reused)
+                                 self._bounds.view(np.uint32), self._seeds, reused, windows, problem.cols)
+        self.costs.synced(ours)
         refresh = not reused or self._stale
         repaired, backward_expanded = 0, 0
         if refresh:

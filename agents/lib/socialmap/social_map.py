@@ -74,7 +74,7 @@ from agents.lib.socialmap.adaptive import Adaptation, AdaptiveParams, adapt_spac
 from agents.lib.socialmap.arrival import time_costs
 from agents.lib.agenda.chronemics import (
     ChronemicsParams,
-    interaction_cost_profile,
+    interaction_cost_profiles,
     is_active,
     r_band,
     r_of_t,
@@ -89,6 +89,7 @@ from agents.lib.socialmap.grid import (
     walls_geometry,
 )
 from agents.lib.socialmap.groups import Group, GroupParams, group_people, social_density
+from agents.lib.socialmap.incremental import IncrementalTimeCosts
 from agents.lib.socialmap.layers import (
     CellMask,
     body_patches,
@@ -214,19 +215,22 @@ class SocialMap:
         return self._cache["physical"]
 
     @property
+    def people_layers(self) -> tuple[CostPatch, ...]:
+        """The patches of ``people_cost`` over the static grid: bodies, footprints, zones, predictions."""
+        return (*self.obstacle_patches, *self.zone_patches, *self.prediction_patches)
+
+    @property
     def people_cost(self) -> CostArray:
         """``physical`` plus the people's zones (the arrival-time planner's static part)."""
         if "people_cost" not in self._cache:
-            self._cache["people_cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
-                                                               *self.prediction_patches))
+            self._cache["people_cost"] = compose(self.static, self.people_layers)
         return self._cache["people_cost"]
 
     @property
     def cost(self) -> CostArray:
         """``people_cost`` plus the interaction spaces at R(t_s): the departure-time social grid."""
         if "cost" not in self._cache:
-            self._cache["cost"] = compose(self.static, (*self.obstacle_patches, *self.zone_patches,
-                                                        *self.prediction_patches, *self.interaction_patches))
+            self._cache["cost"] = compose(self.static, (*self.people_layers, *self.interaction_patches))
         return self._cache["cost"]
 
     @property
@@ -274,26 +278,34 @@ class SocialMap:
             return compose(free, self.interaction_patches)
         raise ValueError(f"unknown layer {name!r}; expected walls, people or objects")
 
-    def time_costs(self, cruise_speed_mps: float) -> TimeCosts | None:
-        """``people_cost`` with the interaction spaces priced at arrival time (None without any)."""
+    def time_costs(self, cruise_speed_mps: float, *,
+                   incremental: IncrementalTimeCosts | None = None) -> TimeCosts | None:
+        """``people_cost`` with the interaction spaces priced at arrival time (None without any).
+        With ``incremental`` (a replanner's), that builder's grid updated from the map it built
+        before (incremental.py: the same values), valid until its next use and not cached here."""
         if not any(m is not None for m in self.interaction_cells):
             return None
         key = ("time_costs", cruise_speed_mps)
-        if key not in self._cache:
-            by_object: dict[str, list[ActivityWindow]] = {}
-            for window in self.activities:
-                by_object.setdefault(window.object, []).append(window)
-            chron = self.params.chronemics
-            profiles = [(lambda times, w=tuple(by_object.get(o.name, ())), f=o.forbidden_while_active:
-                         interaction_cost_profile(times, w, chron, f)) for o in self.objects]
-            xmin, ymin, xmax, ymax = self.spec.bounds
-            horizon = self.params.planner.horizon_factor * ((xmax - xmin) + (ymax - ymin))
-            cached = "people_cost" in self._cache
-            base = self.people_cost if cached else compose(self.static, (*self.obstacle_patches, *self.zone_patches,
-                                                                         *self.prediction_patches))
-            self._cache[key] = time_costs(base, self.interaction_cells, profiles, self.t_s, cruise_speed_mps,
-                                          self.spec.resolution, self.params.planner.time_step_s, horizon,
-                                          in_place=not cached)
+        if incremental is None and key in self._cache:
+            return self._cache[key]
+        by_object: dict[str, list[ActivityWindow]] = {}
+        for window in self.activities:
+            by_object.setdefault(window.object, []).append(window)
+        windows = [by_object.get(o.name, ()) for o in self.objects]
+        forbidden = [o.forbidden_while_active for o in self.objects]
+        chron = self.params.chronemics
+
+        def profiles(times: np.ndarray) -> np.ndarray:
+            return interaction_cost_profiles(times, windows, chron, forbidden)
+
+        xmin, ymin, xmax, ymax = self.spec.bounds
+        horizon = self.params.planner.horizon_factor * ((xmax - xmin) + (ymax - ymin))
+        timing = (self.t_s, cruise_speed_mps, self.spec.resolution, self.params.planner.time_step_s, horizon)
+        if incremental is not None:
+            return incremental.time_costs(self.static, self.people_layers, self.interaction_cells, profiles, *timing)
+        cached = "people_cost" in self._cache
+        base = self.people_cost if cached else compose(self.static, self.people_layers)
+        self._cache[key] = time_costs(base, self.interaction_cells, profiles, *timing, in_place=not cached)
         return self._cache[key]
 
 
@@ -448,7 +460,9 @@ def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[f
           planner: str, speed: float, workspace: SearchWorkspace | None, replanner: Replanner | None) -> Path:
     # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
     c_min = cheapest_cell(social_map, planner)
-    costs = social_map.time_costs(speed) if planner == "social" else None
+    # A replanner composes the arrival-time grid itself, from the one it searched last (replan.py).
+    costs = social_map.time_costs(speed, incremental=replanner.costs if replanner is not None else None) \
+        if planner == "social" else None
     grid = planning_grid(social_map, planner) if costs is None else costs
     return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace,
                         searcher=replanner)
