@@ -27,8 +27,10 @@ Keys (medians over repeated runs; ms unless the key says otherwise):
                          median of runs taken in alternation (so both see the same machine load)
   replan_ms_N            a replan with a Replanner (replan.py) after a local change, map at t + 0.2 s
                          (one 5 Hz period: R(t) crept), the person nearest the path moved 0.2 m,
-                         the robot 0.25 m along the path; arrival-time table built in the timing as
-                         in plan_ms_N, the previous plan (on the old map) untimed
+                         the robot 0.25 m along the path; arrival-time grid and table built in the
+                         timing as in plan_ms_N (the Replanner updates the grid of its previous plan
+                         where the map's layers changed, incremental.py), the previous plan (on the
+                         old map) untimed
   replan_agenda_ms_N     the same, but instead of the person the activity of the object nearest
                          the path moved 10 min earlier (R changed in one interaction space)
   replan_first_ms_N      the first plan to a goal with a Replanner (its backward refresh, then the plan)

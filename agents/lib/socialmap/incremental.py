@@ -98,8 +98,8 @@ class IncrementalTimeCosts:
             # each window once (most spaces' windows are the same in both maps)
             windows = list(dict.fromkeys([*changed, *self._mask_windows, *mask_windows] if encode else changed))
             self._recompose(static, boxed, windows)   # type: ignore[arg-type]
-            if self._changes is not None:   # the table may change every cell of the spaces
-                self._changes.extend(dict.fromkeys([*windows, *mask_windows]))   # type: ignore[list-item]
+            if self._changes is not None:
+                self._changes.extend(windows)   # type: ignore[arg-type]
             self.last_windows = windows   # type: ignore[assignment]
         else:
             if self._grid.shape != shape or self._grid.dtype != static.dtype:
@@ -124,12 +124,18 @@ class IncrementalTimeCosts:
         return self.current
 
     def changes(self) -> NDArray[np.int64] | None:
-        """The windows (n, 4: r0, r1, c0, c1) outside which ``current``'s grid equals the grid of
-        the last ``synced`` call's ``current`` (its table included: every space's window is in);
-        None when unknown (since then a rebuild from scratch, or nothing synced yet)."""
+        """The windows (n, 4: r0, r1, c0, c1) outside which ``current``'s grid holds the values
+        (costs, or the same spaces' codes) of the grid of the last ``synced`` call's ``current``;
+        None when unknown (since then a rebuild from scratch, or nothing synced yet). The table
+        is not covered: see ``space_windows``."""
         if self._changes is None:
             return None
         return np.array(self._changes, dtype=np.int64).reshape(-1, 4)
+
+    def space_windows(self) -> NDArray[np.int64]:
+        """The windows of ``current``'s interaction spaces: every coded cell (whose cost a change
+        of the table alone changes) lies in one."""
+        return np.array(self._mask_windows, dtype=np.int64).reshape(-1, 4)
 
     def synced(self, in_sync: bool = True) -> None:
         """Start counting changes from ``current`` (``in_sync``: a user now mirrors it), or stop
