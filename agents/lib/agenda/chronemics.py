@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -70,46 +71,56 @@ def r_profiles(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]],
     space over its arrival-time horizon on each (re)plan (15 objects x 1,200 times at 1000^2), and
     one object at a time, a dozen passes each, took 0.6 ms of a 2.7 ms replan."""
     t = np.asarray(times_s, dtype=np.float64)
-    live = [_live(own) for own in windows]
-    result = np.full((len(live), *t.shape), params.r_min)
-    starts, ends, owners = _window_columns(live, t.ndim)
-    if owners.size == 0:
+    found = _Windows.of(windows, t.ndim)
+    result = np.full((len(windows), *t.shape), params.r_min)
+    if not found.owners:
         return result
     # Where t lies on each window's ramps: 1 - (start - t) / ramp_before before the start,
     # 1 - (t - end) / ramp_after after the end (1 or more inside, 0 or less beyond the ramps).
     # R grows with it, so an object's dearest window is the one where it is largest.
-    reach = 1.0 - np.maximum(_ramp(starts - t, params.ramp_before_s), _ramp(t - ends, params.ramp_after_s))
-    first, owning = _groups(owners)
-    if first.size < owners.size:
-        reach = np.maximum.reduceat(reach, first, axis=0)
+    reach = 1.0 - np.maximum(_ramp(found.starts - t, params.ramp_before_s), _ramp(t - found.ends, params.ramp_after_s))
+    reach = found.per_owner(reach, np.maximum)
     span = params.r_max - params.r_min
-    result[owning] = np.where(reach >= 1.0, params.r_max, params.r_min + span * np.maximum(reach, 0.0))
+    result[found.owners] = np.where(reach >= 1.0, params.r_max, params.r_min + span * np.maximum(reach, 0.0))
     return result
 
 
-def _ramp(ahead_s: NDArray[np.float64], ramp_s: float) -> NDArray[np.float64]:
-    """How far along a ramp of ``ramp_s`` a time ``ahead_s`` before its window lies, in ramps
-    (<= 0 inside the window; with no ramp, +inf outside it)."""
+def _ramp(outside_s: NDArray[np.float64], ramp_s: float) -> NDArray[np.float64]:
+    """How far along its ramp of ``ramp_s`` a time ``outside_s`` beyond a window's edge lies, in
+    ramps (<= 0 inside the window; with no ramp, +inf anywhere outside it)."""
     if ramp_s > 0.0:
-        return ahead_s / ramp_s
-    return np.where(ahead_s > 0.0, np.inf, -np.inf)
+        return outside_s / ramp_s
+    return np.where(outside_s > 0.0, np.inf, -np.inf)
 
 
-def _window_columns(live: Sequence[Sequence[ActivityWindow]],
-                    ndim: int) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Every window's start and end as a column that broadcasts against ``ndim``-dimensional
-    times, and the index of the object owning it (objects in order)."""
-    flat = [w for own in live for w in own]
-    shape = (len(flat),) + (1,) * ndim
-    starts = np.array([w.start_s for w in flat], dtype=np.float64).reshape(shape)
-    ends = np.array([w.end_s for w in flat], dtype=np.float64).reshape(shape)
-    return starts, ends, np.repeat(np.arange(len(live)), [len(own) for own in live])
+@dataclass(frozen=True, slots=True)
+class _Windows:
+    """The live windows of several objects as columns that broadcast against the times."""
 
+    starts: NDArray[np.float64]
+    ends: NDArray[np.float64]
+    owners: list[int]      # the objects with a live window, in order
+    first: list[int]       # where each owner's windows start in starts/ends
+    single: bool           # one window per owner
 
-def _groups(owners: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """For sorted, non-empty ``owners``: where each owner's run starts, and the owners."""
-    first = np.flatnonzero(np.r_[True, owners[1:] != owners[:-1]])
-    return first, owners[first]
+    @staticmethod
+    def of(windows: Sequence[Sequence[ActivityWindow]], ndim: int) -> _Windows:
+        live = [_live(own) for own in windows]
+        flat = [w for own in live for w in own]
+        shape = (len(flat),) + (1,) * ndim
+        owners, first, at = [], [], 0
+        for k, own in enumerate(live):
+            if own:
+                owners.append(k)
+                first.append(at)
+                at += len(own)
+        return _Windows(starts=np.array([w.start_s for w in flat], dtype=np.float64).reshape(shape),
+                        ends=np.array([w.end_s for w in flat], dtype=np.float64).reshape(shape),
+                        owners=owners, first=first, single=len(flat) == len(owners))
+
+    def per_owner(self, values: NDArray[np.generic], reduce: np.ufunc) -> NDArray[np.generic]:
+        """``values`` (one row per window) reduced to one row per owner."""
+        return values if self.single else reduce.reduceat(values, self.first, axis=0)
 
 
 def r_of_t(t_s: float, windows: Sequence[ActivityWindow], params: ChronemicsParams) -> float:
@@ -125,12 +136,10 @@ def active_mask(times_s: ArrayLike, windows: Sequence[ActivityWindow]) -> NDArra
 def active_masks(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]]) -> NDArray[np.bool_]:
     """``active_mask`` of several objects at once (row k: ``windows[k]``)."""
     t = np.asarray(times_s, dtype=np.float64)
-    live = [_live(own) for own in windows]
-    result = np.zeros((len(live), *t.shape), dtype=bool)
-    starts, ends, owners = _window_columns(live, t.ndim)
-    if owners.size:
-        first, owning = _groups(owners)
-        result[owning] = np.logical_or.reduceat((t >= starts) & (t < ends), first, axis=0)
+    found = _Windows.of(windows, t.ndim)
+    result = np.zeros((len(windows), *t.shape), dtype=bool)
+    if found.owners:
+        result[found.owners] = found.per_owner((t >= found.starts) & (t < found.ends), np.logical_or)
     return result
 
 

@@ -77,7 +77,7 @@ from agents.lib.agenda.chronemics import (
     interaction_cost_profiles,
     is_active,
     r_band,
-    r_of_t,
+    r_profiles,
 )
 from agents.lib.socialmap.grid import (
     CostArray,
@@ -376,9 +376,9 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     unmatched = tuple(a for a in activities if a.object not in known)
     geometries: list[ObjectGeometry] = [object_geometry(o) for o in objects]
     object_spaces = []
-    for obj, geometry in zip(objects, geometries, strict=True):
-        own = [a for a in matched if a.object == obj.name]
-        r = r_of_t(t_s, own, params.chronemics)
+    owned = [[a for a in matched if a.object == obj.name] for obj in objects]
+    rs = r_profiles(np.array([t_s]), owned, params.chronemics)[:, 0]   # R(t_s) of every object at once
+    for obj, geometry, own, r in zip(objects, geometries, owned, rs.tolist(), strict=True):
         active = is_active(t_s, own)
         forbidden = active and obj.forbidden_while_active
         object_spaces.append(ObjectSpace(name=obj.name, kind=obj.kind, footprint=geometry.footprint,
