@@ -2,23 +2,25 @@
 
 Why: after a person moved, a replan (replan.py) expands a thousand cells, but composing the
 arrival-time grid afresh (a copy of the static grid, every patch, every interaction space encoded:
-arrival.time_costs) and then comparing every cell's lower bound took longer than that search
-(tools/bench_planner.py, 1000^2: about 1.5 of a 2.7 ms replan). A planning agent rebuilds its
-social map for each replan, but most of it is what it was 0.2 s ago.
+arrival.time_costs) and then comparing every cell's lower bound took about half of the 3 ms
+replan (tools/bench_planner.py, 1000^2). A planning agent rebuilds its social map for each
+replan, but most of it is what it was 0.2 s ago.
 
 Between two maps on the same static grid (the same array, which is never written), what can
 change is the patches (a person moved: their body, zone bands, prediction), the interaction
 spaces' masks (an object moved) and the table (R(t) with time, the agenda). A patch identical to
-one of the previous map's (same window, equal values) changes nothing. So every cell outside the
-windows of the patches that are not matched so (in either map) and outside every interaction
-space's window (in either map) holds the same value in both grids. Only those windows are
-recomposed: the static grid, then the maximum with every patch overlapping them, then all spaces
-encoded in place (encode_spaces reads and writes only cells of the spaces, all inside those
-windows). The maximum is exact whatever the order, so the grid, its labels and its table are the
-ones a fresh arrival.time_costs builds, bit for bit (tests/unit/test_social_replan.py).
+one of the previous map's (same window, same bits) changes nothing; patches and masks are never
+written once a map is built. So every cell outside the windows of the patches not matched so (in
+either map) holds the same uncoded value in both grids, and only those windows are recomposed:
+the static grid, then the maximum with every patch overlapping them. When the masks changed or
+one of those windows overlaps a space, every space's window (in either map) is recomposed too and
+all spaces are encoded again in place (encode_spaces reads and writes only cells of the spaces);
+otherwise the spaces' codes and labels stay as they were. The maximum is exact whatever the order,
+so the grid, its labels and its table are the ones a fresh arrival.time_costs builds, bit for bit
+(tests/unit/test_social_incremental.py).
 
 The windows are also what the replanner needs: a cell outside them keeps its lower bound, so its
-pass over the bounds covers only them (``changes``).
+pass over the bounds covers only them (``changes``), plus the spaces' windows when the table moved.
 """
 
 from __future__ import annotations
@@ -43,6 +45,25 @@ def _window(rows: slice, cols: slice, shape: tuple[int, int]) -> Window | None:
     if r_step != 1 or c_step != 1:
         return None
     return r0, max(r0, r1), c0, max(c0, c1)
+
+
+def _boxes(patches: Sequence[CostPatch], masks: Sequence[CellMask | None],
+           shape: tuple[int, int]) -> tuple[list[tuple[Window, CostPatch]], list[Window]] | None:
+    """Each patch with its window, and the masks' windows; None if one is strided."""
+    boxed = []
+    for patch in patches:
+        window = _window(patch.rows, patch.cols, shape)
+        if window is None:
+            return None
+        boxed.append((window, patch))
+    windows = []
+    for mask in masks:
+        if mask is not None:
+            window = _window(mask.rows, mask.cols, shape)
+            if window is None:
+                return None
+            windows.append(window)
+    return boxed, windows
 
 
 def _same(a: NDArray[np.generic], b: NDArray[np.generic]) -> bool:
@@ -85,22 +106,21 @@ class IncrementalTimeCosts:
         if cruise_speed_mps <= 0.0 or time_step_s <= 0.0:
             raise ValueError("cruise speed and time step must be > 0")
         shape = static.shape
-        boxed = [(_window(p.rows, p.cols, shape), p) for p in patches]
-        mask_windows = [_window(m.rows, m.cols, shape) for m in masks if m is not None]
-        simple = all(w is not None for w, _ in boxed) and all(w is not None for w in mask_windows)
-        reuse = simple and static is self._static and self._grid.shape == shape and self._grid.dtype == static.dtype
+        found = _boxes(patches, masks, shape)
+        same_static = static is self._static and self._grid.shape == shape and self._grid.dtype == static.dtype
         self._static, self.current = None, None   # until the buffer is consistent again
         labels = self._labels
-        if reuse:
-            changed = self._changed(boxed)   # type: ignore[arg-type]
+        if found is not None and same_static:
+            boxed, mask_windows = found
+            changed = self._changed(boxed)
             # The spaces' codes stay when the spaces and every cell under them stay.
             encode = not self._same_masks(masks) or bool(_overlaps(changed, self._mask_windows).any())
             # each window once (most spaces' windows are the same in both maps)
             windows = list(dict.fromkeys([*changed, *self._mask_windows, *mask_windows] if encode else changed))
-            self._recompose(static, boxed, windows)   # type: ignore[arg-type]
+            self._recompose(static, boxed, windows)
             if self._changes is not None:
-                self._changes.extend(windows)   # type: ignore[arg-type]
-            self.last_windows = windows   # type: ignore[assignment]
+                self._changes.extend(windows)
+            self.last_windows = windows
         else:
             if self._grid.shape != shape or self._grid.dtype != static.dtype:
                 self._grid = np.empty_like(static)
@@ -113,11 +133,10 @@ class IncrementalTimeCosts:
             _, labels = encode_spaces(self._grid, masks, in_place=True)
         self.last_encoded = encode
         table = cost_table(labels, profiles, t0_s, cruise_speed_mps, time_step_s, horizon_m)
-        if simple:
+        if found is not None:
             self._static = static
-            self._patches = boxed   # type: ignore[assignment]
+            self._patches, self._mask_windows = found
             self._masks = list(masks)
-            self._mask_windows = mask_windows   # type: ignore[assignment]
             self._labels = labels
         self.current = TimeCosts(grid=self._grid, table=table,
                                  cells_per_bin=cruise_speed_mps * time_step_s / resolution_m)
