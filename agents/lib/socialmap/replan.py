@@ -137,11 +137,14 @@ def _bound(h_mark, h_stamp, h_g, radius, scale, target_row, target_col, cols, in
 
 @numba.njit(cache=True, nogil=True)
 def _repair(bounds, rows, cols, goal, seeds, count, h_mark, h_stamp, h_g, radius, scale,  # type: ignore[no-untyped-def]
-            target):
+            target, seen, seen_stamp):
     """Restore X's consistency on ``bounds`` after the cells ``seeds[:count]`` became cheaper:
     lower X where a cheaper step allows, then propagate the decreases in increasing X. Lowered
-    values are stored (mark = stamp). Returns how many values were lowered."""
+    values are stored (mark = stamp). Each cell next to a seed is looked at once (``seen[n] ==
+    seen_stamp`` after; neighbouring seeds share most of them): one lowered later is pushed, and
+    its propagation lowers the others as needed. Returns how many values were lowered."""
     h_stamp = np.uint32(h_stamp)
+    seen_stamp = np.uint32(seen_stamp)
     target_row = target // cols
     target_col = target - target_row * cols
     heap = [(0.0, np.int64(0)) for _ in range(0)]
@@ -153,6 +156,9 @@ def _repair(bounds, rows, cols, goal, seeds, count, h_mark, h_stamp, h_g, radius
         for row in range(max(x_row - 1, 0), min(x_row + 2, rows)):
             for col in range(max(x_col - 1, 0), min(x_col + 2, cols)):
                 n = row * cols + col
+                if seen[U(n)] == seen_stamp:
+                    continue
+                seen[U(n)] = seen_stamp
                 c_n = np.float64(bounds[U(n)])
                 if n == goal or c_n == np.inf:
                     continue
@@ -243,6 +249,8 @@ class Replanner:
         self.costs = IncrementalTimeCosts()
         self._seeds = np.empty(0, dtype=np.int32)
         self._row_min = np.empty(0, dtype=np.float32)   # the table's truncated row minima at the last pass
+        self._seen = np.zeros(0, dtype=np.uint32)
+        self._seen_stamp = 0
         self._learned: LearnedBounds | None = None
         self._backward_expanded = 0
         self._stale = True
@@ -285,7 +293,8 @@ class Replanner:
             assert self._learned is not None
             learned = self._learned
             repaired = _repair(self._bounds, problem.rows, problem.cols, problem.goal, self._seeds, cheaper,
-                               learned.mark, learned.stamp, learned.g, learned.radius, learned.scale, learned.target)
+                               learned.mark, learned.stamp, learned.g, learned.radius, learned.scale, learned.target,
+                               *self._next_seen(cells))
         self._key = key
         found = run_search(problem, self.workspace, learned=self._learned)
         self._stale = found.expanded + repaired > self.refresh_fraction * self._backward_expanded
@@ -293,6 +302,14 @@ class Replanner:
                                 cheaper_cells=int(cheaper) if reused else 0, repaired=int(repaired),
                                 expanded=found.expanded)
         return found
+
+    def _next_seen(self, cells: int) -> tuple[NDArray[np.uint32], int]:
+        """The repair's marks of the cells it looked at, and a new stamp for them (no reset)."""
+        if self._seen.shape[0] != cells or self._seen_stamp >= np.iinfo(np.uint32).max - 1:
+            self._seen = np.zeros(cells, dtype=np.uint32)
+            self._seen_stamp = 0
+        self._seen_stamp += 1
+        return self._seen, self._seen_stamp
 
     def _refresh(self, problem: SearchProblem) -> int:
         """A* from the goal to the robot on the lower-bound grid; its closed cells' costs become X.
