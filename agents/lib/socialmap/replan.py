@@ -90,6 +90,7 @@ U = np.uint64
 # non-negative floats order like their bit patterns, so the pass below works on integers.
 _TRUNCATE_MASK = np.uint32(0xFFFC0000)
 _SIGN = np.uint32(0x80000000)
+_MAX_STAMP = int(np.iinfo(np.uint32).max) - 1
 
 
 def truncate_down(values: NDArray[np.floating]) -> NDArray[np.float32]:
@@ -271,6 +272,7 @@ class Replanner:
         if self._bounds.shape[0] != cells:
             self._bounds = np.empty(cells, dtype=np.float32)
             self._seeds = np.empty(cells, dtype=np.int32)
+            self._seen, self._seen_stamp = np.zeros(cells, dtype=np.uint32), 0
             self.costs.synced(False)   # the new bounds hold nothing yet: a full pass
         row_min = truncate_down(problem.table.min(axis=1) if problem.table is not None else np.zeros(1))
         self._key = None   # until the bounds and X agree again
@@ -294,7 +296,7 @@ class Replanner:
             learned = self._learned
             repaired = _repair(self._bounds, problem.rows, problem.cols, problem.goal, self._seeds, cheaper,
                                learned.mark, learned.stamp, learned.g, learned.radius, learned.scale, learned.target,
-                               *self._next_seen(cells))
+                               *self._next_seen())
         self._key = key
         found = run_search(problem, self.workspace, learned=self._learned)
         self._stale = found.expanded + repaired > self.refresh_fraction * self._backward_expanded
@@ -303,10 +305,10 @@ class Replanner:
                                 expanded=found.expanded)
         return found
 
-    def _next_seen(self, cells: int) -> tuple[NDArray[np.uint32], int]:
+    def _next_seen(self) -> tuple[NDArray[np.uint32], int]:
         """The repair's marks of the cells it looked at, and a new stamp for them (no reset)."""
-        if self._seen.shape[0] != cells or self._seen_stamp >= np.iinfo(np.uint32).max - 1:
-            self._seen = np.zeros(cells, dtype=np.uint32)
+        if self._seen_stamp >= _MAX_STAMP:
+            self._seen[:] = 0
             self._seen_stamp = 0
         self._seen_stamp += 1
         return self._seen, self._seen_stamp
