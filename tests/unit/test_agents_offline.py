@@ -134,7 +134,8 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
 def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
     """The navigation agent plans an intention, then every 0.2 s of sim time rebuilds the map and
     searches again through its Replanner: the replans reuse the first search (no refresh, a
-    fraction of its work) and find what a fresh plan on the same map finds."""
+    fraction of its work), update the arrival-time grid of the previous one where the map
+    changed (incremental.py), and find what a fresh plan on the same map finds."""
     from agents.lib.socialmap.social_map import plan
     from agents.social_navigation.agent import REPLAN_PERIOD_S, SocialNavigationAgent
 
@@ -156,6 +157,7 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
     nav.replanner.search = recording  # type: ignore[method-assign]
     nav.step()
     assert nav.intention_id is not None and len(found) == 1 and found[0][1].refreshed
+    assert nav.replanner.costs.last_windows is None   # the first grid is composed whole
     refresh_work = found[0][1].backward_expanded
     start_s = parse_clock("11:30")
     for k in range(1, 4):
@@ -165,6 +167,7 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
         assert len(found) == 1 + k, "one search per replan period (0.2 s, float rounding included)"
         cost, stats = found[-1]
         assert not stats.refreshed and stats.expanded < refresh_work / 4
+        assert nav.replanner.costs.last_windows is not None   # the same building: only what changed
         pose = graph.world_pose(graph.get_node_by_name("robot").id)
         assert nav.map is not None and nav.goal is not None
         fresh = plan(nav.map, (pose[0], pose[1]), nav.goal[:2], cruise_speed_mps=nav.cruise)

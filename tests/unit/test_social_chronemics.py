@@ -11,6 +11,7 @@ from pydantic import ValidationError
 from agents.lib.agenda.chronemics import (
     ChronemicsParams,
     interaction_cost_profile,
+    interaction_cost_profiles,
     is_active,
     r_band,
     r_of_t,
@@ -59,6 +60,26 @@ def test_profile_is_vectorised_and_forbidden_while_active() -> None:
     forbidden = interaction_cost_profile(times, [THERAPY], P, forbidden_while_active=True)
     assert forbidden[0] == 1.5 and math.isinf(forbidden[1]) and math.isinf(forbidden[2])
     assert forbidden[3] == pytest.approx(2.5 + 1.0 / 3.0)            # the ramp after stays finite
+
+
+def test_many_objects_at_once() -> None:
+    """interaction_cost_profiles (one row per object, what the planner's table is built from):
+    values derived by hand for two windows, none, a cancelled one, overlapping ones forbidden
+    while active, and ramps of 1000 s before and 2000 s after; then without ramps."""
+    params = ChronemicsParams(ramp_before_s=1000.0, ramp_after_s=2000.0)
+    a = [ActivityWindow("a", 1000.0, 2000.0), ActivityWindow("a", 5000.0, 6000.0)]
+    c = [ActivityWindow("c", 1000.0, 2000.0, cancelled=True)]
+    d = [ActivityWindow("d", 0.0, 100.0), ActivityWindow("d", 50.0, 3000.0)]
+    times = np.array([500.0, 1500.0, 3000.0, 4500.0, 4750.0])
+    rows = interaction_cost_profiles(times, [a, [], c, d], params, [False, False, True, True])
+    np.testing.assert_allclose(rows[0], [2.5, 3.5, 2.5, 2.5, 3.0])   # up 1/2, in, down 1/2, up 1/2, up 3/4
+    np.testing.assert_array_equal(rows[1], 1.5)
+    np.testing.assert_array_equal(rows[2], 1.5)
+    np.testing.assert_allclose(rows[3], [math.inf, math.inf, 3.5, 2.0, 1.75])   # [start, end) forbidden
+    sharp = ChronemicsParams(ramp_before_s=0.0, ramp_after_s=0.0)
+    np.testing.assert_array_equal(interaction_cost_profiles([500.0, 1000.0, 2000.0, 2000.5], [a], sharp, [False])[0],
+                                  [1.5, 3.5, 3.5, 1.5])
+    assert interaction_cost_profiles(times, [], params, []).shape == (0, 5)
 
 
 def test_configurable_ramp_and_values() -> None:
