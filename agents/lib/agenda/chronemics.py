@@ -75,22 +75,27 @@ def r_profiles(times_s: ArrayLike, windows: Sequence[Sequence[ActivityWindow]],
     result = np.full((len(windows), *t.shape), params.r_min)
     if not found.owners:
         return result
-    # Where t lies on each window's ramps: 1 - (start - t) / ramp_before before the start,
-    # 1 - (t - end) / ramp_after after the end (1 or more inside, 0 or less beyond the ramps).
-    # R grows with it, so an object's dearest window is the one where it is largest.
-    reach = 1.0 - np.maximum(_ramp(found.starts - t, params.ramp_before_s), _ramp(t - found.ends, params.ramp_after_s))
-    reach = found.per_owner(reach, np.maximum)
-    span = params.r_max - params.r_min
-    result[found.owners] = np.where(reach >= 1.0, params.r_max, params.r_min + span * np.maximum(reach, 0.0))
+    # How many ramps t lies outside each window: (start - t) / ramp_before before it, (t - end) /
+    # ramp_after after it, <= 0 inside. R falls with it, so an object's dearest window is the one
+    # where it is smallest; R = r_max - (r_max - r_min) * clip(outside, 0, 1).
+    outside = _ramps_outside(found.starts, t, params.ramp_before_s, -1.0)
+    np.maximum(outside, _ramps_outside(found.ends, t, params.ramp_after_s, 1.0), out=outside)
+    outside = found.per_owner(outside, np.minimum)
+    np.clip(outside, 0.0, 1.0, out=outside)
+    outside *= params.r_max - params.r_min
+    result[found.owners] = np.subtract(params.r_max, outside, out=outside)
     return result
 
 
-def _ramp(outside_s: NDArray[np.float64], ramp_s: float) -> NDArray[np.float64]:
-    """How far along its ramp of ``ramp_s`` a time ``outside_s`` beyond a window's edge lies, in
-    ramps (<= 0 inside the window; with no ramp, +inf anywhere outside it)."""
+def _ramps_outside(edges: NDArray[np.float64], t: NDArray[np.float64], ramp_s: float,
+                   side: float) -> NDArray[np.float64]:
+    """``side * (t - edge) / ramp_s`` for each window's edge (a column) and time: how many ramps t
+    lies beyond the edge on ``side`` (-1: before a start, +1: after an end); with no ramp, +inf
+    beyond the edge and -inf elsewhere."""
     if ramp_s > 0.0:
-        return outside_s / ramp_s
-    return np.where(outside_s > 0.0, np.inf, -np.inf)
+        scale = side / ramp_s
+        return t * scale - edges * scale
+    return np.where(side * (t - edges) > 0.0, np.inf, -np.inf)
 
 
 @dataclass(frozen=True, slots=True)
