@@ -84,7 +84,7 @@ def test_value_types_survive_the_wire():
     assert {k: type(v) for k, v in attrs.items()} == {k: type(v) for k, v in values.items()}
 
 
-# ---- the fast validator must never accept what the pydantic schema refuses ------------------
+# ---- the fast validators must never accept what the pydantic schema refuses -----------------
 
 from hypothesis import given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
@@ -93,7 +93,10 @@ _scalars = st.one_of(
     st.none(), st.booleans(), st.integers(-(2**70), 2**70),
     st.sampled_from([0, 1, -1, 2**63 - 1, 2**63, -(2**63), -(2**63) - 1, 2**64]),
     st.floats(allow_nan=False, allow_infinity=False), st.sampled_from([1e19, -1e19, 0.5]),
-    st.text(max_size=6), st.sampled_from(["room", "a b", "x\n", "", "#1", "agent.1", "a/b"]))
+    st.text(max_size=6), st.sampled_from(["room", "a b", "x\n", "", "#1", "agent.1", "a/b",
+                                          "a\\b", "q\"", "\x7f", "\u00e9t\u00e9", "x" * 300]),
+    st.sampled_from([["a", "b"], [1, "a"], ["a", 1], [1, 2.5], ["\n"], [True], [2**63],
+                     [-(2**63)], [[5, 1], [5, 9]], [[5, 9], [6, 1], [5, 1]]]))
 _json = st.recursive(_scalars, lambda inner: st.one_of(
     st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=4), inner, max_size=3)),
     max_leaves=8)
@@ -104,7 +107,11 @@ _PATHS = [("format",), ("kind",), ("graph",), ("agent",), ("replica",), ("writer
           ("nodes", 0, "meta", 3), ("nodes", 0, "attrs"), ("nodes", 0, "attrs", "x"),
           ("nodes", 0, "attrs", "x", 2), ("nodes", 0, "attrs", "x", 1), ("nodes", 0, "extra"),
           ("edges", 0, "src"), ("edges", 0, "type"), ("edges", 0, "attrs", "w", 2),
-          ("edges", 0, "rem", 0, 0), ("writers", "5"), ("clock",), ("seen",), ("seen", "5")]
+          ("edges", 0, "rem", 0, 0), ("writers", "5"), ("clock",), ("seen",), ("seen", "5"),
+          ("nodes", 0, "attrs", "l", 2), ("nodes", 0, "attrs", "k\\1"),
+          ("nodes", 0, "attrs", "k\n"), ("edges", 0, "add"), ("edges", 0, "dst"), ("writers", "05"),
+          ("seen", "9223372036854775808"),
+          ("edges", 0, "attrs", "w")]
 
 
 def _template() -> dict:
@@ -113,8 +120,8 @@ def _template() -> dict:
             "nodes": [{"id": 9, "add": [[5, 100]], "rem": [[6, 50]], "cleared": 60,
                        "meta": [100, 5, "room", "r"],
                        "attrs": {"x": [100, 5, 1.5], "l": [100, 5, [1, 2.5]]}}],
-            "edges": [{"src": 9, "dst": 9, "type": "in", "add": [[5, 101]], "rem": [[5, 1]],
-                       "attrs": {"w": [101, 5, "s"]}}]}
+            "edges": [{"src": 9, "dst": 9, "type": "in", "add": [[5, 101], [5, 7]],
+                       "rem": [[5, 1]], "attrs": {"w": [101, 5, "s"]}}]}
 
 
 def _put(document: dict, path: tuple, value: object) -> None:
@@ -152,13 +159,41 @@ def test_fast_validator_agrees_with_pydantic(mutations):
         data = orjson.loads(payload)
     except orjson.JSONDecodeError:
         data = None
+    structs = wire.struct_decode(payload)
     fast = wire.fast_decode(data) if data is not None else None
     try:
         slow = wire._from_model(wire.Message.model_validate_json(payload))
     except Exception:  # noqa: BLE001
         slow = None
-    if fast is not None:
-        assert slow is not None, f"fast path accepted what pydantic refuses: {document}"
-        assert _same(fast, slow)
+    for name, quick in (("struct", structs), ("fast", fast)):
+        if quick is not None:
+            assert slow is not None, f"{name} path accepted what pydantic refuses: {document}"
+            assert _same(quick, slow), name
+    if slow is None:
+        with pytest.raises(WireError, match="invalid DSR message"):
+            wire.decode(payload)
+    else:
+        assert _same(wire.decode(payload), slow)
     if not mutations:
-        assert fast is not None and slow is not None
+        assert structs is not None and fast is not None and slow is not None
+
+
+def test_struct_path_limits_and_escapes():
+    """The struct path's conservative cuts defer to the other validators, never refuse."""
+    from dsr.limits import LIMITS
+    cap = LIMITS.max_value_bytes // 4
+    for text, struct_takes in (("x" * cap, True), ("x" * (cap + 1), False),
+                               ("\u00e9" * cap, True), ("a\\b", True)):
+        payload = base(nodes=[{"id": 9, "attrs": {"s": [1, 5, text]}}])
+        assert (wire.struct_decode(payload) is not None) is struct_takes, len(text)
+        assert wire.decode(payload).nodes[0][1].attrs["s"][2] == text
+    escaped = base(nodes=[{"id": 9, "meta": [1, 5, "room", "a\nb"]}])
+    assert wire.struct_decode(escaped) is None
+    with pytest.raises(WireError, match="invalid DSR message"):
+        wire.decode(escaped)
+    huge = "x" * (LIMITS.max_value_bytes + 1)
+    with pytest.raises(WireError, match="bytes per value"):
+        wire.decode(base(nodes=[{"id": 9, "attrs": {"s": [1, 5, [huge]]}}]))
+    strings = base(nodes=[{"id": 9, "attrs": {"s": [1, 5, ["a", "b"]], "f": [1, 5, [1, 2]]}}])
+    decoded = wire.struct_decode(strings)
+    assert decoded is not None and decoded.nodes[0][1].attrs["f"][2] == [1.0, 2.0]
