@@ -551,7 +551,7 @@ def fast_decode(data: object) -> Decoded | None:
 # and a lone surrogate is refused.  Cost: regex calls for tens of thousands of names and keys
 # would double the parse, so a payload without any backslash (no JSON escape: no control
 # character can hide in it, raw ones are invalid JSON) checks names and keys by length only;
-# type names repeat, so they are checked against a memo after parsing.
+# type and agent names repeat, so they are checked against memos after parsing.
 
 def _anchored(pattern: str) -> str:
     """msgspec searches (re.search); '$' would also match before a trailing newline."""
@@ -574,7 +574,6 @@ def _text(pattern: str, escapes: bool) -> Any:
 _MU63 = Annotated[int, Meta(ge=0, le=_U63)]
 _MReplica = Annotated[int, Meta(ge=1, le=_U63)]
 _MNodeId = Annotated[int, Meta(ge=1, le=_U63)]
-_MAgent = Annotated[str, Meta(pattern=_anchored(AGENT_PATTERN))]
 _MFloat = Annotated[float, Meta(gt=-_BIG, lt=_BIG)]   # finite; ints in lists become floats
 _MInt64 = Annotated[int, Meta(ge=_INT64_MIN, le=_U63)]
 _MStr = Annotated[str, Meta(max_length=_MAX_VALUE // 4)]
@@ -585,8 +584,9 @@ def _struct(name: str, fields: list[tuple[Any, ...]]) -> type:
 
 
 def _wire_struct(list_item: Any, escapes: bool) -> type:
-    """The message struct whose list values hold `list_item` (a union has one array type);
-    type names are plain strings here (checked by `_types_ok`)."""
+    """The message struct whose list values hold `list_item` (a union has one array type).
+    Type and agent names are plain strings here: `struct_decode` checks them against memos
+    of names already matched (a regex call per message would double an update's parse)."""
     value = Union[bool, _MInt64, _MFloat, _MStr,  # noqa: UP007
                   Annotated[list[list_item], Meta(max_length=_MAX_VALUE // 8)]]
     register = tuple[_MU63, _MReplica, value]
@@ -598,8 +598,8 @@ def _wire_struct(list_item: Any, escapes: bool) -> type:
     edge = _struct("Edge", [("src", _MNodeId), ("dst", _MNodeId), ("type", str), *entry])
     return _struct("Wire", [
         ("format", Literal["chronav-dsr/1"]), ("kind", Literal["delta", "state", "digest"]),
-        ("graph", _MAgent), ("agent", _MAgent), ("replica", _MReplica),
-        ("writers", dict[_MReplica, _MAgent], {}), ("clock", _MU63, 0),
+        ("graph", str), ("agent", str), ("replica", _MReplica),
+        ("writers", dict[_MReplica, str], {}), ("clock", _MU63, 0),
         ("seen", dict[_MReplica, _MU63], {}), ("nodes", list[node], []),
         ("edges", list[edge], [])])
 
@@ -667,6 +667,11 @@ def struct_decode(payload: bytes) -> Decoded | None:
     edges = []
     top = 0
     try:
+        _agent_name(message.graph)
+        _agent_name(message.agent)
+        writers = message.writers
+        if writers:
+            writers = {str(replica): _agent_name(agent) for replica, agent in writers.items()}
         for raw in message.nodes:
             meta = raw.meta
             if meta is not None:
@@ -688,7 +693,5 @@ def struct_decode(payload: bytes) -> Decoded | None:
                 top = stamp
     except _Reject:
         return None
-    return Decoded(message.kind, message.graph, message.agent, message.replica,
-                   {str(r): a for r, a in writers.items()} if (writers := message.writers)
-                   else {}, nodes, edges, top,
-                   message.clock, message.seen)
+    return Decoded(message.kind, message.graph, message.agent, message.replica, writers,
+                   nodes, edges, top, message.clock, message.seen)

@@ -144,16 +144,13 @@ def _same(a: wire.Decoded, b: wire.Decoded) -> bool:
                 "clock", "seen"))
 
 
-@settings(max_examples=400, deadline=None)
-@given(mutations=st.lists(st.tuples(st.sampled_from(_PATHS), _json), max_size=3))
-def test_fast_validator_agrees_with_pydantic(mutations):
-    document = _template()
-    for path, value in mutations:
-        _put(document, path, value)
+def _check_validators_agree(document: dict, ascii_only: bool = False) -> wire.Decoded | None:
+    """Every fast path that accepts `document` builds what pydantic builds; decode() raises
+    exactly when pydantic refuses.  Returns the struct path's result."""
+    import json
     try:
-        payload = orjson.dumps(document)
+        payload = json.dumps(document).encode() if ascii_only else orjson.dumps(document)
     except TypeError:   # e.g. an int beyond 64 bits: orjson refuses, encode as text
-        import json
         payload = json.dumps(document).encode()
     try:
         data = orjson.loads(payload)
@@ -174,8 +171,53 @@ def test_fast_validator_agrees_with_pydantic(mutations):
             wire.decode(payload)
     else:
         assert _same(wire.decode(payload), slow)
+    return structs
+
+
+@settings(max_examples=400, deadline=None)
+@given(mutations=st.lists(st.tuples(st.sampled_from(_PATHS), _json), max_size=3))
+def test_fast_validator_agrees_with_pydantic(mutations):
+    document = _template()
+    for path, value in mutations:
+        _put(document, path, value)
+    structs = _check_validators_agree(document)
     if not mutations:
-        assert structs is not None and fast is not None and slow is not None
+        assert structs is not None and wire.fast_decode(document) is not None
+
+
+# well-formed shapes with leaves at and beyond every bound (the mutations above mostly break the
+# shape, so they rarely reach the fast paths' value checks)
+_u63 = st.one_of(st.integers(0, 2**63 - 1), st.sampled_from([0, 2**63 - 1, 2**63, -1, 2**64]))
+_replica = st.one_of(st.integers(1, 2**63 - 1), st.sampled_from([1, 2**63 - 1, 0, 2**63]))
+_float = st.one_of(st.floats(allow_nan=False, allow_infinity=False),
+                   st.sampled_from([2.0**63, -(2.0**63), 9.2e18, -9.2e18, -0.0]))
+_number = st.one_of(st.integers(-(2**64), 2**64), _float,
+                    st.sampled_from([2**63 - 1, -(2**63), 2**63, -(2**63) - 1]))
+_texts = st.one_of(st.text(max_size=4), st.sampled_from(["room", "a-b", "9x", "", "x" * 65,
+                                                          "a\nb", "\u00e9", "q\"\\", "~removed"]))
+_value = st.one_of(st.booleans(), _number, _texts, st.lists(_number, max_size=3),
+                   st.lists(_texts, max_size=3), st.lists(st.one_of(_number, _texts), max_size=3))
+_dots = st.lists(st.tuples(_replica, _u63).map(list), max_size=3)
+_attrs = st.dictionaries(_texts, st.tuples(_u63, _replica, _value).map(list), max_size=3)
+_entry = {"add": _dots, "rem": _dots, "cleared": _u63, "attrs": _attrs}
+_node = st.fixed_dictionaries({"id": _replica}, optional={
+    **_entry, "meta": st.one_of(st.none(), st.tuples(_u63, _replica, _texts, _texts).map(list))})
+_edge = st.fixed_dictionaries({"src": _replica, "dst": _replica, "type": _texts},
+                              optional=_entry)
+_agent = st.one_of(st.sampled_from(["a", "g", "agent.1", "a/b", "", "-a"]), st.text(max_size=3))
+_replica_key = st.sampled_from(["5", "05", "9223372036854775807", "9223372036854775808", "x"])
+_message = st.fixed_dictionaries(
+    {"format": st.just("chronav-dsr/1"), "kind": st.sampled_from(["delta", "state", "digest"]),
+     "graph": _agent, "agent": _agent, "replica": _replica},
+    optional={"writers": st.dictionaries(_replica_key, _agent, max_size=2), "clock": _u63,
+              "seen": st.dictionaries(_replica_key, _u63, max_size=2),
+              "nodes": st.lists(_node, max_size=3), "edges": st.lists(_edge, max_size=3)})
+
+
+@settings(max_examples=300, deadline=None)
+@given(document=_message, ascii_only=st.booleans())
+def test_struct_validator_agrees_with_pydantic_on_well_formed_shapes(document, ascii_only):
+    _check_validators_agree(document, ascii_only)
 
 
 def test_struct_path_limits_and_escapes():
