@@ -614,7 +614,8 @@ def _decoders(escapes: bool) -> tuple[msgspec.json.Decoder[Any], msgspec.json.De
 
 _PLAIN = _decoders(escapes=False)
 _ESCAPED = _decoders(escapes=True)
-_TYPE_OK = _type_name._ok    # type names already matched (cleared in place when full)
+_TYPE_OK = _type_name._ok    # names already matched (cleared in place when full)
+_AGENT_OK = _agent_name._ok
 _hlc_of = operator.itemgetter(0)
 
 def _lists_ok(entries: list[Any]) -> bool:
@@ -667,13 +668,20 @@ def struct_decode(payload: bytes) -> Decoded | None:
     edges = []
     top = 0
     try:
-        _agent_name(message.graph)
-        _agent_name(message.agent)
+        if message.graph not in _AGENT_OK or message.agent not in _AGENT_OK:
+            _agent_name(message.graph)
+            _agent_name(message.agent)
         writers = message.writers
         if writers:
             writers = {str(replica): _agent_name(agent) for replica, agent in writers.items()}
         for raw in message.nodes:
             meta = raw.meta
+            if meta is None and not raw.add and not raw.rem and not raw.cleared:
+                attrs = raw.attrs          # an update: the hot path, inlined
+                nodes.append((raw.id, ElementState({}, {}, 0, None, attrs)))
+                if attrs and (stamp := max(map(_hlc_of, attrs.values()))) > top:
+                    top = stamp
+                continue
             if meta is not None:
                 if meta[2] not in _TYPE_OK:
                     _type_name(meta[2])
