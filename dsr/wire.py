@@ -561,8 +561,8 @@ def _anchored(pattern: str) -> str:
 
 
 def _text(pattern: str, escapes: bool) -> Any:
-    """A string type for a `^[^\x00-\x1f]{min,max}$` pattern: the pattern itself when the
-    payload holds escapes, its length bounds otherwise."""
+    """A string type for a "no control character, min to max long" pattern: the pattern
+    itself when the payload holds escapes, its length bounds otherwise."""
     bounds = re.fullmatch(r"\^\[\^\\x00-\\x1f\]\{(\d+),(\d+)\}\$", pattern)
     if bounds is None:
         raise ValueError(f"pattern {pattern!r} is not 'no control character, min..max long'")
@@ -618,7 +618,10 @@ _TYPE_OK = _type_name._ok    # names already matched (cleared in place when full
 _AGENT_OK = _agent_name._ok
 _hlc_of = operator.itemgetter(0)
 
+
 def _lists_ok(entries: list[Any]) -> bool:
+    """The list values of the mixed decoder: all numbers or all strings, and a string list
+    within the value limit (its bytes are the sum of its strings')."""
     for raw in entries:
         for reg in raw.attrs.values():
             value = reg[2]
