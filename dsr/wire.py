@@ -244,9 +244,9 @@ def decode(payload: bytes) -> Decoded:
     The pydantic `Message` schema is the definition.  Two fast validators accept subsets of
     what the schema accepts and build the same result: msgspec structs validated in C
     (`struct_decode`, first), then a hand-written one (`fast_decode`, for what the structs
-    leave out: long strings, lone surrogates...); anything else goes through pydantic, which
-    either accepts it or produces the error (a differential property test,
-    tests/unit/test_dsr_wire.py, checks that all three agree).
+    leave out: strings of over a quarter of the value limit in characters...); anything else
+    goes through pydantic, which either accepts it or produces the error (differential
+    property tests, tests/unit/test_dsr_wire.py, check that all three agree).
     """
     from dsr.errors import WireError
     fast = struct_decode(payload)
@@ -548,7 +548,7 @@ def fast_decode(data: object) -> Decoded | None:
 # schema's patterns and limits (the differential test holds them to the schema), with
 # conservative cuts that send a message to the other validators: a string value is capped in
 # characters (4 UTF-8 bytes each at most), a number beyond +-2**63 is refused even as a float,
-# and a lone surrogate is refused.  Cost: regex calls for tens of thousands of names and keys
+# and so is a lone surrogate (orjson refuses it too: pydantic decides).  Cost: regex calls for tens of thousands of names and keys
 # would double the parse, so a payload without any backslash (no JSON escape: no control
 # character can hide in it, raw ones are invalid JSON) checks names and keys by length only;
 # type and agent names repeat, so they are checked against memos after parsing.
@@ -658,7 +658,9 @@ def struct_decode(payload: bytes) -> Decoded | None:
     numeric, mixed = _ESCAPED if b"\\" in payload else _PLAIN
     try:
         message = numeric.decode(payload)
-    except msgspec.ValidationError:
+    except msgspec.ValidationError as exc:
+        if "got `str`" not in str(exc):   # only a string in a list value needs the mixed one
+            return None
         try:
             message = mixed.decode(payload)
         except msgspec.DecodeError:   # ValidationError is one
