@@ -78,10 +78,7 @@ class Message(BaseModel):
 
 
 _TYPE_RE = re.compile(TYPE_PATTERN)
-_NAME_RE = re.compile(NAME_PATTERN)
 _AGENT_RE = re.compile(AGENT_PATTERN)
-_ATTR_KEY_RE = re.compile(ATTR_KEY_PATTERN)
-_REPLICA_KEY_RE = re.compile(REPLICA_KEY_PATTERN)
 
 
 # ---- key space --------------------------------------------------------------------------------
@@ -241,21 +238,15 @@ def _top_hlc(nodes: list[tuple[int, ElementState]],
 def decode(payload: bytes) -> Decoded:
     """Parse and validate one message, or raise WireError naming the offending field.
 
-    The pydantic `Message` schema is the definition.  Two fast validators accept subsets of
-    what the schema accepts and build the same result: msgspec structs validated in C
-    (`struct_decode`, first), then a hand-written one (`fast_decode`, for what the structs
-    leave out: strings of over a quarter of the value limit in characters...); anything else
-    goes through pydantic, which either accepts it or produces the error (differential
-    property tests, tests/unit/test_dsr_wire.py, check that all three agree).
+    The pydantic `Message` schema is the definition.  A fast validator, msgspec structs
+    validated in C (`struct_decode`), accepts a subset of what the schema accepts and builds
+    the same result; anything else (malformed, or beyond its conservative cuts, such as a
+    string of over a quarter of the value limit in characters) goes through pydantic, which
+    either accepts it or produces the error (differential property tests,
+    tests/unit/test_dsr_wire.py, check that the two agree).
     """
     from dsr.errors import WireError
     fast = struct_decode(payload)
-    if fast is not None:
-        return fast
-    try:
-        fast = fast_decode(orjson.loads(payload))
-    except orjson.JSONDecodeError:
-        fast = None
     if fast is not None:
         return fast
     try:
@@ -305,14 +296,10 @@ def max_hlc(message: Decoded) -> int:
     return message.top_hlc
 
 
-# ---- fast validator -------------------------------------------------------------------------
+# ---- fast validator (msgspec: the common messages, validated in C) --------------------------
 
 _U63 = 2**63 - 1
 _MAX_VALUE = LIMITS.max_value_bytes
-_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges",
-                       "clock", "seen"})
-_NODE_KEYS = frozenset({"id", "add", "rem", "cleared", "meta", "attrs"})
-_EDGE_KEYS = frozenset({"src", "dst", "type", "add", "rem", "cleared", "attrs"})
 _BIG = float(2**63)
 _INT64_MIN = -(2**63)
 
@@ -343,212 +330,16 @@ class _Checked:
 
 
 _type_name = _Checked(_TYPE_RE)
-_node_name = _Checked(_NAME_RE, size=65536)
 _agent_name = _Checked(_AGENT_RE)
-_attr_key = _Checked(_ATTR_KEY_RE)
-_ATTR_OK = _attr_key._ok    # cleared in place when full: the reference stays valid
 
-
-def _dots(value: object) -> dict[int, int]:
-    if type(value) is not list:
-        raise _Reject
-    out: dict[int, int] = {}
-    for dot in value:
-        if type(dot) is not list or len(dot) != 2:
-            raise _Reject
-        replica, hlc = dot
-        if type(replica) is not int or type(hlc) is not int or not 1 <= replica <= _U63 \
-                or not 0 <= hlc <= _U63:
-            raise _Reject
-        if hlc >= out.get(replica, -1):
-            out[replica] = hlc
-    return out
-
-
-def _list_value(value: list[object]) -> list[object]:
-    if value and all(type(item) is str for item in value):
-        return value
-    out: list[object] = []
-    for item in value:
-        item_kind = type(item)
-        if item_kind is int and _INT64_MIN <= item <= _U63:  # type: ignore[operator]
-            out.append(float(item))  # type: ignore[arg-type]
-        elif item_kind is float and -_BIG < item < _BIG:  # type: ignore[operator]
-            out.append(item)
-        else:
-            raise _Reject
-    return out
-
-
-def _attrs(value: object) -> tuple[dict[str, tuple[int, int, object]], int]:
-    """The registers, and the largest stamp among them."""
-    if type(value) is not dict:
-        raise _Reject
-    out = {}
-    top = 0
-    for key, reg in value.items():
-        if type(reg) is not list or len(reg) != 3:
-            raise _Reject
-        hlc, replica, item = reg
-        if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
-                or not 1 <= replica <= _U63:
-            raise _Reject
-        kind = type(item)
-        if kind is float:
-            if not -_BIG < item < _BIG:  # orjson turns integers beyond 64 bits into floats
-                raise _Reject
-        elif kind is int:
-            if not _INT64_MIN <= item <= _U63:
-                raise _Reject
-        elif kind is str:
-            if len(item) * 4 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
-                raise _Reject
-        elif kind is list:
-            item = _list_value(item)
-            if value_bytes(item) > _MAX_VALUE:   # a string list: the sum of its bytes
-                raise _Reject
-        elif kind is not bool:
-            raise _Reject
-        if key not in _ATTR_OK:
-            _attr_key(key)
-        out[key] = (hlc, replica, item)
-        if hlc > top:
-            top = hlc
-    return out, top
-
-
-def _one_dot(value: object) -> tuple[dict[int, int], int] | None:
-    """The common `[[replica, hlc]]` list, or None for the general path."""
-    if type(value) is list and len(value) == 1:
-        dot = value[0]
-        if type(dot) is list and len(dot) == 2:
-            replica, hlc = dot
-            if type(replica) is int and type(hlc) is int and 1 <= replica <= _U63 \
-                    and 0 <= hlc <= _U63:
-                return {replica: hlc}, hlc
-    return None
-
-
-def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
-    """The element state, and the largest stamp in it."""
-    state = ElementState()
-    top = 0
-    if "add" in raw:
-        single = _one_dot(raw["add"])
-        if single is not None:
-            state.add, top = single
-        else:
-            state.add = _dots(raw["add"])
-            top = max(state.add.values(), default=0)
-    if "rem" in raw:
-        state.rem = _dots(raw["rem"])
-        top = max(top, max(state.rem.values(), default=0))
-    if "cleared" in raw:
-        cleared = raw["cleared"]
-        if type(cleared) is not int or not 0 <= cleared <= _U63:
-            raise _Reject
-        state.cleared = cleared
-        if cleared > top:
-            top = cleared
-    if "attrs" in raw:
-        state.attrs, attrs_top = _attrs(raw["attrs"])
-        if attrs_top > top:
-            top = attrs_top
-    return state, top
-
-
-def _node_id(value: object) -> int:
-    if type(value) is not int or not 1 <= value <= _U63:  # type: ignore[operator]
-        raise _Reject
-    return value  # type: ignore[return-value]
-
-
-def fast_decode(data: object) -> Decoded | None:
-    """Validated message for the common well-formed cases, None to defer to pydantic."""
-    try:
-        if type(data) is not dict or not _MSG_KEYS.issuperset(data) \
-                or data.get("format") != FORMAT \
-                or data.get("kind") not in ("delta", "state", "digest"):
-            return None
-        raw_nodes = data.get("nodes", [])
-        raw_edges = data.get("edges", [])
-        writers = data.get("writers", {})
-        if type(raw_nodes) is not list or type(raw_edges) is not list or type(writers) is not dict:
-            return None
-        nodes = []
-        top = 0
-        for raw in raw_nodes:
-            if type(raw) is not dict or "id" not in raw:
-                return None
-            if len(raw) == 2 and "attrs" in raw:     # an update: the hot path
-                attrs, entry_top = _attrs(raw["attrs"])
-                nodes.append((_node_id(raw["id"]), ElementState(attrs=attrs)))
-                if entry_top > top:
-                    top = entry_top
-                continue
-            if not _NODE_KEYS.issuperset(raw):
-                return None
-            meta = raw.get("meta")
-            if meta is not None:
-                if type(meta) is not list or len(meta) != 4:
-                    return None
-                hlc, replica, type_, name = meta
-                if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
-                        or not 1 <= replica <= _U63:
-                    return None
-                meta = (hlc, replica, (_type_name(type_), _node_name(name)))
-                if hlc > top:
-                    top = hlc
-            state, entry_top = _entry(raw)
-            state.meta = meta
-            nodes.append((_node_id(raw["id"]), state))
-            if entry_top > top:
-                top = entry_top
-        edges = []
-        for raw in raw_edges:
-            if type(raw) is not dict or not _EDGE_KEYS.issuperset(raw) \
-                    or "src" not in raw or "dst" not in raw or "type" not in raw:
-                return None
-            key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
-            state, entry_top = _entry(raw)
-            edges.append((key, state))
-            if entry_top > top:
-                top = entry_top
-        for replica_key, agent in writers.items():
-            _agent_name(agent)
-            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63:
-                return None
-        replica = data.get("replica")
-        if type(replica) is not int or not 1 <= replica <= _U63:
-            return None
-        clock = data.get("clock", 0)
-        if type(clock) is not int or not 0 <= clock <= _U63:
-            return None
-        seen = {}
-        raw_seen = data.get("seen", {})
-        if type(raw_seen) is not dict:
-            return None
-        for replica_key, hlc in raw_seen.items():
-            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63 \
-                    or type(hlc) is not int or not 0 <= hlc <= _U63:
-                return None
-            seen[int(replica_key)] = hlc
-        return Decoded(data["kind"], _agent_name(data.get("graph")),
-                       _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
-                       top, clock, seen)
-    except _Reject:
-        return None
-
-
-# ---- struct validator (msgspec: the common messages, validated in C) -----------------------
-#
-# Why a second fast validator: parsing with orjson and then walking the result in Python cost
+# Why a fast validator before pydantic: building pydantic models and converting them to element
+# states, or parsing with orjson and walking the result in Python (the previous fast path), cost
 # ~100 ms for a 10k-node state and most of an update's receive cost; msgspec parses straight
 # into typed structs and checks the bounds while parsing.  Its types are built from the
 # schema's patterns and limits (the differential test holds them to the schema), with
-# conservative cuts that send a message to the other validators: a string value is capped in
-# characters (4 UTF-8 bytes each at most), a number beyond +-2**63 is refused even as a float,
-# and so is a lone surrogate (orjson refuses it too: pydantic decides).  Cost: regex calls for tens of thousands of names and keys
+# conservative cuts that send a message to pydantic: a string value is capped in characters
+# (4 UTF-8 bytes each at most), a number beyond +-2**63 is refused even as a float, and so is
+# a lone surrogate.  Cost: regex calls for tens of thousands of names and keys
 # would double the parse, so a payload without any backslash (no JSON escape: no control
 # character can hide in it, raw ones are invalid JSON) checks names and keys by length only;
 # type and agent names repeat, so they are checked against memos after parsing.
