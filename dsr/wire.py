@@ -2,19 +2,24 @@
 
 Why JSON + pydantic: any Zenoh client in any language can read and write the graph with a
 JSON library, and one pydantic schema gives exact, field-naming errors for whatever arrives.
-Messages are encoded with orjson (fast path) and validated with pydantic's Rust core.
+Messages are encoded with orjson; received ones are parsed and validated by msgspec structs
+in C when they can be (the common case, see "struct validator" below), else by pydantic's Rust
+core, whose schema stays the definition and words the errors.
 """
 
 from __future__ import annotations
 
+import operator
 import re
 from collections.abc import Iterable
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
+import msgspec
 import orjson
+from msgspec import Meta
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
 
-from dsr.crdt import REMOVAL_RECEIPT, ElementState
+from dsr.crdt import REMOVAL_RECEIPT, ElementState, Register
 from dsr.limits import LIMITS, value_bytes
 from dsr.model import (AGENT_PATTERN, ATTR_KEY_PATTERN, NAME_PATTERN, TYPE_PATTERN, AgentName,
                        AttrKey, AttrValueSchema, NodeId, NodeName, TypeName, UInt63)
@@ -73,10 +78,7 @@ class Message(BaseModel):
 
 
 _TYPE_RE = re.compile(TYPE_PATTERN)
-_NAME_RE = re.compile(NAME_PATTERN)
 _AGENT_RE = re.compile(AGENT_PATTERN)
-_ATTR_KEY_RE = re.compile(ATTR_KEY_PATTERN)
-_REPLICA_KEY_RE = re.compile(REPLICA_KEY_PATTERN)
 
 
 # ---- key space --------------------------------------------------------------------------------
@@ -236,16 +238,15 @@ def _top_hlc(nodes: list[tuple[int, ElementState]],
 def decode(payload: bytes) -> Decoded:
     """Parse and validate one message, or raise WireError naming the offending field.
 
-    The pydantic `Message` schema is the definition.  A hand-written fast validator accepts a
-    subset of what the schema accepts and builds the same result; anything else goes through
-    pydantic, which either accepts it or produces the error (a differential property test,
-    tests/unit/test_dsr_wire.py, checks that the two agree).
+    The pydantic `Message` schema is the definition.  A fast validator, msgspec structs
+    validated in C (`struct_decode`), accepts a subset of what the schema accepts and builds
+    the same result; anything else (malformed, or beyond its conservative cuts, such as a
+    string of over a quarter of the value limit in characters) goes through pydantic, which
+    either accepts it or produces the error (differential property tests,
+    tests/unit/test_dsr_wire.py, check that the two agree).
     """
     from dsr.errors import WireError
-    try:
-        fast = fast_decode(orjson.loads(payload))
-    except orjson.JSONDecodeError:
-        fast = None
+    fast = struct_decode(payload)
     if fast is not None:
         return fast
     try:
@@ -295,14 +296,10 @@ def max_hlc(message: Decoded) -> int:
     return message.top_hlc
 
 
-# ---- fast validator -------------------------------------------------------------------------
+# ---- fast validator (msgspec: the common messages, validated in C) --------------------------
 
 _U63 = 2**63 - 1
 _MAX_VALUE = LIMITS.max_value_bytes
-_MSG_KEYS = frozenset({"format", "kind", "graph", "agent", "replica", "writers", "nodes", "edges",
-                       "clock", "seen"})
-_NODE_KEYS = frozenset({"id", "add", "rem", "cleared", "meta", "attrs"})
-_EDGE_KEYS = frozenset({"src", "dst", "type", "add", "rem", "cleared", "attrs"})
 _BIG = float(2**63)
 _INT64_MIN = -(2**63)
 
@@ -333,198 +330,172 @@ class _Checked:
 
 
 _type_name = _Checked(_TYPE_RE)
-_node_name = _Checked(_NAME_RE, size=65536)
 _agent_name = _Checked(_AGENT_RE)
-_attr_key = _Checked(_ATTR_KEY_RE)
-_ATTR_OK = _attr_key._ok    # cleared in place when full: the reference stays valid
+
+# Why a fast validator before pydantic: building pydantic models and converting them to element
+# states, or parsing with orjson and walking the result in Python (the previous fast path), cost
+# ~100 ms for a 10k-node state and most of an update's receive cost; msgspec parses straight
+# into typed structs and checks the bounds while parsing.  Its types are built from the
+# schema's patterns and limits (the differential test holds them to the schema), with
+# conservative cuts that send a message to pydantic: a string value is capped in characters
+# (4 UTF-8 bytes each at most), a number beyond +-2**63 is refused even as a float, and so is
+# a lone surrogate.  Cost: regex calls for tens of thousands of names and keys
+# would double the parse, so a payload without any backslash (no JSON escape: no control
+# character can hide in it, raw ones are invalid JSON) checks names and keys by length only;
+# type and agent names repeat, so they are checked against memos after parsing.
+
+def _anchored(pattern: str) -> str:
+    """msgspec searches (re.search); '$' would also match before a trailing newline."""
+    if not (pattern.startswith("^") and pattern.endswith("$")):
+        raise ValueError(f"pattern {pattern!r} must be anchored with ^...$")
+    return pattern[:-1] + r"\Z"
 
 
-def _dots(value: object) -> dict[int, int]:
-    if type(value) is not list:
-        raise _Reject
-    out: dict[int, int] = {}
-    for dot in value:
-        if type(dot) is not list or len(dot) != 2:
-            raise _Reject
-        replica, hlc = dot
-        if type(replica) is not int or type(hlc) is not int or not 1 <= replica <= _U63 \
-                or not 0 <= hlc <= _U63:
-            raise _Reject
-        if hlc >= out.get(replica, -1):
-            out[replica] = hlc
-    return out
+def _text(pattern: str, escapes: bool) -> Any:
+    """A string type for a "no control character, min to max long" pattern: the pattern
+    itself when the payload holds escapes, its length bounds otherwise."""
+    bounds = re.fullmatch(r"\^\[\^\\x00-\\x1f\]\{(\d+),(\d+)\}\$", pattern)
+    if bounds is None:
+        raise ValueError(f"pattern {pattern!r} is not 'no control character, min..max long'")
+    if escapes:
+        return Annotated[str, Meta(pattern=_anchored(pattern))]
+    return Annotated[str, Meta(min_length=int(bounds[1]), max_length=int(bounds[2]))]
 
 
-def _list_value(value: list[object]) -> list[object]:
-    if value and all(type(item) is str for item in value):
-        return value
-    out: list[object] = []
-    for item in value:
-        item_kind = type(item)
-        if item_kind is int and _INT64_MIN <= item <= _U63:  # type: ignore[operator]
-            out.append(float(item))  # type: ignore[arg-type]
-        elif item_kind is float and -_BIG < item < _BIG:  # type: ignore[operator]
-            out.append(item)
-        else:
-            raise _Reject
-    return out
+_MU63 = Annotated[int, Meta(ge=0, le=_U63)]
+_MReplica = Annotated[int, Meta(ge=1, le=_U63)]
+_MNodeId = Annotated[int, Meta(ge=1, le=_U63)]
+_MFloat = Annotated[float, Meta(gt=-_BIG, lt=_BIG)]   # finite; ints in lists become floats
+_MInt64 = Annotated[int, Meta(ge=_INT64_MIN, le=_U63)]
+_MStr = Annotated[str, Meta(max_length=_MAX_VALUE // 4)]
 
 
-def _attrs(value: object) -> tuple[dict[str, tuple[int, int, object]], int]:
-    """The registers, and the largest stamp among them."""
-    if type(value) is not dict:
-        raise _Reject
-    out = {}
-    top = 0
-    for key, reg in value.items():
-        if type(reg) is not list or len(reg) != 3:
-            raise _Reject
-        hlc, replica, item = reg
-        if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
-                or not 1 <= replica <= _U63:
-            raise _Reject
-        kind = type(item)
-        if kind is float:
-            if not -_BIG < item < _BIG:  # orjson turns integers beyond 64 bits into floats
-                raise _Reject
-        elif kind is int:
-            if not _INT64_MIN <= item <= _U63:
-                raise _Reject
-        elif kind is str:
-            if len(item) * 4 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
-                raise _Reject
-        elif kind is list:
-            item = _list_value(item)
-            if len(item) * 8 > _MAX_VALUE and value_bytes(item) > _MAX_VALUE:
-                raise _Reject
-        elif kind is not bool:
-            raise _Reject
-        if key not in _ATTR_OK:
-            _attr_key(key)
-        out[key] = (hlc, replica, item)
-        if hlc > top:
-            top = hlc
-    return out, top
+def _struct(name: str, fields: list[tuple[Any, ...]]) -> type:
+    return msgspec.defstruct(name, fields, kw_only=True, forbid_unknown_fields=True)
 
 
-def _one_dot(value: object) -> tuple[dict[int, int], int] | None:
-    """The common `[[replica, hlc]]` list, or None for the general path."""
-    if type(value) is list and len(value) == 1:
-        dot = value[0]
-        if type(dot) is list and len(dot) == 2:
-            replica, hlc = dot
-            if type(replica) is int and type(hlc) is int and 1 <= replica <= _U63 \
-                    and 0 <= hlc <= _U63:
-                return {replica: hlc}, hlc
-    return None
+def _wire_struct(list_item: Any, escapes: bool) -> type:
+    """The message struct whose list values hold `list_item` (a union has one array type).
+    Type and agent names are plain strings here: `struct_decode` checks them against memos
+    of names already matched (a regex call per message would double an update's parse)."""
+    value = Union[bool, _MInt64, _MFloat, _MStr,  # noqa: UP007
+                  Annotated[list[list_item], Meta(max_length=_MAX_VALUE // 8)]]
+    register = tuple[_MU63, _MReplica, value]
+    dots = list[tuple[_MReplica, _MU63]]
+    entry = [("add", dots, []), ("rem", dots, []), ("cleared", _MU63, 0),
+             ("attrs", dict[_text(ATTR_KEY_PATTERN, escapes), register], {})]
+    meta = tuple[_MU63, _MReplica, str, _text(NAME_PATTERN, escapes)]
+    node = _struct("Node", [("id", _MNodeId), *entry, ("meta", Union[meta, None], None)])
+    edge = _struct("Edge", [("src", _MNodeId), ("dst", _MNodeId), ("type", str), *entry])
+    return _struct("Wire", [
+        ("format", Literal["chronav-dsr/1"]), ("kind", Literal["delta", "state", "digest"]),
+        ("graph", str), ("agent", str), ("replica", _MReplica),
+        ("writers", dict[_MReplica, str], {}), ("clock", _MU63, 0),
+        ("seen", dict[_MReplica, _MU63], {}), ("nodes", list[node], []),
+        ("edges", list[edge], [])])
 
 
-def _entry(raw: dict[str, Any]) -> tuple[ElementState, int]:
-    """The element state, and the largest stamp in it."""
-    state = ElementState()
-    top = 0
-    if "add" in raw:
-        single = _one_dot(raw["add"])
-        if single is not None:
-            state.add, top = single
-        else:
-            state.add = _dots(raw["add"])
-            top = max(state.add.values(), default=0)
-    if "rem" in raw:
-        state.rem = _dots(raw["rem"])
-        top = max(top, max(state.rem.values(), default=0))
-    if "cleared" in raw:
-        cleared = raw["cleared"]
-        if type(cleared) is not int or not 0 <= cleared <= _U63:
-            raise _Reject
-        state.cleared = cleared
-        if cleared > top:
-            top = cleared
-    if "attrs" in raw:
-        state.attrs, attrs_top = _attrs(raw["attrs"])
-        if attrs_top > top:
-            top = attrs_top
-    return state, top
+def _decoders(escapes: bool) -> tuple[msgspec.json.Decoder[Any], msgspec.json.Decoder[Any]]:
+    """Numeric lists only (ints become floats; nothing to check after parsing), then lists of
+    numbers or strings (the all-numeric / all-string rule and the byte size of string lists
+    are checked by `_lists_ok`: only messages holding a string list pay for it)."""
+    return (msgspec.json.Decoder(_wire_struct(_MFloat, escapes)),
+            msgspec.json.Decoder(_wire_struct(Union[_MFloat, str], escapes)))  # noqa: UP007
 
 
-def _node_id(value: object) -> int:
-    if type(value) is not int or not 1 <= value <= _U63:  # type: ignore[operator]
-        raise _Reject
-    return value  # type: ignore[return-value]
+_PLAIN = _decoders(escapes=False)
+_ESCAPED = _decoders(escapes=True)
+_TYPE_OK = _type_name._ok    # names already matched (cleared in place when full)
+_AGENT_OK = _agent_name._ok
+_hlc_of = operator.itemgetter(0)
 
 
-def fast_decode(data: object) -> Decoded | None:
-    """Validated message for the common well-formed cases, None to defer to pydantic."""
+def _lists_ok(entries: list[Any]) -> bool:
+    """The list values of the mixed decoder: all numbers or all strings, and a string list
+    within the value limit (its bytes are the sum of its strings')."""
+    for raw in entries:
+        for reg in raw.attrs.values():
+            value = reg[2]
+            if type(value) is list and value:
+                kind = type(value[0])
+                if any(type(item) is not kind for item in value) \
+                        or kind is str and value_bytes(value) > _MAX_VALUE:
+                    return False
+    return True
+
+
+def _state(raw: Any, meta: Register | None) -> tuple[ElementState, int]:
+    """The element state of a decoded entry, and the largest stamp of its dots, `cleared` and
+    registers.  Dots become replica -> latest hlc (sorted: a replica's largest stamp wins)."""
+    add, rem, cleared, attrs = raw.add, raw.rem, raw.cleared, raw.attrs
+    stamp = max(map(_hlc_of, attrs.values())) if attrs else 0
+    if cleared > stamp:
+        stamp = cleared
+    if add:
+        add = dict(add) if len(add) == 1 else dict(sorted(add))
+        stamp = max(stamp, *add.values())
+    else:
+        add = {}
+    if rem:
+        rem = dict(rem) if len(rem) == 1 else dict(sorted(rem))
+        stamp = max(stamp, *rem.values())
+    else:
+        rem = {}
+    return ElementState(add, rem, cleared, meta, attrs), stamp
+
+
+def struct_decode(payload: bytes) -> Decoded | None:
+    """Validated message for what the msgspec structs accept, None to defer to the others."""
+    numeric, mixed = _ESCAPED if b"\\" in payload else _PLAIN
     try:
-        if type(data) is not dict or not _MSG_KEYS.issuperset(data) \
-                or data.get("format") != FORMAT \
-                or data.get("kind") not in ("delta", "state", "digest"):
+        message = numeric.decode(payload)
+    except msgspec.ValidationError as exc:
+        if "got `str`" not in str(exc):   # only a string in a list value needs the mixed one
             return None
-        raw_nodes = data.get("nodes", [])
-        raw_edges = data.get("edges", [])
-        writers = data.get("writers", {})
-        if type(raw_nodes) is not list or type(raw_edges) is not list or type(writers) is not dict:
+        try:
+            message = mixed.decode(payload)
+        except msgspec.DecodeError:   # ValidationError is one
             return None
-        nodes = []
-        top = 0
-        for raw in raw_nodes:
-            if type(raw) is not dict or "id" not in raw:
-                return None
-            if len(raw) == 2 and "attrs" in raw:     # an update: the hot path
-                attrs, entry_top = _attrs(raw["attrs"])
-                nodes.append((_node_id(raw["id"]), ElementState(attrs=attrs)))
-                if entry_top > top:
-                    top = entry_top
+        if not (_lists_ok(message.nodes) and _lists_ok(message.edges)):
+            return None
+    except msgspec.DecodeError:
+        return None
+    nodes = []
+    edges = []
+    top = 0
+    try:
+        if message.graph not in _AGENT_OK or message.agent not in _AGENT_OK:
+            _agent_name(message.graph)
+            _agent_name(message.agent)
+        writers = message.writers
+        if writers:
+            writers = {str(replica): _agent_name(agent) for replica, agent in writers.items()}
+        for raw in message.nodes:
+            meta = raw.meta
+            if meta is None and not raw.add and not raw.rem and not raw.cleared:
+                attrs = raw.attrs          # an update: the hot path, inlined
+                nodes.append((raw.id, ElementState({}, {}, 0, None, attrs)))
+                if attrs and (stamp := max(map(_hlc_of, attrs.values()))) > top:
+                    top = stamp
                 continue
-            if not _NODE_KEYS.issuperset(raw):
-                return None
-            meta = raw.get("meta")
             if meta is not None:
-                if type(meta) is not list or len(meta) != 4:
-                    return None
-                hlc, replica, type_, name = meta
-                if type(hlc) is not int or type(replica) is not int or not 0 <= hlc <= _U63 \
-                        or not 1 <= replica <= _U63:
-                    return None
-                meta = (hlc, replica, (_type_name(type_), _node_name(name)))
-                if hlc > top:
-                    top = hlc
-            state, entry_top = _entry(raw)
-            state.meta = meta
-            nodes.append((_node_id(raw["id"]), state))
-            if entry_top > top:
-                top = entry_top
-        edges = []
-        for raw in raw_edges:
-            if type(raw) is not dict or not _EDGE_KEYS.issuperset(raw) \
-                    or "src" not in raw or "dst" not in raw or "type" not in raw:
-                return None
-            key = (_node_id(raw["src"]), _node_id(raw["dst"]), _type_name(raw["type"]))
-            state, entry_top = _entry(raw)
-            edges.append((key, state))
-            if entry_top > top:
-                top = entry_top
-        for replica_key, agent in writers.items():
-            _agent_name(agent)
-            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63:
-                return None
-        replica = data.get("replica")
-        if type(replica) is not int or not 1 <= replica <= _U63:
-            return None
-        clock = data.get("clock", 0)
-        if type(clock) is not int or not 0 <= clock <= _U63:
-            return None
-        seen = {}
-        raw_seen = data.get("seen", {})
-        if type(raw_seen) is not dict:
-            return None
-        for replica_key, hlc in raw_seen.items():
-            if not _REPLICA_KEY_RE.fullmatch(replica_key) or int(replica_key) > _U63 \
-                    or type(hlc) is not int or not 0 <= hlc <= _U63:
-                return None
-            seen[int(replica_key)] = hlc
-        return Decoded(data["kind"], _agent_name(data.get("graph")),
-                       _agent_name(data.get("agent")), replica, dict(writers), nodes, edges,
-                       top, clock, seen)
+                if meta[2] not in _TYPE_OK:
+                    _type_name(meta[2])
+                meta = (meta[0], meta[1], (meta[2], meta[3]))
+                if meta[0] > top:
+                    top = meta[0]
+            state, stamp = _state(raw, meta)
+            nodes.append((raw.id, state))
+            if stamp > top:
+                top = stamp
+        for raw in message.edges:
+            if raw.type not in _TYPE_OK:
+                _type_name(raw.type)
+            state, stamp = _state(raw, None)
+            edges.append(((raw.src, raw.dst, raw.type), state))
+            if stamp > top:
+                top = stamp
     except _Reject:
         return None
+    return Decoded(message.kind, message.graph, message.agent, message.replica, writers,
+                   nodes, edges, top, message.clock, message.seen)

@@ -338,6 +338,17 @@ def profile_split(rounds: int = 20000) -> dict[str, Any]:
 
 
 def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
+    fill_graph(graph, nodes)
+    deadline = time.monotonic() + 60
+    while graph.get_attr(pong_id, "synced") is None:
+        if time.monotonic() > deadline:
+            raise TimeoutError("bench: echo replica did not receive the 10k graph")
+        graph.dispatch(timeout=0.2)
+
+
+def fill_graph(graph: Any, nodes: int) -> None:
+    """The join benchmark's graph: a world node, objects with an RT edge and 3 attributes each,
+    and a "marker" node, `nodes` nodes in all (tools/bench_dsr_decode.py decodes the same)."""
     with graph.transaction():
         world = graph.insert_node("world", "world")
     todo = nodes - len(graph) - 1     # exactly `nodes` nodes, marker included
@@ -349,11 +360,6 @@ def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
                 graph.insert_or_assign_edge(world.id, node.id, "RT",
                                             {"x": i * 0.1, "y": 1.0, "theta": 0.0})
     graph.insert_node("object", "marker")
-    deadline = time.monotonic() + 60
-    while graph.get_attr(pong_id, "synced") is None:
-        if time.monotonic() > deadline:
-            raise TimeoutError("bench: echo replica did not receive the 10k graph")
-        graph.dispatch(timeout=0.2)
 
 
 def main(argv: list[str] | None = None) -> int:
