@@ -1,5 +1,6 @@
 """What a fresh `chronav` process imports (issue 17: `chronav path` on a 2,000 x 1,200 cell map
-in under 1 s, loading included, when a bare interpreter with numpy and numba already takes half).
+in under 1 s, loading included, when a process that only loads the A* kernel from numba's cache
+already takes most of that; docs/maps.md, Scale).
 
 Why a subprocess: imports are paid once per process, and pytest has imported everything already.
 The child runs the console script's ``main()`` and, at exit, writes the names in ``sys.modules``.
