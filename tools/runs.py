@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 import os
-import secrets
 import stat
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -154,6 +153,8 @@ def _write_private(path: Path, text: str) -> None:
 
 
 def _new_password() -> str:
+    import secrets  # here, not at import: every `chronav` command loads this module (8 ms)
+
     return secrets.token_urlsafe(24)   # [A-Za-z0-9_-]: never a ':' (the dictionary separator)
 
 

@@ -8,14 +8,15 @@ node) are skipped rather than crashing the reader.
 
 from __future__ import annotations
 
-from typing import Any
-
-import networkx as nx
+from typing import TYPE_CHECKING, Any
 
 from agents.lib.agenda.model import ActivityWindow, AgendaError
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
 from agents.world.vocabulary import EdgeType, NodeType
 from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
+
+if TYPE_CHECKING:  # networkx (0.1 s) loads with DSRGraph.to_networkx, only when a symbolic view is asked for
+    import networkx as nx
 
 
 def shape_from_attrs(prefix: str, attrs: dict[str, Any], where: str) -> Shape:

@@ -17,6 +17,10 @@ Conventions (docs/agenda.md):
 - participants: ``X-CHRONAV-PARTICIPANTS`` (comma-separated), else each ``ATTENDEE``'s CN;
 - name: ``SUMMARY`` (else the object's name); ``STATUS:CANCELLED`` -> a cancelled activity;
 - floating times and all-day (DATE) events are in the centre's time zone.
+
+icalendar, recurring-ical-events and dateutil are imported by the functions that parse or expand
+a calendar (about 0.1 s): every scene loads this module through the agenda package, and most have
+no .ics, so `chronav path` on them should not pay for it.
 """
 
 from __future__ import annotations
@@ -26,15 +30,14 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
-
-import icalendar
-import recurring_ical_events
-from dateutil import rrule
+from typing import TYPE_CHECKING, Any
 
 from agents.lib.agenda.model import AgendaSourceError, local_midnight, problem
 from scenes.limits import ICS_BYTES, RECURRENCE_STEPS
 from scenes.yamlio import SourceError
+
+if TYPE_CHECKING:
+    import icalendar
 
 UTC = dt.timezone.utc
 _UNESCAPED_COMMA = re.compile(r"(?<!\\),")
@@ -160,6 +163,8 @@ class IcsAgenda:
 def _expand(calendars: Iterable[icalendar.Calendar], low: dt.datetime, high: dt.datetime,
             source: str) -> list[icalendar.Event]:
     """The VEVENT occurrences between ``low`` and ``high``, by recurring-ical-events."""
+    import recurring_ical_events
+
     found: list[icalendar.Event] = []
     for calendar in calendars:
         try:
@@ -219,6 +224,8 @@ def recurrence_steps(rule: icalendar.vRecur, start: Moment, horizon: dt.datetime
 
 
 def _check_steps(events: Iterable[IcsEvent], horizon: dt.datetime, day: dt.date) -> None:
+    import icalendar
+
     limit = RECURRENCE_STEPS.value()
     problems = []
     for event in events:
@@ -279,6 +286,8 @@ def _unescape(raw: str) -> str:
 
 def _text(value: Any) -> str | None:
     """Property value -> text; known TEXT properties arrive unescaped, X- ones raw."""
+    import icalendar
+
     if isinstance(value, list):
         value = value[0] if value else None
     if value is None:
@@ -338,6 +347,8 @@ def _zoned(prop: Any, name: str, problems: list[str]) -> Moment | None:
 
 def _until_in_frame(body: icalendar.vRecur, start: Moment) -> str:
     """RRULE text whose UNTIL is naive wall-clock time of the start's frame (what dateutil needs)."""
+    import icalendar
+
     rule = icalendar.vRecur(body)
     untils = rule.get("UNTIL")
     if untils:
@@ -354,6 +365,8 @@ def _until_in_frame(body: icalendar.vRecur, start: Moment) -> str:
 def _date_until_includes_its_day(vevent: icalendar.Event, start: Moment) -> None:
     """``UNTIL=20250402`` on a series of timed events means "up to and including the 2nd" (what
     calendar apps show); RFC 5545 wants a date-time there, so write it as one before expanding."""
+    import icalendar
+
     rules = vevent.get("RRULE")
     if rules is None or not isinstance(start, dt.datetime):
         return
@@ -408,6 +421,9 @@ _SINGLE_VALUED = ("UID", "DTSTART", "DTEND", "DURATION", "RECURRENCE-ID", "STATU
 
 
 def _parse_event(event: icalendar.Event, file: str, line: int | None) -> tuple[IcsEvent | None, list[str]]:
+    import icalendar
+    from dateutil import rrule
+
     problems: list[str] = [f"{prop}: {message}" for prop, message in event.errors]
     # icalendar hands a repeated property over as a list; RFC 5545 allows these once per event.
     problems += [f"{name} appears {len(event[name])} times; an event has at most one"
@@ -481,6 +497,8 @@ def _check_series(events: Iterable[IcsEvent], problems: list[SourceError]) -> No
 
 def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
     """Parse iCalendar text; every problem is reported at once, each with its line and UID."""
+    import icalendar
+
     if isinstance(data, bytes):
         try:
             data = data.decode("utf-8-sig")

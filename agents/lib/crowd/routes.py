@@ -24,8 +24,6 @@ import numba
 import numpy as np
 import shapely
 from numpy.typing import NDArray
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import shortest_path
 from shapely.geometry.base import BaseGeometry
 
 WALL_CLEARANCE_M = 0.45     # people keep about this much between their centre and a wall or jamb
@@ -110,6 +108,11 @@ class RouteGraph:
     @classmethod
     def build(cls, building: BaseGeometry, walls: Sequence[Sequence[Point]], footprints: Sequence[BaseGeometry],
               clearance_m: float) -> RouteGraph:
+        # scipy.sparse loads with the first graph, not at import: scenes whose people stay put
+        # (a building map's) build none, and `chronav path` on them need not pay for it.
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import shortest_path
+
         wall_lines = [shapely.LineString(w) for w in walls if len(w) >= 2]
         wall_geom = shapely.union_all(wall_lines) if wall_lines else shapely.GeometryCollection()
         furniture_geom = shapely.union_all(list(footprints)) if footprints else shapely.GeometryCollection()

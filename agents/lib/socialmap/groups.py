@@ -31,8 +31,6 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from agents.lib.socialmap.personal_space import PersonalSpace, asymmetric_gaussian
 from agents.lib.socialmap.types import Person
@@ -90,7 +88,14 @@ def group_people(people: Sequence[Person], spaces: Sequence[PersonalSpace], para
     if params.composition == "sum":
         labels = np.zeros(n, dtype=np.int64)
         count = 1
+    elif not pairs:  # nobody near anybody: each person is a group of one (scipy labels them so too)
+        labels = np.arange(n, dtype=np.int64)
+        count = n
     else:
+        # scipy.sparse loads here, not at import (~40 ms a fresh `chronav path` need not pay)
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
         rows = [i for i, _ in pairs]
         cols = [j for _, j in pairs]
         graph = coo_matrix((np.ones(len(pairs)), (rows, cols)), shape=(n, n))
