@@ -12,6 +12,7 @@ busy one.  Credentials come from the environment like every Zenoh setting
 
 from __future__ import annotations
 
+import faulthandler
 import logging
 import os
 import signal
@@ -28,6 +29,9 @@ from agents.world.scene_world import SceneWorld, load_world
 from scenes.model import Scene
 
 log = logging.getLogger("chronav.agent")
+#: seconds after a stop signal before a still-running agent logs every thread's stack (the
+#: launcher's stop_all SIGKILLs what is left after 8 s)
+STOP_TRACE_S = 5.0
 
 
 class Agent(ABC):
@@ -71,6 +75,9 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     def request_stop(signum: int, _frame: object) -> None:
         log.info("%s received signal %d, stopping", config.name, signum)
         stop.set()
+        # A stop that hangs ends in the launcher's SIGKILL, which leaves no trace of where it
+        # hung: the stacks of every thread go to the agent's log first.
+        faulthandler.dump_traceback_later(STOP_TRACE_S, exit=False)
 
     signal.signal(signal.SIGTERM, request_stop)
     signal.signal(signal.SIGINT, request_stop)
@@ -103,5 +110,6 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                 agent.teardown()
     finally:
         recorder.close()
+    faulthandler.cancel_dump_traceback_later()
     log.info("%s stopped", config.name)
     return 0
