@@ -21,8 +21,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python tools/bench_dsr.py
+	$(BIN)/python tools/bench_dsr_decode.py
 	$(BIN)/python tools/bench_planner.py
 	$(BIN)/python tools/bench_planner_symbolic.py
+	$(BIN)/python tools/bench_day.py
 	$(BIN)/python tools/bench_evaluate.py
 
 clean:
