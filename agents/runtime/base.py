@@ -62,6 +62,23 @@ def configure_logging(name: str) -> None:
                         format=f"%(asctime)s {name:>17} %(levelname)-7s %(message)s", datefmt="%H:%M:%S")
 
 
+def stop_on_signals(name: str, trace_after_s: float = STOP_TRACE_S) -> threading.Event:
+    """An event set by SIGTERM or SIGINT; the run loop ends when it is set.
+
+    A stop that hangs ends in the launcher's SIGKILL, which leaves no trace of where it hung, so
+    after ``trace_after_s`` the stacks of every thread go to stderr (the agent's log)."""
+    stop = threading.Event()
+
+    def request_stop(signum: int, _frame: object) -> None:
+        log.info("%s received signal %d, stopping", name, signum)
+        stop.set()
+        faulthandler.dump_traceback_later(trace_after_s, exit=False)
+
+    signal.signal(signal.SIGTERM, request_stop)
+    signal.signal(signal.SIGINT, request_stop)
+    return stop
+
+
 def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
@@ -70,17 +87,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
 
     config = parse_agent_args(agent_cls.kind, argv)
     configure_logging(config.name)
-    stop = threading.Event()
-
-    def request_stop(signum: int, _frame: object) -> None:
-        log.info("%s received signal %d, stopping", config.name, signum)
-        stop.set()
-        # A stop that hangs ends in the launcher's SIGKILL, which leaves no trace of where it
-        # hung: the stacks of every thread go to the agent's log first.
-        faulthandler.dump_traceback_later(STOP_TRACE_S, exit=False)
-
-    signal.signal(signal.SIGTERM, request_stop)
-    signal.signal(signal.SIGINT, request_stop)
+    stop = stop_on_signals(config.name)
 
     # Started by the launcher: if it dies (even by SIGKILL) this agent must not linger as an orphan.
     parent = os.getppid() if os.environ.get("CHRONAV_EXIT_WITH_PARENT") == "1" else None
