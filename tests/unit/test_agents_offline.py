@@ -8,6 +8,7 @@ system tests then only need to show that the same happens across processes.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -22,6 +23,9 @@ from agents.sim_robot.agent import SimRobotAgent
 from dsr import DSRGraph
 from scenes.loader import SCENES_DIR
 from scenes.clock import parse_clock
+
+if TYPE_CHECKING:
+    from agents.social_navigation.agent import SocialNavigationAgent
 
 AGENTS = (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent, ExecutiveAgent)
 
@@ -131,21 +135,30 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
     assert shut > corridor_to_ot() + 5.0, "with the north door shut the way in is the south door"
 
 
-def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
-    """The navigation agent plans an intention, then every 0.2 s of sim time rebuilds the map and
-    searches again through its Replanner: the replans reuse the first search (no refresh, a
-    fraction of its work), update the arrival-time grid of the previous one where the map
-    changed (incremental.py), and find what a fresh plan on the same map finds."""
-    from agents.lib.socialmap.social_map import plan
-    from agents.social_navigation.agent import REPLAN_PERIOD_S, SocialNavigationAgent
+def navigation_at_1130(tmp_path: Path) -> tuple[DSRGraph, dict[str, object], SocialNavigationAgent]:
+    """center_a at 11:30 with the executive's first intention issued, and a navigation agent on
+    the same graph that has not stepped yet."""
+    from agents.social_navigation.agent import SocialNavigationAgent
 
-    assert REPLAN_PERIOD_S <= 0.2
     graph, agents = world("center_a", tmp_path)
     set_clock(graph, agents, "11:30")
     agents["executive"].step()
     graph.dispatch()
     nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
     nav.setup(graph, Recorder("social_navigation", None, None))
+    return graph, agents, nav
+
+
+def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
+    """The navigation agent plans an intention, then every 0.2 s of sim time rebuilds the map and
+    searches again through its Replanner: the replans reuse the first search (no refresh, a
+    fraction of its work), update the arrival-time grid of the previous one where the map
+    changed (incremental.py), and find what a fresh plan on the same map finds."""
+    from agents.lib.socialmap.social_map import plan
+    from agents.social_navigation.agent import REPLAN_PERIOD_S
+
+    assert REPLAN_PERIOD_S <= 0.2
+    graph, agents, nav = navigation_at_1130(tmp_path)
     found: list[tuple[float, object]] = []
     search = nav.replanner.search
 
@@ -185,15 +198,9 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
       live) makes a drive of a few metres show it."""
     from agents.lib.socialmap.grid import blocked_core
     from agents.social_navigation import agent as navigation
-    from agents.social_navigation.agent import SocialNavigationAgent
 
     monkeypatch.setattr(navigation, "STALL_TIMEOUT_S", 2.0)
-    graph, agents = world("center_a", tmp_path)
-    set_clock(graph, agents, "11:30")
-    agents["executive"].step()
-    graph.dispatch()
-    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
-    nav.setup(graph, Recorder("social_navigation", None, None))
+    graph, agents, nav = navigation_at_1130(tmp_path)
     nav.step()
     graph.dispatch()
     assert nav.intention_id is not None and nav.map is not None
@@ -223,14 +230,9 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
 def test_a_recovery_still_answers_the_pose(tmp_path: Path) -> None:
     """Regression: the step that found no progress replanned and returned without a command, so
     the lockstep simulator stood still for its wall-clock watchdog (1 s) after every recovery."""
-    from agents.social_navigation.agent import STALL_S, SocialNavigationAgent
+    from agents.social_navigation.agent import STALL_S
 
-    graph, agents = world("center_a", tmp_path)
-    set_clock(graph, agents, "11:30")
-    agents["executive"].step()
-    graph.dispatch()
-    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
-    nav.setup(graph, Recorder("social_navigation", None, None))
+    graph, agents, nav = navigation_at_1130(tmp_path)
     nav.step()
     graph.dispatch()
     sim, robot = agents["sim_robot"], graph.get_node_by_name("robot")
