@@ -72,9 +72,7 @@ def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
     if len(points) < 2:
         return 0.0
     dense = densify(points, spec.resolution / 2)
-    rows = np.clip(((dense[:, 1] - spec.y0) / spec.resolution).astype(int), 0, grid.shape[0] - 1)
-    cols = np.clip(((dense[:, 0] - spec.x0) / spec.resolution).astype(int), 0, grid.shape[1] - 1)
-    costs = grid[rows, cols]
+    costs = grid[spec.clipped_cells(dense)]
     if not np.all(np.isfinite(costs)):
         return math.inf
     step = np.hypot(*np.diff(dense, axis=0).T)
@@ -363,9 +361,7 @@ class SocialNavigationAgent(Agent):
         spec = smap.spec
         dense = densify(points, spec.resolution / 2)
         far = np.hypot(dense[:, 0] - pose[0], dense[:, 1] - pose[1]) > ESCAPE_SKIP_M
-        rows = np.clip(((dense[far, 1] - spec.y0) / spec.resolution).astype(int), 0, core.shape[0] - 1)
-        cols = np.clip(((dense[far, 0] - spec.x0) / spec.resolution).astype(int), 0, core.shape[1] - 1)
-        return bool(np.any(core[rows, cols]))
+        return bool(np.any(core[spec.clipped_cells(dense[far])]))
 
     def _clearance_scale(self, robot: Any, vx: float, vy: float) -> tuple[float, bool]:
         """Speed factor from the free space ahead in the direction of motion (laser), and whether

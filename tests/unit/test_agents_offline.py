@@ -217,7 +217,7 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
         nav.step()
         graph.dispatch()
         x, y, _ = graph.world_pose(robot.id)
-        if walls[int((y - spec.y0) / spec.resolution), int((x - spec.x0) / spec.resolution)]:
+        if walls[spec.cell_of(x, y)]:
             in_walls.append((round(x, 2), round(y, 2)))
         if graph.get_node(intention_id).attrs.get("state") != "active":
             break

@@ -127,6 +127,13 @@ class GridSpec:
         col = min(int((x - self.x0) / self.resolution), self.cols - 1)
         return row, col
 
+    def clipped_cells(self, points: NDArray[np.float64]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Rows and columns of the cells containing (n, 2) x, y points, a point outside the grid
+        taking the nearest border cell (samples of a polyline looked up on the grid)."""
+        rows = np.clip(((points[:, 1] - self.y0) / self.resolution).astype(np.intp), 0, self.rows - 1)
+        cols = np.clip(((points[:, 0] - self.x0) / self.resolution).astype(np.intp), 0, self.cols - 1)
+        return rows, cols
+
     def centres(self, cells: NDArray[np.integer]) -> NDArray[np.float64]:
         """(n, 2) x, y of the centres of (n, 2) row, col cells."""
         cells = np.asarray(cells)
