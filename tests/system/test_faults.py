@@ -189,6 +189,7 @@ LOGGED = {"sim_robot": ("/world/robot/pose", True), "human_observer": ("/world/p
 
 
 @slow
+@pytest.mark.filterwarnings("ignore:RRD file has no footer")  # the killed processes' files, on purpose
 def test_the_recording_of_every_process_reads_back(kill_run: dict[str, Any]) -> None:
     from rerun.chunk import RrdReader
 
