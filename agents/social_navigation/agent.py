@@ -54,6 +54,8 @@ PASS_THROUGH_TOLERANCE_M = 0.5   # a waypoint past a door is reached without sto
 REPLAN_MIN_GAIN = 0.5   # cost units (~metres of free space): ignore tiny gains near the goal
 STALL_TIMEOUT_S = 60.0
 BLOCKED_WAIT_S = 30.0   # sim seconds an intention waits for people to clear a blocked way before failing
+STAND_IN_AFTER_S = 10.0  # sim seconds a goal occupied by people is waited for before a stand-in is taken
+STAND_IN_MAX_M = 1.5     # how far from an occupied goal the stand-in may be (in the goal's room)
 
 
 def densify(points: np.ndarray, step_m: float) -> np.ndarray:
@@ -92,6 +94,29 @@ def nearest_free(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: fl
         raise StartOccupied(f"no free cell within {max_m} m of ({xy[0]:.2f}, {xy[1]:.2f})")
     best = np.argmin((rows + r0 - row) ** 2 + (cols + c0 - col) ** 2)
     return (spec.x0 + (cols[best] + c0 + 0.5) * spec.resolution, spec.y0 + (rows[best] + r0 + 0.5) * spec.resolution)
+
+
+def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: Any,
+                  max_m: float = STAND_IN_MAX_M) -> tuple[float, float] | None:
+    """The centre of the traversable cell nearest to ``xy`` within ``max_m`` for which
+    ``inside(x, y)`` holds (the goal's room), or None.  Why: people may stand and talk on a
+    mission's goal for minutes; a care robot then stops next to them, outside their intimate
+    zones, instead of giving the mission up (nearest_free alone could pick a cell behind a wall)."""
+    col = int((xy[0] - spec.x0) / spec.resolution)
+    row = int((xy[1] - spec.y0) / spec.resolution)
+    reach = int(max_m / spec.resolution)
+    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
+    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
+    rows, cols = np.nonzero(np.isfinite(grid[r0:r1, c0:c1]))
+    squared = (rows + r0 - row) ** 2 + (cols + c0 - col) ** 2
+    for k in np.argsort(squared, kind="stable"):
+        if squared[k] > reach * reach:
+            break
+        x = spec.x0 + (cols[k] + c0 + 0.5) * spec.resolution
+        y = spec.y0 + (rows[k] + r0 + 0.5) * spec.resolution
+        if inside(x, y):
+            return float(x), float(y)
+    return None
 
 
 class SocialNavigationAgent(Agent):
@@ -204,7 +229,13 @@ class SocialNavigationAgent(Agent):
         assert self.goal is not None
         try:
             self.map = self._build_map(now_s)
-            path = self._plan_from(self.map, pose)
+            try:
+                path = self._plan_from(self.map, pose)
+            except PlanningError:
+                if self.blocked_since is None or now_s - self.blocked_since < STAND_IN_AFTER_S \
+                        or not self._take_stand_in(self.map, now_s):
+                    raise
+                path = self._plan_from(self.map, pose)
         except PlanningError as exc:
             if self.blocked_since is None:
                 self.blocked_since = now_s
@@ -217,6 +248,28 @@ class SocialNavigationAgent(Agent):
         self.blocked_since = None
         points = self._route(pose, path)
         self._adopt(points, now_s, reason, path.cost, replan=False)
+        return True
+
+    def _take_stand_in(self, smap: SocialMap, now_s: float) -> bool:
+        """The goal itself is occupied by people (its cell and everything within
+        GOAL_TOLERANCE_M is not traversable): aim for the nearest free cell of the goal's room
+        within STAND_IN_MAX_M instead, keeping the goal's heading.  False if the goal is free (the
+        way is what is blocked) or there is no such cell."""
+        assert self.goal is not None
+        goal = self.goal
+        cell = smap.spec.clipped_cells(np.array([[goal[0], goal[1]]]))
+        if np.isfinite(smap.cost[cell][0]):
+            return False
+        room = self.scene.room_at(goal[0], goal[1])
+        spot = stand_in_goal(smap.cost, smap.spec, (goal[0], goal[1]),
+                             lambda x, y: self.scene.room_at(x, y) == room)
+        if spot is None:
+            return False
+        self.rec.event(f"{format_clock(now_s)} goal ({goal[0]:.2f}, {goal[1]:.2f}) occupied by people: "
+                       f"stopping next to it at ({spot[0]:.2f}, {spot[1]:.2f}), "
+                       f"{math.hypot(spot[0] - goal[0], spot[1] - goal[1]):.1f} m away", level="WARN")
+        self.log.info("goal (%.2f, %.2f) occupied by people: stand-in (%.2f, %.2f)", goal[0], goal[1], *spot)
+        self.goal = (spot[0], spot[1], goal[2])
         return True
 
     def _wait_for_way(self, robot: Any, now_s: float, pose_stamp: float) -> None:
@@ -337,7 +390,12 @@ class SocialNavigationAgent(Agent):
         self.follower.reset()
         try:
             smap = self._build_map(now_s)
-            path = self._plan_from(smap, pose)
+            try:
+                path = self._plan_from(smap, pose)
+            except PlanningError:
+                if not self._take_stand_in(smap, now_s):   # stalled: people stand on the goal?
+                    raise
+                path = self._plan_from(smap, pose)
         except PlanningError as exc:
             self.rec.event(f"{format_clock(now_s)} stalled and cannot replan: {exc}", level="WARN")
             return

@@ -7,6 +7,7 @@ system tests then only need to show that the same happens across processes.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -246,3 +247,65 @@ def test_a_recovery_still_answers_the_pose(tmp_path: Path) -> None:
     assert nav._progress_s == pytest.approx(sim.now_s), "the stall was noticed and recovered from"
     assert attrs.get("cmd_stamp", -1.0) >= attrs["pose_stamp"], "the pose was answered"
     assert (attrs["cmd_vx"], attrs["cmd_vy"]) == (0.0, 0.0), "with a stop"
+
+
+def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) -> None:
+    """Regression (bench_day, m_therapy): two people stood talking on the mission's goal for
+    minutes; the navigation waited 30 s five times and the mission failed.  After
+    STAND_IN_AFTER_S it now stops at the nearest free cell of the goal's room instead, outside
+    their intimate zones, and the intention is done."""
+    from agents.social_navigation import agent as navigation
+    from agents.world.dsr_writers import write_person
+    from agents.world.vocabulary import intentions
+
+    graph, agents, nav = navigation_at_1130(tmp_path)
+    intention = next(i for i in intentions(graph) if i.active and i.goal is not None)
+    gx, gy = intention.goal[0], intention.goal[1]
+    room = nav.scene.room_at(gx, gy)
+    now = parse_clock("11:30")
+    for name, dx in (("talker_a", -0.25), ("talker_b", 0.25)):
+        write_person(graph, name, "resident", (gx + dx, gy, 0.0), room, now)
+    graph.dispatch()
+    robot = graph.get_node_by_name("robot")
+    sim = agents["sim_robot"]
+    sim.rate = 1e6
+    nav.step()
+    graph.dispatch()
+    assert nav.intention_id is not None and nav.band is None     # waiting: the goal is taken
+    stand_in = None
+    for _ in range(3000):
+        sim.step()
+        graph.dispatch()
+        for name, dx in (("talker_a", -0.25), ("talker_b", 0.25)):   # they keep talking
+            write_person(graph, name, "resident", (gx + dx, gy, 0.0), room, sim.now_s)
+        nav.step()
+        graph.dispatch()
+        if nav.goal is not None and nav.goal[:2] != (gx, gy):
+            stand_in = nav.goal
+        if graph.get_node(intention.node_id).attrs.get("state") != "active":
+            break
+    node = graph.get_node(intention.node_id)
+    assert node.attrs.get("state") == "done", node.attrs
+    assert stand_in is not None and nav.scene.room_at(stand_in[0], stand_in[1]) == room
+    assert 0.4 < math.hypot(stand_in[0] - gx, stand_in[1] - gy) <= navigation.STAND_IN_MAX_M
+    x, y, _ = graph.world_pose(robot.id)
+    assert math.hypot(x - stand_in[0], y - stand_in[1]) < 0.5
+    assert sim.now_s - now >= navigation.STAND_IN_AFTER_S
+
+
+def test_a_stand_in_stays_in_the_goal_s_room() -> None:
+    """The nearest free cell behind a wall is not a stand-in: the room predicate decides."""
+    from types import SimpleNamespace
+
+    from agents.social_navigation.agent import stand_in_goal
+
+    spec = SimpleNamespace(x0=0.0, y0=0.0, resolution=0.1)
+    grid = np.ones((40, 40))
+    grid[:, 18:22] = np.inf                       # a wall at x = 1.8-2.2 m
+    grid[15:25, 22:27] = np.inf                   # people right of the goal at (2.4, 2.0)
+    left_room = lambda x, y: x < 1.8              # noqa: E731
+    right_room = lambda x, y: x > 2.2             # noqa: E731
+    nearest = stand_in_goal(grid, spec, (2.45, 2.05), right_room)
+    assert nearest == pytest.approx((2.75, 2.05))   # past the people, not behind the wall (1.75)
+    assert stand_in_goal(grid, spec, (2.45, 2.05), left_room, max_m=0.5) is None
+    assert stand_in_goal(np.full((40, 40), np.inf), spec, (2.0, 2.0), right_room) is None
