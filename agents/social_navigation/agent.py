@@ -84,24 +84,16 @@ def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
 def nearest_free(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: float = 1.0) -> tuple[float, float]:
     """The centre of the nearest traversable cell: the way out when someone stepped up to the robot
     (its start lies in their intimate zone) or the robot was pushed against an inflated wall."""
-    col = int((xy[0] - spec.x0) / spec.resolution)
-    row = int((xy[1] - spec.y0) / spec.resolution)
-    reach = int(max_m / spec.resolution)
-    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
-    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
-    rows, cols = np.nonzero(np.isfinite(grid[r0:r1, c0:c1]))
-    if len(rows) == 0:
+    found = nearest_free_where(grid, spec, xy, max_m, lambda x, y: True)
+    if found is None:
         raise StartOccupied(f"no free cell within {max_m} m of ({xy[0]:.2f}, {xy[1]:.2f})")
-    best = np.argmin((rows + r0 - row) ** 2 + (cols + c0 - col) ** 2)
-    return (spec.x0 + (cols[best] + c0 + 0.5) * spec.resolution, spec.y0 + (rows[best] + r0 + 0.5) * spec.resolution)
+    return found
 
 
-def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: Any,
-                  max_m: float = STAND_IN_MAX_M) -> tuple[float, float] | None:
+def nearest_free_where(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: float,
+                       inside: Any) -> tuple[float, float] | None:
     """The centre of the traversable cell nearest to ``xy`` within ``max_m`` for which
-    ``inside(x, y)`` holds (the goal's room), or None.  Why: people may stand and talk on a
-    mission's goal for minutes; a care robot then stops next to them, outside their intimate
-    zones, instead of giving the mission up (nearest_free alone could pick a cell behind a wall)."""
+    ``inside(x, y)`` holds, or None."""
     col = int((xy[0] - spec.x0) / spec.resolution)
     row = int((xy[1] - spec.y0) / spec.resolution)
     reach = int(max_m / spec.resolution)
@@ -117,6 +109,15 @@ def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: 
         if inside(x, y):
             return float(x), float(y)
     return None
+
+
+def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: Any,
+                  max_m: float = STAND_IN_MAX_M) -> tuple[float, float] | None:
+    """Where to stop when people stand on the goal: the nearest traversable cell within
+    ``max_m`` inside the goal's room (``inside``), or None.  Why: people may stand and talk on
+    a mission's goal for minutes; a care robot then stops next to them, outside their intimate
+    zones, instead of giving the mission up (the nearest free cell alone could be behind a wall)."""
+    return nearest_free_where(grid, spec, xy, max_m, inside)
 
 
 class SocialNavigationAgent(Agent):
