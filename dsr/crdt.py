@@ -46,6 +46,9 @@ class ElementState:
     cleared: int = 0
     meta: Register | None = None
     attrs: dict[str, Register] = field(default_factory=dict)
+    #: bumped by every change made through this module (merge_attrs, merge_into, prune): the
+    #: graph's cache of encoded elements (DSRGraph.state_parts) is valid while it is unchanged
+    rev: int = field(default=0, compare=False)
 
     def present(self) -> bool:
         rem = self.rem
@@ -71,9 +74,11 @@ class ElementState:
         cleared = self.cleared
         if cleared and self.attrs:
             attrs = self.attrs
-            for key in [k for k, reg in attrs.items() if reg[0] <= cleared
-                        and k != REMOVAL_RECEIPT]:
+            hidden = [k for k, reg in attrs.items() if reg[0] <= cleared and k != REMOVAL_RECEIPT]
+            for key in hidden:
                 del attrs[key]
+            if hidden:
+                self.rev += 1
 
     def copy(self) -> ElementState:
         return ElementState(dict(self.add), dict(self.rem), self.cleared, self.meta,
@@ -158,6 +163,8 @@ def merge_into(state: ElementState, *, add: Any = None, rem: Any = None, cleared
                 if (type(old_visible) is not type(new_visible) or old_visible != new_visible) \
                         and key not in keys:
                     keys.append(key)
+    if changed:
+        state.rev += 1
     return changed, keys
 
 
@@ -180,6 +187,8 @@ def merge_attrs(state: ElementState, attrs: dict[str, Register]) -> tuple[bool, 
             if reg[0] > floor and (old is None or old[0] <= floor
                                    or type(old[2]) is not type(reg[2]) or old[2] != reg[2]):
                 keys.append(key)
+    if changed:
+        state.rev += 1
     return changed, keys
 
 

@@ -123,7 +123,9 @@ class DSRGraph:
         self._tx_depth = 0
         self._version = 0
         self._snapshot_cache: tuple[int, bytes] | None = None
-        self._parts_cache: tuple[int, list[bytes]] | None = None
+        #: element -> (its state object, that object's rev, its JSON): see state_parts
+        self._encoded_nodes: dict[int, tuple[ElementState, int, bytes]] = {}
+        self._encoded_edges: dict[EdgeKey, tuple[ElementState, int, bytes]] = {}
         self._writers: dict[int, str] = {self.replica_id: self.agent}
         self._bound: dict[int, str] = {self.replica_id: self.agent}
         self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
@@ -805,20 +807,15 @@ class DSRGraph:
         so encoding here, transfer and decoding at the joiner overlap (join time).  Each part
         is a valid state (a join of element states); the last one carries `clock` and `seen`
         (only once every part has been merged does the receiver hold what they describe).
-        The graph lock is held per part, not for the whole state.  Cached per version."""
+        The graph lock is held per part, not for the whole state.
+
+        Each element's JSON is cached with the state object and its `rev` (crdt.py bumps it on
+        every change): in a live graph a few elements change between two joins (poses, people)
+        while encoding all of them cost a 10k-node join most of its time."""
         with self._lock:
-            cache = self._parts_cache
-            if cache is not None and cache[0] == self._version:
-                parts: list[bytes] | None = cache[1]
-            else:
-                parts = None
-                version = self._version
-                clock = self.clock.last
-                node_ids, edge_keys = list(self._nodes), list(self._edges)
-                writers = dict(self._writers)
-        if parts is not None:
-            yield from parts
-            return
+            clock = self.clock.last
+            node_ids, edge_keys = list(self._nodes), list(self._edges)
+            writers = dict(self._writers)
         seen = {**(seen or {}), self.replica_id: clock}
         chunks: list[tuple[list[int], list[EdgeKey]]] = []
         for start in range(0, len(node_ids), per_part):
@@ -827,21 +824,21 @@ class DSRGraph:
             chunks.append(([], edge_keys[start:start + per_part]))
         if not chunks:
             chunks.append(([], []))
-        built: list[bytes] = []
+        node_cache, edge_cache = self._encoded_nodes, self._encoded_edges
+        fresh_nodes: dict[int, tuple[ElementState, int, bytes]] = {}
+        fresh_edges: dict[EdgeKey, tuple[ElementState, int, bytes]] = {}
         for index, (ids, keys) in enumerate(chunks):
             last = index == len(chunks) - 1
             with self._lock:
-                nodes, edges = self._nodes, self._edges
-                payload = wire.encode(
+                node_parts = _encoded(self._nodes, ids, node_cache, fresh_nodes, wire.node_entry)
+                edge_parts = _encoded(self._edges, keys, edge_cache, fresh_edges, wire.edge_entry)
+                payload = wire.encode_parts(
                     kind="state", graph=self.graph_name, agent=self.agent,
-                    replica=self.replica_id,
-                    nodes=[(i, nodes[i]) for i in ids if i in nodes],
-                    edges=[(k, edges[k]) for k in keys if k in edges], writers=writers,
-                    clock=clock if last else 0, seen=seen if last else None)
-            built.append(payload)
+                    replica=self.replica_id, nodes=node_parts, edges=edge_parts,
+                    writers=writers, clock=clock if last else 0, seen=seen if last else None)
             yield payload
-        with self._lock:
-            self._parts_cache = (version, built)
+        # only what this state held is kept (removed and compacted elements drop out)
+        self._encoded_nodes, self._encoded_edges = fresh_nodes, fresh_edges
 
     def compact(self, acked: Callable[[int, int], bool]) -> int:
         """Forget removed elements whose removal every member has seen; returns how many.
@@ -1016,3 +1013,26 @@ class DSRGraph:
         except OSError as exc:
             raise GraphFileError(f"{path}: cannot read: {exc.strerror}") from None
         return cls.from_json(text, agent, source=str(path), **kwargs)
+
+
+def _encoded(states: dict[Any, ElementState], keys: list[Any],
+             cache: dict[Any, tuple[ElementState, int, bytes]],
+             fresh: dict[Any, tuple[ElementState, int, bytes]],
+             entry: Callable[[Any, ElementState], dict[str, object]]) -> list[bytes]:
+    """The JSON of each element still in `states`, from `cache` when the element's state is
+    the same object at the same rev, encoded anew otherwise; every one is put in `fresh`."""
+    out: list[bytes] = []
+    dumps = orjson.dumps
+    for key in keys:
+        state = states.get(key)
+        if state is None:
+            continue
+        hit = cache.get(key)
+        if hit is not None and hit[0] is state and hit[1] == state.rev:
+            fresh[key] = hit
+            out.append(hit[2])
+        else:
+            data = dumps(entry(key, state))
+            fresh[key] = (state, state.rev, data)
+            out.append(data)
+    return out

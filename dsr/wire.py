@@ -165,6 +165,20 @@ def encode(*, kind: str, graph: str, agent: str, replica: int,
     return orjson.dumps(message)
 
 
+def encode_parts(*, kind: str, graph: str, agent: str, replica: int, nodes: list[bytes],
+                 edges: list[bytes], writers: dict[int, str] | None = None, clock: int = 0,
+                 seen: dict[int, int] | None = None) -> bytes:
+    """`encode` for elements already encoded one by one (the JSON of node_entry/edge_entry):
+    the same bytes, spliced (DSRGraph.state_parts caches each element's JSON)."""
+    head = encode(kind=kind, graph=graph, agent=agent, replica=replica, nodes=(), edges=(),
+                  writers=writers, clock=clock, seen=seen)
+    tail = b'"nodes":[],"edges":[]}'
+    if not head.endswith(tail):
+        raise AssertionError("encode() must end with the nodes and edges lists")
+    return (head[:-len(tail)] + b'"nodes":[' + b",".join(nodes) + b'],"edges":['
+            + b",".join(edges) + b"]}")
+
+
 # ---- decode + checks --------------------------------------------------------------------------
 
 def _describe(error: ValidationError, limit: int = 3) -> str:

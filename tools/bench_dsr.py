@@ -20,6 +20,9 @@ here on a free loopback port:
 - join_10k_s: a new process's join() of a graph of 10,000 nodes (~9,000 with an RT edge and
   3 attributes, plus the nodes of the previous phases): session open, member lookup, one full
   state fetched, validated and merged (the other replicas' states follow in the background).
+  As in a running system, agents have joined before (each member has served its state once)
+  and the graph changed since (a write right before each join): median of 3 joins.
+  join_10k_first_s: the first join ever served by the members, which encode every element.
 
 Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
 The machine's 2 cores are shared: run it several times and report the best and median run.
@@ -120,7 +123,7 @@ def run_echo(endpoint: str, graph_name: str) -> None:
 
 
 # ---------------------------------------------------------------- joiner process
-def run_join(endpoint: str, graph_name: str) -> None:
+def run_join(endpoint: str, graph_name: str, hold_s: float = 0.0) -> None:
     from dsr import ZenohSettings, join
     settings = ZenohSettings(connect=[endpoint])
     start = time.perf_counter()
@@ -128,6 +131,7 @@ def run_join(endpoint: str, graph_name: str) -> None:
         elapsed = time.perf_counter() - start
         print(json.dumps({"join_s": elapsed, "nodes": len(graph), "edges": len(graph.edges()),
                           "state_replies": graph.replica.stats.state_merged}), flush=True)
+        time.sleep(hold_s)   # the background round then fetches every other member's state
 
 
 # ---------------------------------------------------------------- driver
@@ -371,12 +375,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=1000)
     parser.add_argument("--updates", type=int, default=200_000)
     parser.add_argument("--join-nodes", type=int, default=10_000)
+    parser.add_argument("--hold", type=float, default=0.0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "echo":
         run_echo(args.connect, args.graph)
         return 0
     if args.role == "join":
-        run_join(args.connect, args.graph)
+        run_join(args.connect, args.graph, args.hold)
         return 0
 
     from dsr import ZenohSettings, join
@@ -404,11 +409,18 @@ def main(argv: list[str] | None = None) -> int:
                                                         / result["zenoh_handoff_p50_ms"])
                 result.update(throughput(ping, args.updates))
                 build_graph(graph, args.join_nodes, ping.pong_id)
-                joiner = procs.spawn([me, "--role", "join", "--connect", endpoint, "--graph",
-                                      graph_name], stdout=subprocess.PIPE)
-                out, _ = joiner.communicate(timeout=120)
-                joined = json.loads(out.decode().strip().splitlines()[-1])
-                result["join_10k_s"] = joined["join_s"]
+                joins = []
+                for k in range(4):       # the first: members encode every element
+                    graph.update_node(ping.ping.id, {"joins": k})
+                    time.sleep(0.3)
+                    joiner = procs.spawn([me, "--role", "join", "--connect", endpoint, "--graph",
+                                          graph_name, "--hold", "1.5" if k == 0 else "0"],
+                                         stdout=subprocess.PIPE)
+                    out, _ = joiner.communicate(timeout=120)
+                    joined = json.loads(out.decode().strip().splitlines()[-1])
+                    joins.append(joined["join_s"])
+                result["join_10k_s"] = sorted(joins[1:])[1]
+                result["join_10k_first_s"] = joins[0]
                 result["join_nodes"] = joined["nodes"]
                 result["join_edges"] = joined["edges"]
                 result["join_state_replies"] = joined["state_replies"]
