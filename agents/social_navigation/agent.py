@@ -143,6 +143,8 @@ class SocialNavigationAgent(Agent):
         self.global_points = np.empty((0, 2))
         self._best_distance, self._progress_s = math.inf, 0.0
         self.goal: tuple[float, float, float | None] | None = None
+        #: the intention's own goal (self.goal may become a stand-in next to it)
+        self.asked_goal: tuple[float, float, float | None] | None = None
         self.last_answered = -1.0
         self.last_replan_s = -math.inf
         self.started_s = 0.0
@@ -212,7 +214,7 @@ class SocialNavigationAgent(Agent):
 
     def _start(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         self.intention_id = intention.node_id
-        self.goal = intention.goal
+        self.goal = self.asked_goal = intention.goal
         self.route_rooms = intention.rooms
         self.started_s = now_s
         self.budget_m = 0.0
@@ -254,13 +256,13 @@ class SocialNavigationAgent(Agent):
     def _take_stand_in(self, smap: SocialMap, now_s: float) -> bool:
         """The goal itself is occupied by people (its cell and everything within
         GOAL_TOLERANCE_M is not traversable): aim for the nearest free cell of the goal's room
-        within STAND_IN_MAX_M instead, keeping the goal's heading.  False if the goal is free (the
-        way is what is blocked) or there is no such cell."""
+        within STAND_IN_MAX_M of the intention's goal instead, keeping its heading.  False if the
+        current goal is free (the way is what is blocked) or there is no such cell."""
         assert self.goal is not None
-        goal = self.goal
-        cell = smap.spec.clipped_cells(np.array([[goal[0], goal[1]]]))
+        cell = smap.spec.clipped_cells(np.array([[self.goal[0], self.goal[1]]]))
         if np.isfinite(smap.cost[cell][0]):
             return False
+        goal = self.asked_goal or self.goal   # a stand-in taken in turn: still next to the goal asked
         room = self.scene.room_at(goal[0], goal[1])
         spot = stand_in_goal(smap.cost, smap.spec, (goal[0], goal[1]),
                              lambda x, y: self.scene.room_at(x, y) == room)
@@ -445,7 +447,7 @@ class SocialNavigationAgent(Agent):
                 g.update_node(intention_id, attrs={"state": state, "reason": reason})
         self.intention_id = None
         self.band = None
-        self.goal = None
+        self.goal = self.asked_goal = None
         self.route_rooms = ()
 
     def _fail(self, reason: str) -> None:
