@@ -19,7 +19,8 @@ running:
   stamp of a running writer z that would change this replica's state is either forged
   (stamp <= seen[z]: z published everything up to there, and not this; reason forged_stamp) or
   not yet arrived from z itself (stamp > seen[z]: dropped here, z's own delta or state brings
-  it; counted as `deferred`).
+  it; counted as `deferred`).  `seen[z]` exists only once z's own state has been merged here
+  (dsr/transport.py `_advance`): until then every such stamp is deferred.
 
 Writes of agents that are not running (a previous incarnation, a tool that has exited) can
 only come relayed: they are attributed through the table and judged by the write policy.  The

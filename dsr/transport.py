@@ -148,10 +148,10 @@ class Replica:
         self._connected = False
         self._joined = False
         self._table_lock = threading.Lock()
-        #: seen[z]: this replica holds every write replica z stamped up to seen[z]
+        #: seen[z]: this replica holds every write replica z stamped up to seen[z].  A running
+        #: writer's entry is set only by its own state and then moved on by its own deltas and
+        #: digests (see _advance); without an entry its relayed writes wait for it (deferred)
         self._seen: dict[int, int] = {}
-        #: replicas whose delta stream may have had a gap (see _advance)
-        self._gapped: set[int] = set()
         #: agents whose own state (this incarnation) has been merged: their replica ids known
         self._vouched: set[str] = set()
         self._pending_syncs: set[str] = set()
@@ -400,14 +400,17 @@ class Replica:
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
 
     def _advance(self, replica: int, hlc: int) -> None:
-        """A writer's own messages arrive in order: we now hold all it stamped up to hlc
-        (unless its stream had a gap: its session broke, and the puts it made meanwhile were
-        lost; then only its own state restores the watermark)."""
-        if replica in self._gapped:
-            return
-        seen = self._seen     # one writer thread per key: a plain store (a race with a state
-        if hlc > seen.get(replica, 0):  # merge can only leave a lower, still true, watermark)
-            seen[replica] = hlc
+        """A writer's own messages arrive in order: we now hold all it stamped up to hlc, if
+        we held all it stamped before the first of them that reached us.  Only its own state
+        proves that (it sets the entry, `_note_seen`): a subscription takes effect at the
+        router a moment after it is declared, a broken session loses the puts made meanwhile,
+        and in both cases the deltas that do arrive come in order after a hole.  So without an
+        entry, nothing is advanced."""
+        with self._table_lock:
+            seen = self._seen
+            current = seen.get(replica)
+            if current is not None and hlc > current:
+                seen[replica] = hlc
 
     def _gap(self, agent: str | None) -> None:
         """Deltas of `agent` (None: of everybody) may have been lost: forget its watermarks
@@ -415,7 +418,6 @@ class Replica:
         me = self.graph.replica_id
         for replica, owner in list(self.graph._bound.items()):
             if replica != me and (agent is None or owner == agent):
-                self._gapped.add(replica)
                 self._seen.pop(replica, None)
 
     def _on_digest(self, message: wire.Decoded) -> None:
@@ -563,9 +565,11 @@ class Replica:
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
 
     def _note_seen(self, message: wire.Decoded) -> None:
-        """After merging a state: we now hold what its sender held of its own writes (and,
-        for writers that are not running, of theirs; running writers' relayed stamps may have
-        been screened out, so their watermarks come only from their own messages)."""
+        """After merging a state: we now hold what its sender held of its own writes, and of
+        the writes of agents that are not running.  A running writer's watermark comes only
+        from its own state, even in the first state of a join: its relayed stamps may have
+        been screened out, and deltas it published while our subscription was taking effect
+        may be missing here though the relay holds them (`_advance`)."""
         sender = message.agent
         live = self.live_agents()
         graph = self.graph
@@ -575,11 +579,10 @@ class Replica:
             for replica, hlc in message.seen.items():
                 owner = graph.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
-                if not own and self._joined and owner in live:
-                    continue    # a running writer: only its own messages set its watermark
-                self._gapped.discard(replica)   # (a writer that is not running sends nothing)
-                if hlc > self._seen.get(replica, 0):
-                    self._seen[replica] = hlc
+                if not own and owner in live:
+                    continue    # a running writer: only its own state sets its watermark
+                if hlc >= self._seen.get(replica, 0):   # (one that is not running sends
+                    self._seen[replica] = hlc          # nothing more: a relay's is true)
 
     def _screen(self, key: str, message: wire.Decoded) -> wire.Decoded:
         from dsr.state_trust import screen_state

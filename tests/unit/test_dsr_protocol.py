@@ -49,7 +49,10 @@ class Publisher:
 
 class Net:
     """Replicas wired together in memory: every published delta or digest reaches the others'
-    `_on_delta`, in order (like one Zenoh publisher per replica)."""
+    `_on_delta`, in order (like one Zenoh publisher per replica).  A joiner merges one
+    member's state, then every member's (the round after the join); every member merges the
+    joiner's (its token appeared): as over Zenoh, each running writer's watermark starts from
+    its own state."""
 
     def __init__(self, policy: object = None) -> None:
         self.replicas: dict[str, Replica] = {}
@@ -67,6 +70,9 @@ class Net:
         for name, other in self.replicas.items():
             other._members[agent] = Member(agent)
             replica._members[name] = Member(name)
+        for other in self.replicas.values():
+            replica._merge_state(state_sample(other))
+            other._merge_state(state_sample(replica))
         self.replicas[agent] = replica
         return replica
 
@@ -424,3 +430,33 @@ def test_anti_entropy_settles_for_a_writer_that_left():
     b.publish_digest()
     b.publish_digest()
     assert a._sync_requests.empty() and a.stats.anti_entropy == 1
+
+
+def test_a_joiner_that_missed_a_delta_while_subscribing_does_not_call_it_forged():
+    """Regression (CI, test_three_concurrent_writers_converge and the trust test): a joiner's
+    subscription reaches the router a moment after it is declared; a delta of b published in
+    that moment is lost to it.  Its first state came from c, and b's later deltas arrived in
+    order, so a watermark for b taken from c's state and moved on by b's deltas claimed a
+    write that never arrived, and c's next state was refused as forging it.  A running
+    writer's watermark starts only from its own state."""
+    net = Net()
+    b, c = net.add("b"), net.add("c")
+    net.maintain()
+    joiner = Replica(DSRGraph("a"))
+    for name in ("b", "c"):
+        joiner._members[name] = Member(name)
+    joiner._merge_state(state_sample(c))          # the first state of the join: from c
+    joiner._joined = True
+    missed = b.graph.insert_node("object", "missed")   # reaches c only
+    net.replicas["a"] = joiner                         # now a's subscription is in place
+    for name in ("b", "c"):
+        net.replicas[name]._members["a"] = Member("a")
+    b.graph.insert_node("object", "after")             # in order, after the missed one
+    b.publish_digest()
+    joiner._merge_state(state_sample(c))               # c relays the missed write
+    assert joiner.stats.rejects == {}, joiner.stats.last_reject
+    assert joiner.graph.get_node(missed.id) is None    # left for b itself ...
+    joiner._merge_state(state_sample(b))               # ... whose own state brings it
+    assert joiner.graph.get_node(missed.id) is not None
+    assert joiner.graph.digest() == b.graph.digest() == c.graph.digest()
+    assert joiner.seen()[b.graph.replica_id] >= b.graph.published_hlc()
