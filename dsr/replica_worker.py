@@ -13,6 +13,7 @@ so a test can wait for convergence without sharing memory with the process.
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import random
 import sys
@@ -39,6 +40,7 @@ def write_status(path: Path, graph: DSRGraph, done: bool, ops: dict[str, int]) -
         "nodes": len(graph), "edges": len(graph.edges()), "ops": ops,
         "names": sorted(n.name for n in graph.nodes()),
         "stats": replica.stats.as_dict() if replica is not None else {},
+        "gc_threshold": gc.get_threshold(),
     }
     tmp = path.with_suffix(".tmp")
     tmp.write_bytes(orjson.dumps(status))

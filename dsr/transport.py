@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import gc
 import logging
 import queue
 import random
@@ -29,6 +28,7 @@ from typing import Any
 import orjson
 
 from dsr import wire
+from dsr.collector import FREEZE_AFTER_JOIN_NODES, gc_paused, tune_collector
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
@@ -38,8 +38,6 @@ from dsr.policy import AllowAll, WritePolicy
 log = logging.getLogger(__name__)
 _ALL = "*"
 _LOG_FIRST_REJECTS = 20
-#: a join that brings at least this many nodes freezes them out of the cyclic GC (_gc_paused)
-FREEZE_AFTER_JOIN_NODES = 1000
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
@@ -176,6 +174,7 @@ class Replica:
         """Open the session, declare entities, fetch the current state (blocking)."""
         import zenoh
 
+        tune_collector()     # a replica's heap is long-lived and acyclic: dsr/collector.py
         conf = self.settings.to_zenoh_config()
         self._tune(conf)
         try:
@@ -195,7 +194,7 @@ class Replica:
             # copy of a large graph would multiply the join time); then a background round
             # merges every other replica's state, which covers deltas that were in flight
             # while the answer was built and anything the first member lacked.
-            with _gc_paused(freeze_if=lambda: len(self.graph) >= FREEZE_AFTER_JOIN_NODES):
+            with gc_paused(freeze_if=lambda: len(self.graph) >= FREEZE_AFTER_JOIN_NODES):
                 self._initial_sync()
             self._joined = True
             self._sync_requests.put(_ALL)
@@ -472,7 +471,7 @@ class Replica:
                 query.reply(self._state_key, orjson.dumps(self.report()),
                             encoding=STATS_ENCODING)
             else:
-                with _gc_paused():   # encoding a large state makes ~10^5 short-lived objects
+                with gc_paused():   # encoding a large state makes ~10^5 short-lived objects
                     for part in self.graph.state_parts(self.seen()):
                         query.reply(self._state_key, part, encoding=wire.ENCODING)
                 self.stats.state_served += 1
@@ -536,7 +535,7 @@ class Replica:
                 self._reject(key, "too_large", f"state of {len(payload)} bytes, over the limit "
                              f"of {LIMITS.max_state_bytes} (CHRONAV_DSR_MAX_STATE_BYTES)")
                 return
-            with _gc_paused():
+            with gc_paused():
                 message = wire.decode(payload)
                 problem = self._problem(message, wire.last_chunk(key), "state")
                 if problem is not None:
@@ -688,32 +687,6 @@ class Replica:
                     return
                 self.stats.errors += 1
                 log.exception("DSR %s: anti-entropy round failed", self.graph.agent)
-
-
-@contextmanager
-def _gc_paused(freeze_if: Callable[[], bool] | None = None) -> Iterator[None]:
-    """Pause the cyclic GC while a whole state is decoded and merged.
-
-    Why: decoding a 10,000-node state allocates ~10^6 small objects, which triggers repeated
-    full collections scanning the whole heap (measured: join time x1.7-2.5).  None of these
-    objects form cycles, so deferring collection to the end loses nothing.
-
-    After the join of a large graph (`freeze_if`) the objects are then moved out of the
-    collector's reach (gc.freeze): the joined graph lives as long as the agent, and otherwise
-    the first collections after the join walk all of it, once per generation it climbs
-    (tens of ms each for 10k nodes; the first one still inside join()).  Freed elements are
-    still freed by reference counting; only cyclic garbage pending at that moment would stay
-    (an agent joins once, at its start, and the graph's objects hold no cycles).  Small
-    graphs are not frozen: a process that joins many times (a test run) freezes nothing."""
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was_enabled:
-            if freeze_if is not None and freeze_if():
-                gc.freeze()
-            gc.enable()
 
 
 @contextmanager

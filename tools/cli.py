@@ -52,8 +52,8 @@ def main() -> None:
     command then runs none), and at the end everything is frozen (``gc.freeze``): shutdown still
     runs the atexit handlers and frees every module, but no longer walks those objects for cycles.
     Long-running commands (launch, demo, chaos) still collect, in larger steps; only cyclic garbage
-    waits longer (most objects are freed by reference counting).  The agents are separate processes
-    with Python's defaults.  ``tests/unit/test_cli_imports.py`` guards what `chronav path` imports.
+    waits longer (most objects are freed by reference counting).  The agents are separate processes:
+    each raises the thresholds when it opens its replica (dsr/collector.py).  ``tests/unit/test_cli_imports.py`` guards what `chronav path` imports.
     """
     gc.set_threshold(*GC_THRESHOLDS)
     try:

@@ -7,7 +7,7 @@ import gc
 
 import pytest
 
-from dsr.transport import _gc_paused
+from dsr.collector import GC_THRESHOLDS, gc_paused, tune_collector
 
 
 @pytest.fixture
@@ -23,9 +23,9 @@ def restore_gc():
 
 def test_paused_inside_and_enabled_again_after(restore_gc):
     gc.enable()
-    with _gc_paused():
+    with gc_paused():
         assert not gc.isenabled()
-        with _gc_paused():     # nested (a state part inside the join): still paused after it
+        with gc_paused():     # nested (a state part inside the join): still paused after it
             pass
         assert not gc.isenabled()
     assert gc.isenabled()
@@ -33,14 +33,14 @@ def test_paused_inside_and_enabled_again_after(restore_gc):
 
 def test_an_error_inside_still_enables_it(restore_gc):
     gc.enable()
-    with pytest.raises(ValueError), _gc_paused():
+    with pytest.raises(ValueError), gc_paused():
         raise ValueError("bad state")
     assert gc.isenabled()
 
 
 def test_a_disabled_collector_stays_disabled(restore_gc):
     gc.disable()               # an agent that manages its own collections
-    with _gc_paused(freeze_if=lambda: True):
+    with gc_paused(freeze_if=lambda: True):
         pass
     assert not gc.isenabled()
     assert gc.get_freeze_count() == 0
@@ -49,9 +49,29 @@ def test_a_disabled_collector_stays_disabled(restore_gc):
 def test_freezes_only_when_asked_and_the_condition_holds(restore_gc):
     gc.enable()
     gc.unfreeze()
-    with _gc_paused(freeze_if=lambda: False):
+    with gc_paused(freeze_if=lambda: False):
         kept = [{"x": i} for i in range(100)]
     assert gc.get_freeze_count() == 0
-    with _gc_paused(freeze_if=lambda: True):
+    with gc_paused(freeze_if=lambda: True):
         kept.append({"y": 1})
     assert gc.get_freeze_count() > 0 and gc.isenabled()
+
+
+@pytest.fixture
+def restore_thresholds():
+    was = gc.get_threshold()
+    yield
+    gc.set_threshold(*was)
+
+
+def test_a_replica_process_raises_the_collector_thresholds_and_never_lowers_them(
+        restore_thresholds):
+    gc.set_threshold(700, 10, 10)                       # CPython's default
+    tune_collector()
+    assert gc.get_threshold() == GC_THRESHOLDS
+    gc.set_threshold(GC_THRESHOLDS[0] * 2, 5, 100)      # a process that chose more
+    tune_collector()
+    assert gc.get_threshold() == (GC_THRESHOLDS[0] * 2, GC_THRESHOLDS[1], 100)
+    gc.set_threshold(0)                                 # automatic collection turned off
+    tune_collector()
+    assert gc.get_threshold()[0] == 0
