@@ -52,6 +52,8 @@ class ElementState:
 
     def present(self) -> bool:
         rem = self.rem
+        if not rem:                     # never removed (most elements): any add shows it
+            return bool(self.add)
         for replica, hlc in self.add.items():
             if hlc > rem.get(replica, 0):
                 return True
