@@ -53,7 +53,7 @@ class ElementState:
     def present(self) -> bool:
         rem = self.rem
         if not rem:                     # never removed (most elements): any add shows it
-            return bool(self.add)
+            return any(self.add.values())   # (stamps are >= 0; an add stamped 0 shows nothing)
         for replica, hlc in self.add.items():
             if hlc > rem.get(replica, 0):
                 return True

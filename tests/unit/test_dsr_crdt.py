@@ -8,6 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from dsr import DSRError, DSRGraph, wire
+from dsr.crdt import ElementState
 
 AGENTS = ("r0", "r1", "r2")
 
@@ -231,3 +232,16 @@ def test_lww_orders_by_clock_then_writer():
     deliver(a, out_b)
     deliver(b, out_a)
     assert a.get_node(n.id).attrs["x"] == b.get_node(n.id).attrs["x"]
+
+
+def test_present_is_an_add_not_covered_by_a_removal_even_on_the_fast_path():
+    """present() answers at once for an element never removed; an add stamped 0 (valid on the
+    wire) is covered by the implicit removal at 0 on that path too, as on the general one."""
+    import random
+    rng = random.Random(7)
+    for _ in range(5000):
+        add = {rng.randrange(3): rng.choice([0, 1, 5, 9]) for _ in range(rng.randrange(3))}
+        rem = {rng.randrange(3): rng.choice([0, 1, 5, 9]) for _ in range(rng.randrange(3))}
+        expected = any(hlc > rem.get(replica, 0) for replica, hlc in add.items())
+        assert ElementState(add, rem).present() == expected, (add, rem)
+    assert not ElementState({4: 0}).present() and ElementState({4: 1}).present()
