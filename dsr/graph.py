@@ -691,8 +691,6 @@ class DSRGraph:
             types, names = self._types, self._names
             wants_added = self._signals.wants("node_added")
             out_index, in_index = self._out, self._in
-            edge_types = self._edge_types
-            wants_edge_added = self._signals.wants("edge_added")
             for node_id, state in message.nodes:
                 current = nodes.get(node_id)
                 if current is None:        # unknown element: the decoded state is installed
@@ -748,19 +746,8 @@ class DSRGraph:
                         in_index[dst] = {key}
                     else:
                         ends.add(key)
+                    self._sync_edge(key, [], events)
                     changed += 1
-                    # _sync_edge for an edge new here (a join: 10^4 times), inlined
-                    if not state.present():
-                        self._dead_edges.add(key)
-                    elif src in view and dst in view:
-                        self._visible_edges.add(key)
-                        of_type = edge_types.get(key[2])
-                        if of_type is None:
-                            edge_types[key[2]] = {key}
-                        else:
-                            of_type.add(key)
-                        if wants_edge_added:
-                            events.append(("edge_added", (self._edge(key),)))
                 else:
                     changed += self._merge_edge(key, {
                         "add": state.add.items(), "rem": state.rem.items(),
