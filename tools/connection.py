@@ -5,7 +5,8 @@ Why shared: `chronav agenda` and `chronav dsr dump` take the same ``--run``/``--
 whether anything listens at the endpoint, whether it refused us for lack of the run's
 credentials, which graphs and runs do exist.  First match wins: ``--connect``/``--graph``;
 ``--run DIR|ID|latest`` (the run's connect file, with its credentials, tools/runs.py); the
-environment the agents use (``CHRONAV_ZENOH_*``, ``CHRONAV_GRAPH``).
+environment the agents use (``CHRONAV_ZENOH_*``, ``CHRONAV_GRAPH``); the user's newest live run;
+the default router.
 """
 
 from __future__ import annotations
@@ -28,8 +29,10 @@ RUN_HELP = ("A run of `chronav launch`: 'latest' (your newest live run), a run d
 GRAPH_HELP = "Graph name (default: the run's, $CHRONAV_GRAPH or 'chronav')."
 CONNECT_HELP = "Zenoh endpoint(s) tcp/HOST:PORT (default: the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."
 
-HOW_TO_FIND = ("start one with `chronav launch SCENE`, then point this command at it with --run latest, "
-               "--run <run directory>, or --connect tcp/HOST:PORT --graph <run id> (with the run's credentials)")
+HOW_TO_FIND = ("start one with `chronav launch SCENE` in this directory (with no --connect, --graph or "
+               "CHRONAV_ZENOH_CONNECT/CHRONAV_GRAPH, commands find your newest live run under ./recordings or "
+               "$CHRONAV_RUNS), or point this command at one with --run latest, --run <run directory>, or "
+               "--connect tcp/HOST:PORT --graph <run id> (with the run's credentials)")
 
 
 class ConnectionProblem(Exception):
@@ -59,7 +62,9 @@ def check_timeout(value: float, option: str = "--timeout") -> float:
 
 def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | None, *, role: Role,
                    environ: Mapping[str, str] | None = None, runs: Path | None = None) -> Target:
-    """Explicit options beat --run, which beats the environment the agents use."""
+    """Explicit options beat --run, which beats the environment the agents use; with none of
+    them, the user's newest live run under the runs directory (what `chronav launch` just
+    started), else the default router (a system started by hand, `python -m dsr.router`)."""
     from dsr.config import DEFAULT_ROUTER, ENV_CONNECT, ENV_GRAPH, check_endpoint, graph_name_from_env
     from dsr.errors import ConfigError
     from dsr.model import check_agent_name
@@ -88,14 +93,35 @@ def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | 
             env_connect = [check_endpoint(e) for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
         except ConfigError as exc:
             raise ConnectionProblem(f"{ENV_CONNECT}: {exc}" if ENV_CONNECT not in str(exc) else str(exc)) from None
-        origin = (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
-            f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
-        base = Target(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
+        newest, looked = None, ""
+        if not (endpoints or graph or env_connect or env.get(ENV_GRAPH)):
+            directory = runs or runs_dir(env)
+            newest = _newest_live_run(directory)
+            looked = f"no live run of yours under {directory}; "
+        if newest is not None:
+            base = Target((newest.endpoint,), newest.graph, f"run {newest.run_id}, your newest live run",
+                          newest.run_dir, newest.identity(role))
+        else:
+            origin = looked + (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
+                f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
+            base = Target(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
     if endpoints or graph:
         base = Target(tuple(endpoints) if endpoints else base.connect, graph or base.graph,
                       "from --connect/--graph" if endpoints and graph else
                       f"{'--connect' if endpoints else '--graph'} over {base.origin}", base.run_dir, base.identity)
     return base
+
+
+def _newest_live_run(directory: Path) -> Any:
+    """The connect file of this user's newest live run, or None when there is none (the command
+    then tries the default router, where a hand-started system listens)."""
+    live = list_runs(directory).mine_live if directory.is_dir() else []
+    if not live:
+        return None
+    try:
+        return open_run(str(live[0]), directory)
+    except RunError as exc:   # live, but its connect file is unusable: say so, do not guess
+        raise ConnectionProblem(str(exc)) from None
 
 
 def settings_for(target: Target, *, open_timeout_s: float | None = None,

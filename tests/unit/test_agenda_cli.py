@@ -368,6 +368,11 @@ def test_run_latest_joins_with_the_runs_credentials(secured_run: LiveSystem, tmp
     assert json.loads(result.stdout)["graph"] == secured_run.graph and json.loads(result.stdout)["accepted"]
     listed = runner.invoke(app, ["agenda", "list", "--run", "latest", "--json"], env=env)
     assert listed.exit_code == 0 and [a["id"] for a in json.loads(listed.stdout)["activities"]] == ["tv-0908"]
+    # No option and no CHRONAV_ZENOH_*: the newest live run, as after `chronav launch` in this directory.
+    plain = runner.invoke(app, ["agenda", "list", "--json"], env={"CHRONAV_RUNS": env["CHRONAV_RUNS"],
+                                                                 "CHRONAV_ZENOH_CONNECT": None, "CHRONAV_GRAPH": None})
+    assert plain.exit_code == 0, plain.output
+    assert json.loads(plain.stdout)["graph"] == secured_run.graph
 
     # The same router and graph, without the run's credentials: refused before anything is sent.
     bare = runner.invoke(app, ["agenda", "cancel", "tv-0908", "--connect", secured_run.endpoint,

@@ -106,11 +106,21 @@ def test_other_users_runs_are_never_picked_nor_joined(tmp_path: Path) -> None:
 def test_target_precedence(tmp_path: Path) -> None:
     make_run(tmp_path, "run1", mtime=1000)
     env = {"CHRONAV_ZENOH_CONNECT": "tcp/127.0.0.1:7002", "CHRONAV_GRAPH": "envgraph"}
-    default = resolve_target(None, None, None, role="reader", environ={})
+    nothing = tmp_path / "no_runs"
+    default = resolve_target(None, None, None, role="reader", environ={}, runs=nothing)
     assert default.connect == ("tcp/127.0.0.1:7447",) and default.graph == "chronav" and default.identity is None
+    assert f"no live run of yours under {nothing}" in default.origin
     assert "CHRONAV_ZENOH_CONNECT is not set" in default.origin
-    from_env = resolve_target(None, None, None, role="reader", environ=env)
+    # with no option and no environment: the newest live run (what `chronav launch` just started)
+    newest = resolve_target(None, None, None, role="tool", environ={}, runs=tmp_path)
+    assert (newest.connect, newest.graph, newest.identity.user) == (("tcp/127.0.0.1:7001",), "run1", "agenda_tool")
+    assert newest.origin == "run run1, your newest live run"
+    make_run(tmp_path, "ended", mtime=2000, finished=True)       # newer, but over: not picked
+    assert resolve_target(None, None, None, role="reader", environ={}, runs=tmp_path).graph == "run1"
+    from_env = resolve_target(None, None, None, role="reader", environ=env, runs=tmp_path)
     assert (from_env.connect, from_env.graph) == (("tcp/127.0.0.1:7002",), "envgraph")
+    only_graph = resolve_target(None, "g4", None, role="reader", environ={}, runs=tmp_path)
+    assert (only_graph.connect, only_graph.graph) == (("tcp/127.0.0.1:7447",), "g4")
     from_run = resolve_target(None, None, "latest", role="tool", environ=env, runs=tmp_path)
     assert (from_run.connect, from_run.graph, from_run.identity.user) == (("tcp/127.0.0.1:7001",), "run1",
                                                                           "agenda_tool")
