@@ -20,12 +20,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
+from tools.runs import (HOW_TO_START, ConnectInfo, Identity, Role, RunError, list_runs, open_run, run_is_alive,
+                        runs_dir)
 
 # The help of the options every command that reaches a running system takes (one wording: they
 # resolve alike, resolve_target below).
 RUN_HELP = ("A run of `chronav launch`: 'latest' (your newest live run), a run directory, or a run id under "
-            "./recordings ($CHRONAV_RUNS).")
+            "./recordings ($CHRONAV_RUNS). Default: your newest live run, unless --connect, --graph or "
+            "$CHRONAV_ZENOH_CONNECT/$CHRONAV_GRAPH name another system.")
 GRAPH_HELP = "Graph name (default: the run's, $CHRONAV_GRAPH or 'chronav')."
 CONNECT_HELP = "Zenoh endpoint(s) tcp/HOST:PORT (default: the run's, $CHRONAV_ZENOH_CONNECT or tcp/127.0.0.1:7447)."
 
@@ -112,7 +114,7 @@ def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | 
     return base
 
 
-def _newest_live_run(directory: Path) -> Any:
+def _newest_live_run(directory: Path) -> ConnectInfo | None:
     """The connect file of this user's newest live run, or None when there is none (the command
     then tries the default router, where a hand-started system listens)."""
     live = list_runs(directory).mine_live if directory.is_dir() else []
