@@ -20,8 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.runs import (HOW_TO_START, ConnectInfo, Identity, Role, RunError, list_runs, open_run, run_is_alive,
-                        runs_dir)
+from tools.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
 
 # The help of the options every command that reaches a running system takes (one wording: they
 # resolve alike, resolve_target below).
@@ -83,47 +82,36 @@ def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | 
             check_agent_name(graph, "graph")
         except ValueError as exc:
             raise ConnectionProblem(f"--graph {graph!r}: {exc}") from None
+    looked = newest = ""
+    names_a_system = endpoints or graph or env.get(ENV_GRAPH) or any(
+        e.strip() for e in env.get(ENV_CONNECT, "").split(","))
+    if not run and not names_a_system:       # what `chronav launch` here just started, if any
+        directory = runs or runs_dir(env)
+        live = list_runs(directory).mine_live
+        if live:       # then opened as --run <its directory> is
+            run, newest = str(live[0]), ", your newest live run"
+        else:
+            looked = f"no live run of yours under {directory}; "
     if run:
         try:
             info = open_run(run, runs or runs_dir(env))
         except RunError as exc:
             raise ConnectionProblem(str(exc)) from None
-        base = Target((info.endpoint,), info.graph, f"run {info.run_id}", info.run_dir, info.identity(role))
+        base = Target((info.endpoint,), info.graph, f"run {info.run_id}{newest}", info.run_dir, info.identity(role))
     else:
         try:
             env_graph = graph_name_from_env(env)
             env_connect = [check_endpoint(e) for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
         except ConfigError as exc:
             raise ConnectionProblem(f"{ENV_CONNECT}: {exc}" if ENV_CONNECT not in str(exc) else str(exc)) from None
-        newest, looked = None, ""
-        if not (endpoints or graph or env_connect or env.get(ENV_GRAPH)):
-            directory = runs or runs_dir(env)
-            newest = _newest_live_run(directory)
-            looked = f"no live run of yours under {directory}; "
-        if newest is not None:
-            base = Target((newest.endpoint,), newest.graph, f"run {newest.run_id}, your newest live run",
-                          newest.run_dir, newest.identity(role))
-        else:
-            origin = looked + (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
-                f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
-            base = Target(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
+        origin = looked + (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
+            f", {ENV_GRAPH}" if env.get(ENV_GRAPH) else f", default graph; {ENV_GRAPH} is not set")
+        base = Target(tuple(env_connect or [DEFAULT_ROUTER]), env_graph, origin)
     if endpoints or graph:
         base = Target(tuple(endpoints) if endpoints else base.connect, graph or base.graph,
                       "from --connect/--graph" if endpoints and graph else
                       f"{'--connect' if endpoints else '--graph'} over {base.origin}", base.run_dir, base.identity)
     return base
-
-
-def _newest_live_run(directory: Path) -> ConnectInfo | None:
-    """The connect file of this user's newest live run, or None when there is none (the command
-    then tries the default router, where a hand-started system listens)."""
-    live = list_runs(directory).mine_live if directory.is_dir() else []
-    if not live:
-        return None
-    try:
-        return open_run(str(live[0]), directory)
-    except RunError as exc:   # live, but its connect file is unusable: say so, do not guess
-        raise ConnectionProblem(str(exc)) from None
 
 
 def settings_for(target: Target, *, open_timeout_s: float | None = None,

@@ -237,7 +237,6 @@ def test_lww_orders_by_clock_then_writer():
 def test_present_is_an_add_not_covered_by_a_removal_even_on_the_fast_path():
     """present() answers at once for an element never removed; an add stamped 0 (valid on the
     wire) is covered by the implicit removal at 0 on that path too, as on the general one."""
-    import random
     rng = random.Random(7)
     for _ in range(5000):
         add = {rng.randrange(3): rng.choice([0, 1, 5, 9]) for _ in range(rng.randrange(3))}
