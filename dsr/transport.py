@@ -37,6 +37,9 @@ from dsr.policy import AllowAll, WritePolicy
 
 log = logging.getLogger(__name__)
 _ALL = "*"
+#: members whose delta key a session declares (Replica._declare_writer_key); past this many the
+#: wildcard subscription still delivers every delta, only without the shortcut
+MAX_DECLARED_WRITER_KEYS = 256
 _LOG_FIRST_REJECTS = 20
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
@@ -154,6 +157,9 @@ class Replica:
         self._vouched: set[str] = set()
         self._pending_syncs: set[str] = set()
         self._members: dict[str, Member] = {}
+        #: agent -> the Zenoh KeyExpr of its delta key, declared in this session
+        self._writer_keys: dict[str, Any] = {}
+        self._writer_keys_lock = threading.Lock()
         name = graph.graph_name
         self._delta_key = wire.delta_key(name, graph.agent)
         self._state_key = wire.state_key(name, graph.agent)
@@ -249,6 +255,10 @@ class Replica:
         self._sync_requests.put(None)
         session, self.session = self.session, None
         if session is not None:
+            with self._writer_keys_lock:
+                writer_keys, self._writer_keys = self._writer_keys, {}
+            for key_expr in writer_keys.values():
+                self._undeclare(session, key_expr)
             for entity in reversed(self._entities):
                 try:
                     entity.undeclare()
@@ -506,8 +516,46 @@ class Replica:
             # own state is merged again, its watermarks and replica ids are not trusted
             self._gap(agent)
             self._vouched.discard(agent)
+        self._declare_writer_key(agent, live)
         if live:
             self._request_sync(agent)
+
+    def _declare_writer_key(self, agent: str, live: bool) -> None:
+        """Declare in this session the key a member publishes its deltas on (undeclare it when
+        the member leaves).
+
+        Why: deltas arrive through one wildcard subscription (`delta/*`: writers come and go),
+        and Zenoh delivers a sample faster when the receiving session has declared its exact
+        key.  Measured with bare Zenoh on this project's 2-core machines (4 runs, interleaved):
+        a round trip through wildcard subscriptions took 10-20 us more than through exact ones,
+        and declaring the peer's key (Session.declare_keyexpr) brought it back to the exact
+        subscriptions' time; in tools/bench_dsr.py the wire-layer round trip went from
+        1.24-1.34x bare Zenoh (exact keys) to 1.43-1.49x with the wildcard.  Only an
+        optimisation: the wildcard subscription delivers every delta either way."""
+        with self._writer_keys_lock:
+            session = self.session
+            declared = self._writer_keys.get(agent)
+            if not live:
+                if declared is not None and session is not None:
+                    del self._writer_keys[agent]
+                    self._undeclare(session, declared)
+                return
+            if declared is not None or session is None \
+                    or len(self._writer_keys) >= MAX_DECLARED_WRITER_KEYS:
+                return
+            try:
+                self._writer_keys[agent] = session.declare_keyexpr(
+                    wire.delta_key(self.graph.graph_name, agent))
+            except Exception:  # noqa: BLE001 - a name Zenoh refuses: the wildcard serves it
+                log.debug("DSR %s: cannot declare the delta key of %r", self.graph.agent, agent,
+                          exc_info=True)
+
+    @staticmethod
+    def _undeclare(session: Any, key_expr: Any) -> None:
+        try:
+            session.undeclare(key_expr)
+        except Exception:  # noqa: BLE001 - already gone with the session
+            log.debug("undeclaring %s failed", key_expr, exc_info=True)
 
     def live_agents(self) -> set[str]:
         with self._table_lock:
@@ -609,6 +657,8 @@ class Replica:
         with self._table_lock:
             for member in members:
                 self._members.setdefault(member, Member(member))
+        for member in members:
+            self._declare_writer_key(member, True)
         random.shuffle(members)          # spread the load when many agents start together
         for member in members:
             if self._sync(member):

@@ -6,6 +6,13 @@ here on a free loopback port:
 - dsr_p50_ms / dsr_p99_ms: DSR round trip: driver updates node "ping"; the echo replica gets the
   node_updated signal in its dispatch() loop and updates node "pong"; the driver waits for that
   signal in its own dispatch() loop.  Both numbers are ROUND trips (two propagations);
+- wire_floor_p50_ms: the same round trip through the DSR wire layer only: each side decodes the
+  delta it receives (wire.decode), hands it to another thread as an agent loop does, and that
+  thread encodes the answer (DeltaEncoder) and puts it, with the replica's publisher options.
+  No graph: no merge, checks, clock, signals or send order.  It is the floor of any Python
+  replica of this format with agent-style hand-off on this machine; wire_floor_over_zenoh_p50
+  and dsr_over_wire_floor_p50 split dsr_over_zenoh_p50 into the wire layer's share and the
+  graph machinery's;
 - updates_per_s: sustained single-attribute updates, round robin over 1,000 nodes (so
   coalescing cannot merge them away), until the echo replica has applied the last one and
   delivered its signals.  The writer batches as docs/dsr_wire_format.md says a writer should:
@@ -99,6 +106,7 @@ def run_echo(endpoint: str, graph_name: str) -> None:
             while True:
                 tpong_pub.put(handoff.get())
         threading.Thread(target=handoff_loop, daemon=True).start()
+        wire_floor_echo(raw, graph_name)
         with join("echo", graph=graph_name, settings=settings) as graph:
             pong = graph.insert_node("object", "pong", {"seq": -1})
 
@@ -120,6 +128,52 @@ def run_echo(endpoint: str, graph_name: str) -> None:
         pass
     finally:
         raw.close()
+
+
+def _wire_side(session: Any, graph_name: str, me: str, peer: str) -> tuple[Any, Any, Any]:
+    """One side of the wire-floor round trip: a publisher with the replica's options, a
+    subscriber that decodes what arrives and queues it, and an encoder."""
+    import zenoh
+
+    from dsr import wire
+    publisher = session.declare_publisher(
+        f"bench/{graph_name}/wire/{me}", encoding=wire.ENCODING,
+        congestion_control=zenoh.CongestionControl.BLOCK, reliability=zenoh.Reliability.RELIABLE)
+    inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
+    session.declare_subscriber(f"bench/{graph_name}/wire/{peer}",
+                               lambda sample: inbox.put(wire.decode(sample.payload.to_bytes())))
+    return publisher, inbox, wire.DeltaEncoder(graph_name, me, 3 if me == "echo" else 5)
+
+
+def wire_floor_echo(session: Any, graph_name: str) -> None:
+    """Answer each decoded wire-floor delta from another thread: encode, put."""
+    publisher, inbox, encoder = _wire_side(session, graph_name, "echo", "driver")
+
+    def loop() -> None:
+        stamp = 0
+        while True:
+            message = inbox.get()
+            stamp += 1
+            seq = message.nodes[0][1].attrs["seq"][2]
+            publisher.put(encoder.node_attrs(2, {"seq": (stamp, 3, seq)}))
+    threading.Thread(target=loop, daemon=True).start()
+
+
+class WireFloor:
+    """The driver's side of the wire-floor round trip (see the module docstring)."""
+
+    def __init__(self, session: Any, graph_name: str) -> None:
+        self.publisher, self.inbox, self.encoder = _wire_side(session, graph_name, "driver",
+                                                              "echo")
+        _wait(lambda: self.publisher.matching_status.matching, 10, "wire-floor echo")
+
+    def round_trip(self, i: int) -> float:
+        start = time.perf_counter()
+        self.publisher.put(self.encoder.node_attrs(1, {"seq": (i, 5, i)}))
+        message = self.inbox.get(timeout=10)
+        if message.nodes[0][1].attrs["seq"][2] != i:
+            raise RuntimeError(f"bench: wire-floor echo answered {message.nodes}, not {i}")
+        return (time.perf_counter() - start) * 1000
 
 
 # ---------------------------------------------------------------- joiner process
@@ -223,13 +277,15 @@ class DsrPing:
         return (time.perf_counter() - start) * 1000
 
 
-def latencies(bare: BareZenoh, ping: DsrPing, rounds: int) -> dict[str, float]:
-    """Interleave blocks of each kind so that all three see the same machine load."""
-    samples: dict[str, list[float]] = {"zenoh": [], "zenoh_handoff": [], "dsr": []}
+def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, rounds: int) -> dict[str, float]:
+    """Interleave blocks of each kind so that all four see the same machine load."""
+    samples: dict[str, list[float]] = {"zenoh": [], "zenoh_handoff": [], "wire_floor": [],
+                                       "dsr": []}
     block = 50
     seq = 0
     for blk in range(rounds // block + 1):       # the first block is a warm-up
         for name, fn in (("zenoh", bare.direct), ("zenoh_handoff", bare.threaded),
+                         ("wire_floor", floor.round_trip),
                          ("dsr", ping.round_trip)):
             for _ in range(block):
                 seq += 1
@@ -403,10 +459,15 @@ def main(argv: list[str] | None = None) -> int:
         try:
             with join("driver", graph=graph_name, settings=settings) as graph:
                 ping = DsrPing(graph)
-                result.update(latencies(bare, ping, args.rounds))
+                result.update(latencies(bare, WireFloor(bare.session, graph_name), ping,
+                                        args.rounds))
                 result["dsr_over_zenoh_p50"] = result["dsr_p50_ms"] / result["zenoh_p50_ms"]
                 result["dsr_over_zenoh_handoff_p50"] = (result["dsr_p50_ms"]
                                                         / result["zenoh_handoff_p50_ms"])
+                result["wire_floor_over_zenoh_p50"] = (result["wire_floor_p50_ms"]
+                                                       / result["zenoh_p50_ms"])
+                result["dsr_over_wire_floor_p50"] = (result["dsr_p50_ms"]
+                                                     / result["wire_floor_p50_ms"])
                 result.update(throughput(ping, args.updates))
                 build_graph(graph, args.join_nodes, ping.pong_id)
                 joins = []

@@ -150,3 +150,29 @@ def test_write_policy_drops_refused_deltas(procs, tmp_path):
         assert guard.get_node_by_name("r2d2") is None
         stats = guard.replica.stats
         assert stats.rejected_policy == 1 and stats.rejected == 0
+
+
+def test_members_delta_keys_are_declared_while_they_run(procs, tmp_path):
+    """Each replica declares the exact delta key of every running member in its session (a
+    faster delivery than through the wildcard subscription alone, Replica._declare_writer_key)
+    and undeclares it when the member leaves; deltas flow the same either way."""
+    endpoint, _ = start_router(procs, tmp_path)
+    settings = ZenohSettings(connect=[endpoint])
+    with join("first", settings=settings) as first:
+        with join("second", settings=settings) as second:
+            leaver = second.replica
+            # the joiner declares from the member list, the first from the liveliness token
+            assert set(second.replica._writer_keys) == {"first"}
+            wait_until(lambda: set(first.replica._writer_keys) == {"second"}, 10,
+                       message="first declares second's delta key")
+            assert str(first.replica._writer_keys["second"]) == wire.delta_key("chronav",
+                                                                                "second")
+            node = second.insert_node("person", "ana", {"x": 1.0})
+            second.update_node(node.id, {"x": 2.0})
+            wait_until(lambda: node.id in first and first.get_attr(node.id, "x") == 2.0, 10,
+                       message="second's deltas reach first")
+        wait_until(lambda: not first.replica._writer_keys, 10,
+                   message="second's key undeclared after it left")
+        assert leaver._writer_keys == {}              # closed: everything undeclared
+        again = first.insert_node("person", "bo")
+        assert first.get_node(again.id) is not None
