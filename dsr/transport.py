@@ -526,8 +526,8 @@ class Replica:
 
         Why: deltas arrive through one wildcard subscription (`delta/*`: writers come and go),
         and Zenoh delivers a sample faster when the receiving session has declared its exact
-        key.  Measured with bare Zenoh on this project's 2-core machines (4 runs, interleaved):
-        a round trip through wildcard subscriptions took 10-20 us more than through exact ones,
+        key.  Measured with bare Zenoh on this project's 2-core machines (10 runs, interleaved):
+        a round trip through wildcard subscriptions took 8-21 us more than through exact ones,
         and declaring the peer's key (Session.declare_keyexpr) brought it back to the exact
         subscriptions' time.  tools/bench_dsr.py, 4 A/B pairs in one sequence:
         dsr_over_zenoh_p50 1.73-1.81 with the keys declared, 1.81-1.89 without.  Only an
