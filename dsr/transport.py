@@ -95,6 +95,12 @@ class Member:
     behind: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
+def delta_publisher_options(zenoh: Any) -> dict[str, Any]:
+    """The options of a replica's delta publisher (docs/dsr_wire_format.md, "Key space")."""
+    return {"encoding": wire.ENCODING, "congestion_control": zenoh.CongestionControl.BLOCK,
+            "reliability": zenoh.Reliability.RELIABLE}
+
+
 class _LogBudget:
     """Per-reason log rate limit: the first `burst` refusals of a reason are logged, then at
     most one line per `period_s` saying how many were not logged in between."""
@@ -234,10 +240,8 @@ class Replica:
             wire.member_key(name, _ALL), self._on_member))
         if self.graph.read_only:
             return
-        self._publisher = session.declare_publisher(
-            self._delta_key, encoding=wire.ENCODING,
-            congestion_control=zenoh.CongestionControl.BLOCK,
-            reliability=zenoh.Reliability.RELIABLE)
+        self._publisher = session.declare_publisher(self._delta_key,
+                                                    **delta_publisher_options(zenoh))
         self._entities.append(self._publisher)
         self._entities.append(session.declare_queryable(self._state_key, self._on_query,
                                                         complete=True))

@@ -130,19 +130,23 @@ def run_echo(endpoint: str, graph_name: str) -> None:
         raw.close()
 
 
+#: the replica id each side of the wire-floor round trip writes with
+_WIRE_REPLICA = {"echo": 3, "driver": 5}
+
+
 def _wire_side(session: Any, graph_name: str, me: str, peer: str) -> tuple[Any, Any, Any]:
     """One side of the wire-floor round trip: a publisher with the replica's options, a
     subscriber that decodes what arrives and queues it, and an encoder."""
     import zenoh
 
     from dsr import wire
-    publisher = session.declare_publisher(
-        f"bench/{graph_name}/wire/{me}", encoding=wire.ENCODING,
-        congestion_control=zenoh.CongestionControl.BLOCK, reliability=zenoh.Reliability.RELIABLE)
+    from dsr.transport import delta_publisher_options
+    publisher = session.declare_publisher(f"bench/{graph_name}/wire/{me}",
+                                          **delta_publisher_options(zenoh))
     inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
     session.declare_subscriber(f"bench/{graph_name}/wire/{peer}",
                                lambda sample: inbox.put(wire.decode(sample.payload.to_bytes())))
-    return publisher, inbox, wire.DeltaEncoder(graph_name, me, 3 if me == "echo" else 5)
+    return publisher, inbox, wire.DeltaEncoder(graph_name, me, _WIRE_REPLICA[me])
 
 
 def wire_floor_echo(session: Any, graph_name: str) -> None:
@@ -155,7 +159,7 @@ def wire_floor_echo(session: Any, graph_name: str) -> None:
             message = inbox.get()
             stamp += 1
             seq = message.nodes[0][1].attrs["seq"][2]
-            publisher.put(encoder.node_attrs(2, {"seq": (stamp, 3, seq)}))
+            publisher.put(encoder.node_attrs(2, {"seq": (stamp, _WIRE_REPLICA["echo"], seq)}))
     threading.Thread(target=loop, daemon=True).start()
 
 
@@ -169,7 +173,7 @@ class WireFloor:
 
     def round_trip(self, i: int) -> float:
         start = time.perf_counter()
-        self.publisher.put(self.encoder.node_attrs(1, {"seq": (i, 5, i)}))
+        self.publisher.put(self.encoder.node_attrs(1, {"seq": (i, _WIRE_REPLICA["driver"], i)}))
         message = self.inbox.get(timeout=10)
         if message.nodes[0][1].attrs["seq"][2] != i:
             raise RuntimeError(f"bench: wire-floor echo answered {message.nodes}, not {i}")

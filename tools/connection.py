@@ -83,10 +83,10 @@ def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | 
         except ValueError as exc:
             raise ConnectionProblem(f"--graph {graph!r}: {exc}") from None
     looked = newest = ""
-    names_a_system = endpoints or graph or env.get(ENV_GRAPH) or any(
-        e.strip() for e in env.get(ENV_CONNECT, "").split(","))
+    directory = runs or runs_dir(env)
+    env_endpoints = [e for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
+    names_a_system = endpoints or graph or env.get(ENV_GRAPH) or env_endpoints
     if not run and not names_a_system:       # what `chronav launch` here just started, if any
-        directory = runs or runs_dir(env)
         live = list_runs(directory).mine_live
         if live:       # then opened as --run <its directory> is
             run, newest = str(live[0]), ", your newest live run"
@@ -94,14 +94,14 @@ def resolve_target(connect: Sequence[str] | None, graph: str | None, run: str | 
             looked = f"no live run of yours under {directory}; "
     if run:
         try:
-            info = open_run(run, runs or runs_dir(env))
+            info = open_run(run, directory)
         except RunError as exc:
             raise ConnectionProblem(str(exc)) from None
         base = Target((info.endpoint,), info.graph, f"run {info.run_id}{newest}", info.run_dir, info.identity(role))
     else:
         try:
             env_graph = graph_name_from_env(env)
-            env_connect = [check_endpoint(e) for e in env.get(ENV_CONNECT, "").split(",") if e.strip()]
+            env_connect = [check_endpoint(e) for e in env_endpoints]
         except ConfigError as exc:
             raise ConnectionProblem(f"{ENV_CONNECT}: {exc}" if ENV_CONNECT not in str(exc) else str(exc)) from None
         origin = looked + (f"from {ENV_CONNECT}" if env_connect else f"default; {ENV_CONNECT} is not set") + (
