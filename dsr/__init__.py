@@ -12,13 +12,13 @@ from dsr.errors import (ConfigError, DSRError, EdgeNotFoundError, GraphFileError
 from dsr.graph import DSRGraph
 from dsr.model import Edge, Node
 from dsr.policy import AllowAll, WritePolicy
-from dsr.signals import SIGNALS
+from dsr.signals import SIGNALS, SpinPolicy
 from dsr.transport import Replica, ReplicaStats, join
 
 __all__ = [
     "AllowAll", "ConfigError", "DSRError", "DSRGraph", "Edge", "EdgeNotFoundError",
     "GraphFileError", "InvalidAttributeError", "InvalidIdentifierError", "NameTakenError", "Node",
     "NodeNotFoundError", "PolicyError", "PoseError", "ReadOnlyGraphError", "Replica", "ReplicaStats",
-    "SIGNALS", "TransactionError", "WireError", "WritePolicy", "ZenohSettings", "graph_name_from_env",
-    "WriteRefusedError", "join",
+    "SIGNALS", "SpinPolicy", "TransactionError", "WireError", "WritePolicy", "ZenohSettings",
+    "graph_name_from_env", "WriteRefusedError", "join",
 ]

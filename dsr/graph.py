@@ -34,7 +34,7 @@ from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_n
                        check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
 from dsr.outbox import Outbox, Outgoing
-from dsr.signals import Event, SignalHub
+from dsr.signals import Event, SignalHub, SpinPolicy
 
 if TYPE_CHECKING:
     import networkx
@@ -97,7 +97,8 @@ class DSRGraph:
     """A full replica of a DSR graph.  Offline until a transport (dsr.transport.join) attaches."""
 
     def __init__(self, agent: str, *, replica_id: int | None = None, read_only: bool = False,
-                 graph: str = "chronav", clock: HybridLogicalClock | None = None) -> None:
+                 graph: str = "chronav", clock: HybridLogicalClock | None = None,
+                 spin: SpinPolicy | None = None) -> None:
         self.agent = check_agent_name(agent)
         self.graph_name = check_agent_name(graph, "graph")
         self.replica_id = replica_id if replica_id is not None else secrets.randbits(63) | 1
@@ -118,7 +119,7 @@ class DSRGraph:
         self._types: dict[str, set[int]] = {}
         self._edge_types: dict[str, set[EdgeKey]] = {}
         self._names = NameIndex()
-        self._signals = SignalHub()
+        self._signals = SignalHub(spin)     # spin None: SpinPolicy.from_env()
         self._tx: _Transaction | None = None
         self._tx_depth = 0
         self._version = 0
@@ -229,6 +230,13 @@ class DSRGraph:
         if self._tx is not None and self._tx.owner == threading.get_ident():
             raise TransactionError("dispatch() called inside a transaction; call it after")
         return self._signals.dispatch(timeout)
+
+    def dispatch_stats(self) -> dict[str, float]:
+        """How dispatch() has waited: polls that found a change, polls that gave up and slept,
+        seconds spent polling (dsr.signals.SpinPolicy)."""
+        hub = self._signals
+        return {"poll_hits": hub.spin_hits, "poll_misses": hub.spin_misses,
+                "poll_s": hub.spin_s}
 
     @property
     def callback_errors(self) -> int:

@@ -34,6 +34,7 @@ from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
 from dsr.limits import LIMITS
 from dsr.policy import AllowAll, WritePolicy
+from dsr.signals import SpinPolicy
 
 log = logging.getLogger(__name__)
 _ALL = "*"
@@ -746,12 +747,13 @@ class Replica:
 @contextmanager
 def join(agent: str, graph: str | None = None, settings: ZenohSettings | None = None, *,
          read_only: bool = False, policy: WritePolicy | None = None,
-         sync_timeout: float = 10.0) -> Iterator[DSRGraph]:
+         sync_timeout: float = 10.0, spin: SpinPolicy | None = None) -> Iterator[DSRGraph]:
     """A DSRGraph replicated over Zenoh for the duration of the block.
 
     On entry the current graph is fetched from the other replicas, so the graph is complete
     when the block starts.  The session is always closed on exit.
     """
-    dsr_graph = DSRGraph(agent, graph=graph or graph_name_from_env(), read_only=read_only)
+    dsr_graph = DSRGraph(agent, graph=graph or graph_name_from_env(), read_only=read_only,
+                         spin=spin)
     with Replica(dsr_graph, settings, policy=policy, sync_timeout=sync_timeout):
         yield dsr_graph

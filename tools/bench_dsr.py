@@ -6,6 +6,11 @@ here on a free loopback port:
 - dsr_p50_ms / dsr_p99_ms: DSR round trip: driver updates node "ping"; the echo replica gets the
   node_updated signal in its dispatch() loop and updates node "pong"; the driver waits for that
   signal in its own dispatch() loop.  Both numbers are ROUND trips (two propagations);
+- dsr_nopoll_p50_ms: the same between a second driver replica and a second echo process whose
+  dispatch() never polls (dsr.signals.SpinPolicy window 0, as CHRONAV_DSR_SPIN_US=0 sets):
+  what the default polling buys, in the same run.  dispatch_poll_*: the driver's default
+  replica during the latency phase: polls that found the answer, polls that gave up, and the
+  share of one core spent polling (the echo's is alike);
 - wire_floor_p50_ms: the same round trip through the DSR wire layer only: each side decodes the
   delta it receives (wire.decode), hands it to another thread as an agent loop does, and that
   thread encodes the answer (DeltaEncoder) and puts it, with the replica's publisher options.
@@ -82,32 +87,20 @@ def _percentile(samples: list[float], q: float) -> float:
 
 
 # ---------------------------------------------------------------- echo process
-def run_echo(endpoint: str, graph_name: str) -> None:
+def run_echo(endpoint: str, graph_name: str, poll: bool = True) -> None:
+    """The echo side; with poll=False only a DSR echo whose dispatch() never polls."""
     import zenoh
 
-    from dsr import ZenohSettings, join
+    from dsr import SpinPolicy, ZenohSettings, join
     from dsr.process import exit_on_sigterm
     exit_on_sigterm()
     settings = ZenohSettings(connect=[endpoint])
     raw = zenoh.open(settings.to_zenoh_config())
     try:
-        pong_pub = raw.declare_publisher(f"bench/{graph_name}/pong",
-                                         congestion_control=zenoh.CongestionControl.BLOCK)
-        raw.declare_subscriber(f"bench/{graph_name}/ping",
-                               lambda sample: pong_pub.put(sample.payload))
-        # the same echo with an agent-like hand-off: callback -> queue -> main thread replies
-        handoff: queue.SimpleQueue[bytes] = queue.SimpleQueue()
-        tpong_pub = raw.declare_publisher(f"bench/{graph_name}/tpong",
-                                          congestion_control=zenoh.CongestionControl.BLOCK)
-        raw.declare_subscriber(f"bench/{graph_name}/tping",
-                               lambda sample: handoff.put(sample.payload.to_bytes()))
-
-        def handoff_loop() -> None:
-            while True:
-                tpong_pub.put(handoff.get())
-        threading.Thread(target=handoff_loop, daemon=True).start()
-        wire_floor_echo(raw, graph_name)
-        with join("echo", graph=graph_name, settings=settings) as graph:
+        if poll:
+            raw_echoes(raw, graph_name)
+        spin = None if poll else SpinPolicy(window_us=0)
+        with join("echo", graph=graph_name, settings=settings, spin=spin) as graph:
             pong = graph.insert_node("object", "pong", {"seq": -1})
 
             def on_updated(node: Any, keys: list[str]) -> None:
@@ -128,6 +121,28 @@ def run_echo(endpoint: str, graph_name: str) -> None:
         pass
     finally:
         raw.close()
+
+
+def raw_echoes(raw: Any, graph_name: str) -> None:
+    """Bare Zenoh echoes (direct and with an agent-like hand-off) and the wire-floor echo."""
+    import zenoh
+
+    pong_pub = raw.declare_publisher(f"bench/{graph_name}/pong",
+                                     congestion_control=zenoh.CongestionControl.BLOCK)
+    raw.declare_subscriber(f"bench/{graph_name}/ping",
+                           lambda sample: pong_pub.put(sample.payload))
+    # the same echo with an agent-like hand-off: callback -> queue -> main thread replies
+    handoff: queue.SimpleQueue[bytes] = queue.SimpleQueue()
+    tpong_pub = raw.declare_publisher(f"bench/{graph_name}/tpong",
+                                      congestion_control=zenoh.CongestionControl.BLOCK)
+    raw.declare_subscriber(f"bench/{graph_name}/tping",
+                           lambda sample: handoff.put(sample.payload.to_bytes()))
+
+    def handoff_loop() -> None:
+        while True:
+            tpong_pub.put(handoff.get())
+    threading.Thread(target=handoff_loop, daemon=True).start()
+    wire_floor_echo(raw, graph_name)
 
 
 #: the replica id each side of the wire-floor round trip writes with
@@ -281,16 +296,19 @@ class DsrPing:
         return (time.perf_counter() - start) * 1000
 
 
-def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, rounds: int) -> dict[str, float]:
-    """Interleave blocks of each kind so that all four see the same machine load."""
+def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, nopoll: DsrPing,
+              rounds: int) -> dict[str, float]:
+    """Interleave blocks of each kind so that all five see the same machine load."""
     samples: dict[str, list[float]] = {"zenoh": [], "zenoh_handoff": [], "wire_floor": [],
-                                       "dsr": []}
+                                       "dsr": [], "dsr_nopoll": []}
     block = 50
     seq = 0
+    before = ping.graph.dispatch_stats()
+    started = time.perf_counter()
     for blk in range(rounds // block + 1):       # the first block is a warm-up
         for name, fn in (("zenoh", bare.direct), ("zenoh_handoff", bare.threaded),
                          ("wire_floor", floor.round_trip),
-                         ("dsr", ping.round_trip)):
+                         ("dsr", ping.round_trip), ("dsr_nopoll", nopoll.round_trip)):
             for _ in range(block):
                 seq += 1
                 value = fn(seq)
@@ -300,6 +318,11 @@ def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, rounds: int) -> 
     for name, values in samples.items():
         out[f"{name}_p50_ms"] = _percentile(values, 0.5)
         out[f"{name}_p99_ms"] = _percentile(values, 0.99)
+    after = ping.graph.dispatch_stats()
+    out["dispatch_poll_hits"] = after["poll_hits"] - before["poll_hits"]
+    out["dispatch_poll_misses"] = after["poll_misses"] - before["poll_misses"]
+    out["dispatch_poll_core_share"] = ((after["poll_s"] - before["poll_s"])
+                                       / (time.perf_counter() - started))
     return out
 
 
@@ -436,15 +459,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--updates", type=int, default=200_000)
     parser.add_argument("--join-nodes", type=int, default=10_000)
     parser.add_argument("--hold", type=float, default=0.0, help=argparse.SUPPRESS)
+    parser.add_argument("--no-poll", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "echo":
-        run_echo(args.connect, args.graph)
+        run_echo(args.connect, args.graph, poll=not args.no_poll)
         return 0
     if args.role == "join":
         run_join(args.connect, args.graph, args.hold)
         return 0
 
-    from dsr import ZenohSettings, join
+    from dsr import SpinPolicy, ZenohSettings, join
     from dsr.process import exit_on_sigterm
     exit_on_sigterm()
     procs = Procs()
@@ -452,20 +476,30 @@ def main(argv: list[str] | None = None) -> int:
     endpoint = f"tcp/127.0.0.1:{port}"
     graph_name = f"bench{os.getpid()}"
     me = str(Path(__file__).resolve())
-    result: dict[str, Any] = {"latency_kind": "round_trip", "cpu_count": os.cpu_count()}
+    spin = SpinPolicy.from_env()
+    result: dict[str, Any] = {"latency_kind": "round_trip", "cpu_count": os.cpu_count(),
+                              "dispatch_spin_us": spin.window_us,
+                              "dispatch_spin_share_pct": spin.max_share_pct}
     result.update(profile_split())
     try:
         procs.spawn(["-m", "dsr.router", "--listen", endpoint])
         _wait(lambda: _port_open(port), 10, "router")
         procs.spawn([me, "--role", "echo", "--connect", endpoint, "--graph", graph_name])
+        nopoll_echo = procs.spawn([me, "--role", "echo", "--connect", endpoint, "--graph",
+                                   f"{graph_name}np", "--no-poll"])
         settings = ZenohSettings(connect=[endpoint])
         bare = BareZenoh(endpoint, graph_name)
         try:
             with join("driver", graph=graph_name, settings=settings) as graph:
                 ping = DsrPing(graph)
-                result.update(latencies(bare, WireFloor(bare.session, graph_name), ping,
-                                        args.rounds))
+                with join("driver", graph=f"{graph_name}np", settings=settings,
+                          spin=SpinPolicy(window_us=0)) as nopoll_graph:
+                    result.update(latencies(bare, WireFloor(bare.session, graph_name), ping,
+                                            DsrPing(nopoll_graph), args.rounds))
+                os.killpg(nopoll_echo.pid, signal.SIGTERM)   # the later phases run without them
                 result["dsr_over_zenoh_p50"] = result["dsr_p50_ms"] / result["zenoh_p50_ms"]
+                result["dsr_nopoll_over_zenoh_p50"] = (result["dsr_nopoll_p50_ms"]
+                                                       / result["zenoh_p50_ms"])
                 result["dsr_over_zenoh_handoff_p50"] = (result["dsr_p50_ms"]
                                                         / result["zenoh_handoff_p50_ms"])
                 result["wire_floor_over_zenoh_p50"] = (result["wire_floor_p50_ms"]

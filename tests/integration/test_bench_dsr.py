@@ -1,6 +1,6 @@
 """tools/bench_dsr.py runs end to end (router, echo and joiner processes on a free loopback port)
-and prints one flat JSON object holding every key the issue's goals are read from, and the
-wire-floor split.  No speed is asserted: the goals are checked by running the benchmark."""
+and prints one flat JSON object holding every key the issue's goals are read from, the
+wire-floor split and the same round trip without dispatch() polling.  No speed is asserted: the goals are checked by running the benchmark."""
 
 from __future__ import annotations
 
@@ -24,8 +24,12 @@ def test_small_run_prints_every_goal_key() -> None:
     for key in ("dsr_p50_ms", "zenoh_p50_ms", "dsr_over_zenoh_p50", "updates_per_s",
                 "join_10k_s", "wire_floor_p50_ms", "wire_floor_over_zenoh_p50",
                 "dsr_over_wire_floor_p50", "profile_encode_us", "profile_decode_us",
-                "profile_merge_us", "profile_signal_handoff_us"):
+                "profile_merge_us", "profile_signal_handoff_us", "dsr_nopoll_p50_ms",
+                "dsr_nopoll_over_zenoh_p50"):
         assert values[key] > 0, key
+    assert values["dispatch_spin_us"] == 1000 and values["dispatch_spin_share_pct"] == 25
+    assert 0 <= values["dispatch_poll_core_share"] < 1.0
+    assert values["dispatch_poll_hits"] >= 0 and values["dispatch_poll_misses"] >= 0
     ratio = values["dsr_p50_ms"] / values["zenoh_p50_ms"]      # printed rounded to 4 digits
     assert values["dsr_over_zenoh_p50"] == pytest.approx(ratio, rel=1e-3)
     ratio = values["dsr_p50_ms"] / values["wire_floor_p50_ms"]
