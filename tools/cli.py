@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import gc
 import importlib
+import sys
 
 import typer
 
@@ -58,6 +59,15 @@ def main() -> None:
     gc.set_threshold(*GC_THRESHOLDS)
     try:
         app()
+    except Exception as exc:
+        # A bad CHRONAV_DSR_* variable that no command caught (the DSR reads its limits when it
+        # is first imported): name it, no traceback.  Looked up, not imported, so that `chronav
+        # --help` does not load the DSR, and so that a failed import is not retried here.
+        errors = sys.modules.get("dsr.errors")
+        if errors is None or not isinstance(exc, errors.ConfigError):
+            raise
+        typer.echo(f"chronav: {exc}; fix or unset that environment variable", err=True)
+        raise SystemExit(2) from None
     finally:
         gc.freeze()
 

@@ -1,8 +1,12 @@
 """dispatch() polls briefly before it sleeps, only while changes come densely, and within its
-CPU share (dsr.signals.SpinPolicy); CHRONAV_DSR_SPIN_US / _SPIN_SHARE_PCT set it per process."""
+CPU share (dsr.signals.SpinPolicy); CHRONAV_DSR_SPIN_US / _SPIN_SHARE_PCT set it per process,
+and a bad value is named by the command line, not shown as a traceback."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import threading
 import time
 
@@ -10,6 +14,7 @@ import pytest
 
 from dsr.errors import ConfigError
 from dsr.signals import SignalHub, SpinPolicy
+from tests.support import REPO_ROOT
 
 
 def _post_later(hub: SignalHub, delay_s: float, value: int) -> None:
@@ -74,3 +79,14 @@ def test_a_zero_window_turns_polling_off() -> None:
         _post_later(hub, 0.005, value)
         assert hub.dispatch(timeout=5.0) == 1
     assert got == [1, 2, 3] and hub.spin_hits + hub.spin_misses == 0
+
+
+@pytest.mark.parametrize("var", ["CHRONAV_DSR_SPIN_US", "CHRONAV_DSR_MAX_VALUE_BYTES"])
+def test_a_bad_dsr_variable_is_named_by_the_cli_without_a_traceback(var: str) -> None:
+    # regression: both escaped `chronav plan` as tracebacks (the limits one at import time)
+    env = {**os.environ, var: "fast"}
+    result = subprocess.run([sys.executable, "-m", "tools.cli", "plan", "icra_usecase",
+                             "--mission", "room:kitchen"], cwd=REPO_ROOT, env=env,
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert f"{var}='fast'" in result.stderr and "Traceback" not in result.stderr
