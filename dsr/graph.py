@@ -16,7 +16,7 @@ from __future__ import annotations
 import hashlib
 import secrets
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sized
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -230,6 +230,14 @@ class DSRGraph:
         if self._tx is not None and self._tx.owner == threading.get_ident():
             raise TransactionError("dispatch() called inside a transaction; call it after")
         return self._signals.dispatch(timeout)
+
+    def receive_while_polling(self, inbox: Sized | None,
+                              receive: Callable[[], None] = lambda: None) -> None:
+        """Transport hook: while dispatch() polls, it calls `receive()` to handle the deltas
+        put in `inbox` itself (dsr/signals.py, "Why the polling thread receives").  (Never
+        inside the polling thread's own transaction: dispatch() refuses to run there.)
+        None detaches."""
+        self._signals.receive_from(inbox, receive)
 
     def dispatch_stats(self) -> dict[str, float]:
         """How dispatch() has waited: polls that found a change, polls that gave up and slept,

@@ -2,10 +2,15 @@
 
 Why coalesce: each Zenoh sample costs the receiver a fixed ~20-50 us of Python work (callback,
 decode, checks), whatever its size, so an agent writing thousands of attributes per second
-would saturate its peers.  The first delta after a quiet period is sent at once (no latency
-cost on the request/response path); deltas that follow within `linger_s` of the previous send
-are joined into one pending delta (a join of delta-states is a valid delta) and sent by a
-flusher thread at most `linger_s` later, or as soon as `max_entries` elements are pending.
+would saturate its peers.  Samples are rationed like tokens from a bucket that refills by one
+every `linger_s` and holds at most DIRECT_BURST: while a token is left, a delta is sent at once,
+on the writer's thread (no latency cost on the request/response path, even when requests and
+answers come faster than `linger_s` apart); a stream that outruns the bucket has its deltas
+joined into one pending delta (a join of delta-states is a valid delta), sent by a flusher
+thread at most `linger_s` after the previous send, or as soon as `max_entries` elements are
+pending.  So a writer publishes at most one sample per `linger_s` on average.  (A bucket of
+one, sending only after a quiet `linger_s`, delayed every answer of an exchange faster than
+that by up to `linger_s` plus a thread wake-up, measured in bench_dsr's ping-pong.)
 
 Why order: receivers take a writer's deltas as arriving in stamp order (a delta's top stamp is
 their watermark of that writer, dsr/transport.py), so a send must never overtake an older one.
@@ -34,6 +39,8 @@ EdgeKey = tuple[int, int, str]
 
 #: how long a payload waits for an older one to be published before it goes anyway
 TURN_TIMEOUT_S = 2.0
+#: samples a writer may send at once after a quiet time (see the module docstring)
+DIRECT_BURST = 2.0
 
 
 @dataclass(slots=True, frozen=True)
@@ -56,6 +63,8 @@ class Outbox:
         self._nodes: dict[int, ElementState] = {}
         self._edges: dict[EdgeKey, ElementState] = {}
         self._last_send = 0.0
+        self._tokens = DIRECT_BURST               # at _tokens_at (see _tokens_now)
+        self._tokens_at = 0.0
         self._pending_top = 0
         self._tickets = 0                         # next ticket to give (under _lock)
         self._turn = 0                            # next ticket allowed to publish
@@ -112,7 +121,7 @@ class Outbox:
         now = time.perf_counter()
         with self._lock:   # a big batch is worth a sample of its own: no lingering for it
             if not self._nodes and not self._edges and (
-                    len(entries) * 4 >= self.max_entries or now - self._last_send >= self.linger_s):
+                    len(entries) * 4 >= self.max_entries or self._tokens_now(now) >= 1.0):
                 return self._issue(self._encoder.encode(entries, []), top, now)
         return self.add({entry["id"]: ElementState(attrs=entry["attrs"])  # type: ignore[misc]
                          for entry in entries}, {}, top)
@@ -123,14 +132,21 @@ class Outbox:
 
     def _direct_ok(self, now: float) -> bool:
         """May a delta go out at once, on the writer's thread?  Only with nothing queued (the
-        queued writes are older: their batch must get the earlier ticket) and after a quiet
-        `linger_s`."""
-        return not self._nodes and not self._edges and now - self._last_send >= self.linger_s
+        queued writes are older: their batch must get the earlier ticket) and a token left."""
+        return not self._nodes and not self._edges and self._tokens_now(now) >= 1.0
+
+    def _tokens_now(self, now: float) -> float:
+        """Samples that may go out at once: one more per `linger_s` since the last send."""
+        if self.linger_s <= 0:
+            return DIRECT_BURST
+        return min(DIRECT_BURST, self._tokens + (now - self._tokens_at) / self.linger_s)
 
     def _issue(self, payload: bytes, top: int, now: float) -> Outgoing:
-        """Give a payload its ticket (caller holds _lock)."""
+        """Give a payload its ticket (caller holds _lock); every sample takes a token."""
         ticket = self._tickets
         self._tickets = ticket + 1
+        self._tokens = self._tokens_now(now) - 1.0
+        self._tokens_at = now
         self._last_send = now
         self.messages += 1
         return Outgoing(ticket, payload, top)

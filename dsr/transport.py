@@ -5,7 +5,9 @@
 - Remote deltas arrive on ``chronav/<graph>/delta/*``; each is validated (schema, claimed agent
   == key, writer ids, clock drift) and checked against the write policy (dsr/policy.py) before
   it touches the graph; state replies too.  Rejected ones are
-  logged and counted in `ReplicaStats`, and the graph is untouched.
+  logged and counted in `ReplicaStats`, and the graph is untouched.  Deltas are handled one at
+  a time in arrival order, on Zenoh's callback thread or, while the agent's thread polls in
+  dispatch(), on that thread (dsr/signals.py, "Why the polling thread receives").
 - State transfer: each writable replica answers ``chronav/<graph>/state/<agent>`` with its full
   CRDT state.  A replica queries ``state/*`` when it starts, and again whenever its connection
   comes back (puts made while disconnected are lost by Zenoh, so this anti-entropy is needed).
@@ -15,6 +17,7 @@
 
 from __future__ import annotations
 
+import collections
 import logging
 import queue
 import random
@@ -42,6 +45,9 @@ _ALL = "*"
 #: wildcard subscription still delivers every delta, only without the shortcut
 MAX_DECLARED_WRITER_KEYS = 256
 _LOG_FIRST_REJECTS = 20
+#: a polling agent thread takes Zenoh's deltas only while fewer than this many wait for it;
+#: beyond, Zenoh's thread handles them itself (and so slows down the sender: back-pressure)
+_HANDOVER_MAX = 64
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
@@ -68,6 +74,7 @@ class ReplicaStats:
     state_merged: int = 0       # state replies merged
     syncs: int = 0              # anti-entropy rounds (initial join included)
     errors: int = 0             # unexpected exceptions inside callbacks
+    received_by_agent: int = 0  # remote deltas handled by an agent thread polling in dispatch()
     last_reject: str = ""
     #: refusals per reason (see REASONS); each reason has its own log budget
     rejects: dict[str, int] = field(default_factory=dict)
@@ -156,6 +163,10 @@ class Replica:
         self._connected = False
         self._joined = False
         self._table_lock = threading.Lock()
+        #: deltas received and not yet handled, in arrival order (_on_delta)
+        self._inbox: collections.deque[tuple[str, bytes]] = collections.deque()
+        self._receive_lock = threading.Lock()
+        self._hub = graph._signals
         #: seen[z]: this replica holds every write replica z stamped up to seen[z].  A running
         #: writer's entry is set only by its own state and then moved on by its own deltas and
         #: digests (see _advance); without an entry its relayed writes wait for it (deferred)
@@ -213,6 +224,7 @@ class Replica:
             self._sync_requests.put(_ALL)
             if not self.graph.read_only:
                 self.graph.attach(self._publish, linger_s=self.linger_s)
+            self.receive_on_dispatch()
             self._worker = threading.Thread(target=self._work, name=f"dsr-sync-{self.graph.agent}",
                                             daemon=True)
             self._worker.start()
@@ -254,6 +266,7 @@ class Replica:
         if self._closed.is_set():
             return
         self._closed.set()
+        self.graph.receive_while_polling(None)
         self.graph.attach(None)
         if self.graph.replica is self:
             self.graph.replica = None
@@ -273,6 +286,7 @@ class Replica:
                 session.close()
             except Exception:  # noqa: BLE001
                 log.debug("closing Zenoh session failed", exc_info=True)
+        self._inbox.clear()
         worker = self._worker
         if worker is not None and worker is not threading.current_thread():
             worker.join(timeout=2.0)
@@ -380,9 +394,41 @@ class Replica:
         return None
 
     def _on_delta(self, sample: Any) -> None:
-        self.stats.received += 1
-        key = str(sample.key_expr)
+        """Zenoh's callback: queue the sample, then handle what is queued, unless an agent
+        thread that polls in dispatch() takes it (dsr/signals.py, "Why the polling thread
+        receives"); then this thread only queues the sample and returns (at most
+        _HANDOVER_MAX wait: beyond, it handles them itself, which slows the senders down)."""
         try:
+            self.stats.received += 1
+            inbox = self._inbox
+            inbox.append(sample)
+            if self._hub.receiving and len(inbox) <= _HANDOVER_MAX:
+                return
+            self._receive_queued(by_agent=False)
+        except Exception:  # noqa: BLE001 - never kill Zenoh's callback thread
+            self.stats.errors += 1
+            log.exception("DSR %s failed to take a delta", self.graph.agent)
+
+    def receive_on_dispatch(self) -> None:
+        """From now on an agent thread polling in the graph's dispatch() handles the deltas
+        Zenoh's thread receives (see _on_delta); close() ends it."""
+        self.graph.receive_while_polling(self._inbox, self._receive_queued)
+
+    def _receive_queued(self, by_agent: bool = True) -> None:
+        """Handle the queued deltas in arrival order, on Zenoh's thread or (by_agent) on the
+        agent thread polling in dispatch().  One thread at a time: a writer's deltas must be
+        merged in the order it sent them (_advance)."""
+        with self._receive_lock:
+            inbox = self._inbox
+            while inbox:
+                self._receive_delta(inbox.popleft())
+                if by_agent:
+                    self.stats.received_by_agent += 1
+
+    def _receive_delta(self, sample: Any) -> None:
+        key = "?"
+        try:
+            key = str(sample.key_expr)
             payload = sample.payload.to_bytes()
             if len(payload) > LIMITS.max_delta_bytes:
                 self._reject(key, "too_large", f"delta of {len(payload)} bytes, over the limit "
@@ -409,7 +455,7 @@ class Replica:
             self.stats.applied += 1
         except WireError as exc:
             self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001 - never kill Zenoh's callback thread
+        except Exception:  # noqa: BLE001 - never kill Zenoh's thread or the agent's
             self.stats.errors += 1
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
 

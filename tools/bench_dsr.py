@@ -10,7 +10,9 @@ here on a free loopback port:
   dispatch() never polls (dsr.signals.SpinPolicy window 0, as CHRONAV_DSR_SPIN_US=0 sets):
   what the default polling buys, in the same run.  dispatch_poll_*: the driver's default
   replica during the latency phase: polls that found the answer, polls that gave up, and the
-  share of one core spent polling (the echo's is alike);
+  share of one core spent polling (the echo's is alike); dispatch_received_by_agent: deltas
+  its polling thread decoded and merged itself instead of Zenoh's thread (dsr/signals.py;
+  dsr_nopoll_received_by_agent: the same for the no-poll replica, always 0);
 - wire_floor_p50_ms: the same round trip through the DSR wire layer only: each side decodes the
   delta it receives (wire.decode), hands it to another thread as an agent loop does, and that
   thread encodes the answer (DeltaEncoder) and puts it, with the replica's publisher options.
@@ -304,6 +306,8 @@ def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, nopoll: DsrPing,
     block = 50
     seq = 0
     before = ping.graph.dispatch_stats()
+    taken = {"dispatch": ping.graph.replica.stats.received_by_agent,
+             "dsr_nopoll": nopoll.graph.replica.stats.received_by_agent}
     started = time.perf_counter()
     for blk in range(rounds // block + 1):       # the first block is a warm-up
         for name, fn in (("zenoh", bare.direct), ("zenoh_handoff", bare.threaded),
@@ -323,6 +327,10 @@ def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, nopoll: DsrPing,
     out["dispatch_poll_misses"] = after["poll_misses"] - before["poll_misses"]
     out["dispatch_poll_core_share"] = ((after["poll_s"] - before["poll_s"])
                                        / (time.perf_counter() - started))
+    out["dispatch_received_by_agent"] = (ping.graph.replica.stats.received_by_agent
+                                         - taken["dispatch"])
+    out["dsr_nopoll_received_by_agent"] = (nopoll.graph.replica.stats.received_by_agent
+                                           - taken["dsr_nopoll"])
     return out
 
 

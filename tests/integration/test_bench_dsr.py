@@ -30,6 +30,8 @@ def test_small_run_prints_every_goal_key() -> None:
     assert values["dispatch_spin_us"] == 1000 and values["dispatch_spin_share_pct"] == 25
     assert 0 <= values["dispatch_poll_core_share"] < 1.0
     assert values["dispatch_poll_hits"] >= 0 and values["dispatch_poll_misses"] >= 0
+    assert values["dispatch_received_by_agent"] >= 0
+    assert values["dsr_nopoll_received_by_agent"] == 0, "a replica that never polls never takes"
     ratio = values["dsr_p50_ms"] / values["zenoh_p50_ms"]      # printed rounded to 4 digits
     assert values["dsr_over_zenoh_p50"] == pytest.approx(ratio, rel=1e-3)
     ratio = values["dsr_p50_ms"] / values["wire_floor_p50_ms"]

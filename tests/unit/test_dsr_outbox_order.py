@@ -20,7 +20,7 @@ import orjson
 from dsr import wire
 from dsr.crdt import ElementState
 from dsr.graph import DSRGraph
-from dsr.outbox import Outbox
+from dsr.outbox import DIRECT_BURST, Outbox
 
 
 def _stamps(payload: bytes) -> list[int]:
@@ -44,43 +44,69 @@ def _sent_stamps(published: list[bytes]) -> list[int]:
 def test_a_direct_send_never_overtakes_a_batch_in_flight() -> None:
     published: list[bytes] = []
     in_publish, release = threading.Event(), threading.Event()
+    burst = int(DIRECT_BURST)
 
-    def publish(payload: bytes) -> None:   # stalls the second payload (the flusher's batch)
-        if published:
+    def publish(payload: bytes) -> None:   # stalls the payload after the burst (the batch)
+        if len(published) >= burst:
             in_publish.set()
             release.wait(5.0)
         published.append(payload)
 
     outbox = Outbox(wire.DeltaEncoder("g", "a", 1), publish, linger_s=0.001)
-    outbox.send(outbox.add(_write(1), {}, top=1))
-    assert published, "after a quiet time a delta goes out at once"
-    assert outbox.add(_write(2), {}, top=2) is None            # within the linger: queued
+    for stamp in range(1, burst + 1):
+        outbox.send(outbox.add(_write(stamp), {}, top=stamp))
+    assert len(published) == burst, "after a quiet time a burst of deltas goes out at once"
+    assert outbox.add(_write(burst + 1), {}, top=burst + 1) is None   # beyond it: queued
     assert in_publish.wait(5.0), "the flusher took the batch and is publishing it"
     time.sleep(0.01)                                           # well past the linger time
-    third = outbox.add(_write(3), {}, top=3)
-    sender = threading.Thread(target=outbox.send, args=(third,))
+    last = outbox.add(_write(burst + 2), {}, top=burst + 2)
+    sender = threading.Thread(target=outbox.send, args=(last,))
     sender.start()
     time.sleep(0.05)
-    assert _sent_stamps(published) == [1], "the newer delta waits for the batch in flight"
+    assert _sent_stamps(published) == list(range(1, burst + 1)), \
+        "the newer delta waits for the batch in flight"
     release.set()
     sender.join(5.0)
     outbox.close()
-    assert _sent_stamps(published) == [1, 2, 3]
-    assert outbox.sent_top == 3
+    assert _sent_stamps(published) == list(range(1, burst + 3))
+    assert outbox.sent_top == burst + 2
 
 
 def test_a_batch_never_overtakes_a_direct_delta_its_writer_has_not_sent_yet() -> None:
     published: list[bytes] = []
     outbox = Outbox(wire.DeltaEncoder("g", "a", 1), published.append, linger_s=0.001)
-    stalled = outbox.add(_write(1), {}, top=1)    # writer A: a direct delta, then descheduled
+    for stamp in range(1, int(DIRECT_BURST)):        # all but the last token of the burst
+        outbox.send(outbox.add(_write(stamp), {}, top=stamp))
+    sent = len(published)
+    a = sent + 1
+    stalled = outbox.add(_write(a), {}, top=a)    # writer A: a direct delta, then descheduled
     assert stalled is not None
-    assert outbox.add(_write(2), {}, top=2) is None   # writer B, within the linger: queued
+    assert outbox.add(_write(a + 1), {}, top=a + 1) is None   # writer B, beyond the burst
     time.sleep(0.05)                                  # the flusher has long taken B's batch
-    assert published == [], "the batch waits for the older direct delta"
+    assert len(published) == sent, "the batch waits for the older direct delta"
     outbox.send(stalled)                              # writer A runs again
     outbox.flush()
     outbox.close()
-    assert _sent_stamps(published) == [1, 2]
+    assert _sent_stamps(published) == list(range(1, a + 2))
+
+
+def test_answers_faster_than_the_linger_time_go_out_at_once_and_streams_are_coalesced() -> None:
+    """Regression (bench_dsr ping-pong): with a bucket of one token, the answer to a request
+    that came less than `linger_s` after the previous answer waited for the flusher thread,
+    up to `linger_s` plus a wake-up.  Two deltas in quick succession now both leave at once,
+    on the writer's thread; a stream that outruns one sample per `linger_s` is joined."""
+    published: list[bytes] = []
+    outbox = Outbox(wire.DeltaEncoder("g", "a", 1), published.append, linger_s=0.05)
+    for stamp in (1, 2):
+        out = outbox.add(_write(stamp), {}, top=stamp)
+        assert out is not None, f"delta {stamp} of a pair goes out at once"
+        outbox.send(out)
+    for stamp in range(3, 103):                       # a tight stream: joined
+        outbox.send(outbox.add(_write(stamp), {}, top=stamp))
+    outbox.flush()
+    outbox.close()
+    assert _sent_stamps(published) == list(range(1, 103))
+    assert len(published) <= 4, f"a stream of 100 deltas took {len(published) - 2} samples"
 
 
 def test_concurrent_writer_threads_publish_in_stamp_order() -> None:
