@@ -16,7 +16,7 @@ from __future__ import annotations
 import hashlib
 import secrets
 import threading
-from collections.abc import Callable, Iterator, Sized
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -34,7 +34,7 @@ from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_n
                        check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
 from dsr.outbox import Outbox, Outgoing
-from dsr.signals import Event, SignalHub, SpinPolicy
+from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
 
 if TYPE_CHECKING:
     import networkx
@@ -231,13 +231,11 @@ class DSRGraph:
             raise TransactionError("dispatch() called inside a transaction; call it after")
         return self._signals.dispatch(timeout)
 
-    def receive_while_polling(self, inbox: Sized | None,
-                              receive: Callable[[], None] = lambda: None) -> None:
-        """Transport hook: while dispatch() polls, it calls `receive()` to handle the deltas
-        put in `inbox` itself (dsr/signals.py, "Why the polling thread receives").  (Never
-        inside the polling thread's own transaction: dispatch() refuses to run there.)
-        None detaches."""
-        self._signals.receive_from(inbox, receive)
+    def receive_while_polling(self, source: PollSource | None) -> None:
+        """Transport hook: while dispatch() polls, it handles the deltas `source` received
+        itself (dsr/signals.py, "Why the polling thread receives"; never inside the polling
+        thread's own transaction: dispatch() refuses to run there).  None detaches."""
+        self._signals.receive_from(source)
 
     def dispatch_stats(self) -> dict[str, float]:
         """How dispatch() has waited: polls that found a change, polls that gave up and slept,

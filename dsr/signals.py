@@ -17,17 +17,17 @@ yields the core to any other runnable thread while it waits, and its CPU time is
 one that hears a stream pays at most that share.  CHRONAV_DSR_SPIN_US=0 turns it off (a
 battery-powered host that prefers idle cores to latency).
 
-Why the polling thread receives: even a polling dispatch() paid for a hand-over.  Zenoh's
-thread decoded, checked and merged a delta (holding the GIL all along), posted the event,
-finished its bookkeeping and returned; only then could the polling thread, asleep on the GIL
-by that time, be woken to run the callback.  Timestamps on the live path of bench_dsr's
-ping-pong put that at a median 35-45 us per delta (the tail after posting, then the wake-up),
-more than the decode and merge.  So while dispatch() polls, Zenoh's thread only queues the
-received sample (`receive_from`) and the polling thread decodes, checks and merges it
-itself, in arrival order, and goes straight on to the callbacks.  Whoever handles a delta runs
+Why the polling thread receives: even a polling dispatch() paid for hand-overs.  Zenoh's
+callback thread decoded, checked and merged a delta (holding the GIL all along), posted the
+event, finished its bookkeeping and returned; only then could the polling thread, asleep on
+the GIL by that time, be woken to run the callback.  Timestamps on the live path of
+bench_dsr's ping-pong put that at a median 35-45 us per delta, more than the decode and
+merge.  So while dispatch() polls, it takes the received deltas itself from a poll source
+(`receive_from`; dsr/receiver.py: the replica's Zenoh channel), decodes, checks and merges
+them, in arrival order, and goes straight on to the callbacks.  Whoever handles a delta runs
 the same code (dsr/transport.py), so nothing but the thread changes; when nobody polls (an
-agent busy in a callback, or one that never dispatches), Zenoh's thread handles its deltas as
-before.  Agent callbacks still never run on Zenoh's thread.
+agent busy in a callback, or one that never dispatches), the replica's receiver thread
+handles its deltas.  Agent callbacks never run on a receiving thread.
 """
 
 from __future__ import annotations
@@ -37,9 +37,9 @@ import os
 import queue
 import threading
 import time
-from collections.abc import Callable, Mapping, Sized
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 from dsr.errors import ConfigError
 
@@ -82,8 +82,16 @@ class SpinPolicy:
         return cls(**values)
 
 
-def _nothing() -> None:
-    return None
+class PollSource(Protocol):
+    """Received deltas a polling dispatch() may handle itself (dsr/receiver.py)."""
+
+    def poll_begin(self) -> None: ...
+
+    def poll_take(self) -> bool:
+        """Handle the next waiting delta, if this thread may; True if it did."""
+
+    def poll_end(self, idle: bool) -> None:
+        """The poll is over; idle: nothing came and the thread goes to sleep."""
 
 
 class SignalHub:
@@ -108,17 +116,11 @@ class SignalHub:
         self.spin_hits = 0
         self.spin_misses = 0
         self.spin_s = 0.0
-        #: True while a dispatch() polls and handles what `receive_from`'s inbox gets
-        self.receiving = False
-        self._inbox: Sized | None = None
-        self._receive: Callable[[], None] = _nothing
+        self._source: PollSource | None = None
 
-    def receive_from(self, inbox: Sized | None, receive: Callable[[], None] = _nothing) -> None:
-        """While dispatch() polls, it sets `receiving` and calls `receive()` whenever `inbox` is
-        not empty, and once more after it stopped polling, so that whatever was put in the
-        inbox while `receiving` was seen set is handled.  None detaches."""
-        self._inbox = inbox
-        self._receive = receive if inbox is not None else _nothing
+    def receive_from(self, source: PollSource | None) -> None:
+        """While dispatch() polls, let it handle what `source` received (None detaches)."""
+        self._source = source
 
     def connect(self, signal: str, callback: Callable[..., Any]) -> None:
         if signal not in self._callbacks:
@@ -164,32 +166,28 @@ class SignalHub:
             self._credit_s, self._credit_at = credit, now
             return False
         source, end, clock, yield_core = self._queue, now + budget, time.perf_counter, os.sched_yield
-        inbox = self._inbox
-        take = inbox is not None
+        taker = self._source
         working = 0.0                 # time spent handling deltas: work, not polling
-        if take:
-            self.receiving = True
+        found = False
+        if taker is not None:
+            taker.poll_begin()
         try:
             while not source.qsize():
-                if take and inbox:
+                if taker is not None:
                     started = clock()
-                    self._receive()
-                    stopped = clock()
-                    working += stopped - started
-                    if stopped >= end:            # a flood must not hold dispatch() here
-                        break
-                elif clock() >= end:
+                    if taker.poll_take():
+                        stopped = clock()
+                        working += stopped - started
+                        if stopped >= end:        # a flood must not hold dispatch() here
+                            break
+                        continue
+                if clock() >= end:
                     break
-                else:
-                    yield_core()      # releases the GIL: the Zenoh thread can post meanwhile
+                yield_core()          # releases the GIL: other threads can post meanwhile
+            found = bool(source.qsize())
         finally:
-            if take:
-                self.receiving = False
-                if inbox:             # put there while `receiving` was still seen set
-                    started = clock()
-                    self._receive()
-                    working += clock() - started
-        found = bool(source.qsize())
+            if taker is not None:
+                taker.poll_end(idle=not found)
         done = clock()
         polled = max(0.0, done - now - working)
         self.spin_s += polled

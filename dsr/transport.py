@@ -5,9 +5,9 @@
 - Remote deltas arrive on ``chronav/<graph>/delta/*``; each is validated (schema, claimed agent
   == key, writer ids, clock drift) and checked against the write policy (dsr/policy.py) before
   it touches the graph; state replies too.  Rejected ones are
-  logged and counted in `ReplicaStats`, and the graph is untouched.  Deltas are handled one at
-  a time in arrival order, on Zenoh's callback thread or, while the agent's thread polls in
-  dispatch(), on that thread (dsr/signals.py, "Why the polling thread receives").
+  logged and counted in `ReplicaStats`, and the graph is untouched.  Deltas wait in a Zenoh
+  channel and are handled one at a time in arrival order, by the replica's receiver thread or,
+  while the agent's thread polls in dispatch(), by that thread (dsr/receiver.py).
 - State transfer: each writable replica answers ``chronav/<graph>/state/<agent>`` with its full
   CRDT state.  A replica queries ``state/*`` when it starts, and again whenever its connection
   comes back (puts made while disconnected are lost by Zenoh, so this anti-entropy is needed).
@@ -17,7 +17,6 @@
 
 from __future__ import annotations
 
-import collections
 import logging
 import queue
 import random
@@ -37,6 +36,7 @@ from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
 from dsr.limits import LIMITS
 from dsr.policy import AllowAll, WritePolicy
+from dsr.receiver import DeltaReceiver, receiver_of
 from dsr.signals import SpinPolicy
 
 log = logging.getLogger(__name__)
@@ -45,9 +45,9 @@ _ALL = "*"
 #: wildcard subscription still delivers every delta, only without the shortcut
 MAX_DECLARED_WRITER_KEYS = 256
 _LOG_FIRST_REJECTS = 20
-#: a polling agent thread takes Zenoh's deltas only while fewer than this many wait for it;
-#: beyond, Zenoh's thread handles them itself (and so slows down the sender: back-pressure)
-_HANDOVER_MAX = 64
+#: received deltas that may wait in the replica's Zenoh channel; when it is full, Zenoh's
+#: network thread waits (back-pressure on the senders) instead of queueing without bound
+DELTA_CHANNEL_CAPACITY = 10_000
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
@@ -163,10 +163,8 @@ class Replica:
         self._connected = False
         self._joined = False
         self._table_lock = threading.Lock()
-        #: deltas received and not yet handled, in arrival order (_on_delta)
-        self._inbox: collections.deque[tuple[str, bytes]] = collections.deque()
-        self._receive_lock = threading.Lock()
-        self._hub = graph._signals
+        #: takes received deltas off the Zenoh channel (dsr/receiver.py; None until opened)
+        self._receiver: DeltaReceiver | None = None
         #: seen[z]: this replica holds every write replica z stamped up to seen[z].  A running
         #: writer's entry is set only by its own state and then moved on by its own deltas and
         #: digests (see _advance); without an entry its relayed writes wait for it (deferred)
@@ -224,7 +222,7 @@ class Replica:
             self._sync_requests.put(_ALL)
             if not self.graph.read_only:
                 self.graph.attach(self._publish, linger_s=self.linger_s)
-            self.receive_on_dispatch()
+            self.graph.receive_while_polling(self._receiver)
             self._worker = threading.Thread(target=self._work, name=f"dsr-sync-{self.graph.agent}",
                                             daemon=True)
             self._worker.start()
@@ -247,8 +245,11 @@ class Replica:
     def _declare(self, zenoh: Any) -> None:
         session = self.session
         name = self.graph.graph_name
-        self._entities.append(session.declare_subscriber(
-            wire.delta_key(name, _ALL), self._on_delta, allowed_origin=zenoh.Locality.REMOTE))
+        deltas = session.declare_subscriber(
+            wire.delta_key(name, _ALL), zenoh.handlers.FifoChannel(DELTA_CHANNEL_CAPACITY),
+            allowed_origin=zenoh.Locality.REMOTE)
+        self._entities.append(deltas)
+        self.start_receiver(deltas.handler, zenoh.ZError)
         self._entities.append(session.liveliness().declare_subscriber(
             wire.member_key(name, _ALL), self._on_member))
         if self.graph.read_only:
@@ -286,7 +287,9 @@ class Replica:
                 session.close()
             except Exception:  # noqa: BLE001
                 log.debug("closing Zenoh session failed", exc_info=True)
-        self._inbox.clear()
+        receiver = self._receiver
+        if receiver is not None:            # its blocking take ended with the session
+            receiver.close()
         worker = self._worker
         if worker is not None and worker is not threading.current_thread():
             worker.join(timeout=2.0)
@@ -393,39 +396,22 @@ class Replica:
                                    "ahead of this replica's wall clock")
         return None
 
+    def start_receiver(self, channel: Any, closed_error: type[Exception]) -> None:
+        """Handle the deltas of `channel` (a Zenoh channel handler: try_recv() / recv(), which
+        raises `closed_error` once closed) from now on: on a receiver thread, or on the
+        agent's thread while it polls in dispatch() (dsr/receiver.py)."""
+        self._receiver = receiver_of(channel, self._on_delta, self._on_delta_by_agent,
+                                     closed_error, name=f"dsr-rx-{self.graph.agent}")
+        self._receiver.start()
+
+    def _on_delta_by_agent(self, sample: Any) -> None:
+        self._on_delta(sample)
+        self.stats.received_by_agent += 1
+
     def _on_delta(self, sample: Any) -> None:
-        """Zenoh's callback: queue the sample, then handle what is queued, unless an agent
-        thread that polls in dispatch() takes it (dsr/signals.py, "Why the polling thread
-        receives"); then this thread only queues the sample and returns (at most
-        _HANDOVER_MAX wait: beyond, it handles them itself, which slows the senders down)."""
-        try:
-            self.stats.received += 1
-            inbox = self._inbox
-            inbox.append(sample)
-            if self._hub.receiving and len(inbox) <= _HANDOVER_MAX:
-                return
-            self._receive_queued(by_agent=False)
-        except Exception:  # noqa: BLE001 - never kill Zenoh's callback thread
-            self.stats.errors += 1
-            log.exception("DSR %s failed to take a delta", self.graph.agent)
-
-    def receive_on_dispatch(self) -> None:
-        """From now on an agent thread polling in the graph's dispatch() handles the deltas
-        Zenoh's thread receives (see _on_delta); close() ends it."""
-        self.graph.receive_while_polling(self._inbox, self._receive_queued)
-
-    def _receive_queued(self, by_agent: bool = True) -> None:
-        """Handle the queued deltas in arrival order, on Zenoh's thread or (by_agent) on the
-        agent thread polling in dispatch().  One thread at a time: a writer's deltas must be
-        merged in the order it sent them (_advance)."""
-        with self._receive_lock:
-            inbox = self._inbox
-            while inbox:
-                self._receive_delta(inbox.popleft())
-                if by_agent:
-                    self.stats.received_by_agent += 1
-
-    def _receive_delta(self, sample: Any) -> None:
+        """Handle one received delta (or digest), on the receiver thread or on the agent's
+        thread polling in dispatch() (dsr/receiver.py: one at a time, in arrival order)."""
+        self.stats.received += 1
         key = "?"
         try:
             key = str(sample.key_expr)
@@ -455,7 +441,7 @@ class Replica:
             self.stats.applied += 1
         except WireError as exc:
             self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001 - never kill Zenoh's thread or the agent's
+        except Exception:  # noqa: BLE001 - never kill the receiving thread or the agent's
             self.stats.errors += 1
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
 

@@ -11,7 +11,7 @@ here on a free loopback port:
   what the default polling buys, in the same run.  dispatch_poll_*: the driver's default
   replica during the latency phase: polls that found the answer, polls that gave up, and the
   share of one core spent polling (the echo's is alike); dispatch_received_by_agent: deltas
-  its polling thread decoded and merged itself instead of Zenoh's thread (dsr/signals.py;
+  its polling thread decoded and merged itself instead of the receiver thread (dsr/receiver.py;
   dsr_nopoll_received_by_agent: the same for the no-poll replica, always 0);
 - wire_floor_p50_ms: the same round trip through the DSR wire layer only: each side decodes the
   delta it receives (wire.decode), hands it to another thread as an agent loop does, and that
