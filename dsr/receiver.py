@@ -40,8 +40,10 @@ from typing import Any
 log = logging.getLogger(__name__)
 
 #: how long the parked receiver thread sleeps between looks while the agent's thread owns the
-#: channel, and how long without a poll before it takes the channel back
-PARK_S = 0.001
+#: channel (so a busy agent's graph lags by at most this much; each look costs the polling
+#: agent a GIL hand-over, so not much more often), and how long without a poll before it takes
+#: the channel back
+PARK_S = 0.01
 RECLAIM_S = 0.05
 
 
