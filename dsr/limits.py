@@ -15,6 +15,10 @@ of a graph must apply the same limits; they are documented in docs/dsr_wire_form
 - `max_clock_offset_ms` (CHRONAV_DSR_MAX_CLOCK_OFFSET_MS, default 1000): the HLC paper's
   maximum offset: a received message stamped more than this ahead of the receiver's wall
   clock is dropped, so no writer can drag the others' clocks further ahead than this.
+- `max_waiting_deltas` (CHRONAV_DSR_MAX_WAITING_DELTAS, default 10,000): received deltas
+  waiting in a replica's Zenoh channel to be handled (dsr/receiver.py).  When it is full,
+  Zenoh's network thread waits and the senders are slowed down; nothing is dropped.  (Local to
+  each process: it changes no replica's view of the graph.)
 """
 
 from __future__ import annotations
@@ -29,7 +33,8 @@ ENV_PREFIX = "CHRONAV_DSR_"
 _ENV = {"max_value_bytes": "CHRONAV_DSR_MAX_VALUE_BYTES",
         "max_delta_bytes": "CHRONAV_DSR_MAX_DELTA_BYTES",
         "max_state_bytes": "CHRONAV_DSR_MAX_STATE_BYTES",
-        "max_clock_offset_ms": "CHRONAV_DSR_MAX_CLOCK_OFFSET_MS"}
+        "max_clock_offset_ms": "CHRONAV_DSR_MAX_CLOCK_OFFSET_MS",
+        "max_waiting_deltas": "CHRONAV_DSR_MAX_WAITING_DELTAS"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,6 +43,7 @@ class Limits:
     max_delta_bytes: int = 4 * 1024 * 1024
     max_state_bytes: int = 256 * 1024 * 1024
     max_clock_offset_ms: int = 1000
+    max_waiting_deltas: int = 10_000
 
     @classmethod
     def from_env(cls, environ: Mapping[str, str] | None = None) -> Limits:

@@ -157,7 +157,7 @@ class DeltaReceiver:
         if time.monotonic() - self._last_poll >= self.reclaim_s:
             self._give_back()                    # the agent stopped polling: back to recv()
         with self._lock:                         # the agent is busy: keep the graph current
-            while not self._closed:
+            while not self._closed and not self._polling:    # (until it polls again)
                 try:
                     sample = self._take_nowait()
                 except Exception:  # noqa: BLE001 - closed: the next take() says so

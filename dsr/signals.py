@@ -1,8 +1,8 @@
 """Change signals queued by any thread and delivered on the agent's own thread.
 
-Why a queue: replication merges remote deltas on Zenoh's callback thread while holding the
-graph lock; running agent callbacks there would let agent code block replication or re-enter
-the graph under the lock.  Instead events are queued and `dispatch()` (called from the agent's
+Why a queue: replication merges remote deltas on the replica's receiver thread
+(dsr/receiver.py) while holding the graph lock; running agent callbacks there would let agent
+code block replication or re-enter the graph under the lock.  Instead events are queued and `dispatch()` (called from the agent's
 loop) runs the callbacks with no lock held.  Events are only queued for signals that have at
 least one callback, so a replica nobody listens to does not accumulate memory.
 
@@ -10,7 +10,8 @@ Why dispatch() polls a little before it sleeps (SpinPolicy): a thread that sleep
 messages is woken by the kernel tens of microseconds later, and on a virtual machine the idle
 core it runs on must be woken too.  In a request/answer exchange between agents that wake-up,
 twice per round trip, cost more than decoding and merging the delta: bench_dsr measured the DSR
-round trip at a median 1.8x bare Zenoh without polling and 1.54x with it (22 runs, 1.34-1.90).
+round trip at a median 1.8x bare Zenoh without polling and 1.54x with it (22 runs, 1.34-1.90),
+and RATIO once the polling thread also took the deltas itself (below).
 Polling only starts when changes arrive densely (the previous one came within the window),
 yields the core to any other runnable thread while it waits, and its CPU time is capped
 (`max_share_pct` of one core), so an agent that hears a few changes a second never polls and

@@ -45,9 +45,6 @@ _ALL = "*"
 #: wildcard subscription still delivers every delta, only without the shortcut
 MAX_DECLARED_WRITER_KEYS = 256
 _LOG_FIRST_REJECTS = 20
-#: received deltas that may wait in the replica's Zenoh channel; when it is full, Zenoh's
-#: network thread waits (back-pressure on the senders) instead of queueing without bound
-DELTA_CHANNEL_CAPACITY = 10_000
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
@@ -246,7 +243,7 @@ class Replica:
         session = self.session
         name = self.graph.graph_name
         deltas = session.declare_subscriber(
-            wire.delta_key(name, _ALL), zenoh.handlers.FifoChannel(DELTA_CHANNEL_CAPACITY),
+            wire.delta_key(name, _ALL), zenoh.handlers.FifoChannel(LIMITS.max_waiting_deltas),
             allowed_origin=zenoh.Locality.REMOTE)
         self._entities.append(deltas)
         self.start_receiver(deltas.handler, zenoh.ZError)

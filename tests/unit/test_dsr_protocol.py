@@ -8,9 +8,11 @@ local policy checks) are exercised exactly as over Zenoh, without processes.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import orjson
 import pytest
@@ -153,6 +155,16 @@ def test_limits_come_from_the_environment_and_bad_values_name_the_variable():
     assert Limits.from_env({"CHRONAV_DSR_MAX_VALUE_BYTES": "1_000"}).max_value_bytes == 1000
     with pytest.raises(ValueError, match="CHRONAV_DSR_MAX_CLOCK_OFFSET_MS"):
         Limits.from_env({"CHRONAV_DSR_MAX_CLOCK_OFFSET_MS": "soon"})
+    assert Limits.from_env({"CHRONAV_DSR_MAX_WAITING_DELTAS": "50"}).max_waiting_deltas == 50
+
+
+def test_every_limit_is_documented_with_its_variable():
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "dsr_wire_format.md").read_text()
+    table = doc[doc.index("## Limits"):doc.index("## Refusals")]
+    for field in dataclasses.fields(Limits):
+        var = f"CHRONAV_DSR_{field.name.upper()}"
+        row = next((line for line in table.splitlines() if f"`{var}`" in line), None)
+        assert row is not None, f"{var} is not in the Limits table of docs/dsr_wire_format.md"
 
 
 # ---------------------------------------------------------------------------- clock

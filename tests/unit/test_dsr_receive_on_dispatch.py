@@ -265,3 +265,35 @@ def _take_or_closed(channel: Channel) -> Any:
         return channel.recv()
     except Closed:
         raise ChannelClosed from None
+
+
+def test_the_receiver_thread_stops_catching_up_as_soon_as_the_agent_polls_again() -> None:
+    hub = SignalHub(SpinPolicy(window_us=20_000, max_share_pct=100, burst_ms=1000))
+    hub.connect("node_deleted", lambda node_id: None)
+    channel = Channel()
+    for i in range(100_000):
+        channel.put(i)
+    handled: list[tuple[int, int]] = []
+
+    def handle(item: int) -> None:   # 1 ms each: the receiver thread would need 100 s
+        handled.append((threading.get_ident(), item))
+        time.sleep(0.001)
+    receiver = DeltaReceiver(channel.try_recv, channel.recv, handle, park_s=0.001, reclaim_s=60)
+    receiver._agent_owns = True               # the agent owns the channel and is busy
+    receiver._last_poll = time.monotonic()
+    hub.receive_from(receiver)
+    receiver.start()
+    try:
+        assert _until(lambda: len(handled) >= 5), "the receiver thread catches up meanwhile"
+        hub._dense = True
+        started = time.perf_counter()
+        hub.dispatch(timeout=0.3)
+        elapsed = time.perf_counter() - started
+        assert elapsed < 1.0, f"dispatch() waited {elapsed:.2f} s for the receiver thread"
+        me = threading.get_ident()
+        assert any(thread == me for thread, _ in handled), "the polling thread took some"
+        items = [item for _, item in handled]
+        assert items == sorted(items) and len(set(items)) == len(items)
+    finally:
+        channel.closed = True
+        receiver.close()
