@@ -11,7 +11,8 @@ messages is woken by the kernel tens of microseconds later, and on a virtual mac
 core it runs on must be woken too.  In a request/answer exchange between agents that wake-up,
 twice per round trip, cost more than decoding and merging the delta: bench_dsr measured the DSR
 round trip at a median 1.8x bare Zenoh without polling and 1.54x with it (22 runs, 1.34-1.90),
-and RATIO once the polling thread also took the deltas itself (below).
+and 1.28x (14 runs, 13 of them under 1.5) once the polling thread also took the
+deltas off the replica's channel itself (below).
 Polling only starts when changes arrive densely (the previous one came within the window),
 yields the core to any other runnable thread while it waits, and its CPU time is capped
 (`max_share_pct` of one core), so an agent that hears a few changes a second never polls and
