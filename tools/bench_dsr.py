@@ -29,8 +29,8 @@ here on a free loopback port:
   coalesces bursts into fewer samples);
 - profile_*: where the time of one update goes, measured in this process on the same code:
   encode (update_node() up to the payload handed to Zenoh), decode (validation), merge
-  (apply_message), signal hand-off (Zenoh thread -> dispatch() thread); profile_top: the top
-  functions of a cProfile of that path (full listing on stderr);
+  (apply_message), signal hand-off (receiver thread -> a sleeping dispatch() thread);
+  profile_top: the top functions of a cProfile of that path (full listing on stderr);
 - join_10k_s: a new process's join() of a graph of 10,000 nodes (~9,000 with an RT edge and
   3 attributes, plus the nodes of the previous phases): session open, member lookup, one full
   state fetched, validated and merged (the other replicas' states follow in the background).
