@@ -4,8 +4,9 @@ Why coalesce: each Zenoh sample costs the receiver a fixed ~20-50 us of Python w
 decode, checks), whatever its size, so an agent writing thousands of attributes per second
 would saturate its peers.  Samples are rationed like tokens from a bucket that refills by one
 every `linger_s` and holds at most DIRECT_BURST: while a token is left, a delta is sent at once,
-on the writer's thread (no latency cost on the request/response path, even when requests and
-answers come faster than `linger_s` apart); a stream that outruns the bucket has its deltas
+on the writer's thread (no latency cost on the request/response path, even for an answer
+that follows the previous send by less than `linger_s`, as long as the exchange averages at
+most one sample per `linger_s`); a stream that outruns the bucket has its deltas
 joined into one pending delta (a join of delta-states is a valid delta), sent by a flusher
 thread at most `linger_s` after the previous send, or as soon as `max_entries` elements are
 pending.  So a writer publishes at most one sample per `linger_s` on average.  (A bucket of
