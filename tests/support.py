@@ -1,4 +1,5 @@
-"""Shared test helpers: free ports, polling waits and process groups that are always cleaned up.
+"""Shared test helpers: free ports, polling waits, process groups that are always cleaned up,
+and a stand-in for a received Zenoh sample.
 
 Why: multi-process tests must never use fixed ports or fixed sleeps (flaky on a 2-core CI box),
 and every spawned process must die even when an assertion fails mid-test.
@@ -14,9 +15,26 @@ import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass
+class FakeSample:
+    """What a replica's receiving code reads of a Zenoh sample (`key_expr`, `payload.to_bytes()`),
+    so that tests can hand messages to `Replica._on_delta` / `_merge_state` without Zenoh."""
+
+    key_expr: str
+    data: bytes
+
+    @property
+    def payload(self) -> FakeSample:
+        return self
+
+    def to_bytes(self) -> bytes:
+        return self.data
 
 
 def free_port() -> int:

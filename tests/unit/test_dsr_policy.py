@@ -8,7 +8,6 @@ policy.  The multi-process version with real Zenoh is tests/integration/test_tru
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import orjson
@@ -22,23 +21,11 @@ from agents.world.write_policy import load_policy, policy_from_env
 from dsr.policy import AllowAll, DenyTypes
 from dsr.policy_rules import RulePolicy
 from dsr.transport import Replica
+from tests.support import FakeSample
 
 POLICY = policy_from_env({})
 OWNERS = ("sim_robot", "human_observer", "object_recognition", "agenda", "executive",
           "social_navigation", "agenda_tool-ward3")
-
-
-@dataclass
-class FakeSample:
-    key_expr: str
-    data: bytes
-
-    @property
-    def payload(self) -> FakeSample:
-        return self
-
-    def to_bytes(self) -> bytes:
-        return self.data
 
 
 class Guard:

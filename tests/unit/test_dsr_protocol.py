@@ -11,7 +11,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import orjson
@@ -24,21 +23,9 @@ from dsr.limits import LIMITS, Limits
 from agents.world.write_policy import policy_from_env
 from dsr.policy import AllowAll
 from dsr.transport import Member, Replica
+from tests.support import FakeSample
 
 POLICY = policy_from_env({})
-
-
-@dataclass
-class Sample:
-    key_expr: str
-    data: bytes
-
-    @property
-    def payload(self) -> Sample:
-        return self
-
-    def to_bytes(self) -> bytes:
-        return self.data
 
 
 class Publisher:
@@ -81,7 +68,7 @@ class Net:
     def _deliver(self, sender: str, payload: bytes) -> None:
         for name, replica in self.replicas.items():
             if name != sender:
-                replica._on_delta(Sample(wire.delta_key("chronav", sender), payload))
+                replica._on_delta(FakeSample(wire.delta_key("chronav", sender), payload))
 
     def maintain(self) -> None:
         for replica in self.replicas.values():
@@ -91,18 +78,18 @@ class Net:
         """From now on ``sender``'s deltas reach only ``receivers`` (lost on the way to the rest)."""
         def deliver(payload: bytes) -> None:
             for name in receivers:
-                self.replicas[name]._on_delta(Sample(wire.delta_key("chronav", sender), payload))
+                self.replicas[name]._on_delta(FakeSample(wire.delta_key("chronav", sender), payload))
         self.replicas[sender]._publisher = Publisher(deliver)
 
 
-def state_sample(replica: Replica, payload: bytes | None = None) -> Sample:
+def state_sample(replica: Replica, payload: bytes | None = None) -> FakeSample:
     graph = replica.graph
-    return Sample(wire.state_key("chronav", graph.agent),
+    return FakeSample(wire.state_key("chronav", graph.agent),
                   payload if payload is not None else graph.state_message(replica.seen()))
 
 
-def delta_sample(agent: str, message: dict) -> Sample:
-    return Sample(wire.delta_key("chronav", agent), orjson.dumps(message))
+def delta_sample(agent: str, message: dict) -> FakeSample:
+    return FakeSample(wire.delta_key("chronav", agent), orjson.dumps(message))
 
 
 def raw_delta(graph: DSRGraph, nodes: list[dict], edges: list[dict] | None = None) -> dict:
@@ -147,7 +134,7 @@ def test_value_and_message_limits_on_local_writes_and_on_receipt():
         wire.decode(orjson.dumps(message))
     guard = Replica(DSRGraph("guard"))
     huge = orjson.dumps(raw_delta(graph, [])) + b" " * LIMITS.max_delta_bytes
-    guard._on_delta(Sample(wire.delta_key("chronav", "a"), huge))
+    guard._on_delta(FakeSample(wire.delta_key("chronav", "a"), huge))
     assert guard.stats.rejects == {"too_large": 1}
 
 
@@ -274,9 +261,9 @@ def test_refusals_are_counted_and_logged_per_reason(caplog):
     guard = Replica(DSRGraph("guard"), policy=POLICY)
     with caplog.at_level(logging.WARNING):
         for _ in range(30):
-            guard._on_delta(Sample(wire.delta_key("chronav", "x"), b"junk"))
+            guard._on_delta(FakeSample(wire.delta_key("chronav", "x"), b"junk"))
         rogue = DSRGraph("rogue")
-        rogue.attach(lambda p: guard._on_delta(Sample(wire.delta_key("chronav", "rogue"), p)))
+        rogue.attach(lambda p: guard._on_delta(FakeSample(wire.delta_key("chronav", "rogue"), p)))
         rogue.insert_node("robot", "robot")
     assert guard.stats.rejects == {"invalid": 30, "policy": 1}
     lines = [r.message for r in caplog.records]
@@ -387,7 +374,7 @@ def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
     a1, b1, b2 = net.add("a1"), net.add("b1"), net.add("b2")
     net.maintain()
     node = b1.graph.insert_node("object", "n", {"k": 0})
-    lost = Publisher(lambda payload: b2._on_delta(Sample(wire.delta_key("chronav", "b1"),
+    lost = Publisher(lambda payload: b2._on_delta(FakeSample(wire.delta_key("chronav", "b1"),
                                                          payload)))
     b1._publisher = lost                       # partition: a1 gets none of these
     b1.graph.update_node(node.id, {"k": 1})
@@ -409,7 +396,7 @@ def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forg
     sim = net.add("sim_robot")
     newcomer = DSRGraph("executive")
     newcomer.insert_node("mission", "m1", {"state": "pending"})
-    sim._merge_state(Sample(wire.state_key("chronav", "executive"), newcomer.state_message()))
+    sim._merge_state(FakeSample(wire.state_key("chronav", "executive"), newcomer.state_message()))
     guard = Replica(DSRGraph("agenda"))
     guard._joined = True
     guard._members["executive"] = Member("executive")                 # its token is up
@@ -417,7 +404,7 @@ def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forg
     guard._merge_state(state_sample(sim))
     assert guard.stats.rejects == {} and guard.stats.deferred >= 1
     assert guard.graph.get_node_by_name("m1") is None                 # left for executive
-    guard._merge_state(Sample(wire.state_key("chronav", "executive"),
+    guard._merge_state(FakeSample(wire.state_key("chronav", "executive"),
                               newcomer.state_message()))
     assert guard.graph.get_node_by_name("m1") is not None
 

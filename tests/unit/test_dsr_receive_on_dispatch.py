@@ -16,13 +16,13 @@ from __future__ import annotations
 import queue
 import threading
 import time
-from dataclasses import dataclass
 from typing import Any
 
 from dsr import DSRGraph, wire
 from dsr.receiver import ChannelClosed, DeltaReceiver
 from dsr.signals import SignalHub, SpinPolicy
 from dsr.transport import Replica
+from tests.support import FakeSample
 
 POLL = SpinPolicy(window_us=300_000, max_share_pct=100, burst_ms=1000)
 
@@ -58,19 +58,6 @@ class Channel:
         raise Closed("channel is empty and closed")
 
 
-@dataclass
-class Sample:
-    key_expr: str
-    data: bytes
-
-    @property
-    def payload(self) -> Sample:
-        return self
-
-    def to_bytes(self) -> bytes:
-        return self.data
-
-
 class Pair:
     """A writer graph whose deltas land in the channel of a replica of another graph."""
 
@@ -90,7 +77,7 @@ class Pair:
         self.replica.start_receiver(self.channel, Closed)
         self.graph.receive_while_polling(self.replica._receiver)     # as Replica.open() does
         key = wire.delta_key("chronav", "writer")
-        self.writer.attach(lambda payload: self.channel.put(Sample(key, payload)), linger_s=0.0)
+        self.writer.attach(lambda payload: self.channel.put(FakeSample(key, payload)), linger_s=0.0)
         self.ball = self.writer.insert_node("thing", "ball", {"v": 0}).id
         self.values: list[int] = []
         self.graph.connect("node_updated",
@@ -223,21 +210,29 @@ def test_a_poll_that_finds_nothing_gives_the_channel_back_before_the_agent_sleep
         pair.close()
 
 
-def test_a_flood_of_received_deltas_does_not_hold_dispatch_beyond_its_window() -> None:
+def _flooded(handle: Any, **options: float) -> tuple[SignalHub, Channel, DeltaReceiver]:
+    """A hub whose dispatch() polls (changes came densely, 20 ms window) and the receiver of a
+    channel holding 100,000 deltas, which the agent's thread owns."""
     hub = SignalHub(SpinPolicy(window_us=20_000, max_share_pct=100, burst_ms=1000))
     hub.connect("node_deleted", lambda node_id: None)
     channel = Channel()
     for i in range(100_000):
         channel.put(i)
+    receiver = DeltaReceiver(channel.try_recv, lambda: _take_or_closed(channel), handle,
+                             **options)
+    receiver._agent_owns = True
+    hub.receive_from(receiver)
+    hub._dense = True
+    return hub, channel, receiver
+
+
+def test_a_flood_of_received_deltas_does_not_hold_dispatch_beyond_its_window() -> None:
     handled: list[int] = []
 
     def handle(item: int) -> None:   # each delta takes 1 ms and changes nothing anybody watches
         handled.append(item)
         time.sleep(0.001)
-    receiver = DeltaReceiver(channel.try_recv, channel.recv, handle)
-    receiver._agent_owns = True          # a polling agent thread owns the channel
-    hub.receive_from(receiver)
-    hub._dense = True                    # changes came densely: dispatch() polls
+    hub, _, receiver = _flooded(handle)
     started = time.perf_counter()
     assert hub.dispatch(timeout=0.3) == 0
     elapsed = time.perf_counter() - started
@@ -268,24 +263,16 @@ def _take_or_closed(channel: Channel) -> Any:
 
 
 def test_the_receiver_thread_stops_catching_up_as_soon_as_the_agent_polls_again() -> None:
-    hub = SignalHub(SpinPolicy(window_us=20_000, max_share_pct=100, burst_ms=1000))
-    hub.connect("node_deleted", lambda node_id: None)
-    channel = Channel()
-    for i in range(100_000):
-        channel.put(i)
     handled: list[tuple[int, int]] = []
 
     def handle(item: int) -> None:   # 1 ms each: the receiver thread would need 100 s
         handled.append((threading.get_ident(), item))
         time.sleep(0.001)
-    receiver = DeltaReceiver(channel.try_recv, channel.recv, handle, park_s=0.001, reclaim_s=60)
-    receiver._agent_owns = True               # the agent owns the channel and is busy
-    receiver._last_poll = time.monotonic()
-    hub.receive_from(receiver)
+    hub, channel, receiver = _flooded(handle, park_s=0.001, reclaim_s=60)
+    receiver._last_poll = time.monotonic()    # the agent owns the channel and is busy
     receiver.start()
     try:
         assert _until(lambda: len(handled) >= 5), "the receiver thread catches up meanwhile"
-        hub._dense = True
         started = time.perf_counter()
         hub.dispatch(timeout=0.3)
         elapsed = time.perf_counter() - started
