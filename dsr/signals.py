@@ -2,9 +2,10 @@
 
 Why a queue: replication merges remote deltas on the replica's receiver thread
 (dsr/receiver.py) while holding the graph lock; running agent callbacks there would let agent
-code block replication or re-enter the graph under the lock.  Instead events are queued and `dispatch()` (called from the agent's
-loop) runs the callbacks with no lock held.  Events are only queued for signals that have at
-least one callback, so a replica nobody listens to does not accumulate memory.
+code block replication or re-enter the graph under the lock.  Instead events are queued and
+`dispatch()` (called from the agent's loop) runs the callbacks with no lock held.  Events are
+only queued for signals that have at least one callback, so a replica nobody listens to does
+not accumulate memory.
 
 Why dispatch() polls a little before it sleeps (SpinPolicy): a thread that sleeps between two
 messages is woken by the kernel tens of microseconds later, and on a virtual machine the idle
@@ -175,17 +176,16 @@ class SignalHub:
             taker.poll_begin()
         try:
             while not source.qsize():
-                if taker is not None:
-                    started = clock()
-                    if taker.poll_take():
-                        stopped = clock()
-                        working += stopped - started
-                        if stopped >= end:        # a flood must not hold dispatch() here
-                            break
-                        continue
-                if clock() >= end:
+                started = clock()
+                if taker is not None and taker.poll_take():
+                    stopped = clock()
+                    working += stopped - started
+                    if stopped >= end:            # a flood must not hold dispatch() here
+                        break
+                elif started >= end:
                     break
-                yield_core()          # releases the GIL: other threads can post meanwhile
+                else:
+                    yield_core()      # releases the GIL: other threads can post meanwhile
             found = bool(source.qsize())
         finally:
             if taker is not None:
