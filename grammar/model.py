@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Union
 
+from grammar.agm_order import agm_creation_order
 from grammar.errors import GrammarWarning, SourcePos
 
 Value = Union[bool, int, float, str, None, tuple]
@@ -277,6 +278,14 @@ class Rule:
     @cached_property
     def created_nodes(self) -> tuple[PatternNode, ...]:
         return tuple(n for n in self.rhs.nodes if self.lhs.node(n.name) is None)
+
+    @cached_property
+    def agm_creation_order(self) -> tuple[str, ...]:
+        """The created nodes' names in the order AGM's planner creates (and numbers) them: the
+        iteration order of a Python 2 dict of the RHS names (grammar/agm_order.py), which a plan
+        file must follow for AGM's plan checker to accept its ids."""
+        return agm_creation_order([n.name for n in self.rhs.nodes], [n.name for n in self.lhs.nodes],
+                                  [p.name for p in self.parameters])
 
     @cached_property
     def retyped_nodes(self) -> tuple[PatternNode, ...]:

@@ -47,7 +47,7 @@ DEFAULT_MAX_EXPANSIONS = 20_000
 class PlanStep:
     """One rule application; ``bindings`` maps each rule variable to a world node name
     (created nodes get a fresh name ``var#id``). ``agm_bindings`` maps them to world graph keys
-    (AGM symbol ids; created nodes get the next free integer id, as AGM numbers them). A
+    (AGM symbol ids; created nodes get the ids AGM's planner gives them, see ``_AgmIds``). A
     hierarchical step carries its ``expansion`` (the sub-plan that realises it) or, when none
     was found, ``expansion_error``."""
 
@@ -291,7 +291,7 @@ class Planner:
         steps: list[PlanStep] = []
         for index, (before, rule, b, after) in enumerate(chain):
             names = {var: (before.name_of(n) if before.exists(n) else after.name_of(n)) for var, n in b.items()}
-            agm = {var: ids.of(n, before) for var, n in b.items()}
+            agm = ids.step(rule, b, before, after)
             step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm)
             if rule.hierarchical and expand:
                 sub = self._expand(rule, b, before)
@@ -323,22 +323,54 @@ class Planner:
 
 
 class _AgmIds:
-    """AGM symbol ids for plan files: a world node's graph key; a created node gets the next
-    integer after the largest id in the state that creates it (``getNewIdForSymbol``)."""
+    """AGM symbol ids for plan files, as AGM's planner assigns them (``getNewIdForSymbol``): a
+    world node keeps its graph key; the nodes one step creates get the largest integer id in
+    the graph + 1, + 2, ... in the order AGM creates them: first the rule's right-hand-side
+    nodes in AGM's order (``Rule.agm_creation_order``, grammar/agm_order.py), then, after the
+    rule's deletions, the nodes its ``effect`` creates. The largest id is that of the graph the
+    step applies to (a deleted node's id may be given again, as AGM does)."""
 
     def __init__(self, world: World) -> None:
         self.world = world
-        self.created: dict[int, str] = {}
-        self.base_max = max((int(k) for k in world.keys if _is_int(k)), default=0)
+        self.created: dict[int, str] = {}  # created node -> its AGM id
+        # integer world keys, largest first: the largest id of a state is the first that exists
+        self.world_ids = sorted(((int(k), i) for i, k in enumerate(world.keys) if _is_int(k)), reverse=True)
 
-    def of(self, node: int, state: State) -> str:
+    def _largest(self, state: State, gone: frozenset[int] | set[int], extra: Mapping[int, str]) -> int:
+        top = 0
+        for value, node in self.world_ids:
+            if state.exists(node) and node not in gone:
+                top = value
+                break
+        for node, agm_id in extra.items():
+            if node not in gone and int(agm_id) > top:
+                top = int(agm_id)
+        return top
+
+    def _of(self, node: int) -> str:
         if node < self.world.size:
             return str(self.world.keys[node])
-        found = self.created.get(node)
-        if found is None:
-            largest = max([self.base_max, *(int(v) for k, v in self.created.items() if state.exists(k))])
-            found = self.created[node] = str(largest + 1)
-        return found
+        return self.created.get(node, str(node))
+
+    def step(self, rule: Rule, b: Bindings, before: State, after: State) -> dict[str, str]:
+        """The AGM ids of one step's bindings (numbering the nodes it creates)."""
+        new = {n for n in b.values() if not before.exists(n)}
+        new.update(n for n, _, _ in after.overlay.created if not before.exists(n))
+        if new:
+            live = {n: i for n, i in self.created.items() if before.exists(n)}
+            top = self._largest(before, frozenset(), live)
+            ordered = [b[name] for name in rule.agm_creation_order if name in b and b[name] in new]
+            for node in ordered:
+                top = max(top, 0) + 1
+                live[node] = self.created[node] = str(top)
+            rest = sorted(new - set(ordered))
+            if rest:  # effect creations come after the rule's deletions
+                gone = {b[name] for name in rule.deleted_nodes if name in b}
+                top = self._largest(before, gone, live)
+                for node in rest:
+                    top = max(top, 0) + 1
+                    live[node] = self.created[node] = str(top)
+        return {var: self._of(n) for var, n in b.items()}
 
 
 def _is_int(key: object) -> bool:
