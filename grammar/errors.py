@@ -24,6 +24,10 @@ class SourcePos:
 MAX_MESSAGE_CHARS = 400
 """Longest error message kept: a message quoting a 5 MB token must not flood a terminal."""
 
+MAX_PATH_CHARS = 4096
+"""A file path is quoted whole up to this length (Linux's PATH_MAX): a path cut in the middle
+("…/et…") cannot be found or fixed, while a longer one is not a path."""
+
 
 def shorten(text: str, limit: int = 60) -> str:
     """``text`` cut to ``limit`` characters, marked with an ellipsis (names quoted in messages)."""
@@ -37,18 +41,19 @@ class GrammarError(Exception):
     there is no place in the file (a file that cannot be read), ``file: message``.
     """
 
-    def __init__(self, message: str, file: str = "<string>", line: int = 0, column: int = 0) -> None:
-        self.message = shorten(message, MAX_MESSAGE_CHARS)
+    def __init__(self, message: str, file: str = "<string>", line: int = 0, column: int = 0, *,
+                 limit: int = MAX_MESSAGE_CHARS) -> None:
+        self.message = shorten(message, limit)
         self.file = file
         self.line = line
         self.column = column
         super().__init__(str(self))
 
     @classmethod
-    def at(cls, pos: SourcePos | None, message: str) -> GrammarError:
+    def at(cls, pos: SourcePos | None, message: str, *, limit: int = MAX_MESSAGE_CHARS) -> GrammarError:
         if pos is None:
-            return cls(message)
-        return cls(message, pos.file, pos.line, pos.column)
+            return cls(message, limit=limit)
+        return cls(message, pos.file, pos.line, pos.column, limit=limit)
 
     def __str__(self) -> str:
         if self.line <= 0:

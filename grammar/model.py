@@ -387,3 +387,4 @@ class Target:
     where: tuple[Expr, ...] = ()
     precondition: Formula | None = None
     file: str = "<string>"
+    warnings: tuple[GrammarWarning, ...] = field(default=(), compare=False)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Iterable
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -19,7 +21,7 @@ from typing import Any
 from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
-from grammar.errors import GrammarError, GrammarWarning, SourcePos, shorten
+from grammar.errors import MAX_PATH_CHARS, GrammarError, GrammarWarning, SourcePos, shorten
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder
 from grammar.validate import check_grammar, check_rule, check_target
@@ -35,6 +37,10 @@ refused with its position instead of exhausting Python's recursion limit in the 
 MAX_COST_DIGITS = 15
 """An AGM cost is an integer; more digits than this is a typo, not a cost (and Python refuses to
 convert integers of more than 4300 digits)."""
+
+MAX_LISTED_PLACES = 8
+"""Places an include-not-found error lists (each path whole): the including file's directory,
+the working directory and the first $AGGLPATH entries."""
 
 _AGM_HEADER = re.compile(r"^\s*[A-Za-z0-9_.]+\s*=(?!=)")
 _FIRST_WORD = re.compile(r"[A-Za-z_]+")
@@ -187,16 +193,51 @@ def _resolve_include(path: str, including: Path | None, pos: SourcePos) -> Path:
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()
-    looked = ", ".join(str(c) for c in candidates)
-    raise GrammarError.at(pos, f"included file {shorten(path)!r} not found (looked at: {shorten(looked, 300)}); "
-                               "set AGGLPATH to the directories that hold it")
+    looked = "; ".join(shorten(str(c), MAX_PATH_CHARS) for c in candidates[:MAX_LISTED_PLACES])
+    more = f" and {len(candidates) - MAX_LISTED_PLACES} more" if len(candidates) > MAX_LISTED_PLACES else ""
+    raise GrammarError.at(pos, f"included file {shorten(path, MAX_PATH_CHARS)!r} not found (looked at: "
+                               f"{looked}{more}); set AGGLPATH to the directories that hold it",
+                          limit=(MAX_LISTED_PLACES + 1) * (MAX_PATH_CHARS + 10) + 200)
+
+
+def _refuse_warnings(warnings: Iterable[GrammarWarning]) -> None:
+    """``strict``: the first warning (something AGM reads but that is probably a mistake) is an error."""
+    for warning in warnings:
+        raise GrammarError.at(warning.pos, f"{warning.message} [strict check: warnings are errors]")
+
+
+def _resolve_redefinitions(rules: list[Rule], warnings: list[GrammarWarning]) -> list[Rule]:
+    """A rule defined in one file and again in another (an included one): the later definition
+    wins, as in AGM (its rules are kept in one list, included rules where the ``include`` is,
+    and the generated planner defines one method per name, so the last one stands); a warning
+    names both places. The same rule met twice through two includes of one file is kept once.
+    Two definitions in one file stay an error (check_grammar): that is a mistake, not a reuse."""
+    winner: dict[str, int] = {}
+    for i, rule in enumerate(rules):
+        winner[rule.name] = i
+    kept: list[Rule] = []
+    for i, rule in enumerate(rules):
+        later = rules[winner[rule.name]]
+        if i == winner[rule.name] or rule.pos is None or later.pos is None:
+            kept.append(rule)
+        elif rule.pos == later.pos:
+            continue  # one file included twice: the same definition
+        elif rule.pos.file == later.pos.file:
+            kept.append(rule)  # refused by check_grammar ("defined twice")
+        else:
+            warnings.append(GrammarWarning(later.pos, f"rule {shorten(rule.name)!r} is defined again here; "
+                                                      f"AGM uses the later definition, so this one replaces "
+                                                      f"the one at {rule.pos}"))
+    return kept
 
 
 def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = None,
-                  path: Path | None = None, includes: bool = True,
+                  path: Path | None = None, includes: bool = True, strict: bool = False,
                   _stack: tuple[Path, ...] = ()) -> Grammar:
     """Parse grammar text; ``path`` (the file it came from) anchors relative includes.
-    ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``."""
+    ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``. ``strict``
+    refuses what is only warned about otherwise (what AGM accepts but is probably a mistake:
+    a stray ``)`` after a formula, a rule redefined across an include...)."""
     text = text.removeprefix("\ufeff")
     if not _stack and all(not line.strip() or line.lstrip().startswith("#") for line in text.splitlines()):
         raise GrammarError("the file is empty (nothing but blank lines and comments): a grammar needs at "
@@ -231,12 +272,15 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
             included.extend(inner.includes)
             for name, supers in inner.types.parents.items():
                 types.setdefault(name, supers)
+    rules = _resolve_redefinitions(rules, warnings)
     name = raw["name"] or (path.stem if path else "grammar")
     grammar = Grammar(name=str(name), rules=tuple(rules), types=TypeTable(types), file=file,
                       dialect=dialect, properties=raw["properties"], combos=tuple(combos),
                       includes=tuple(included), skipped_includes=tuple(skipped),
                       declared_types=bool(types), warnings=tuple(warnings))
     check_grammar(grammar, top_level=not _stack)
+    if strict:
+        _refuse_warnings(grammar.warnings)
     return grammar
 
 
@@ -259,14 +303,14 @@ def _read(path: str | os.PathLike[str], what: str) -> str:
 
 
 def load_grammar(path: str | os.PathLike[str], *, dialect: str | None = None, includes: bool = True,
-                 _stack: tuple[Path, ...] = ()) -> Grammar:
+                 strict: bool = False, _stack: tuple[Path, ...] = ()) -> Grammar:
     """Read and parse a grammar file (either dialect); includes resolve relative to it."""
     text = _read(path, "grammar")
     return parse_grammar(text, str(path), dialect=dialect, path=Path(path).resolve(), includes=includes,
-                         _stack=_stack)
+                         strict=strict, _stack=_stack)
 
 
-def parse_target(text: str, file: str = "<string>") -> Target:
+def parse_target(text: str, file: str = "<string>", *, strict: bool = False) -> Target:
     """Parse an AGM ``.aggt`` target, or a native ``target { ... } where ...`` one."""
     text = text.removeprefix("\ufeff")
     start = "agm_target"
@@ -276,13 +320,15 @@ def parse_target(text: str, file: str = "<string>") -> Target:
             first = _FIRST_WORD.match(stripped)
             start = "native_target" if first and first.group(0) == "target" else "agm_target"
             break
-    target: Target = _parse(text, start, file)[0]
+    target, warnings = _parse(text, start, file)
     check_target(target)
-    return target
+    if strict:
+        _refuse_warnings(warnings)
+    return replace(target, warnings=tuple(warnings)) if warnings else target
 
 
-def load_target(path: str | os.PathLike[str]) -> Target:
-    return parse_target(_read(path, "target"), str(path))
+def load_target(path: str | os.PathLike[str], *, strict: bool = False) -> Target:
+    return parse_target(_read(path, "target"), str(path), strict=strict)
 
 
 def default_grammar_path() -> Path:

@@ -107,6 +107,13 @@ class _Section:
         self.pos = pos
 
 
+class _Stray:
+    """A ``)`` left after a formula block's formula (read as AGM reads it: ignored, with a warning)."""
+
+    def __init__(self, pos: SourcePos | None) -> None:
+        self.pos = pos
+
+
 class _Include:
     def __init__(self, path: str, pos: SourcePos) -> None:
         self.path = path
@@ -170,11 +177,29 @@ class ModelBuilder(Transformer):
         return GrammarError.at(pos or SourcePos(self.file, 0, 0), message)
 
     # ------------------------------------------------------------------ formulas
-    def precondition(self, meta: Any, items: list[Formula]) -> _Section:
-        return _Section("precondition", self._single(items, "precondition", meta), self._pos(meta))
+    def precondition(self, meta: Any, items: list[Any]) -> _Section:
+        return _Section("precondition", self._single(self._strays(items, "precondition", meta), "precondition", meta),
+                        self._pos(meta))
 
-    def effect(self, meta: Any, items: list[Formula]) -> _Section:
-        return _Section("effect", self._single(items, "effect", meta), self._pos(meta))
+    def effect(self, meta: Any, items: list[Any]) -> _Section:
+        return _Section("effect", self._single(self._strays(items, "effect", meta), "effect", meta), self._pos(meta))
+
+    def stray_close(self, meta: Any, c: list[Any]) -> _Stray:
+        return _Stray(self._pos(meta))
+
+    def _strays(self, items: list[Any], what: str, meta: Any) -> list[Formula]:
+        """The block's formulas; a ``)`` after them is read as AGM reads it (ignored, with a
+        warning naming its line), a ``)`` with no formula before it is refused (AGM fails too)."""
+        strays = [x for x in items if isinstance(x, _Stray)]
+        formulas = [x for x in items if not isinstance(x, _Stray)]
+        if strays and not formulas:
+            raise self._error(strays[0].pos or self._pos(meta), f"unexpected ')' in an empty {what}")
+        for stray in strays:
+            self.warnings.append(GrammarWarning(
+                stray.pos or self._pos(meta) or SourcePos(self.file, 0, 0),
+                f"stray ')' after the {what}'s formula, ignored as AGM ignores it (AGM reads one formula "
+                "and skips the rest); remove it ('grammar check --strict' refuses it)"))
+        return formulas
 
     def _single(self, items: list[Formula], what: str, meta: Any) -> Formula | None:
         if len(items) > 1:

@@ -26,8 +26,12 @@ def _fail(message: str, code: int = 2) -> None:
 def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or target (.aggt) files"),
           no_includes: bool = typer.Option(False, "--no-includes",
                                            help="check each file alone, without reading its includes"),
+          strict: bool = typer.Option(False, "--strict",
+                                      help="refuse what is otherwise only warned about (what AGM reads but is "
+                                           "probably a mistake: a stray ')', a rule redefined by an include...)"),
           as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
-    """Parse each file; print file:line:col: message for the first error of each broken file."""
+    """Parse each file; print file:line:col: message for the first error of each broken file,
+    and a warning for each thing read as AGM reads it that is probably a mistake."""
     from grammar.errors import GrammarError
     from grammar.parser import load_grammar, load_target
 
@@ -35,12 +39,12 @@ def check(files: list[Path] = typer.Argument(..., help="grammar (.aggl) or targe
     for path in files:
         try:
             if path.suffix == ".aggt":
-                target = load_target(path)
+                target = load_target(path, strict=strict)
                 results.append({"file": str(path), "ok": True, "kind": "target",
                                 "nodes": len(target.pattern.nodes), "links": len(target.pattern.links),
-                                "warnings": []})
+                                "warnings": [str(w) for w in target.warnings]})
             else:
-                grammar = load_grammar(path, includes=not no_includes)
+                grammar = load_grammar(path, includes=not no_includes, strict=strict)
                 results.append({"file": str(path), "ok": True, "kind": "grammar", "name": grammar.name,
                                 "dialect": grammar.dialect, "rules": len(grammar.rules),
                                 "hierarchical": sum(r.hierarchical for r in grammar.rules),
@@ -194,11 +198,15 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
         return
     try:
         grammar = load_grammar(grammar_file or default_grammar_path())
+        for warning in grammar.warnings:  # read as AGM reads it, but probably a mistake: say so
+            typer.echo(str(warning), err=True)
         if agm_mode:
             from grammar.planner import Planner
 
             assert world_file is not None and target_file is not None
             target = load_target(target_file)
+            for warning in target.warnings:
+                typer.echo(str(warning), err=True)
             world = _load_world(world_file)
             result = Planner(grammar, world).plan(target, max_expansions=max_expansions)
             payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file}
