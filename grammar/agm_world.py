@@ -47,6 +47,7 @@ RESERVED = ("name", "type")
 PREFIX = "agm:"
 DISABLED = frozenset({"false", "f", "fa", "fal", "fals", "0", "n", "no"})
 MAX_WORLD_BYTES = 64 * 1024 * 1024  # a world file larger than this is refused, not read
+_UNCLOSED = ("mismatched tag", "no element found", "unclosed token")  # expat: an element left open
 
 
 class WorldFileError(GrammarError):
@@ -108,6 +109,7 @@ class _Builder:
         self.world = AgmWorld()
         self.parser: DefusedXMLParser | None = None
         self.stack: list[str] = []
+        self.opened: list[tuple[dict[str, str], int]] = []  # each open element's attributes and line
         self.symbol: AgmSymbol | None = None
         self.link: AgmLink | None = None
 
@@ -126,9 +128,21 @@ class _Builder:
             raise self.error(f"<{tag}> has no {key!r} attribute")
         return attrs[key]
 
+    def unclosed(self) -> str | None:
+        """The innermost open <symbol>/<link>, as written and where (for errors about a missing end)."""
+        for (attrs, line), tag in zip(reversed(self.opened), reversed(self.stack)):
+            if tag in ("symbol", "link"):
+                shown = "".join(f" {k}={quoteattr(shorten(str(v), 40))}" for k, v in list(attrs.items())[:4])
+                return f"<{tag}{shown}> opened at line {line}"
+        return None
+
     def start(self, tag: str, attrs: dict[str, str]) -> None:
         parent = self.stack[-1] if self.stack else None
+        if parent in ("symbol", "link") and tag in ("symbol", "link"):  # '<link ...>' meant as '<link .../>'
+            raise self.error(f"<{tag}> inside {self.unclosed()}: that <{parent}> is not closed (end it "
+                             f"with '/>' or '</{parent}>')")
         self.stack.append(tag)
+        self.opened.append((attrs, self._where()[0]))
         if parent is None:
             if tag != "AGMModel":
                 raise self.error(f"the root element is <{shorten(tag)}>; an AGM world is <AGMModel>")
@@ -166,6 +180,7 @@ class _Builder:
 
     def end(self, tag: str) -> None:
         self.stack.pop()
+        self.opened.pop()
         if tag == "symbol":
             self.symbol = None
         elif tag == "link":
@@ -191,7 +206,9 @@ def parse_agm_world(text: str, file: str = "<string>") -> AgmWorld:
     except ParseError as exc:
         line, column = getattr(exc, "position", (0, 0))
         message = str(exc).split(":", 1)[0] if ":" in str(exc) else str(exc)
-        raise WorldFileError(f"not well-formed XML ({message})", file, line, column + 1) from None
+        open_element = builder.unclosed()
+        hint = f": {open_element} is not closed" if open_element and message in _UNCLOSED else ""
+        raise WorldFileError(f"not well-formed XML ({message}){hint}", file, line, column + 1) from None
     except DefusedXmlException as exc:
         line, column = builder._where()
         raise WorldFileError(f"refused: the file uses a DTD or entities ({type(exc).__name__}); an AGM "
