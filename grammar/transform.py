@@ -331,6 +331,7 @@ class ModelBuilder(Transformer):
         sections = [x for x in c[3:] if isinstance(x, _Section)]
         graphs = [x for x in c[3:] if isinstance(x, Pattern)]
         by_kind = {s.kind: s.value for s in sections}
+        self._warn_rhs_absent_links(head.name, graphs[0], graphs[1])
         return Rule(
             name=head.name, lhs=graphs[0], rhs=graphs[1], cost=self._cost(cost),
             active=str(mode) == "active",
@@ -340,6 +341,20 @@ class ModelBuilder(Transformer):
             activates=by_kind.get("activates", ()), success=by_kind.get("success"),
             pos=self._tpos(words[0]),
         )
+
+    def _warn_rhs_absent_links(self, rule: str, lhs: Pattern, rhs: Pattern) -> None:
+        """A right-hand-side ``a->b(l)*`` that the left side does not also mark ``*``: AGM's
+        ``getLinkChanges`` then adds it as an ordinary link (its ``*`` dropped); chronav reads
+        ``*`` as "absent" (docs/grammar.md, "Where chronav deliberately reads AGM files
+        differently"), so say where the two planners part."""
+        absent_left = {link.key for link in lhs.links if link.negated}
+        for link in rhs.links:
+            if link.negated and link.key not in absent_left:
+                self.warnings.append(GrammarWarning(
+                    link.pos or SourcePos(self.file, 0, 0),
+                    f"rule {shorten(rule)!r}: right-hand-side link {shorten(link.src)}->{shorten(link.dst)}"
+                    f"({shorten(link.label)})* is read as 'this link is absent'; AGM's planner would add it as "
+                    "an ordinary link (see docs/grammar.md)"))
 
     def combo_atom(self, meta: Any, c: list[Any]) -> ComboAtom:
         return ComboAtom(str(c[0]), str(c[1]), optional=c[2] is not None)

@@ -119,3 +119,23 @@ def test_a_link_left_open_in_a_world_is_named_with_its_line(tmp_path: Path, afte
                  "--grammar", str(DATA / "teleport.aggl"))
     assert result.exit_code == 2
     assert f"{world}:{where}: {message}" in result.stderr
+
+
+# ----------------------------------------------------------------------------- where chronav reads AGM differently
+def test_a_right_hand_side_absent_link_on_a_new_symbol_stays_absent_and_is_warned_about(tmp_path: Path) -> None:
+    """robocomp-shelly's GraspMug shape: AGM adds ``o->r(reach)*`` as a real link; chronav does not."""
+    grammar = tmp_path / "see.aggl"
+    grammar.write_text("name=see\n===\nsee : active(1)\n{\n\t{\n\t\tr:robot\n\t}\n\t=>\n\t{\n\t\tr:robot\n"
+                       "\t\to:object\n\t\tr->o(know)\n\t\to->r(reach)*\n\t}\n}\n")
+    world = tmp_path / "w.xml"
+    world.write_text('<AGMModel>\n\t<symbol id="1" type="robot" />\n</AGMModel>\n')
+    checked = run("grammar", "check", str(grammar))
+    assert checked.exit_code == 0
+    assert (f"{grammar}:13:3: warning: rule 'see': right-hand-side link o->r(reach)* is read as 'this link "
+            "is absent'") in checked.stderr
+    for wanted, found in (("x->1(reach)", False), ("1->x(know)\n\tx->1(reach)*", True)):
+        target = tmp_path / "t.aggt"
+        target.write_text(f"{{\n\t1:robot\n\tx:object\n\t{wanted}\n}}\n")
+        result = run("plan", "--world", str(world), "--target", str(target), "--grammar", str(grammar),
+                     "--max-expansions", "20", "--json")  # 'see' applies forever: a short search says enough
+        assert (result.exit_code == 0) == found, result.output
