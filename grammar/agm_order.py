@@ -26,7 +26,9 @@ refused by AGM's ``AGGLPlanChecker``. This module reproduces that order exactly:
 It was checked against the order found in two planner modules AGM generated (both rules named
 ``findObjectVisually``, from two RoboComp grammars): right-hand sides ``r cl o re t rb po se``
 created in the order cl, o, re, t, rb, po, se, and ``r re se cl po o`` created as re, se, cl, po, o
-(tests/unit/test_grammar_agm_ids.py).
+(tests/unit/test_grammar_agm_ids.py). The second comes from AGM's current code (with rule
+parameters and the ``dict(...)`` copy); the first from older code that iterated the deep-copied
+dict itself, which gives the same order for those 8 names but not for every 6- or 7-node side.
 """
 
 from __future__ import annotations
