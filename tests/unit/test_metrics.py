@@ -100,12 +100,15 @@ def test_report_table_and_json() -> None:
     report = compute_metrics(straight_line(), people={"alice": (5.0, 2.0)},
                              zones={"social": box(2.0, -1.0, 8.0, 1.0)},
                              interaction_spaces={"tv": box(7.0, -1.0, 9.0, 1.0)})
-    rows = dict(report.to_table())
-    assert rows["d_t (m)"] == "10.00"
-    assert rows["d_min alice (m)"] == "2.00"
-    assert rows["Psi social (%)"] == "60.0"
-    assert rows["Psi public (%)"] == "40.0"
-    assert rows["Psi tv (%)"] == "20.0"
+    table = report.to_table()
+    rows = dict(table)
+    assert len(rows) == len(table), "no two rows with the same label"
+    assert rows["path length d_t (m)"] == "10.00"
+    assert rows["d_min to alice at the start, path to centre (m)"] == "2.000"
+    assert rows["Psi social zone, seeds' contours (% of path)"] == "60.0"
+    assert rows["Psi public zone, seeds' contours (% of path)"] == "40.0"
+    assert rows["Psi tv's interaction space (% of path)"] == "20.0"
+    assert rows["metrics among moving people"].startswith("- (no people's trajectories")
     dumped = json.loads(json.dumps(report.model_dump()))
     assert dumped["psi_basis"] == "path_length"
     assert dumped["psi_zone_percent"]["social"] == pytest.approx(60.0)

@@ -251,6 +251,26 @@ class SocialMap:
         return {name: shapely.union_all([z.zone(name) for z in zones]) if zones else shapely.MultiPolygon()
                 for name in ZONE_NAMES}
 
+    def unadapted_zone_polygons(self) -> dict[str, BaseGeometry] | None:
+        """The zones the people's spaces would have without the wall adaptation (the same people,
+        roles, motion and groups rule), or None when the adaptation changed no one's space.
+
+        Why: Psi is measured on the zones the planner used (``zone_polygons``); the unadapted
+        figure beside it shows what the adaptation conceded near walls (docs/metrics.md)."""
+        if not any(ps.adaptation.adapted for ps in self.person_spaces):
+            return None
+        if "unadapted_zones" not in self._cache:
+            params = self.params
+            spaces = [stretched(PersonalSpace.from_params(params.personal_space, role_scale(p, params.roles)), p,
+                                role_scale(p, params.roles), params.motion) for p in self.people]
+            groups = group_people(self.people, spaces, params.groups)
+            windows = density_windows(self.spec, self.people, spaces, groups, params.zones)
+            zones = contour_zones(self.spec, tuple(windows), params.zones)
+            self._cache["unadapted_zones"] = {
+                name: shapely.union_all([z.zone(name) for z in zones]) if zones else shapely.MultiPolygon()
+                for name in ZONE_NAMES}
+        return self._cache["unadapted_zones"]
+
     def interaction_polygons(self) -> dict[str, BaseGeometry]:
         return {space.name: space.interaction for space in self.object_spaces}
 
