@@ -129,10 +129,14 @@ class SceneMaps:
     def obstacles(self) -> BaseGeometry:
         """Walls and object footprints: what pushes the robot in the social force model."""
         if "_obstacles" not in self.__dict__:
-            scene = self.world.scene
-            walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
-            self.__dict__["_obstacles"] = shapely.union_all([*walls, *footprint_polygons(scene)])
+            self.__dict__["_obstacles"] = scene_obstacles(self.world.scene)
         return self.__dict__["_obstacles"]
+
+
+def scene_obstacles(scene: LoadedScene) -> BaseGeometry:
+    """A scene's walls and object footprints as one geometry (what pushes in the social force model)."""
+    walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
+    return shapely.union_all([*walls, *footprint_polygons(scene)])
 
 
 def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.ndarray:
@@ -195,26 +199,30 @@ def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
 
     if definitions not in ("published", "hunav"):
         raise OfflineError(f"--definitions: expected published or hunav, got {definitions!r}")
-    maps = SceneMaps.load(scene)
+    try:    # the scene alone (its navigation maps only for the published definitions' Psi and d_min)
+        world = scene if isinstance(scene, SceneWorld) else load_world(scene)
+    except SourceError as exc:
+        raise OfflineError(str(exc)) from None
     traj = read_trajectory_csv(trajectory_csv)
-    _check_on_map(maps.world, traj, trajectory_csv)
+    _check_on_map(world, traj, trajectory_csv)
     if people_csv is None and (trajectory_csv.parent / "people.csv").exists():
         people_csv = trajectory_csv.parent / "people.csv"
     tracks = read_people_csv(people_csv) if people_csv is not None else None
     if at_s is None:
         first = float(traj[0, 0])
-        at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s
+        at_s = first if first >= 3600.0 else world.scene.clock.start_s
     if not math.isfinite(at_s):
         raise OfflineError("--at must be a finite time")
-    head = {"scene": maps.world.scene.name, "at_s": at_s, "definitions": definitions,
+    head = {"scene": world.scene.name, "at_s": at_s, "definitions": definitions,
             "people": None if people_csv is None else str(people_csv)}
     if definitions == "hunav":
         values, missing = hunav_metrics(traj, tracks, robot_radius_m=robot_radius_m or HUNAV_RADIUS_M,
                                         person_radius_m=person_radius_m or HUNAV_RADIUS_M, goal_xy=goal_xy,
-                                        obstacles=maps.obstacles)
+                                        obstacles=scene_obstacles(world.scene))
         return {**head, "robot_radius_m": robot_radius_m or HUNAV_RADIUS_M,
                 "person_radius_m": person_radius_m or HUNAV_RADIUS_M, "metrics": values, "missing": missing,
                 "table": hunav_table(values, missing)}
+    maps = SceneMaps.load(world)
     report = maps.measure(traj, at_s, tracks, goal_xy=goal_xy)
     if tracks is not None and (robot_radius_m is not None or person_radius_m is not None):
         from agents.lib.socialmap.dynamic_metrics import dynamic_metrics
