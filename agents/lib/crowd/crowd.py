@@ -286,6 +286,11 @@ class Crowd:
         corners = self.router.graphs[0].corners
         return not len(corners) or float(np.min(np.hypot(*(corners - (x, y)).T))) >= SPOT_CORNER_M
 
+    def _clear_of_robot(self, x: float, y: float) -> bool:
+        """(x, y) is at least ``ROBOT_CLEARANCE_M`` from the resting robot's body (or it drives)."""
+        rest = self._robot_parked
+        return rest is None or math.hypot(x - rest[0], y - rest[1]) >= self._robot_radius + ROBOT_CLEARANCE_M
+
     def _fits(self, x: float, y: float) -> bool:
         """A body can stand at (x, y): in the building, clear of walls, furniture and the resting robot."""
         rest = self._robot_parked
@@ -587,7 +592,8 @@ class Crowd:
             task.replans += 1
             if task.purpose == "chat" and self._rejoin(person, t):
                 return
-            if distance < SETTLE_M or (task.replans > 3 and task.purpose not in ("attend", "fetch")):
+            if (distance < SETTLE_M or (task.replans > 3 and task.purpose not in ("attend", "fetch"))) \
+                    and self._clear_of_robot(float(x), float(y)):     # never settle in the robot's intimate distance
                 facing = gth if task.look_at is None else math.atan2(task.look_at[1] - y, task.look_at[0] - x)
                 self._arrive(person, t, (float(x), float(y), facing))
                 return
