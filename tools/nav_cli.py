@@ -96,11 +96,13 @@ def register(app: typer.Typer) -> None:
         table.add_column("value", justify="right")
         table.add_row("cost (cost-weighted m)", f"{result['cost']:.2f}")
         table.add_row("length (m)", f"{result['length_m']:.2f}")
+        from agents.lib.socialmap.metric_catalog import column_label
+
         for key, value in result["metrics"]["psi_percent"].items():
-            table.add_row(f"Psi {key} (%)", f"{value:.1f}")
+            table.add_row(column_label(f"psi_zone_percent.{key}"), f"{value:.1f}")
         for name, value in result["metrics"]["psi_interaction_percent"].items():
             r = result["objects"][name]["R"]
-            table.add_row(f"through {name} space (%), R={r:.2f}", f"{value:.1f}")
+            table.add_row(f"{column_label(f'psi_object_percent.{name}')}, R={r:.2f}", f"{value:.1f}")
         table.add_row("waypoints", str(len(result["points"])))
         Console().print(table)
 
