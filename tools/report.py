@@ -117,12 +117,13 @@ def render_report(report: dict[str, Any], console: Console) -> None:
         console.print(f"[yellow]no metrics: {report['error']}[/yellow]")
         return
     for mission_id, entry in report["missions"].items():
-        table = Table(title=f"{report['scene']} / {mission_id}: social planner vs non-social baseline")
-        table.add_column("metric")
+        table = Table(title=f"{report['scene']} / {mission_id}: social planner vs non-social baseline "
+                            "(definitions: docs/metrics.md)")
+        table.add_column("metric (unit)")
         table.add_column("social", justify="right")
         table.add_column("non-social", justify="right")
         social = dict(_rows(entry["social"]))
         baseline = dict(_rows(entry["baseline"])) if "baseline" in entry else {}
-        for label, value in social.items():
-            table.add_row(label, value, baseline.get(label, "-"))
+        for label, value in social.items():   # the baseline is planned, not driven: nobody moved around it
+            table.add_row(label, value, baseline.get(label, "- (planned path, not driven among people)"))
         console.print(table)
