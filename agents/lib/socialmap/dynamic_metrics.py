@@ -329,7 +329,7 @@ def _regrouped(people: PeopleTracks, xy: NDArray[np.float64],
             gaze = np.column_stack([people.x[k, members] + GROUP_GAZE_M * np.cos(people.theta[k, members]),
                                     people.y[k, members] + GROUP_GAZE_M * np.sin(people.theta[k, members])])
             cx, cy = gaze.mean(axis=0)
-            d = math.hypot(cx - xy[k, 0], cy - xy[k, 1]) - robot_radius_m
+            d = max(0.0, math.hypot(cx - xy[k, 0], cy - xy[k, 1]) - robot_radius_m)   # clipped like every distance
             per_group_distances.setdefault(label, []).append(d)
             group_distance[k] = d if np.isnan(group_distance[k]) else min(group_distance[k], d)
     per_group = {}

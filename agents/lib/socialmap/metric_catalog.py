@@ -84,7 +84,7 @@ CATALOG: tuple[MetricDef, ...] = (
     _D("dynamic.group_intimate_intrusions_percent", "group intimate-space intrusions, < 0.45 m",
        "% of samples", "HuNavSim",
        "share of samples whose closest group centre (members moved 1.5 m along their heading, averaged) "
-       "is nearer than 0.45 m to the robot's edge (groups of two or more, regrouped every sample)",
+       "is nearer than 0.45 m to the robot's edge, clipped at 0 (groups of two or more, regrouped every sample)",
        "group_intimate_space_intrusions"),
     _D("dynamic.group_personal_intrusions_percent", "group personal-space intrusions, 0.45-1.2 m",
        "% of samples", "HuNavSim", "as the group intimate share, in [0.45, 1.2) m",
