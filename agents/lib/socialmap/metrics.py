@@ -69,6 +69,9 @@ class TrajectoryFormatError(MetricsInputError):
     """A trajectory CSV file that cannot be read; the message names the file and line."""
 
 
+NO_PEOPLE = "no people's trajectories: no people.csv beside the trajectory, give --people"
+
+
 class MetricsReport(BaseModel):
     """Everything measured of one run, ``--definitions published``.  ``model_dump()`` gives the JSON;
     each key's label, unit, source and definition: metric_catalog.py."""
@@ -109,8 +112,7 @@ class MetricsReport(BaseModel):
             elif metric.key in missing:
                 rows.append((column_label(metric.key), f"- ({missing[metric.key]})"))
         if self.dynamic is None:
-            rows.append(("metrics among moving people", "- (no people's trajectories: no people.csv beside the "
-                                                        "trajectory, give --people)"))
+            rows.append(("metrics among moving people", f"- ({self.missing.get('dynamic', NO_PEOPLE)})"))
         return rows
 
 
@@ -182,6 +184,7 @@ def compute_metrics(
         psi_object_percent={name: _share_inside(path, geom) for name, geom in interaction_spaces.items()},
         dynamic=None if people_tracks is None else dynamic_metrics(
             traj, people_tracks, robot_radius_m, obstacles, person_radius_m=person_radius_m, goal_xy=goal_xy),
+        missing={} if people_tracks is not None else {"dynamic": NO_PEOPLE},
     )
 
 
