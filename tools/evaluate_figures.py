@@ -28,18 +28,10 @@ OTHER_COLOURS = ("#E69F00", "#F0E442", "#000000", "#999999")
 ZONE_COLOURS = {"social": "#FFF3B0", "personal": "#FFC971", "intimate": "#E4572E"}
 DPI = 110
 
-_LABELS = {
-    "distance_travelled_m": "d_t: distance travelled (m)",
-    "duration_s": "tau: duration (s)",
-    "cumulative_heading_change_rad": "CHC: cumulative heading change (rad)",
-    "samples": "trajectory samples",
-}
-_PREFIXES = {
-    "d_min_person_m.": "d_min to {} (m)",
-    "d_min_object_m.": "d_min to {} (m)",
-    "psi_zone_percent.": "Psi {} zone (% of path)",
-    "psi_object_percent.": "Psi {}'s interaction space (% of path)",
-}
+def _catalogue_label(metric: str) -> str:
+    from agents.lib.socialmap.metric_catalog import column_label
+
+    return column_label(metric)
 
 
 def _pyplot() -> Any:
@@ -52,13 +44,11 @@ def _pyplot() -> Any:
 
 
 def metric_label(metric: str) -> str:
-    """A reader's name for a metric column (unknown ones keep their column name)."""
-    if metric in _LABELS:
-        return _LABELS[metric]
-    for prefix, template in _PREFIXES.items():
-        if metric.startswith(prefix):
-            return template.format(metric.removeprefix(prefix))
-    return metric
+    """A reader's name for a metric column with its unit (metric_catalog.py: the same names as
+    `chronav metrics` and the demo table; unknown columns keep their column name)."""
+    if metric == "samples":
+        return "trajectory samples"
+    return _catalogue_label(metric)
 
 
 def slug(text: str) -> str:

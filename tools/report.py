@@ -55,7 +55,9 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
         social = _mission_rows(trajectory, started, finished)
         if len(social) < 2:
             continue
-        entry: dict[str, Any] = {"social": maps.measure(social, started, tracks).model_dump()}
+        goal_xy, why = mission_target(mission)
+        entry: dict[str, Any] = {"social": maps.measure(social, started, tracks, goal_xy=goal_xy,
+                                                        goal_missing=why).model_dump()}
         smap = maps.at(started)
         try:
             base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), baseline=True)
@@ -65,6 +67,20 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
             entry["baseline_error"] = str(exc)
         report["missions"][mission_id] = entry
     return report
+
+
+def mission_target(mission: dict[str, Any]) -> tuple[tuple[float, float] | None, str]:
+    """A mission's target point (a pose mission's x, y) or None and why (room, person, object goals
+    have no single point: completed and the distances to target are then not measured)."""
+    goal = str(mission.get("goal", ""))
+    kind, _, argument = goal.partition(":")
+    if kind == "pose":
+        try:
+            x, y = (float(v) for v in argument.split(",")[:2])
+            return (x, y), ""
+        except ValueError:
+            pass
+    return None, f"a {kind or 'mission'} goal has no single target point"
 
 
 def log_report(recorder: Any, report: dict[str, Any], missions: dict[str, dict[str, Any]]) -> None:
@@ -101,12 +117,13 @@ def render_report(report: dict[str, Any], console: Console) -> None:
         console.print(f"[yellow]no metrics: {report['error']}[/yellow]")
         return
     for mission_id, entry in report["missions"].items():
-        table = Table(title=f"{report['scene']} / {mission_id}: social planner vs non-social baseline")
-        table.add_column("metric")
+        table = Table(title=f"{report['scene']} / {mission_id}: social planner vs non-social baseline "
+                            "(definitions: docs/metrics.md)")
+        table.add_column("metric (unit)")
         table.add_column("social", justify="right")
         table.add_column("non-social", justify="right")
         social = dict(_rows(entry["social"]))
         baseline = dict(_rows(entry["baseline"])) if "baseline" in entry else {}
-        for label, value in social.items():
-            table.add_row(label, value, baseline.get(label, "-"))
+        for label, value in social.items():   # the baseline is planned, not driven: nobody moved around it
+            table.add_row(label, value, baseline.get(label, "- (planned path, not driven among people)"))
         console.print(table)

@@ -32,7 +32,7 @@ from agents.world.building import closed_door_walls, footprint_polygons, scene_o
 from agents.world.dsr_readers import closed_doors
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
-from agents.world.timeline import doors_at
+from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
 from agents.world.vocabulary import AGENDA, CLOCK, WORLD, MissionState, intentions, missions
 from scenes.geometry import project_on_segments
 
@@ -41,6 +41,7 @@ PEOPLE_HEADER = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
 WATCHDOG_WALL_S = 1.0
 BUSY_RATE = 1.0
 MAX_SKIP_S = 900.0       # an idle skip moves the clock at most this far per loop
+AGENDA_HOLD_WALL_S = 2.0  # the idle clock waits this long (wall) for the agenda agent to apply a due change
 
 
 @dataclass
@@ -85,6 +86,7 @@ class SimRobotAgent(Agent):
         self._wall_anchor = time.monotonic()
         self._sim_anchor = self.now_s
         self._waiting_since: float | None = None
+        self._agenda_hold: tuple[tuple[str, ...], float] | None = None
         self._trajectory_file = self._open_trajectory()
         self._last_mode: str | None = None
         self._room_name: str | None = None
@@ -161,18 +163,41 @@ class SimRobotAgent(Agent):
             if dt > 0:
                 self._advance(dt, Velocity())
         else:
+            if self._holding_for_agenda(wall_now):
+                return
             target = self._next_deadline()
+            event = self._next_event()
             if self.scene.clock.skip_idle and target is not None and target > self.now_s:
                 # In pieces: the people walk through every skipped second (agents/world/people.py), and
                 # an hour of a busy centre is seconds of work; the loop beats its heartbeat between pieces.
-                self.skip_to(min(target, end_s, self.now_s + MAX_SKIP_S))
+                # A scheduled event (agenda change, door, crowd routine) ends a piece: it fires on time.
+                self.skip_to(min(target, end_s, self.now_s + MAX_SKIP_S, event))
                 self.rec.event(f"idle: clock skipped to {self.now_s:.0f} s")
             else:
                 # A mission is due and the executive is starting it: time runs as while agents plan.
                 rate = self.busy_rate if self._due_now() else self.rate
                 dt = (wall_now - self._wall_anchor) * rate - (self.now_s - self._sim_anchor)
                 if dt > 0:
-                    self._advance(min(dt, 5.0), Velocity())
+                    self._advance(min(dt, 5.0, max(event - self.now_s, 1e-3)), Velocity())
+
+    def _next_event(self) -> float:
+        """The next scheduled event after now: a scripted agenda change or door event, or a crowd
+        routine event (inf: none)."""
+        scripted = next_scheduled_event(self.world, self.now_s)
+        return min(math.inf if scripted is None else scripted, self.crowd.next_event_s(self.now_s))
+
+    def _holding_for_agenda(self, wall_now: float) -> bool:
+        """A scripted agenda change is due and the agenda agent has not applied it yet: the idle clock
+        stands still (at most ``AGENDA_HOLD_WALL_S`` wall seconds, so a dead agenda agent cannot stop
+        the day), so the change is stamped with its own time, not the end of the next skip."""
+        log = self.graph.get_node_by_name(AGENDA)
+        pending = unapplied_changes(self.world, self.now_s, log.attrs.get("applied", []) if log is not None else [])
+        if not pending:
+            self._agenda_hold = None
+            return False
+        if self._agenda_hold is None or self._agenda_hold[0] != pending:
+            self._agenda_hold = (pending, wall_now)
+        return wall_now - self._agenda_hold[1] < AGENDA_HOLD_WALL_S
 
     def _due_now(self) -> bool:
         """A pending mission's time has come (the executive is about to start it)."""

@@ -104,26 +104,39 @@ class SceneMaps:
     def symbolic(self, t_s: float) -> Any:
         return symbolic_view(self.graph(t_s))
 
-    def measure(self, trajectory: np.ndarray, t_s: float, people_tracks: PeopleTracks | None = None) -> MetricsReport:
-        """Seed-table metrics of a trajectory against the people and agenda at ``t_s``, and with
-        ``people_tracks`` (a run's people.csv) HuNavSim's dynamic metrics among the moving people."""
+    def measure(self, trajectory: np.ndarray, t_s: float, people_tracks: PeopleTracks | None = None, *,
+                goal_xy: tuple[float, float] | None = None,
+                goal_missing: str = "") -> MetricsReport:
+        """Seed-table metrics of a trajectory against the people and agenda at ``t_s`` (Psi on the
+        zones the planner drew then, adapted to walls, and beside it the unadapted ones), and with
+        ``people_tracks`` (a run's people.csv) the metrics among the moving people; ``goal_xy`` the
+        target (``goal_missing``: why there is none, for the table)."""
         smap = self.at(t_s)
-        return compute_metrics(trajectory,
-                               people={p.name: (p.x, p.y) for p in smap.people},
-                               objects={s.name: s.footprint for s in smap.object_spaces},
-                               zones=smap.zone_polygons(),
-                               interaction_spaces=smap.interaction_polygons(),
-                               people_tracks=people_tracks, robot_radius_m=self.world.scene.robot.radius,
-                               obstacles=self.obstacles)
+        report = compute_metrics(trajectory,
+                                 people={p.name: (p.x, p.y) for p in smap.people},
+                                 objects={s.name: s.footprint for s in smap.object_spaces},
+                                 zones=smap.zone_polygons(), unadapted_zones=smap.unadapted_zone_polygons(),
+                                 interaction_spaces=smap.interaction_polygons(),
+                                 people_tracks=people_tracks, robot_radius_m=self.world.scene.robot.radius,
+                                 obstacles=self.obstacles, goal_xy=goal_xy)
+        if goal_missing and report.dynamic is not None and goal_xy is None:
+            why = {key: goal_missing for key in report.dynamic.missing if "target" in key or key == "completed"}
+            report = report.model_copy(update={"dynamic": report.dynamic.model_copy(
+                update={"missing": {**report.dynamic.missing, **why}})})
+        return report
 
     @property
     def obstacles(self) -> BaseGeometry:
         """Walls and object footprints: what pushes the robot in the social force model."""
         if "_obstacles" not in self.__dict__:
-            scene = self.world.scene
-            walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
-            self.__dict__["_obstacles"] = shapely.union_all([*walls, *footprint_polygons(scene)])
+            self.__dict__["_obstacles"] = scene_obstacles(self.world.scene)
         return self.__dict__["_obstacles"]
+
+
+def scene_obstacles(scene: LoadedScene) -> BaseGeometry:
+    """A scene's walls and object footprints as one geometry (what pushes in the social force model)."""
+    walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
+    return shapely.union_all([*walls, *footprint_polygons(scene)])
 
 
 def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.ndarray:
@@ -174,20 +187,66 @@ def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:
 
 
 def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
-                    people_csv: Path | None = None) -> dict[str, Any]:
-    """`chronav metrics`: the seed's metrics of a trajectory, and HuNavSim's dynamic metrics when
-    the people's trajectories are known (``people_csv``, by default the run's people.csv beside it)."""
-    maps = SceneMaps.load(scene)
+                    people_csv: Path | None = None, *, definitions: str = "published",
+                    goal_xy: tuple[float, float] | None = None, robot_radius_m: float | None = None,
+                    person_radius_m: float | None = None) -> dict[str, Any]:
+    """`chronav metrics`: the metrics of a trajectory (``definitions`` "published", the papers', or
+    "hunav", HuNavSim's evaluator with its quirks and metric names: dynamic_metrics.py), with the
+    people's trajectories when known (``people_csv``, by default the run's people.csv beside it).
+    ``goal_xy``: the target (completed, distances to target); radii default to the scene's robot and
+    0.25 m people (published) or HuNavSim's 0.35 m for both (hunav)."""
+    from agents.lib.socialmap.dynamic_metrics import HUNAV_RADIUS_M, PERSON_RADIUS_M, hunav_metrics
+
+    if definitions not in ("published", "hunav"):
+        raise OfflineError(f"--definitions: expected published or hunav, got {definitions!r}")
+    try:    # the scene alone (its navigation maps only for the published definitions' Psi and d_min)
+        world = scene if isinstance(scene, SceneWorld) else load_world(scene)
+    except SourceError as exc:
+        raise OfflineError(str(exc)) from None
     traj = read_trajectory_csv(trajectory_csv)
-    _check_on_map(maps.world, traj, trajectory_csv)
+    _check_on_map(world, traj, trajectory_csv)
     if people_csv is None and (trajectory_csv.parent / "people.csv").exists():
         people_csv = trajectory_csv.parent / "people.csv"
     tracks = read_people_csv(people_csv) if people_csv is not None else None
     if at_s is None:
         first = float(traj[0, 0])
-        at_s = first if first >= 3600.0 else maps.world.scene.clock.start_s
+        at_s = first if first >= 3600.0 else world.scene.clock.start_s
     if not math.isfinite(at_s):
         raise OfflineError("--at must be a finite time")
-    report = maps.measure(traj, at_s, tracks)
-    return {"scene": maps.world.scene.name, "at_s": at_s, "people": None if people_csv is None else str(people_csv),
-            "metrics": report.model_dump(), "table": report.to_table()}
+    head = {"scene": world.scene.name, "at_s": at_s, "definitions": definitions,
+            "people": None if people_csv is None else str(people_csv)}
+    if definitions == "hunav":
+        values, missing = hunav_metrics(traj, tracks, robot_radius_m=robot_radius_m or HUNAV_RADIUS_M,
+                                        person_radius_m=person_radius_m or HUNAV_RADIUS_M, goal_xy=goal_xy,
+                                        obstacles=scene_obstacles(world.scene))
+        return {**head, "robot_radius_m": robot_radius_m or HUNAV_RADIUS_M,
+                "person_radius_m": person_radius_m or HUNAV_RADIUS_M, "metrics": values, "missing": missing,
+                "table": hunav_table(values, missing)}
+    maps = SceneMaps.load(world)
+    report = maps.measure(traj, at_s, tracks, goal_xy=goal_xy)
+    if tracks is not None and (robot_radius_m is not None or person_radius_m is not None):
+        from agents.lib.socialmap.dynamic_metrics import dynamic_metrics
+
+        report = report.model_copy(update={"dynamic": dynamic_metrics(
+            traj, tracks, robot_radius_m or maps.world.scene.robot.radius, maps.obstacles,
+            person_radius_m=person_radius_m or PERSON_RADIUS_M, goal_xy=goal_xy)})
+    return {**head, "metrics": report.model_dump(), "table": report.to_table()}
+
+
+def hunav_table(values: dict[str, Any], missing: dict[str, str]) -> list[tuple[str, str]]:
+    """(HuNavSim metric name with chronav's label and unit, value) rows for `--definitions hunav`."""
+    from agents.lib.socialmap.metric_catalog import BY_HUNAV
+
+    rows = []
+    for key, value in values.items():
+        metric = BY_HUNAV.get(key)
+        label = f"{key} ({metric.unit})" if metric and metric.unit else key
+        if value is None:
+            rows.append((label, f"- ({missing.get(key, 'not measurable')})"))
+        elif isinstance(value, bool):
+            rows.append((label, "yes" if value else "no"))
+        elif isinstance(value, int):
+            rows.append((label, str(value)))
+        else:
+            rows.append((label, f"{value:.4f}"))
+    return rows

@@ -104,7 +104,7 @@ def _agenda_error(exc: Exception, loaded: LoadedScene) -> SourceError:
     return SourceError(scene_file, None, None, "agenda", str(exc))
 
 
-def _check_navigable(loaded: LoadedScene) -> None:
+def _check_navigable(loaded: LoadedScene) -> tuple[str, ...]:
     """The map the navigation will build: not too large, and every mission goal reachable from the
     robot's start (a goal on a wall or in a walled-off box would leave the mission "active" until
     the run times out).  Free space is the building less the walls grown by the robot's radius plus
@@ -121,7 +121,20 @@ def _check_navigable(loaded: LoadedScene) -> None:
     free = building.difference(walls.buffer(clearance)) if not walls.is_empty else building
     robot = scene.robot.pose
     parts = list(getattr(free, "geoms", [free]))
-    start = next((part for part in parts if part.covers(shapely.Point(robot.x, robot.y))), None)
+    notes: list[str] = []
+    here = shapely.Point(robot.x, robot.y)
+    start = next((part for part in parts if part.covers(here)), None)
+    if start is None and parts and not walls.is_empty and walls.distance(here) >= scene.robot.radius \
+            and building.covers(here):
+        # Docked: collision-free but inside the planning margin. The planner leaves the margin the
+        # cheapest way (social_map.dock_exit), as a robot backs off its charging dock.
+        nearest = min(parts, key=lambda part: part.distance(here))
+        if nearest.distance(here) <= PLANNING_MARGIN_M + scene.resolution:
+            start = nearest
+            notes.append(f"warning: robot.pose ({robot.x:g}, {robot.y:g}) is {walls.distance(here):.2f} m from a "
+                         f"wall, inside the planning margin ({clearance:.2f} m = radius {scene.robot.radius:g} + "
+                         f"margin {PLANNING_MARGIN_M:g}): allowed, as at a charging dock; the first plan leaves "
+                         f"the margin by the cheapest way out ({nearest.distance(here):.2f} m)")
     if start is None:
         raise loaded.error(("robot", "pose"), f"the robot at ({robot.x:g}, {robot.y:g}) is within {clearance:.2f} m "
                            "(its radius plus the planning margin) of a wall or outside the rooms: the navigation "
@@ -145,13 +158,14 @@ def _check_navigable(loaded: LoadedScene) -> None:
                 raise loaded.error(("missions", i, "goal", "room"), f"room {goal.room!r} of mission {mission.id!r} "
                                    f"cannot be reached from the robot's start ({robot.x:g}, {robot.y:g}): no door "
                                    "wide enough for the robot leads there")
+    return tuple(notes)
 
 
 def resolve_world(loaded: LoadedScene) -> SceneWorld:
     """The agenda of a loaded scene placed on its date, and its scripted changes checked by applying
     them in order (SourceError at the offending ``agenda_changes`` entry)."""
     scene = loaded.scene
-    _check_navigable(loaded)
+    dock_notes = _check_navigable(loaded)
     check_people(loaded)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise loaded.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
@@ -161,7 +175,7 @@ def resolve_world(loaded: LoadedScene) -> SceneWorld:
                          known_people={p.name for p in scene.people})
     except AgendaError as exc:
         raise _agenda_error(exc, loaded) from None
-    notes = tuple(f.message for f in validate_day(day, None).infos)
+    notes = (*dock_notes, *(f.message for f in validate_day(day, None).infos))
     world = SceneWorld(loaded, day, scripted_changes(scene), notes)
     check = day
     for change in world.scripted:

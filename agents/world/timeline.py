@@ -8,7 +8,7 @@ the offline planner at 09:30 too.  Where the people are at ``t`` is agents/world
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from agents.lib.agenda import AgendaChangeError, AgendaDay
 from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S
 from agents.world.scene_world import SceneWorld
@@ -38,3 +38,24 @@ def agenda_at(world: SceneWorld, t_s: float, upcoming_window_s: float = UPCOMING
         except AgendaChangeError:
             continue
     return day.at(t_s, upcoming_window_s)
+
+
+def scheduled_events(world: SceneWorld) -> tuple[float, ...]:
+    """The sim times at which the scene's script changes the world: scripted agenda changes and
+    door events, sorted.  Why: an idle skip of the clock stops at each of them, so an event fires
+    at its time and not at the end of the skip (agents/sim_robot/agent.py)."""
+    times = {change.at_s for change in world.scripted}
+    times |= {float(parse_clock(change.at)) for change in world.scene.door_changes}
+    return tuple(sorted(times))
+
+
+def next_scheduled_event(world: SceneWorld, t_s: float) -> float | None:
+    """The first scripted event strictly after ``t_s`` (None: no more today)."""
+    return next((at for at in scheduled_events(world) if at > t_s + 1e-9), None)
+
+
+def unapplied_changes(world: SceneWorld, t_s: float, applied: Sequence[str]) -> tuple[str, ...]:
+    """Keys of the scripted agenda changes due by ``t_s`` that the agenda agent has not yet applied
+    (nor refused): while there is one, the simulator's idle clock holds still for it."""
+    done = set(applied)
+    return tuple(change.key for change in world.scripted if change.at_s <= t_s and change.key not in done)

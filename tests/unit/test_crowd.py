@@ -211,3 +211,25 @@ def test_nobody_walks_into_or_stands_at_the_resting_robot(reacts: bool) -> None:
         assert min(gaps) > 0.3, "people keep clear of the resting robot's body"
     else:
         assert min(gaps) < 0.3, "without the robot in their world someone stands where it rests"
+
+
+def test_an_activity_place_the_robot_parks_on_is_drawn_again_clear_of_it(world) -> None:  # noqa: ANN001
+    """Issue 27: the robot came to rest by the table after its mission, on the place the therapy's
+    formation had given eva; she walked there anyway and stood 0.65 m from the robot's centre, inside
+    its intimate distance, while the idle clock skipped on.  Now the formation is drawn again clear
+    of the resting robot: the attendees stand at least Hall's 0.45 m from its body."""
+    crowd, feed = new_crowd(world), WorldFeed(world)
+    during = parse_clock("09:50")
+    crowd.advance(during, feed)                           # the agenda read, places given, no robot
+    eva = next(p for p in crowd.at(during) if p.name == "eva")
+    assert eva.group == "activity/therapy"
+    robot = RobotBody(eva.x + 0.6, eva.y, 0.0, 0.0, world.scene.robot.radius)   # parks beside her place
+    crowd, feed = new_crowd(world), WorldFeed(world)
+    crowd.advance(parse_clock("09:20"), feed)             # before the attendees leave for the table
+    for t in np.arange(parse_clock("09:20") + 5.0, parse_clock("10:05"), 5.0):
+        crowd.advance(float(t), feed, robot)
+    attendees = [p for p in crowd.at(parse_clock("10:05") - 5.0) if p.group == "activity/therapy"]
+    assert attendees, "the therapy still takes place"
+    for p in attendees:
+        gap = math.hypot(p.x - robot.x, p.y - robot.y) - robot.radius - 0.25
+        assert gap >= 0.45 - 0.05, f"{p.name} stands {gap:.2f} m from the robot's body"

@@ -28,17 +28,19 @@ def still(name: str, x: float, y: float, times: list[float], theta: float = 0.0,
 
 
 def test_distances_and_intrusions_past_a_standing_person() -> None:
-    """Robot along y = 0 at 1 m/s, a person at (2, 1): centre distances sqrt(5), sqrt(2), 1,
-    sqrt(2), sqrt(5); minus the robot's 0.3 m: 1.936, 1.114, 0.7, 1.114, 1.936."""
+    """Robot along y = 0 at 1 m/s, a person at (2, 1.1): centre distances hypot(2, 1.1),
+    hypot(1, 1.1), 1.1, ...; minus the robot's 0.3 m and the person's 0.25 m (body edges): 1.733,
+    0.937, 0.55, 0.937, 1.733."""
     traj = robot_line([0, 1, 2, 3, 4])
-    tracks = tracks_from_rows(still("ana", 2.0, 1.0, [0, 1, 2, 3, 4], theta=-math.pi / 2))
+    tracks = tracks_from_rows(still("ana", 2.0, 1.1, [0, 1, 2, 3, 4], theta=-math.pi / 2))
     d = compute_metrics(traj, people_tracks=tracks, robot_radius_m=ROBOT_R).dynamic
     assert d is not None
-    assert d.time_to_goal_s == 4.0 and d.path_length_m == pytest.approx(4.0)
-    assert d.cumulative_heading_changes_rad == 0.0
-    assert d.min_distance_to_people_m == pytest.approx(0.7)
-    edges = [math.sqrt(5) - 0.3, math.sqrt(2) - 0.3, 0.7, math.sqrt(2) - 0.3, math.sqrt(5) - 0.3]
-    assert d.avg_distance_to_closest_person_m == pytest.approx(np.mean(edges) - 0.25)
+    assert d.min_distance_to_people_m == pytest.approx(0.55)
+    edges = [math.hypot(dx, 1.1) - 0.55 for dx in (2, 1, 0, 1, 2)]
+    assert d.max_distance_to_people_m == pytest.approx(math.hypot(2, 1.1) - 0.55)
+    assert d.avg_distance_to_closest_person_m == pytest.approx(np.mean(edges))
+    assert d.avg_robot_linear_speed_mps == pytest.approx(1.0) and d.avg_acceleration_mps2 == pytest.approx(0.0)
+    assert d.avg_pedestrian_speed_mps == d.avg_closest_pedestrian_speed_mps == 0.0
     assert (d.intimate_intrusions_percent, d.personal_intrusions_percent, d.social_intrusions_percent) == \
         pytest.approx((0.0, 60.0, 40.0))
     assert d.intrusions_per_person == {"ana": pytest.approx({"intimate": 0.0, "personal": 60.0, "social": 40.0})}
@@ -47,21 +49,23 @@ def test_distances_and_intrusions_past_a_standing_person() -> None:
 
 
 def test_social_forces_between_two_still_bodies_and_the_walls_push() -> None:
-    """Both at rest, 1 m apart: the interaction vector is the unit direction (theta = 0, B = 0.35), so
-    each pushes the other with 2.1 exp(-1 / 0.35) = 0.1206; a wall 1 m from the robot's centre
+    """Both at rest, 1.1 m apart: the interaction vector is the unit direction (theta = 0, B = 0.35), so
+    each pushes the other with 2.1 exp(-1.1 / 0.35); a wall 1 m from the robot's centre
     pushes with 10 exp(-(1 - 0.3) / 0.2) = 0.3020.  Two samples."""
     traj = robot_line([0.0, 0.0])
-    tracks = tracks_from_rows(still("ben", 1.0, 0.0, [0, 1], theta=math.pi))
-    force = 2.1 * math.exp(-1.0 / 0.35)
+    tracks = tracks_from_rows(still("ben", 1.1, 0.0, [0, 1], theta=math.pi))
+    force = 2.1 * math.exp(-1.1 / 0.35)
     wall = shapely.LineString([(-5, 1.0), (5, 1.0)])
     d = compute_metrics(traj, people_tracks=tracks, robot_radius_m=ROBOT_R, obstacles=wall).dynamic
     assert d.social_force_on_robot == pytest.approx(2 * force, rel=1e-6)
     assert d.social_force_on_people == pytest.approx(2 * force, rel=1e-6)
     push = 10.0 * math.exp(-0.7 / 0.2)
     assert d.social_work == pytest.approx(2 * (force + push + force), rel=1e-6)
+    assert d.obstacle_force_on_robot == pytest.approx(2 * push, rel=1e-6)
+    assert d.obstacle_force_on_people == pytest.approx(2 * 10.0 * math.exp(-0.75 / 0.2), rel=1e-6)  # 1 m - 0.25
     assert d.time_not_moving_s == pytest.approx(1.0), "one interval of 1 s at rest"
     assert d.intimate_intrusions_percent == pytest.approx(0.0)
-    assert d.personal_intrusions_percent == pytest.approx(100.0), "1 - 0.3 = 0.7 m: personal"
+    assert d.personal_intrusions_percent == pytest.approx(100.0), "1.1 - 0.3 - 0.25 = 0.55 m: personal"
 
 
 def test_collisions_are_blamed_on_who_moved_into_whom() -> None:
@@ -90,7 +94,7 @@ def test_group_intrusions_use_where_the_members_gazes_meet() -> None:
     assert (d.group_intimate_intrusions_percent, d.group_personal_intrusions_percent,
             d.group_social_intrusions_percent) == pytest.approx((0.0, 0.0, 100.0))
     assert d.intrusions_per_group == {"chat/1": pytest.approx({"intimate": 0.0, "personal": 0.0, "social": 100.0})}
-    assert d.min_distance_to_people_m == pytest.approx(2.5 - 0.3)
+    assert d.min_distance_to_people_m == pytest.approx(2.5 - 0.3 - 0.25)
 
 
 def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
@@ -104,12 +108,13 @@ def test_chronav_metrics_reads_the_runs_people_csv(tmp_path: Path) -> None:
     dynamic = json.loads(result.stdout)["metrics"]["dynamic"]
     # robot x 1.0 .. 3.0 toward a person at x = 3: centre distances 2, 1.5, 1, 0.5, 0 -> contact at the
     # last two (0.5 < 0.57): one collision, the robot's
-    assert dynamic["min_distance_to_people_m"] == pytest.approx(-0.3)
+    assert dynamic["min_distance_to_people_m"] == 0.0, "overlapping bodies: clipped at 0, never negative"
     assert dynamic["robot_on_person_collisions"] == 1 and dynamic["person_on_robot_collisions"] == 0
     assert dynamic["robot_intimate_entries"] == 1
-    assert dynamic["time_to_goal_s"] == 4.0
-    table = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")])
-    assert "social work" in table.output and "collisions" in table.output
+    assert json.loads(result.stdout)["metrics"]["duration_s"] == 4.0
+    table = CliRunner().invoke(app, ["metrics", "center_a", str(tmp_path / "trajectory.csv")], env={"COLUMNS": "200"})
+    assert "social work (m/s^2, summed over samples)" in table.output and "collisions" in table.output
+    assert "no target" in table.output, "a metric without a value says why"
 
 
 def test_a_bad_people_csv_is_named_with_its_line(tmp_path: Path) -> None:

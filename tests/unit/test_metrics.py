@@ -100,12 +100,15 @@ def test_report_table_and_json() -> None:
     report = compute_metrics(straight_line(), people={"alice": (5.0, 2.0)},
                              zones={"social": box(2.0, -1.0, 8.0, 1.0)},
                              interaction_spaces={"tv": box(7.0, -1.0, 9.0, 1.0)})
-    rows = dict(report.to_table())
-    assert rows["d_t (m)"] == "10.00"
-    assert rows["d_min alice (m)"] == "2.00"
-    assert rows["Psi social (%)"] == "60.0"
-    assert rows["Psi public (%)"] == "40.0"
-    assert rows["Psi tv (%)"] == "20.0"
+    table = report.to_table()
+    rows = dict(table)
+    assert len(rows) == len(table), "no two rows with the same label"
+    assert rows["path length d_t (m)"] == "10.00"
+    assert rows["d_min to alice at the start, path to centre (m)"] == "2.000"
+    assert rows["Psi social zone, seeds' contours (% of path)"] == "60.0"
+    assert rows["Psi public zone, seeds' contours (% of path)"] == "40.0"
+    assert rows["Psi tv's interaction space (% of path)"] == "20.0"
+    assert rows["metrics among moving people"].startswith("- (no people's trajectories")
     dumped = json.loads(json.dumps(report.model_dump()))
     assert dumped["psi_basis"] == "path_length"
     assert dumped["psi_zone_percent"]["social"] == pytest.approx(60.0)
@@ -154,3 +157,40 @@ def test_read_trajectory_csv_errors_name_file_and_line(tmp_path: Path, text: str
 def test_missing_csv_file_is_a_clear_error(tmp_path: Path) -> None:
     with pytest.raises(TrajectoryFormatError, match="absent.csv: no such file"):
         read_trajectory_csv(tmp_path / "absent.csv")
+
+
+def test_every_metric_has_its_row_in_docs_metrics_md_with_unit_and_source() -> None:
+    """One vocabulary: metric_catalog.py and docs/metrics.md list the same metrics, units and sources."""
+    from agents.lib.socialmap.metric_catalog import CATALOG, SOURCES
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "metrics.md").read_text()
+    rows = {line.split("|")[1].strip().strip("`"): [c.strip() for c in line.split("|")[1:-1]]
+            for line in doc.splitlines() if line.startswith("| `")}
+    for metric in CATALOG:
+        assert metric.key in rows, metric.key
+        _, _, unit, source, *_ = rows[metric.key]
+        assert (unit, source) == (metric.unit, metric.source), metric.key
+        assert metric.source in SOURCES and metric.unit and metric.definition
+    labels = [m.label for m in CATALOG]
+    assert len(set(labels)) == len(labels), "no two metrics share a name"
+
+
+def test_psi_is_measured_on_the_adapted_zones_the_planner_used() -> None:
+    """The corridor case: a person 0.35 m from the south wall of a 1.6 m corridor, facing across it.
+    The adaptation moves her personal contour in front of her to the room a robot passing at the far
+    wall leaves; the planned path passes there: 0 % in her (adapted) personal and social zones, while
+    the same path on the unadapted spaces crosses her personal zone."""
+    from agents.lib.socialmap.social_map import build_social_map, plan
+    from agents.lib.socialmap.types import Person, Wall
+    from agents.world.offline import path_as_trajectory
+
+    walls = [Wall(((0.0, 0.0), (12.0, 0.0))), Wall(((0.0, 1.6), (12.0, 1.6)))]
+    smap = build_social_map((0, 0, 12, 1.6), walls, [Person("ana", 6.0, 0.35, math.pi / 2)], [], [], 0.0)
+    assert smap.person_spaces[0].adaptation.adapted == ("front",)
+    path = plan(smap, (1.0, 1.0), (11.0, 1.0))
+    report = compute_metrics(path_as_trajectory(np.asarray(path.points_m), 0.0, 0.5),
+                             zones=smap.zone_polygons(), unadapted_zones=smap.unadapted_zone_polygons())
+    assert report.psi_zone_percent["personal"] == 0.0 and report.psi_zone_percent["intimate"] == 0.0
+    assert report.psi_unadapted_zone_percent["personal"] > 5.0
+    rows = dict(report.to_table())
+    assert "Psi personal zone, unadapted contours (% of path)" in rows

@@ -205,6 +205,14 @@ class Crowd:
         while self.t_s < t_s - 1e-9:
             self._step(world, robot, t_s)
 
+    def next_event_s(self, t_s: float) -> float:
+        """The next routine event after ``t_s``: someone standing decides to move on (their stay or
+        chat ends, an activity calls them) or a scripted walk starts; inf when none is known.
+        Why: the simulator's idle skip stops there, so the DSR shows each event at its time."""
+        times = [p.next_check_s for p in self._dynamic if p.task.kind == "stand" and p.next_check_s > t_s + 1e-9]
+        times += [t0 for p in self._scripted for t0, _ in p.spec.moves if t0 > t_s + 1e-9]
+        return min(times, default=math.inf)
+
     def _doors(self, closed_doors: frozenset[str]) -> None:
         if closed_doors != self._closed:
             self._closed = closed_doors
@@ -278,6 +286,11 @@ class Crowd:
         corners = self.router.graphs[0].corners
         return not len(corners) or float(np.min(np.hypot(*(corners - (x, y)).T))) >= SPOT_CORNER_M
 
+    def _clear_of_robot(self, x: float, y: float) -> bool:
+        """(x, y) is at least ``ROBOT_CLEARANCE_M`` from the resting robot's body (or it drives)."""
+        rest = self._robot_parked
+        return rest is None or math.hypot(x - rest[0], y - rest[1]) >= self._robot_radius + ROBOT_CLEARANCE_M
+
     def _fits(self, x: float, y: float) -> bool:
         """A body can stand at (x, y): in the building, clear of walls, furniture and the resting robot."""
         rest = self._robot_parked
@@ -296,6 +309,30 @@ class Crowd:
             self.orca.set_max_speed(self._robot_index, 0.0)
             self.orca.prefer(self._robot_index, 0.0, 0.0)
             self._robot_parked = rest
+            self._clear_places_of_robot()
+
+    def _clear_places_of_robot(self) -> None:
+        """The robot came to rest where an activity's formation has a place (it parked by the table
+        it was sent to): that formation is drawn again clear of it, and whoever attends walks to their
+        new place, so nobody stands inside the robot's intimate distance (Hall's 0.45 m between the
+        bodies: ``ROBOT_CLEARANCE_M``), however long the clock then skips."""
+        rest = self._robot_parked
+        if rest is None or rest == PARKED or not getattr(self, "_places", None):
+            return
+        limit = self._robot_radius + ROBOT_CLEARANCE_M
+        for aid, places in list(self._places.items()):
+            if all(math.hypot(x - rest[0], y - rest[1]) >= limit for x, y, _ in places):
+                continue
+            a = self._appointments[aid]
+            self._places[aid] = new = self._formation(a)
+            for old, place, name in zip(places, new, a.participants, strict=False):
+                person = self.people.get(name)
+                if person is not None and math.hypot(old[0] - place[0], old[1] - place[1]) > 1e-6:
+                    if person.task.activity == aid:
+                        person.task.activity = ""          # _decide sends them to their new place
+                    person.next_check_s = -math.inf
+        points = [p[:2] for places in self._places.values() for p in places]
+        self._place_points = np.asarray(points, dtype=float).reshape(-1, 2)
 
     # ------------------------------------------------------------------------------------ agenda
     def _read_agenda(self, agenda: Agenda) -> None:
@@ -555,7 +592,8 @@ class Crowd:
             task.replans += 1
             if task.purpose == "chat" and self._rejoin(person, t):
                 return
-            if distance < SETTLE_M or (task.replans > 3 and task.purpose not in ("attend", "fetch")):
+            if (distance < SETTLE_M or (task.replans > 3 and task.purpose not in ("attend", "fetch"))) \
+                    and self._clear_of_robot(float(x), float(y)):     # never settle in the robot's intimate distance
                 facing = gth if task.look_at is None else math.atan2(task.look_at[1] - y, task.look_at[0] - x)
                 self._arrive(person, t, (float(x), float(y), facing))
                 return

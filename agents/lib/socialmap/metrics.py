@@ -1,4 +1,7 @@
-"""Navigation quality metrics of the seed's Tables 1, 2 and 4, computed from a recorded trajectory.
+"""Navigation quality metrics of a recorded trajectory: the seed's Tables 1, 2 and 4, and (with the
+people's trajectories) the metrics among moving people of dynamic_metrics.py.
+
+Every metric's name, unit, source and definition is in metric_catalog.py (and docs/metrics.md).
 
 Why one entry point (`compute_metrics`): the CLI (`chronav metrics SCENE TRAJ.csv`), the gain tuner
 and the tests must all measure a run the same way, so the definitions live here and nowhere else.
@@ -40,7 +43,9 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
-from agents.lib.socialmap.dynamic_metrics import DynamicMetrics, PeopleTracks, dynamic_metrics, tracks_from_rows
+from agents.lib.socialmap.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetrics, PeopleTracks, dynamic_metrics,
+                                                  tracks_from_rows)
+from agents.lib.socialmap.metric_catalog import CATALOG, column_label
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
 
@@ -64,8 +69,12 @@ class TrajectoryFormatError(MetricsInputError):
     """A trajectory CSV file that cannot be read; the message names the file and line."""
 
 
+NO_PEOPLE = "no people's trajectories: no people.csv beside the trajectory, give --people"
+
+
 class MetricsReport(BaseModel):
-    """Everything the seed's result tables report for one run. ``model_dump()`` gives the JSON."""
+    """Everything measured of one run, ``--definitions published``.  ``model_dump()`` gives the JSON;
+    each key's label, unit, source and definition: metric_catalog.py."""
 
     model_config = ConfigDict(frozen=True)
 
@@ -76,24 +85,57 @@ class MetricsReport(BaseModel):
     d_min_person_m: dict[str, float]
     d_min_object_m: dict[str, float]
     psi_zone_percent: dict[str, float]
+    psi_unadapted_zone_percent: dict[str, float] = {}   # only when the wall adaptation changed a space
     psi_object_percent: dict[str, float]
     psi_basis: str = "path_length"
-    dynamic: DynamicMetrics | None = None     # HuNavSim's, when the people's trajectories are known
+    dynamic: DynamicMetrics | None = None     # among the moving people, when their trajectories are known
+    missing: dict[str, str] = {}              # metric key -> why it has no value
 
     def to_table(self) -> list[tuple[str, str]]:
-        """(parameter, value) rows in the order of the seed's tables, ready to print."""
-        rows: list[tuple[str, str]] = [
-            ("d_t (m)", f"{self.distance_travelled_m:.2f}"),
-            ("tau (s)", f"{self.duration_s:.2f}"),
-            ("CHC (rad)", f"{self.cumulative_heading_change_rad:.2f}"),
-        ]
-        rows += [(f"d_min {name} (m)", f"{value:.2f}") for name, value in self.d_min_person_m.items()]
-        rows += [(f"d_min {name} (m)", f"{value:.2f}") for name, value in self.d_min_object_m.items()]
-        rows += [(f"Psi {band} (%)", f"{self.psi_zone_percent[band]:.1f}") for band in PSI_BANDS]
-        rows += [(f"Psi {name} (%)", f"{value:.1f}") for name, value in self.psi_object_percent.items()]
+        """(metric with unit, value) rows in the catalogue's order, ready to print; a metric without a
+        value says why.  One row per metric: each label is used once (metric_catalog.py)."""
+        values = flatten(self.model_dump())
+        missing = dict(self.missing)
         if self.dynamic is not None:
-            rows += self.dynamic.to_table()
+            missing.update({f"dynamic.{key}": why for key, why in self.dynamic.missing.items()})
+        rows: list[tuple[str, str]] = []
+        for metric in CATALOG:
+            if metric.key.startswith("dynamic.") and self.dynamic is None:
+                continue
+            if metric.key.endswith(".*"):       # one row per person / object / band (not the nested ones)
+                prefix = metric.key[:-1]
+                if prefix.count(".") == 1:
+                    rows += [(column_label(column), _fmt(value, metric.unit)) for column, value in values.items()
+                             if column.startswith(prefix) and "." not in column[len(prefix):]]
+            elif metric.key in values:
+                rows.append((column_label(metric.key), _fmt(values[metric.key], metric.unit)))
+            elif metric.key in missing:
+                rows.append((column_label(metric.key), f"- ({missing[metric.key]})"))
+        if self.dynamic is None:
+            rows.append(("metrics among moving people", f"- ({self.missing.get('dynamic', NO_PEOPLE)})"))
         return rows
+
+
+def flatten(metrics: Mapping[str, object], prefix: str = "") -> dict[str, float]:
+    """Every number of a report as ``dotted.key -> float`` (texts and Nones are skipped)."""
+    out: dict[str, float] = {}
+    for key, value in metrics.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            out.update(flatten(value, f"{name}."))
+        elif isinstance(value, bool | int | float):
+            out[name] = float(value)
+    return out
+
+
+def _fmt(value: float, unit: str) -> str:
+    if unit == "count":
+        return str(int(value))
+    if unit == "yes/no":
+        return "yes" if value else "no"
+    if unit.startswith("%"):
+        return f"{value:.1f}"
+    return f"{value:.3f}" if abs(value) < 10 else f"{value:.2f}"
 
 
 def compute_metrics(
@@ -105,15 +147,21 @@ def compute_metrics(
     people_tracks: PeopleTracks | None = None,
     robot_radius_m: float = 0.3,
     obstacles: BaseGeometry | None = None,
+    *,
+    unadapted_zones: Mapping[str, BaseGeometry | None] | None = None,
+    goal_xy: tuple[float, float] | None = None,
+    person_radius_m: float = PERSON_RADIUS_M,
 ) -> MetricsReport:
-    """Measure one run: the seed's tables and, with ``people_tracks``, HuNavSim's dynamic metrics.
+    """Measure one run: the seed's tables and, with ``people_tracks``, the metrics among moving people.
 
     ``trajectory``: (N, 4) rows of (t [s], x [m], y [m], theta [rad]), time non-decreasing.
     ``people``: name -> (x, y). ``objects``: name -> footprint geometry. ``zones``: any of
-    "intimate", "personal", "social" -> (multi)polygon of that contour (missing or None = empty).
-    ``interaction_spaces``: object name -> polygon.  ``people_tracks``: every person's trajectory
-    (people.csv); ``robot_radius_m`` and ``obstacles`` (walls and footprints, for the obstacle
-    force of the social work) go with it (dynamic_metrics.py).
+    "intimate", "personal", "social" -> (multi)polygon of that contour (missing or None = empty), as
+    the planner used them (adapted to walls when adaptation is on); ``unadapted_zones`` the same
+    without the adaptation (Psi beside it, named so).  ``interaction_spaces``: object name -> polygon.
+    ``people_tracks``: every person's trajectory (people.csv); ``robot_radius_m``,
+    ``person_radius_m``, ``obstacles`` (walls and footprints) and ``goal_xy`` (the target) go with it
+    (dynamic_metrics.py).
     """
     traj = validate_trajectory(trajectory)
     zone_geoms = _validate_zones(zones or {})
@@ -131,8 +179,12 @@ def compute_metrics(
         d_min_person_m={name: _person_distance(path, name, pos) for name, pos in people.items()},
         d_min_object_m={name: float(path.distance(geom)) for name, geom in objects.items()},
         psi_zone_percent=psi_zone_percent(path, zone_geoms),
+        psi_unadapted_zone_percent={} if unadapted_zones is None else
+        psi_zone_percent(path, _validate_zones(unadapted_zones)),
         psi_object_percent={name: _share_inside(path, geom) for name, geom in interaction_spaces.items()},
-        dynamic=None if people_tracks is None else dynamic_metrics(traj, people_tracks, robot_radius_m, obstacles),
+        dynamic=None if people_tracks is None else dynamic_metrics(
+            traj, people_tracks, robot_radius_m, obstacles, person_radius_m=person_radius_m, goal_xy=goal_xy),
+        missing={} if people_tracks is not None else {"dynamic": NO_PEOPLE},
     )
 
 

@@ -251,6 +251,26 @@ class SocialMap:
         return {name: shapely.union_all([z.zone(name) for z in zones]) if zones else shapely.MultiPolygon()
                 for name in ZONE_NAMES}
 
+    def unadapted_zone_polygons(self) -> dict[str, BaseGeometry] | None:
+        """The zones the people's spaces would have without the wall adaptation (the same people,
+        roles, motion and groups rule), or None when the adaptation changed no one's space.
+
+        Why: Psi is measured on the zones the planner used (``zone_polygons``); the unadapted
+        figure beside it shows what the adaptation conceded near walls (docs/metrics.md)."""
+        if not any(ps.adaptation.adapted for ps in self.person_spaces):
+            return None
+        if "unadapted_zones" not in self._cache:
+            params = self.params
+            spaces = [stretched(PersonalSpace.from_params(params.personal_space, role_scale(p, params.roles)), p,
+                                role_scale(p, params.roles), params.motion) for p in self.people]
+            groups = group_people(self.people, spaces, params.groups)
+            windows = density_windows(self.spec, self.people, spaces, groups, params.zones)
+            zones = contour_zones(self.spec, tuple(windows), params.zones)
+            self._cache["unadapted_zones"] = {
+                name: shapely.union_all([z.zone(name) for z in zones]) if zones else shapely.MultiPolygon()
+                for name in ZONE_NAMES}
+        return self._cache["unadapted_zones"]
+
     def interaction_polygons(self) -> dict[str, BaseGeometry]:
         return {space.name: space.interaction for space in self.object_spaces}
 
@@ -427,11 +447,48 @@ def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[fl
     if not speed > 0.0:
         raise ValueError(f"cruise speed must be > 0, got {speed}")
     try:
-        return _plan(social_map, start_xy, goal_xy, method=method, planner=name, speed=speed, workspace=workspace,
-                     replanner=replanner)
+        try:
+            return _plan(social_map, start_xy, goal_xy, method=method, planner=name, speed=speed,
+                         workspace=workspace, replanner=replanner)
+        except StartOccupied:
+            exit_xy = dock_exit(social_map, planning_grid(social_map, name), start_xy)
+            if exit_xy is None:
+                raise
+            rest = _plan(social_map, exit_xy, goal_xy, method=method, planner=name, speed=speed,
+                         workspace=workspace, replanner=replanner)
+            first = np.asarray([social_map.spec.cell_of(*start_xy)], dtype=rest.cells.dtype)
+            step = math.hypot(exit_xy[0] - start_xy[0], exit_xy[1] - start_xy[1])
+            return Path(cells=np.vstack([first, rest.cells]),
+                        points_m=np.vstack([np.asarray([start_xy], dtype=float), rest.points_m]),
+                        cost=rest.cost + step * social_map.params.grid.free_cost, expanded=rest.expanded)
     except (StartOccupied, GoalOccupied) as exc:
         xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
         raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
+
+
+def dock_exit(social_map: SocialMap, grid: np.ndarray, xy: tuple[float, float]) -> tuple[float, float] | None:
+    """Where a robot that starts inside the planning margin of a wall (docked: collision-free
+    but nearer a wall than its radius plus the margin) leaves the margin: of the traversable cells
+    within the robot's inflated radius, the one with the least distance x cost to step onto (the
+    cheapest way out, straight off the wall as from a charging dock).  None when the start is not
+    in a wall's margin (a body, an object or a forbidden space blocks it) or no cell is near."""
+    spec = social_map.spec
+    row, col = spec.cell_of(*xy)
+    if not (0 <= row < grid.shape[0] and 0 <= col < grid.shape[1]) or np.isfinite(social_map.static[row, col]):
+        return None
+    reach = int(math.ceil(social_map.params.grid.robot_radius_m / spec.resolution))
+    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
+    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
+    window = np.asarray(grid[r0:r1, c0:c1], dtype=float)
+    rows, cols = np.nonzero(np.isfinite(window) & (window > 0))
+    if not rows.size:
+        return None
+    xs = spec.x0 + (cols + c0 + 0.5) * spec.resolution
+    ys = spec.y0 + (rows + r0 + 0.5) * spec.resolution
+    distance = np.hypot(xs - xy[0], ys - xy[1])
+    score = np.where(distance <= social_map.params.grid.robot_radius_m, distance * window[rows, cols], np.inf)
+    best = int(np.argmin(score))
+    return None if not np.isfinite(score[best]) else (float(xs[best]), float(ys[best]))
 
 
 def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
