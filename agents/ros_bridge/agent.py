@@ -1,0 +1,226 @@
+"""The ROS 2 bridge agent: reads the DSR, publishes ROS 2 topics over Zenoh; /goal_pose -> mission.
+
+Why an agent of its own (not code inside the navigation): the bridge is an optional window on
+the system, started with ``chronav launch --ros`` or alone against a running system; it talks to
+the other agents only through the DSR, like any agent, and to ROS 2 through a second Zenoh
+session towards the ROS side's router (rmw_zenohd), so the run's own Zenoh network keeps its
+credentials and ACL and ROS nodes never see chronav's graph traffic.
+
+What it publishes (names, frames and QoS in config.py, conventions in wire.py):
+``/map`` (the building as the planner rasterises it, without the robot's inflation),
+``/social_costmap`` (the navigation's social map of the moment, built from the DSR by the same
+``NavigationMaps`` the navigation agent uses, as 0..100 with walls 100), ``/keepout_filter_mask``
++ ``/costmap_filter_info`` (the social layers as ``chronav map export`` writes them),
+``/people`` (people_msgs/People), ``/plan`` (the path the navigation adopted), ``/tf``
+(map -> odom -> base_link and map -> person/<name>), ``/odom``, ``/scan``, ``/agenda`` (JSON),
+``/clock`` (the scene's clock).  Each topic has a wall-clock rate limit and is published only
+when what it shows changed.
+
+What it subscribes: ``/goal_pose`` (geometry_msgs/PoseStamped in the map frame) becomes a pose
+mission (``mission/ros_goal_<n>``, due now) that the executive plans and runs like any other.
+A goal in another frame, or not finite, is refused with a log line; nothing is written.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import time
+from typing import Any
+
+import numpy as np
+
+from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE, MaskScale, keepout_values, social_costs
+from agents.ros_bridge import messages as msgs
+from agents.ros_bridge.config import BridgeConfig, BridgeConfigError, TopicSpec, config_from_options
+from agents.ros_bridge.wire import RosNode, RosPublisher, ros_session_config
+from agents.runtime.base import Agent
+from agents.runtime.recording import Recorder
+from agents.world.dsr_readers import closed_doors, dsr_people
+from agents.world.navigation import NavigationMaps
+from agents.world.vocabulary import WORLD, MissionState, NodeType, activities, mission_name, now_s
+from scenes.clock import format_clock
+
+GOAL_PREFIX = "ros_goal_"
+MAX_PENDING_GOALS = 16
+
+
+class RosBridgeAgent(Agent):
+    kind = "ros_bridge"
+
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
+        import zenoh
+
+        self.graph = graph
+        self.rec = recorder
+        try:
+            self.cfg: BridgeConfig = config_from_options(self.config.options)
+        except BridgeConfigError as exc:
+            raise SystemExit(f"ros_bridge: {exc}") from None
+        try:
+            self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
+        except zenoh.ZError as exc:
+            raise SystemExit(f"ros_bridge: cannot reach the ROS 2 side's Zenoh router at {self.cfg.endpoint} "
+                             f"({exc}); start it (`ros2 run rmw_zenoh_cpp rmw_zenohd`) or give its endpoint "
+                             "with CHRONAV_ROS_ENDPOINT / -o ros_endpoint=tcp/HOST:PORT") from None
+        self.epoch_s = msgs.day_epoch_s(self.scene.clock.date, self.scene.clock.timezone)
+        self.maps = NavigationMaps.for_scene(self.scene)
+        # the building as it is (no robot inflation): what a map_server would serve
+        self.wall_maps = NavigationMaps.for_scene(self.scene, margin_m=-self.scene.robot.radius)
+        self.scale = MaskScale.for_params(self.maps.params)
+        self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        self.pubs: dict[str, RosPublisher] = {}
+        self._last: dict[str, float] = {}
+        self._seen: dict[str, Any] = {}
+        self.stats: dict[str, dict[str, float]] = {}
+        topics = self.cfg.topics
+        for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
+                               ("keepout_filter_mask", msgs.OCCUPANCY_GRID),
+                               ("costmap_filter_info", msgs.COSTMAP_FILTER_INFO), ("people", msgs.PEOPLE),
+                               ("plan", msgs.PATH), ("tf", msgs.TF), ("odom", msgs.ODOMETRY),
+                               ("scan", msgs.LASER_SCAN), ("agenda", msgs.STRING), ("clock", msgs.CLOCK)):
+            spec: TopicSpec = getattr(topics, key)
+            if spec.enabled:
+                self.pubs[key] = self.node.create_publisher(spec.name, type_name, spec.qos.qos())
+        self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
+        self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
+            f"mission/{GOAL_PREFIX}"))
+        if topics.goal_pose.enabled:
+            self.node.create_subscription(topics.goal_pose.name, msgs.POSE_STAMPED, topics.goal_pose.qos.qos(),
+                                          self._on_goal, on_error=self.log.warning)
+        self.log.info("ROS 2 node /%s on domain %d via %s: %s", self.cfg.node, self.cfg.domain, self.cfg.endpoint,
+                      ", ".join(p.topic for p in self.pubs.values()))
+
+    # ------------------------------------------------------------------ subscriptions
+    def _on_goal(self, message: Any) -> None:
+        """Zenoh's thread: only queue it; the DSR is written from the agent's loop."""
+        try:
+            x, y, yaw = msgs.goal_of(message)
+        except ValueError as exc:
+            self.log.warning("goal refused: %s", exc)
+            return
+        try:
+            self.goals.put_nowait((x, y, yaw, str(message.header.frame_id)))
+        except queue.Full:
+            self.log.warning("goal (%.2f, %.2f) refused: %d goals already wait", x, y, MAX_PENDING_GOALS)
+
+    def _take_goals(self, t_s: float) -> None:
+        while True:
+            try:
+                x, y, yaw, frame = self.goals.get_nowait()
+            except queue.Empty:
+                return
+            if frame not in (self.cfg.frames.map, ""):
+                self.log.warning("goal in frame %r refused: give goals in %r", frame, self.cfg.frames.map)
+                continue
+            self._goal_count += 1
+            mission_id = f"{GOAL_PREFIX}{self._goal_count}"
+            goal = f"pose:{x:.3f},{y:.3f},{yaw:.4f}"
+            self.graph.insert_node(type=NodeType.MISSION, name=mission_name(mission_id),
+                                   attrs={"mission_id": mission_id, "goal": goal, "time_s": t_s,
+                                          "state": MissionState.PENDING, "description": "goal from ROS 2 /goal_pose",
+                                          "replans": 0})
+            self.rec.event(f"{format_clock(t_s)} ROS 2 goal {goal} -> mission {mission_id}")
+            self.log.info("goal %s -> mission %s", goal, mission_id)
+
+    # ------------------------------------------------------------------ loop
+    def step(self) -> None:
+        g = self.graph
+        t_s = now_s(g)
+        if t_s is None or g.get_node_by_name(WORLD) is None:
+            return
+        self._take_goals(t_s)
+        wall = time.monotonic()
+        stamp = msgs.ros_time(t_s, self.epoch_s)
+        frames = self.cfg.frames
+        robot = g.get_node_by_name(self.scene.robot.name)
+        self._publish_if("clock", wall, t_s, lambda: msgs.clock(stamp))
+        closed = tuple(closed_doors(g))
+        self._publish_if("map", wall, closed, lambda: self._map(stamp, closed))
+        if "costmap_filter_info" in self.pubs and "costmap_filter_info" not in self._seen:
+            self._publish_if("costmap_filter_info", wall, True, lambda: msgs.costmap_filter_info(
+                KEEPOUT_FILTER_TYPE, self.pubs["keepout_filter_mask"].topic if "keepout_filter_mask" in self.pubs
+                else self.cfg.topics.keepout_filter_mask.name, self.scale.base, self.scale.multiplier, stamp,
+                frames.map))
+        acts = activities(g)
+        self._publish_if("agenda", wall, msgs.agenda_json(acts), lambda: msgs.string(msgs.agenda_json(acts)))
+        if robot is not None:
+            self._robot_topics(robot, wall, t_s, stamp)
+        people = None
+        if self._due("people", wall) or self._due("tf", wall):
+            people = dsr_people(g)
+        if people is not None:
+            key = tuple((p.name, round(p.x, 3), round(p.y, 3)) for p in people)
+            self._publish_if("people", wall, (t_s, key), lambda: msgs.people(people, stamp, frames.map))
+        if self._due("social_costmap", wall) or self._due("keepout_filter_mask", wall):
+            self._social(wall, t_s, stamp, people)
+        if robot is not None and people is not None:
+            self._publish_if("tf", wall, (t_s, robot.attrs.get("pose_stamp")), lambda: self._tf(robot, people, stamp))
+
+    def _due(self, key: str, wall: float) -> bool:
+        if key not in self.pubs:
+            return False
+        rate = getattr(self.cfg.topics, key).rate_hz
+        return rate is None or wall - self._last.get(key, -math.inf) >= 1.0 / rate
+
+    def _publish_if(self, key: str, wall: float, token: Any, build: Any) -> None:
+        """Publish topic ``key`` when its rate allows and ``token`` (what it shows) changed."""
+        if not self._due(key, wall) or self._seen.get(key, object()) == token:
+            return
+        started = time.perf_counter()
+        size = self.pubs[key].publish(build())
+        self._seen[key] = token
+        self._last[key] = wall
+        stat = self.stats.setdefault(key, {"count": 0, "bytes": 0, "seconds": 0.0})
+        stat["count"] += 1
+        stat["bytes"] += size
+        stat["seconds"] += time.perf_counter() - started
+
+    def _map(self, stamp: Any, closed: tuple[str, ...]) -> Any:
+        static = self.wall_maps.static(closed=closed)
+        values = np.where(np.isfinite(static.grid), 0, 100).astype(np.int8)
+        return msgs.occupancy_grid(values, (static.spec.x0, static.spec.y0), static.spec.resolution, stamp,
+                                   self.cfg.frames.map)
+
+    def _social(self, wall: float, t_s: float, stamp: Any, people: list | None) -> None:
+        smap = self.maps.build(self.graph, t_s)
+        origin, res = (smap.spec.x0, smap.spec.y0), smap.spec.resolution
+        frame = self.cfg.frames.map
+        self._publish_if("social_costmap", wall, t_s, lambda: msgs.occupancy_grid(
+            keepout_values(smap.cost, self.scale), origin, res, stamp, frame))
+        self._publish_if("keepout_filter_mask", wall, t_s, lambda: msgs.occupancy_grid(
+            keepout_values(social_costs(smap), self.scale), origin, res, stamp, frame))
+
+    def _robot_topics(self, robot: Any, wall: float, t_s: float, stamp: Any) -> None:
+        a, frames = robot.attrs, self.cfg.frames
+        try:
+            x, y, theta = self.graph.world_pose(robot.id)
+        except (LookupError, ValueError):
+            return
+        pose_stamp = a.get("pose_stamp")
+        self._publish_if("odom", wall, pose_stamp, lambda: msgs.odometry(
+            x, y, theta, float(a.get("v", 0.0)), float(a.get("vy", 0.0)), float(a.get("omega", 0.0)), stamp,
+            frames.odom, frames.base))
+        ranges, angles = a.get("laser_ranges"), a.get("laser_angles")
+        if ranges and angles and len(ranges) == len(angles):
+            self._publish_if("scan", wall, pose_stamp, lambda: msgs.laser_scan(
+                ranges, angles, self.scene.robot.laser_range, stamp, frames.laser))
+        xs, ys = a.get("path_x") or [], a.get("path_y") or []
+        if len(xs) == len(ys) and xs:
+            self._publish_if("plan", wall, a.get("planned_s"), lambda: msgs.path(xs, ys, stamp, frames.map))
+
+    def _tf(self, robot: Any, people: list, stamp: Any) -> Any:
+        frames = self.cfg.frames
+        x, y, theta = self.graph.world_pose(robot.id)
+        transforms = [msgs.transform(frames.map, frames.odom, 0.0, 0.0, 0.0, stamp),
+                      msgs.transform(frames.odom, frames.base, x, y, theta, stamp)]
+        transforms += [msgs.transform(frames.map, f"{frames.person_prefix}{p.name}", p.x, p.y, p.theta, stamp)
+                       for p in people]
+        return msgs.tf_message(transforms)
+
+    def teardown(self) -> None:
+        summary = ", ".join(f"{k} {int(v['count'])} msgs {v['seconds'] * 1000:.0f} ms"
+                            for k, v in sorted(self.stats.items()))
+        self.log.info("published: %s", summary or "nothing")
+        self.node.close()
+        self.session.close()

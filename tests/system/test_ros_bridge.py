@@ -1,0 +1,133 @@
+"""chronav as a ROS 2 node over Zenoh, checked by an independent client (tests/integration/ros2_client.py).
+
+The path a user takes: a ROS-side Zenoh router (here `python -m dsr.router`, standing in for
+rmw_zenohd), then `chronav launch SCENE --ros --ros-domain 7` with CHRONAV_ROS_ENDPOINT pointing
+at it.  The client sees chronav's node and topics in the ROS graph (liveliness tokens), receives
+/map late (TRANSIENT_LOCAL), /people where the DSR has the people, and sends a /goal_pose: the
+robot plans (the /plan ends at the goal, the DSR has the pose mission) and drives there (/odom).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.integration.ros2_client import STORE, Ros2Client, dds
+from tests.support import REPO_ROOT, ProcessGroup, free_port, wait_until
+
+pytestmark = pytest.mark.slow
+SCENE = REPO_ROOT / "tests" / "data" / "ros_lounge.yaml"
+DOMAIN = 7
+GOAL = (4.8, 3.0, 0.0)
+
+
+def _dsr(run_dir: Path) -> dict:
+    out = subprocess.run([sys.executable, "-m", "tools.cli", "dsr", "dump", "--run", str(run_dir), "--json"],
+                         capture_output=True, text=True, timeout=60, cwd=REPO_ROOT, check=False)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return json.loads(out.stdout)
+
+
+def _pose_of(doc: dict, name: str) -> tuple[float, float]:
+    node = next(n for n in doc["nodes"] if n["name"] == name)
+    edge = next(e for e in doc["edges"] if e["dst"] == node["id"] and e["type"] == "RT")
+    return edge["attrs"]["x"], edge["attrs"]["y"]
+
+
+def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: Path) -> None:
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CHRONAV_")}
+    group = ProcessGroup()
+    client = None
+    try:
+        group.spawn(["-m", "dsr.router", "--listen", endpoint], env=env, log_path=tmp_path / "ros_router.log")
+        launcher = group.spawn(["-m", "tools.cli", "launch", str(SCENE), "--ros", "--ros-domain", str(DOMAIN),
+                                "--no-record", "--timeout", "240"],
+                               env={"CHRONAV_ROS_ENDPOINT": endpoint, "CHRONAV_RUNS": str(tmp_path / "runs")},
+                               log_path=tmp_path / "launch.log")
+        wait_until(lambda: any((tmp_path / "runs").glob("*/connect.json")), 60, message="the run's connect file")
+        run_dir = next((tmp_path / "runs").glob("*/connect.json")).parent
+        client = Ros2Client(endpoint, DOMAIN)
+        people = client.subscribe("/people", "people_msgs/msg/People")
+        plan = client.subscribe("/plan", "nav_msgs/msg/Path")
+        odom = client.subscribe("/odom", "nav_msgs/msg/Odometry")
+        tf = client.subscribe("/tf", "tf2_msgs/msg/TFMessage")
+        scan = client.subscribe("/scan", "sensor_msgs/msg/LaserScan")
+        social = client.subscribe("/social_costmap", "nav_msgs/msg/OccupancyGrid", transient_local=True)
+
+        # the ROS graph: chronav's node and its publishers, with type, hash and QoS as rmw_zenoh writes them
+        def tokens() -> list[str]:
+            return [t for t in client.graph() if t.split("/")[5] in ("NN", "MP", "MS") and
+                    t.split("/")[8] == "chronav"]
+        wait_until(lambda: any("/MP/" in t and "%map/" in t for t in tokens()), 180, interval=0.5,
+                   message="chronav's /map publisher in the ROS graph")
+        graph = tokens()
+        assert any(t.split("/")[5] == "NN" for t in graph), graph
+        map_token = next(t for t in graph if "/MP/" in t and t.split("/")[9] == "%map")
+        assert map_token.split("/")[10:] == [dds("nav_msgs/msg/OccupancyGrid"),
+                                             STORE.hash_rihs01("nav_msgs/msg/OccupancyGrid"), ":1:,1:,:,:,,"]
+        sub_token = next(t for t in graph if "/MS/" in t and t.split("/")[9] == "%goal_pose")
+        assert sub_token.split("/")[10] == dds("geometry_msgs/msg/PoseStamped")
+
+        # a late subscriber still gets the map (TRANSIENT_LOCAL): the scene's 6 x 4 m at 0.05 m
+        the_map = client.subscribe("/map", "nav_msgs/msg/OccupancyGrid", transient_local=True).wait(timeout=30)
+        assert (the_map.info.width, the_map.info.height) == (120, 80)
+        assert the_map.info.resolution == pytest.approx(0.05) and the_map.header.frame_id == "map"
+        assert len(the_map.data) == 120 * 80 and set(the_map.data.tolist()) <= {0, 100}
+        grid = social.wait(timeout=30)
+        assert (grid.info.width, grid.info.height) == (120, 80) and max(grid.data) == 100
+        assert min(grid.data) >= 0
+        info = client.subscribe("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo",
+                                transient_local=True).wait(timeout=30)
+        assert info.type == 0 and info.filter_mask_topic == "/keepout_filter_mask"
+
+        # people where the DSR has them
+        msg = people.wait(lambda m: len(m.people) == 2, timeout=60)
+        doc = _dsr(run_dir)
+        for person in msg.people:
+            x, y = _pose_of(doc, person.name)
+            assert math.hypot(person.position.x - x, person.position.y - y) < 0.3, person.name
+        frames = {t.child_frame_id for t in tf.wait(lambda m: len(m.transforms) >= 4, timeout=30).transforms}
+        assert {"odom", "base_link", "person/ana", "person/ben"} <= frames
+        laser = scan.wait(timeout=30)
+        assert len(laser.ranges) == 91 and laser.header.frame_id == "base_link"
+
+        # a goal from ROS: a pose mission in the DSR, a plan ending at the goal, the robot arriving
+        publish_goal = client.publisher("/goal_pose", "geometry_msgs/msg/PoseStamped")
+        T = STORE.types
+        goal = T["geometry_msgs/msg/PoseStamped"](
+            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="map"),
+            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=GOAL[0], y=GOAL[1], z=0.0),
+                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
+                                                                                           w=1.0)))
+        wait_until(lambda: (publish_goal(goal), bool(plan.messages))[1], 60, interval=1.0,
+                   message="a /plan after the /goal_pose")
+        path = plan.wait(lambda m: len(m.poses) > 1, timeout=60)
+        end = path.poses[-1].pose.position
+        assert math.hypot(end.x - GOAL[0], end.y - GOAL[1]) < 0.1
+        missions = [n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission"]
+        assert missions and missions[0]["attrs"]["goal"].startswith("pose:4.800,3.000")
+        odom.wait(lambda m: math.hypot(m.pose.pose.position.x - GOAL[0], m.pose.pose.position.y - GOAL[1]) < 0.3,
+                  timeout=120)
+        wait_until(lambda: any(n["type"] == "mission" and n["attrs"].get("state") == "done"
+                               for n in _dsr(run_dir)["nodes"]), 60, interval=1.0, message="the mission done")
+        assert not (people.errors or plan.errors or odom.errors or tf.errors or scan.errors)
+        seqs = [a[0] for a in odom.attachments]
+        assert seqs == sorted(seqs) and len({a[2] for a in odom.attachments}) == 1
+        assert all(len(a[2]) == 16 for a in odom.attachments)
+
+        os.killpg(launcher.pid, signal.SIGINT)
+        launcher.wait(timeout=60)
+        assert not [t for t in client.graph() if t.split("/")[8] == "chronav"], "tokens left after the run"
+    finally:
+        if client is not None:
+            client.close()
+        group.close()
