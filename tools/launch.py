@@ -400,7 +400,11 @@ def register(app: typer.Typer) -> None:
 
         domain = None
         if ros or ros_domain is not None:
-            domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
+            try:
+                domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
+            except ValueError:
+                raise typer.BadParameter(f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')!r} is not a number; "
+                                         "set it to 0-232 or give --ros-domain N") from None
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain)

@@ -93,6 +93,15 @@ class BridgeConfigError(ValueError):
     """The bridge's YAML is unreadable or has a bad key or value."""
 
 
+def _merge(base: dict[str, object], extra: dict[str, object]) -> dict[str, object]:
+    """``extra`` over ``base``, mapping by mapping (a topic's ``rate_hz`` alone keeps its name and QoS)."""
+    out = dict(base)
+    for key, value in extra.items():
+        old = out.get(key)
+        out[key] = _merge(old, value) if isinstance(old, dict) and isinstance(value, dict) else value
+    return out
+
+
 def load_bridge_config(path: Path | None = None, **overrides: object) -> BridgeConfig:
     """Defaults, then the YAML file (if any), then ``overrides`` (command-line options)."""
     data: dict[str, object] = {}
@@ -106,7 +115,7 @@ def load_bridge_config(path: Path | None = None, **overrides: object) -> BridgeC
         data.update(loaded or {})
     data.update({k: v for k, v in overrides.items() if v is not None})
     try:
-        return BridgeConfig.model_validate(data)
+        return BridgeConfig.model_validate(_merge(BridgeConfig().model_dump(), data))
     except ValidationError as exc:
         where = path or "ros bridge settings"
         problems = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in exc.errors())

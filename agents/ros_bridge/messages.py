@@ -39,7 +39,8 @@ def day_epoch_s(date: dt.date, timezone: str) -> float:
 
 
 def ros_time(t_s: float, epoch_s: float = 0.0) -> Any:
-    total_ns = int(round((epoch_s + t_s) * 1e9))
+    whole = math.floor(epoch_s)   # in integer parts: a float of 1.8e18 ns has 256 ns steps
+    total_ns = whole * 1_000_000_000 + round((epoch_s - whole) * 1e9) + round(t_s * 1e9)
     return msg_class("builtin_interfaces/msg/Time")(sec=total_ns // 1_000_000_000, nanosec=total_ns % 1_000_000_000)
 
 

@@ -128,6 +128,7 @@ class Ros2Client:
         def publish(message: Any) -> None:
             payload = bytes(STORE.serialize_cdr(message, type_name))
             pub.put(payload, attachment=struct.pack("<qqB", next(self._seq), time.time_ns(), 16) + gid)
+        publish.matched = lambda: pub.matching_status.matching  # type: ignore[attr-defined]
         return publish
 
     def graph(self, timeout: float = 2.0) -> list[str]:

@@ -108,13 +108,13 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
             pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=GOAL[0], y=GOAL[1], z=0.0),
                                              orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
                                                                                            w=1.0)))
-        wait_until(lambda: (publish_goal(goal), bool(plan.messages))[1], 60, interval=1.0,
-                   message="a /plan after the /goal_pose")
+        wait_until(publish_goal.matched, 30, message="chronav's /goal_pose subscription matching")
+        publish_goal(goal)
         path = plan.wait(lambda m: len(m.poses) > 1, timeout=60)
         end = path.poses[-1].pose.position
         assert math.hypot(end.x - GOAL[0], end.y - GOAL[1]) < 0.1
         missions = [n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission"]
-        assert missions and missions[0]["attrs"]["goal"].startswith("pose:4.800,3.000")
+        assert len(missions) == 1 and missions[0]["attrs"]["goal"].startswith("pose:4.800,3.000")
         odom.wait(lambda m: math.hypot(m.pose.pose.position.x - GOAL[0], m.pose.pose.position.y - GOAL[1]) < 0.3,
                   timeout=120)
         wait_until(lambda: any(n["type"] == "mission" and n["attrs"].get("state") == "done"
