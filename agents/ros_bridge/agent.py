@@ -28,16 +28,14 @@ import queue
 import time
 from typing import Any
 
-import numpy as np
-
-from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE, MaskScale, keepout_values, social_costs
+from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE
 from agents.ros_bridge import messages as msgs
 from agents.ros_bridge.config import BridgeConfig, BridgeConfigError, TopicSpec, config_from_options
+from agents.ros_bridge.maps import Grid, RosMaps
 from agents.ros_bridge.wire import RosNode, RosPublisher, ros_session_config
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.world.dsr_readers import closed_doors, dsr_people
-from agents.world.navigation import NavigationMaps
 from agents.world.vocabulary import WORLD, MissionState, NodeType, activities, mission_name, now_s
 from scenes.clock import format_clock
 
@@ -64,10 +62,8 @@ class RosBridgeAgent(Agent):
                              f"({exc}); start it (`ros2 run rmw_zenoh_cpp rmw_zenohd`) or give its endpoint "
                              "with CHRONAV_ROS_ENDPOINT / -o ros_endpoint=tcp/HOST:PORT") from None
         self.epoch_s = msgs.day_epoch_s(self.scene.clock.date, self.scene.clock.timezone)
-        self.maps = NavigationMaps.for_scene(self.scene)
-        # the building as it is (no robot inflation): what a map_server would serve
-        self.wall_maps = NavigationMaps.for_scene(self.scene, margin_m=-self.scene.robot.radius)
-        self.scale = MaskScale.for_params(self.maps.params)
+        self.maps = RosMaps(self.scene)
+        self.scale = self.maps.scale
         self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
         self.pubs: dict[str, RosPublisher] = {}
         self._last: dict[str, float] = {}
@@ -176,20 +172,16 @@ class RosBridgeAgent(Agent):
         stat["bytes"] += size
         stat["seconds"] += time.perf_counter() - started
 
+    def _grid(self, grid: Grid, stamp: Any) -> Any:
+        return msgs.occupancy_grid(grid.values, grid.origin, grid.resolution, stamp, self.cfg.frames.map)
+
     def _map(self, stamp: Any, closed: tuple[str, ...]) -> Any:
-        static = self.wall_maps.static(closed=closed)
-        values = np.where(np.isfinite(static.grid), 0, 100).astype(np.int8)
-        return msgs.occupancy_grid(values, (static.spec.x0, static.spec.y0), static.spec.resolution, stamp,
-                                   self.cfg.frames.map)
+        return self._grid(self.maps.building(closed), stamp)
 
     def _social(self, wall: float, t_s: float, stamp: Any, people: list | None) -> None:
-        smap = self.maps.build(self.graph, t_s)
-        origin, res = (smap.spec.x0, smap.spec.y0), smap.spec.resolution
-        frame = self.cfg.frames.map
-        self._publish_if("social_costmap", wall, t_s, lambda: msgs.occupancy_grid(
-            keepout_values(smap.cost, self.scale), origin, res, stamp, frame))
-        self._publish_if("keepout_filter_mask", wall, t_s, lambda: msgs.occupancy_grid(
-            keepout_values(social_costs(smap), self.scale), origin, res, stamp, frame))
+        costmap, keepout = self.maps.social(self.maps.nav.build(self.graph, t_s))
+        self._publish_if("social_costmap", wall, t_s, lambda: self._grid(costmap, stamp))
+        self._publish_if("keepout_filter_mask", wall, t_s, lambda: self._grid(keepout, stamp))
 
     def _robot_topics(self, robot: Any, wall: float, t_s: float, stamp: Any) -> None:
         a, frames = robot.attrs, self.cfg.frames

@@ -14,9 +14,13 @@ import hashlib
 import struct
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 import zenoh
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from zenoh import ext
 
@@ -143,3 +147,17 @@ class Ros2Client:
             except zenoh.ZError:
                 pass
         self.session.close()
+
+
+def read_back(path: Path) -> dict[str, list]:
+    """Every message of the bag, decoded by rosbags (types from the bag's own definitions) and
+    checked against the mcap library's decoder; topic -> [(log time ns, message)]."""
+    out: dict[str, list] = {}
+    with AnyReader([path]) as reader:
+        for conn, log_ns, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((log_ns, reader.deserialize(raw, conn.msgtype)))
+    with path.open("rb") as handle:
+        decoded = list(make_reader(handle, decoder_factories=[DecoderFactory()]).iter_decoded_messages())
+    assert len(decoded) == sum(len(v) for v in out.values())
+    assert {schema.name for schema, *_ in decoded} >= {"nav_msgs/msg/Odometry", "people_msgs/msg/People"}
+    return out

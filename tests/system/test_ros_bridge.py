@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.ros2_client import STORE, Ros2Client, dds
+from tests.integration.ros2_client import STORE, Ros2Client, dds, read_back
 from tests.support import REPO_ROOT, ProcessGroup, free_port, wait_until
 
 pytestmark = pytest.mark.slow
@@ -127,6 +127,16 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         os.killpg(launcher.pid, signal.SIGINT)
         launcher.wait(timeout=60)
         assert not [t for t in client.graph() if t.split("/")[8] == "chronav"], "tokens left after the run"
+
+        # the run as a bag: the drive and the people, every message decoding with rosbags and mcap
+        bag = tmp_path / "run.mcap"
+        done = subprocess.run([sys.executable, "-m", "tools.cli", "export", str(run_dir), "--out", str(bag)],
+                              capture_output=True, text=True, timeout=120, cwd=REPO_ROOT, check=False)
+        assert done.returncode == 0, done.stderr
+        topics = read_back(bag)
+        last = topics["/odom"][-1][1].pose.pose.position
+        assert math.hypot(last.x - GOAL[0], last.y - GOAL[1]) < 0.3
+        assert {p.name for p in topics["/people"][0][1].people} == {"ana", "ben"}
     finally:
         if client is not None:
             client.close()
