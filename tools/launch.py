@@ -180,12 +180,13 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                startup_timeout_s: float = DEFAULT_STARTUP_TIMEOUT_S,
                agent_options: dict[str, list[str]] | None = None,
                on_tick: Callable[[dict[str, object]], None] | None = None,
-               metrics_report: bool = True, ros_domain: int | None = None) -> RunResult:
+               metrics_report: bool = True, ros_domain: int | None = None, robot: str = "sim") -> RunResult:
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C.
 
     ``metrics_report=False`` skips the social-vs-baseline metrics the demo logs into the recording
     (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
-    the ROS 2 bridge agent on that ROS_DOMAIN_ID (docs/ros2.md)."""
+    the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
+    instead of the simulated one (docs/ros2.md)."""
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
     from dsr import DSRError, join
@@ -197,6 +198,10 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     from agents.runtime.drawing.dsr_graph import GraphLogger
 
     check_rate(rate)
+    if robot not in ("sim", "ros"):
+        raise LaunchError(f"--robot {robot!r}: give sim (the simulated robot) or ros (a ROS 2 robot through --ros)")
+    if robot == "ros" and ros_domain is None:
+        raise LaunchError("--robot ros needs the ROS 2 bridge: add --ros (and --ros-domain N if not 0)")
     check_timeout(timeout_s)
     check_timeout(hang_timeout_s, "--hang-timeout")
     check_timeout(startup_timeout_s, "--startup-timeout")
@@ -217,6 +222,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     for name in agents:
         options = [*(["-o", f"rate={rate}"] if rate is not None and name == "sim_robot" else [])]
         options += ["-o", f"ros_domain={ros_domain}"] if name == ROS_BRIDGE else []
+        options += ["-o", "robot=ros"] if robot == "ros" and name in ("sim_robot", ROS_BRIDGE) else []
         for opt in (agent_options or {}).get(name, []):
             options += ["-o", opt]
         supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
@@ -393,6 +399,8 @@ def register(app: typer.Typer) -> None:
                                         "router endpoint from CHRONAV_ROS_ENDPOINT, default tcp/127.0.0.1:7447)"),
                ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
                                               help="ROS_DOMAIN_ID of --ros (default: $ROS_DOMAIN_ID or 0)"),
+               robot: str = typer.Option("sim", "--robot", help="sim: the simulated robot; ros: a ROS 2 robot "
+                                         "(its /odom and /scan in, /cmd_vel out; needs --ros)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -400,7 +408,7 @@ def register(app: typer.Typer) -> None:
         from tools.console import run_with_progress
 
         domain = None
-        if ros or ros_domain is not None:
+        if ros or ros_domain is not None or robot == "ros":
             try:
                 domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
             except ValueError:
@@ -408,7 +416,8 @@ def register(app: typer.Typer) -> None:
                                          "set it to 0-232 or give --ros-domain N") from None
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
-                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain)
+                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
+                                 robot=robot)
         raise typer.Exit(code)
 
     @app.command("demo")

@@ -19,6 +19,15 @@ when what it shows changed.
 What it subscribes: ``/goal_pose`` (geometry_msgs/PoseStamped in the map frame) becomes a pose
 mission (``mission/ros_goal_<n>``, due now) that the executive plans and runs like any other.
 A goal in another frame, or not finite, is refused with a log line; nothing is written.
+
+``-o robot=ros`` (``chronav launch --robot ros``): the robot is a ROS 2 robot.  The bridge then
+does not publish ``/odom``, ``/scan`` and the odom -> base_link transform (the robot does); it
+subscribes them and writes the robot's pose (``/odom`` read in the map frame: a robot whose
+odometry is not aligned with the map needs a localiser that publishes map poses on that topic),
+velocity and laser (resampled to the scene's rays) into the DSR, stamped with the scene clock,
+at most ``robot_rate_hz`` times a second; and it publishes the navigation's every command on
+``/cmd_vel`` (geometry_msgs/Twist) the moment the command reaches its replica (a DSR signal, not
+the loop's period), and a stop when the bridge ends.
 """
 
 from __future__ import annotations
@@ -27,6 +36,8 @@ import math
 import queue
 import time
 from typing import Any
+
+import numpy as np
 
 from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE
 from agents.ros_bridge import messages as msgs
@@ -41,6 +52,7 @@ from scenes.clock import format_clock
 
 GOAL_PREFIX = "ros_goal_"
 MAX_PENDING_GOALS = 16
+ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (the simulator's is 10)
 
 
 class RosBridgeAgent(Agent):
@@ -70,13 +82,15 @@ class RosBridgeAgent(Agent):
         self._seen: dict[str, Any] = {}
         self.stats: dict[str, dict[str, float]] = {}
         topics = self.cfg.topics
+        self.external = self.config.option("robot", "sim") == "ros"
+        own_robot = () if self.external else ("odom", "scan")
         for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
                                ("keepout_filter_mask", msgs.OCCUPANCY_GRID),
                                ("costmap_filter_info", msgs.COSTMAP_FILTER_INFO), ("people", msgs.PEOPLE),
                                ("plan", msgs.PATH), ("tf", msgs.TF), ("odom", msgs.ODOMETRY),
                                ("scan", msgs.LASER_SCAN), ("agenda", msgs.STRING), ("clock", msgs.CLOCK)):
             spec: TopicSpec = getattr(topics, key)
-            if spec.enabled:
+            if spec.enabled and (key not in ("odom", "scan") or key in own_robot):
                 self.pubs[key] = self.node.create_publisher(spec.name, type_name, spec.qos.qos())
         self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
         self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
@@ -84,8 +98,55 @@ class RosBridgeAgent(Agent):
         if topics.goal_pose.enabled:
             self.node.create_subscription(topics.goal_pose.name, msgs.POSE_STAMPED, topics.goal_pose.qos.qos(),
                                           self._on_goal, on_error=self.log.warning)
+        if self.external:
+            self._setup_external(graph)
         self.log.info("ROS 2 node /%s on domain %d via %s: %s", self.cfg.node, self.cfg.domain, self.cfg.endpoint,
                       ", ".join(p.topic for p in self.pubs.values()))
+
+    # ------------------------------------------------------------------ --robot ros
+    def _setup_external(self, graph: Any) -> None:
+        topics = self.cfg.topics
+        self._odom: Any = None
+        self._scan: Any = None
+        self._robot_written = -math.inf
+        self._last_cmd: Any = None
+        self.cmd_pub = self.node.create_publisher(topics.cmd_vel.name, msgs.TWIST, topics.cmd_vel.qos.qos())
+        self.node.create_subscription(topics.odom.name, msgs.ODOMETRY, topics.odom.qos.qos(),
+                                      lambda m: setattr(self, "_odom", m), on_error=self.log.warning)
+        self.node.create_subscription(topics.scan.name, msgs.LASER_SCAN, topics.scan.qos.qos(),
+                                      lambda m: setattr(self, "_scan", m), on_error=self.log.warning)
+        graph.connect("node_updated", self._on_robot_command)
+
+    def _on_robot_command(self, node: Any, *_rest: object) -> None:
+        """The navigation's command reached this replica: send it now (the agent's thread)."""
+        if node.type != NodeType.ROBOT:
+            return
+        a = node.attrs
+        cmd = (a.get("cmd_stamp"), a.get("cmd_vx"), a.get("cmd_vy"), a.get("cmd_omega"))
+        if cmd[0] is None or cmd == self._last_cmd:
+            return
+        self._last_cmd = cmd
+        self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
+
+    def _write_robot(self, t_s: float, wall: float) -> None:
+        """The ROS robot's latest odometry and scan into the DSR, as the simulator would write them."""
+        odom, g = self._odom, self.graph
+        if odom is None or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
+            return
+        robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
+        if robot is None or world is None:
+            return
+        p, tw = odom.pose.pose, odom.twist.twist
+        attrs: dict[str, Any] = {"pose_stamp": t_s, "v": float(tw.linear.x), "vy": float(tw.linear.y),
+                                 "omega": float(tw.angular.z)}
+        angles = robot.attrs.get("laser_angles") or []
+        if self._scan is not None and angles:
+            attrs["laser_ranges"] = resample_scan(self._scan, angles, self.scene.robot.laser_range)
+        with g.transaction():
+            g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": float(p.position.x), "y": float(p.position.y),
+                                                                     "theta": msgs.yaw_of(p.orientation)})
+            g.update_node(robot.id, attrs=attrs)
+        self._robot_written = wall
 
     # ------------------------------------------------------------------ subscriptions
     def _on_goal(self, message: Any) -> None:
@@ -127,6 +188,8 @@ class RosBridgeAgent(Agent):
             return
         self._take_goals(t_s)
         wall = time.monotonic()
+        if self.external:
+            self._write_robot(t_s, wall)
         stamp = msgs.ros_time(t_s, self.epoch_s)
         frames = self.cfg.frames
         robot = g.get_node_by_name(self.scene.robot.name)
@@ -204,8 +267,9 @@ class RosBridgeAgent(Agent):
     def _tf(self, robot: Any, people: list, stamp: Any) -> Any:
         frames = self.cfg.frames
         x, y, theta = self.graph.world_pose(robot.id)
-        transforms = [msgs.transform(frames.map, frames.odom, 0.0, 0.0, 0.0, stamp),
-                      msgs.transform(frames.odom, frames.base, x, y, theta, stamp)]
+        transforms = [msgs.transform(frames.map, frames.odom, 0.0, 0.0, 0.0, stamp)]
+        if not self.external:   # a ROS robot publishes its own odom -> base_link
+            transforms.append(msgs.transform(frames.odom, frames.base, x, y, theta, stamp))
         transforms += [msgs.transform(frames.map, f"{frames.person_prefix}{p.name}", p.x, p.y, p.theta, stamp)
                        for p in people]
         return msgs.tf_message(transforms)
@@ -214,5 +278,20 @@ class RosBridgeAgent(Agent):
         summary = ", ".join(f"{k} {int(v['count'])} msgs {v['seconds'] * 1000:.0f} ms"
                             for k, v in sorted(self.stats.items()))
         self.log.info("published: %s", summary or "nothing")
+        if self.external:
+            self.cmd_pub.publish(msgs.twist(0.0, 0.0, 0.0))   # leave the robot stopped
         self.node.close()
         self.session.close()
+
+
+def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[float]:
+    """A LaserScan's ranges at the scene's ray angles (nearest ray; no return or out of the scan's
+    field of view: ``range_max``, as the simulator's laser reports a ray that hits nothing)."""
+    ranges = np.asarray(scan.ranges, dtype=float)
+    if len(ranges) == 0 or scan.angle_increment == 0:
+        return [range_max] * len(angles)
+    index = np.rint((np.asarray(angles) - scan.angle_min) / scan.angle_increment).astype(int)
+    inside = (index >= 0) & (index < len(ranges))
+    picked = np.where(inside, ranges[np.clip(index, 0, len(ranges) - 1)], range_max)
+    valid = np.isfinite(picked) & (picked >= scan.range_min) & (picked <= scan.range_max)
+    return np.minimum(np.where(valid, picked, range_max), range_max).tolist()

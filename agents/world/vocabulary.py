@@ -166,8 +166,9 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.CLOCK, (SIM_ROBOT,), _attrs(SIM_ROBOT, now_s=FLOAT, start_s=FLOAT, end_s=FLOAT, rate=FLOAT,
                                                   mode=STR, finished=BOOL)),
     NodeSpec(NodeType.ROBOT, (SIM_ROBOT,), {
-        **_attrs(SIM_ROBOT, radius=FLOAT, kinematics=STR, max_speed=FLOAT, laser_angles=FLOATS, pose_stamp=FLOAT,
-                 v=FLOAT, vy=FLOAT, omega=FLOAT, laser_ranges=FLOATS),
+        **_attrs(SIM_ROBOT, radius=FLOAT, kinematics=STR, max_speed=FLOAT, laser_angles=FLOATS),
+        # the simulated robot's motion, or a ROS 2 robot's as the bridge reports it (--robot ros)
+        **_attrs((SIM_ROBOT, ROS_BRIDGE), pose_stamp=FLOAT, v=FLOAT, vy=FLOAT, omega=FLOAT, laser_ranges=FLOATS),
         **_attrs((SIM_ROBOT, NAVIGATION), nav_active=BOOL),
         **_attrs(NAVIGATION, cmd_vx=FLOAT, cmd_vy=FLOAT, cmd_omega=FLOAT, cmd_stamp=FLOAT, path_x=FLOATS,
                  path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
@@ -210,6 +211,7 @@ _POSE = {"x": FLOAT, "y": FLOAT, "theta": FLOAT}
 
 EDGES: tuple[EdgeSpec, ...] = (
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROOM, NodeType.ROBOT), (SIM_ROBOT,), _POSE),
+    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROBOT,), (ROS_BRIDGE,), _POSE),   # --robot ros
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.PERSON,), (OBSERVER,), _POSE),
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.OBJECT,), (RECOGNITION,), _POSE),
     EdgeSpec(EdgeType.IN, (NodeType.ROBOT,), (NodeType.ROOM,), (SIM_ROBOT,)),

@@ -67,8 +67,8 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         def tokens() -> list[str]:
             return [t for t in client.graph() if t.split("/")[5] in ("NN", "MP", "MS") and
                     t.split("/")[8] == "chronav"]
-        wait_until(lambda: any("/MP/" in t and "%map/" in t for t in tokens()), 180, interval=0.5,
-                   message="chronav's /map publisher in the ROS graph")
+        wait_until(lambda: any("/MS/" in t and "%goal_pose/" in t for t in tokens()), 180, interval=0.5,
+                   message="chronav's publishers and /goal_pose subscription in the ROS graph")
         graph = tokens()
         assert any(t.split("/")[5] == "NN" for t in graph), graph
         map_token = next(t for t in graph if "/MP/" in t and t.split("/")[9] == "%map")
@@ -141,3 +141,107 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         if client is not None:
             client.close()
         group.close()
+
+
+class FakeUnicycle:
+    """A ROS 2 robot written with the independent client: integrates /cmd_vel (unicycle), publishes
+    /odom (pose in the map frame) and an empty /scan at 20 Hz."""
+
+    def __init__(self, client: Ros2Client, pose: tuple[float, float, float]) -> None:
+        import threading
+
+        self.x, self.y, self.theta = pose
+        self.cmd = client.subscribe("/cmd_vel", "geometry_msgs/msg/Twist")
+        self.odom = client.publisher("/odom", "nav_msgs/msg/Odometry")
+        self.scan = client.publisher("/scan", "sensor_msgs/msg/LaserScan")
+        self.travelled = 0.0
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self) -> None:
+        import time
+
+        T = STORE.types
+        dt = 0.05
+        while not self.stop.is_set():
+            last = self.cmd.last()
+            v, w = (last.linear.x, last.angular.z) if last is not None else (0.0, 0.0)
+            self.x += v * math.cos(self.theta) * dt
+            self.y += v * math.sin(self.theta) * dt
+            self.theta += w * dt
+            self.travelled += abs(v) * dt
+            now = time.time_ns()
+            stamp = T["builtin_interfaces/msg/Time"](sec=now // 10**9, nanosec=now % 10**9)
+            header = T["std_msgs/msg/Header"](stamp=stamp, frame_id="odom")
+            vec = T["geometry_msgs/msg/Vector3"]
+            pose = T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](x=self.x, y=self.y, z=0.0),
+                orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(self.theta / 2),
+                                                              w=math.cos(self.theta / 2)))
+            import numpy as np
+
+            self.odom(T["nav_msgs/msg/Odometry"](
+                header=header, child_frame_id="base_link",
+                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                    twist=T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w)),
+                    covariance=np.zeros(36))))
+            self.scan(T["sensor_msgs/msg/LaserScan"](
+                header=T["std_msgs/msg/Header"](stamp=stamp, frame_id="base_link"), angle_min=-1.57,
+                angle_max=1.57, angle_increment=3.14 / 90, time_increment=0.0, scan_time=0.05, range_min=0.05,
+                range_max=5.0, ranges=np.full(91, np.inf, dtype=np.float32), intensities=np.zeros(0, np.float32)))
+            time.sleep(dt)
+
+
+def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CHRONAV_")}
+    group = ProcessGroup()
+    client = robot = None
+    try:
+        group.spawn(["-m", "dsr.router", "--listen", endpoint], env=env, log_path=tmp_path / "ros_router.log")
+        wait_until(lambda: _listening(port), 30, message="the ROS-side router")
+        client = Ros2Client(endpoint, DOMAIN, node="fake_robot")
+        robot = FakeUnicycle(client, (0.8, 1.2, 0.0))
+        group.spawn(["-m", "tools.cli", "launch", str(SCENE), "--robot", "ros", "--ros-domain", str(DOMAIN),
+                     "--no-record", "--timeout", "240"],
+                    env={"CHRONAV_ROS_ENDPOINT": endpoint, "CHRONAV_RUNS": str(tmp_path / "runs")},
+                    log_path=tmp_path / "launch.log")
+        wait_until(lambda: any((tmp_path / "runs").glob("*/connect.json")), 60, message="the run's connect file")
+        run_dir = next((tmp_path / "runs").glob("*/connect.json")).parent
+        goal_pub = client.publisher("/goal_pose", "geometry_msgs/msg/PoseStamped")
+        wait_until(goal_pub.matched, 180, interval=0.2, message="chronav's /goal_pose subscription")
+        # chronav does not publish the robot's own topics in this mode
+        assert not [t for t in client.graph() if t.split("/")[8] == "chronav" and "/MP/" in t
+                    and t.split("/")[9] in ("%odom", "%scan")]
+        T = STORE.types
+        goal_pub(T["geometry_msgs/msg/PoseStamped"](
+            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="map"),
+            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=GOAL[0], y=GOAL[1], z=0.0),
+                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
+                                                                                           w=1.0))))
+        wait_until(lambda: any(n["type"] == "mission" and n["attrs"].get("state") in ("done", "failed")
+                               for n in _dsr(run_dir)["nodes"]), 150, interval=1.0, message="the mission's end")
+        mission = next(n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission")
+        assert mission["attrs"]["state"] == "done", mission
+        assert math.hypot(robot.x - GOAL[0], robot.y - GOAL[1]) < 0.35, (robot.x, robot.y)
+        assert robot.travelled > 3.0 and len(robot.cmd.messages) > 20 and not robot.cmd.errors
+        # the DSR holds the ROS robot's pose (the bridge wrote it), not a simulated one
+        x, y = _pose_of(_dsr(run_dir), "robot")
+        assert math.hypot(x - robot.x, y - robot.y) < 0.3
+    finally:
+        if robot is not None:
+            robot.stop.set()
+            robot.thread.join(timeout=5)
+        if client is not None:
+            client.close()
+        group.close()
+
+
+def _listening(port: int) -> bool:
+    import socket
+
+    with socket.socket() as sock:
+        return sock.connect_ex(("127.0.0.1", port)) == 0
