@@ -53,6 +53,9 @@ from scenes.clock import format_clock
 GOAL_PREFIX = "ros_goal_"
 MAX_PENDING_GOALS = 16
 ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (the simulator's is 10)
+#: share of one core the bridge may spend rebuilding the social map from the DSR (a 1000 x 600
+#: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
+SOCIAL_MAP_CPU_BUDGET = 0.25
 
 
 class RosBridgeAgent(Agent):
@@ -80,6 +83,7 @@ class RosBridgeAgent(Agent):
         self.pubs: dict[str, RosPublisher] = {}
         self._last: dict[str, float] = {}
         self._seen: dict[str, Any] = {}
+        self._social_next = -math.inf
         self.stats: dict[str, dict[str, float]] = {}
         topics = self.cfg.topics
         self.external = self.config.option("robot", "sim") == "ros"
@@ -211,7 +215,7 @@ class RosBridgeAgent(Agent):
         if people is not None:
             key = tuple((p.name, round(p.x, 3), round(p.y, 3)) for p in people)
             self._publish_if("people", wall, (t_s, key), lambda: msgs.people(people, stamp, frames.map))
-        if self._due("social_costmap", wall) or self._due("keepout_filter_mask", wall):
+        if (self._due("social_costmap", wall) or self._due("keepout_filter_mask", wall)) and wall >= self._social_next:
             self._social(wall, t_s, stamp, people)
         if robot is not None and people is not None:
             self._publish_if("tf", wall, (t_s, robot.attrs.get("pose_stamp")), lambda: self._tf(robot, people, stamp))
@@ -242,7 +246,9 @@ class RosBridgeAgent(Agent):
         return self._grid(self.maps.building(closed), stamp)
 
     def _social(self, wall: float, t_s: float, stamp: Any, people: list | None) -> None:
+        started = time.process_time()
         costmap, keepout = self.maps.social(self.maps.nav.build(self.graph, t_s))
+        self._social_next = wall + (time.process_time() - started) / SOCIAL_MAP_CPU_BUDGET
         self._publish_if("social_costmap", wall, t_s, lambda: self._grid(costmap, stamp))
         self._publish_if("keepout_filter_mask", wall, t_s, lambda: self._grid(keepout, stamp))
 

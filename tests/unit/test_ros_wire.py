@@ -99,3 +99,21 @@ def test_bridge_config_errors_name_the_file_and_key(tmp_path: Path) -> None:
         load_bridge_config(bad)
     with pytest.raises(BridgeConfigError, match="domain"):
         load_bridge_config(None, domain=999)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_keepout_values_equal_their_numpy_definition(dtype: type) -> None:
+    """The compiled keepout conversion (nav2.keepout_values, used by the bridge several times a
+    second) gives exactly docs/maps.md's formula, half steps and lethal cells included."""
+    from agents.lib.socialmap.nav2 import MaskScale, keepout_values
+    from agents.lib.socialmap.social_map import SocialMapParams
+
+    scale = MaskScale.for_params(SocialMapParams())
+    rng = np.random.default_rng(5)
+    costs = rng.uniform(-1, 6, size=(60, 100)).astype(dtype)
+    costs[rng.random(costs.shape) < 0.1] = np.inf
+    costs[0, :99] = (scale.free_cost + (np.arange(99) + 0.5) * scale.multiplier).astype(dtype)
+    finite = np.isfinite(costs)
+    graded = np.rint((np.where(finite, costs, scale.free_cost) - scale.free_cost) / scale.multiplier)
+    expected = np.where(finite, np.clip(graded, 0, 99), 100).astype(np.int8)
+    assert np.array_equal(keepout_values(costs, scale), expected)
