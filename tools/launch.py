@@ -214,7 +214,8 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     agents = AGENTS if ros_domain is None else (*AGENTS, ROS_BRIDGE)
-    security = prepare_run_security(run_dir, graph_name, agents)
+    # the bridge's identity always: `chronav ros bridge --run` may join the run later
+    security = prepare_run_security(run_dir, graph_name, (*AGENTS, ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])

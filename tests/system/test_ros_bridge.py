@@ -1,8 +1,9 @@
 """chronav as a ROS 2 node over Zenoh, checked by an independent client (tests/integration/ros2_client.py).
 
-The path a user takes: a ROS-side Zenoh router (here `python -m dsr.router`, standing in for
-rmw_zenohd), then `chronav launch SCENE --ros --ros-domain 7` with CHRONAV_ROS_ENDPOINT pointing
-at it.  The client sees chronav's node and topics in the ROS graph (liveliness tokens), receives
+The paths a user takes: a ROS-side Zenoh router (here `python -m dsr.router`, standing in for
+rmw_zenohd), then `chronav launch SCENE` and, alone against that running system,
+`chronav ros bridge SCENE --run RUN --ros-domain 7 --ros-endpoint ...` (first test), or
+`chronav launch SCENE --robot ros --ros-domain 7` with CHRONAV_ROS_ENDPOINT (second test).  The client sees chronav's node and topics in the ROS graph (liveliness tokens), receives
 /map late (TRANSIENT_LOCAL), /people where the DSR has the people, and sends a /goal_pose: the
 robot plans (the /plan ends at the goal, the DSR has the pose mission) and drives there (/odom).
 """
@@ -19,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.integration.ros2_client import STORE, Ros2Client, dds, read_back
+from tests.integration.ros2_client import STORE, Ros2Client, data_key, dds, read_back
 from tests.support import REPO_ROOT, ProcessGroup, free_port, wait_until
 
 pytestmark = pytest.mark.slow
@@ -49,12 +50,13 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
     client = None
     try:
         group.spawn(["-m", "dsr.router", "--listen", endpoint], env=env, log_path=tmp_path / "ros_router.log")
-        launcher = group.spawn(["-m", "tools.cli", "launch", str(SCENE), "--ros", "--ros-domain", str(DOMAIN),
-                                "--no-record", "--timeout", "240"],
-                               env={"CHRONAV_ROS_ENDPOINT": endpoint, "CHRONAV_RUNS": str(tmp_path / "runs")},
-                               log_path=tmp_path / "launch.log")
+        launcher = group.spawn(["-m", "tools.cli", "launch", str(SCENE), "--no-record", "--timeout", "240"],
+                               env={"CHRONAV_RUNS": str(tmp_path / "runs")}, log_path=tmp_path / "launch.log")
         wait_until(lambda: any((tmp_path / "runs").glob("*/connect.json")), 60, message="the run's connect file")
         run_dir = next((tmp_path / "runs").glob("*/connect.json")).parent
+        bridge = group.spawn(["-m", "tools.cli", "ros", "bridge", str(SCENE), "--run", str(run_dir),
+                              "--ros-domain", str(DOMAIN), "--ros-endpoint", endpoint],
+                             env={"CHRONAV_RUNS": str(tmp_path / "runs")}, log_path=tmp_path / "bridge.log")
         client = Ros2Client(endpoint, DOMAIN)
         people = client.subscribe("/people", "people_msgs/msg/People")
         plan = client.subscribe("/plan", "nav_msgs/msg/Path")
@@ -109,6 +111,11 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
                                              orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
                                                                                            w=1.0)))
         wait_until(publish_goal.matched, 30, message="chronav's /goal_pose subscription matching")
+        # bad input first: bytes that are no PoseStamped, a goal in another frame; neither makes a mission
+        client.session.put(data_key(DOMAIN, "/goal_pose", "geometry_msgs/msg/PoseStamped"), b"\x00\x01\x00\x00junk")
+        wrong = STORE.types["geometry_msgs/msg/PoseStamped"](header=T["std_msgs/msg/Header"](
+            stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="odom"), pose=goal.pose)
+        publish_goal(wrong)
         publish_goal(goal)
         path = plan.wait(lambda m: len(m.poses) > 1, timeout=60)
         end = path.poses[-1].pose.position
@@ -124,9 +131,14 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         assert seqs == sorted(seqs) and len({a[2] for a in odom.attachments}) == 1
         assert all(len(a[2]) == 16 for a in odom.attachments)
 
+        log = (tmp_path / "bridge.log").read_text()
+        assert "not a valid geometry_msgs/msg/PoseStamped" in log and "frame 'odom' refused" in log
+
+        os.killpg(bridge.pid, signal.SIGINT)
+        bridge.wait(timeout=60)
+        assert not [t for t in client.graph() if t.split("/")[8] == "chronav"], "tokens left after the bridge"
         os.killpg(launcher.pid, signal.SIGINT)
         launcher.wait(timeout=60)
-        assert not [t for t in client.graph() if t.split("/")[8] == "chronav"], "tokens left after the run"
 
         # the run as a bag: the drive and the people, every message decoding with rosbags and mcap
         bag = tmp_path / "run.mcap"
