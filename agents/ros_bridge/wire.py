@@ -41,6 +41,8 @@ GID_SIZE = 16
 RMW_ZENOH_DEFAULT_DEPTH = 42
 #: rmw_zenoh's sporadic heartbeat period for RELIABLE + TRANSIENT_LOCAL publishers (s)
 MISS_DETECTION_HEARTBEAT_S = 0.5
+#: largest message the bridge decodes from the ROS side (goals, odometry, scans are far smaller)
+MAX_RECEIVED_BYTES = 4 * 1024 * 1024
 
 Reliability = Literal["reliable", "best_effort"]
 Durability = Literal["volatile", "transient_local"]
@@ -200,11 +202,17 @@ class RosNode:
         token_key, _ = self._entity_token("MS", topic, type_name, qos)
 
         def on_sample(sample: zenoh.Sample) -> None:
-            try:
-                message = deserialize(sample.payload.to_bytes(), type_name)
-            except Exception as exc:  # noqa: BLE001 - any malformed CDR: rosbags raises several kinds
+            data = sample.payload.to_bytes()
+            if len(data) > MAX_RECEIVED_BYTES:
                 if on_error is not None:
-                    on_error(f"{topic}: a message that is not a valid {type_name} was dropped ({exc})")
+                    on_error(f"{topic}: a message of {len(data)} bytes was dropped (at most {MAX_RECEIVED_BYTES})")
+                return
+            try:
+                message = deserialize(data, type_name)
+            except Exception:  # noqa: BLE001 - any malformed CDR: rosbags raises several kinds
+                if on_error is not None:
+                    on_error(f"{topic}: a message of {len(data)} bytes that is not a valid {type_name} was "
+                             "dropped (a publisher with another type or version of that message?)")
                 return
             callback(message)
 

@@ -3,8 +3,8 @@
 The RIHS01 hashes are computed by rosbags from the type descriptions; the expected values are
 published by others: std_msgs/String in rmw_zenoh's docs/design.md key-expression examples,
 OccupancyGrid, TFMessage and Twist in `ros2 topic info --verbose` outputs of ROS 2 installs
-(RViz's /map subscription, amcl's /tf, teleop_turtle's cmd_vel), Odometry, LaserScan and
-PoseStamped in other ROS-2-over-Zenoh clients' tables.
+(RViz's /map subscription, amcl's /tf, teleop_turtle's cmd_vel), Odometry, LaserScan,
+PoseStamped, Path and Clock in other ROS-2-over-Zenoh clients' tables and golden-hash tests.
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ PUBLISHED_HASHES = {
     "nav_msgs/msg/Odometry": "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0",
     "sensor_msgs/msg/LaserScan": "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
     "geometry_msgs/msg/PoseStamped": "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8",
+    "nav_msgs/msg/Path": "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b",
+    "rosgraph_msgs/msg/Clock": "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
 }
 
 
