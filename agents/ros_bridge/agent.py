@@ -56,37 +56,57 @@ ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (th
 #: share of one core the bridge may spend rebuilding the social map from the DSR (a 1000 x 600
 #: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
 SOCIAL_MAP_CPU_BUDGET = 0.25
+RETRY_S = 2.0            # between attempts to reach the ROS side's router
 
 
 class RosBridgeAgent(Agent):
     kind = "ros_bridge"
 
     def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
-        import zenoh
-
         self.graph = graph
         self.rec = recorder
         try:
             self.cfg: BridgeConfig = config_from_options(self.config.options)
         except BridgeConfigError as exc:
             raise SystemExit(f"ros_bridge: {exc}") from None
-        try:
-            self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
-        except zenoh.ZError as exc:
-            raise SystemExit(f"ros_bridge: cannot reach the ROS 2 side's Zenoh router at {self.cfg.endpoint} "
-                             f"({exc}); start it (`ros2 run rmw_zenoh_cpp rmw_zenohd`) or give its endpoint "
-                             "with CHRONAV_ROS_ENDPOINT / -o ros_endpoint=tcp/HOST:PORT") from None
         self.epoch_s = msgs.day_epoch_s(self.scene.clock.date, self.scene.clock.timezone)
         self.maps = RosMaps(self.scene)
         self.scale = self.maps.scale
-        self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        self.session: Any = None
+        self.node: RosNode | None = None
         self.pubs: dict[str, RosPublisher] = {}
         self._last: dict[str, float] = {}
         self._seen: dict[str, Any] = {}
         self._social_next = -math.inf
+        self._retry_at = -math.inf
         self.stats: dict[str, dict[str, float]] = {}
-        topics = self.cfg.topics
         self.external = self.config.option("robot", "sim") == "ros"
+        self._odom: Any = None
+        self._scan: Any = None
+        self._robot_written = -math.inf
+        self._last_cmd: Any = None
+        self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
+        self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
+            f"mission/{GOAL_PREFIX}"))
+        if self.external:
+            graph.connect("node_updated", self._on_robot_command)
+        self._open_ros()
+
+    def _open_ros(self) -> bool:
+        """Join the ROS side; while its router is not there, log it and try again every
+        RETRY_S (the run goes on: the bridge is a window, not a part the robot needs)."""
+        import zenoh
+
+        try:
+            self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
+        except zenoh.ZError:
+            self._retry_at = time.monotonic() + RETRY_S
+            self.log.warning("the ROS 2 side's Zenoh router at %s does not answer; trying again in %.0f s "
+                             "(start it with `ros2 run rmw_zenoh_cpp rmw_zenohd`, or give its endpoint with "
+                             "CHRONAV_ROS_ENDPOINT or --ros-endpoint)", self.cfg.endpoint, RETRY_S)
+            return False
+        self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        topics = self.cfg.topics
         own_robot = () if self.external else ("odom", "scan")
         for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
                                ("keepout_filter_mask", msgs.OCCUPANCY_GRID),
@@ -96,34 +116,28 @@ class RosBridgeAgent(Agent):
             spec: TopicSpec = getattr(topics, key)
             if spec.enabled and (key not in ("odom", "scan") or key in own_robot):
                 self.pubs[key] = self.node.create_publisher(spec.name, type_name, spec.qos.qos())
-        self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
-        self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
-            f"mission/{GOAL_PREFIX}"))
         if topics.goal_pose.enabled:
             self.node.create_subscription(topics.goal_pose.name, msgs.POSE_STAMPED, topics.goal_pose.qos.qos(),
                                           self._on_goal, on_error=self.log.warning)
         if self.external:
-            self._setup_external(graph)
+            self._setup_external()
         self.log.info("ROS 2 node /%s on domain %d via %s: %s", self.cfg.node, self.cfg.domain, self.cfg.endpoint,
                       ", ".join(p.topic for p in self.pubs.values()))
+        return True
 
     # ------------------------------------------------------------------ --robot ros
-    def _setup_external(self, graph: Any) -> None:
+    def _setup_external(self) -> None:
         topics = self.cfg.topics
-        self._odom: Any = None
-        self._scan: Any = None
-        self._robot_written = -math.inf
-        self._last_cmd: Any = None
+        assert self.node is not None
         self.cmd_pub = self.node.create_publisher(topics.cmd_vel.name, msgs.TWIST, topics.cmd_vel.qos.qos())
         self.node.create_subscription(topics.odom.name, msgs.ODOMETRY, topics.odom.qos.qos(),
                                       lambda m: setattr(self, "_odom", m), on_error=self.log.warning)
         self.node.create_subscription(topics.scan.name, msgs.LASER_SCAN, topics.scan.qos.qos(),
                                       lambda m: setattr(self, "_scan", m), on_error=self.log.warning)
-        graph.connect("node_updated", self._on_robot_command)
 
     def _on_robot_command(self, node: Any, *_rest: object) -> None:
         """The navigation's command reached this replica: send it now (the agent's thread)."""
-        if node.type != NodeType.ROBOT:
+        if node.type != NodeType.ROBOT or self.node is None:
             return
         a = node.attrs
         cmd = (a.get("cmd_stamp"), a.get("cmd_vx"), a.get("cmd_vy"), a.get("cmd_omega"))
@@ -186,6 +200,8 @@ class RosBridgeAgent(Agent):
 
     # ------------------------------------------------------------------ loop
     def step(self) -> None:
+        if self.node is None and (time.monotonic() < self._retry_at or not self._open_ros()):
+            return
         g = self.graph
         t_s = now_s(g)
         if t_s is None or g.get_node_by_name(WORLD) is None:
@@ -284,6 +300,8 @@ class RosBridgeAgent(Agent):
         summary = ", ".join(f"{k} {int(v['count'])} msgs {v['seconds'] * 1000:.0f} ms"
                             for k, v in sorted(self.stats.items()))
         self.log.info("published: %s", summary or "nothing")
+        if self.node is None:
+            return
         if self.external:
             self.cmd_pub.publish(msgs.twist(0.0, 0.0, 0.0))   # leave the robot stopped
         self.node.close()

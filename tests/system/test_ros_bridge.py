@@ -49,7 +49,6 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
     group = ProcessGroup()
     client = None
     try:
-        group.spawn(["-m", "dsr.router", "--listen", endpoint], env=env, log_path=tmp_path / "ros_router.log")
         launcher = group.spawn(["-m", "tools.cli", "launch", str(SCENE), "--no-record", "--timeout", "240"],
                                env={"CHRONAV_RUNS": str(tmp_path / "runs")}, log_path=tmp_path / "launch.log")
         wait_until(lambda: any((tmp_path / "runs").glob("*/connect.json")), 60, message="the run's connect file")
@@ -57,6 +56,11 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         bridge = group.spawn(["-m", "tools.cli", "ros", "bridge", str(SCENE), "--run", str(run_dir),
                               "--ros-domain", str(DOMAIN), "--ros-endpoint", endpoint],
                              env={"CHRONAV_RUNS": str(tmp_path / "runs")}, log_path=tmp_path / "bridge.log")
+        # the ROS side's router comes after the bridge: the bridge waits for it, the run goes on
+        wait_until(lambda: "does not answer" in (tmp_path / "bridge.log").read_text(), 180, interval=0.5,
+                   message="the bridge noticing the ROS router is missing")
+        group.spawn(["-m", "dsr.router", "--listen", endpoint], env=env, log_path=tmp_path / "ros_router.log")
+        wait_until(lambda: _listening(port), 30, message="the ROS-side router")
         client = Ros2Client(endpoint, DOMAIN)
         people = client.subscribe("/people", "people_msgs/msg/People")
         plan = client.subscribe("/plan", "nav_msgs/msg/Path")
