@@ -214,15 +214,17 @@ class RosBridgeAgent(Agent):
         frames = self.cfg.frames
         robot = g.get_node_by_name(self.scene.robot.name)
         self._publish_if("clock", wall, t_s, lambda: msgs.clock(stamp))
-        closed = tuple(closed_doors(g))
-        self._publish_if("map", wall, closed, lambda: self._map(stamp, closed))
+        if self._due("map", wall):
+            closed = tuple(closed_doors(g))
+            self._publish_if("map", wall, closed, lambda: self._map(stamp, closed))
         if "costmap_filter_info" in self.pubs and "costmap_filter_info" not in self._seen:
             self._publish_if("costmap_filter_info", wall, True, lambda: msgs.costmap_filter_info(
                 KEEPOUT_FILTER_TYPE, self.pubs["keepout_filter_mask"].topic if "keepout_filter_mask" in self.pubs
                 else self.cfg.topics.keepout_filter_mask.name, self.scale.base, self.scale.multiplier, stamp,
                 frames.map))
-        acts = activities(g)
-        self._publish_if("agenda", wall, msgs.agenda_json(acts), lambda: msgs.string(msgs.agenda_json(acts)))
+        if self._due("agenda", wall):
+            text = msgs.agenda_json(activities(g))
+            self._publish_if("agenda", wall, text, lambda: msgs.string(text))
         if robot is not None:
             self._robot_topics(robot, wall, t_s, stamp)
         people = None
@@ -243,13 +245,16 @@ class RosBridgeAgent(Agent):
         return rate is None or wall - self._last.get(key, -math.inf) >= 1.0 / rate
 
     def _publish_if(self, key: str, wall: float, token: Any, build: Any) -> None:
-        """Publish topic ``key`` when its rate allows and ``token`` (what it shows) changed."""
-        if not self._due(key, wall) or self._seen.get(key, object()) == token:
+        """Publish topic ``key`` when its rate allows and ``token`` (what it shows) changed; a
+        look that found no change counts against the rate too."""
+        if not self._due(key, wall):
+            return
+        self._last[key] = wall
+        if self._seen.get(key, object()) == token:
             return
         started = time.perf_counter()
         size = self.pubs[key].publish(build())
         self._seen[key] = token
-        self._last[key] = wall
         stat = self.stats.setdefault(key, {"count": 0, "bytes": 0, "seconds": 0.0})
         stat["count"] += 1
         stat["bytes"] += size

@@ -41,8 +41,9 @@ class TopicSpec(BaseModel):
     rate_hz: float | None = Field(None, gt=0, le=1000, description="publication rate limit (None: on change)")
 
 
-def _latched(name: str) -> TopicSpec:
-    return TopicSpec(name=name, qos=QosSpec(durability="transient_local", depth=1))
+def _latched(name: str, check_hz: float | None = 1.0) -> TopicSpec:
+    """A TRANSIENT_LOCAL depth-1 topic published on change (checked ``check_hz`` times a second)."""
+    return TopicSpec(name=name, qos=QosSpec(durability="transient_local", depth=1), rate_hz=check_hz)
 
 
 class Topics(BaseModel):
@@ -53,7 +54,7 @@ class Topics(BaseModel):
                                           rate_hz=5.0)
     keepout_filter_mask: TopicSpec = TopicSpec(name="/keepout_filter_mask",
                                                qos=QosSpec(durability="transient_local", depth=1), rate_hz=5.0)
-    costmap_filter_info: TopicSpec = _latched("/costmap_filter_info")
+    costmap_filter_info: TopicSpec = _latched("/costmap_filter_info", None)
     people: TopicSpec = TopicSpec(name="/people", rate_hz=10.0)
     plan: TopicSpec = TopicSpec(name="/plan", qos=QosSpec(depth=1))
     tf: TopicSpec = TopicSpec(name="/tf", qos=QosSpec(depth=100), rate_hz=20.0)

@@ -119,3 +119,14 @@ def test_keepout_values_equal_their_numpy_definition(dtype: type) -> None:
     graded = np.rint((np.where(finite, costs, scale.free_cost) - scale.free_cost) / scale.multiplier)
     expected = np.where(finite, np.clip(graded, 0, 99), 100).astype(np.int8)
     assert np.array_equal(keepout_values(costs, scale), expected)
+
+
+def test_a_ros_robots_scan_is_resampled_to_the_scenes_rays() -> None:
+    """--robot ros: the navigation reads the laser at the scene's ray angles; rays the robot's
+    scanner does not cover, or that saw nothing (inf, NaN, beyond range), read as max range."""
+    from agents.ros_bridge.agent import resample_scan
+
+    scan = msgs.laser_scan([1.0, 2.0, 9.0, 3.0, 4.0], [-1.0, -0.5, 0.0, 0.5, 1.0], 6.0, msgs.ros_time(0.0), "laser")
+    scan.ranges[3] = np.nan
+    out = resample_scan(scan, [-2.0, -1.0, -0.49, 0.0, 0.5, 0.99], 5.0)
+    assert out == [5.0, 1.0, 2.0, 5.0, 5.0, 4.0]
