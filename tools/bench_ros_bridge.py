@@ -18,6 +18,10 @@ Two measurements, each with a reference taken in the same run (the machine is sh
    subscribing ``/cmd_vel``, decoding with rosbags): latency = Twist decoded here minus command
    written here, same clock.  ``zenoh_oneway_p50_ms``: a bare put between two Zenoh sessions of
    this process through the same router (reference).
+3. **The live bridge in a run** (``--live-seconds``, 0 skips it): ``chronav launch center_day --ros``
+   (26 people, 520 x 200 grid) towards an otherwise idle ROS router; after a warm-up, the CPU
+   share of the ros_bridge process over that time, beside the social_navigation agent's
+   (reference: the agent that builds the same maps to plan), from the processes' CPU times.
 """
 
 from __future__ import annotations
@@ -265,10 +269,51 @@ def latency(endpoint: str, samples: int) -> dict[str, float]:
             "cmd_vel_samples": len(lat), "zenoh_oneway_p50_ms": statistics.median(bare)}
 
 
+def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, float]:
+    import signal
+    import tempfile
+
+    import psutil
+
+    with tempfile.TemporaryDirectory() as runs:
+        env = {k: v for k, v in os.environ.items() if not k.startswith("CHRONAV_")}
+        env.update({"CHRONAV_ROS_ENDPOINT": endpoint, "CHRONAV_RUNS": runs, "RERUN": "off"})
+        launcher = subprocess.Popen([sys.executable, "-m", "tools.cli", "launch", scene, "--ros", "--ros-domain", "5",
+                                     "--no-record", "--timeout", str(seconds + 240)], cwd=REPO, env=env,
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        try:
+            deadline = time.monotonic() + 180
+            pids: dict[str, int] = {}
+            while time.monotonic() < deadline and not pids.get("ros_bridge"):
+                time.sleep(1.0)
+                for path in Path(runs).glob("*/pids.json"):
+                    pids = json.loads(path.read_text())
+            logs = next(Path(runs).glob("*/logs"))
+            while time.monotonic() < deadline and "ROS 2 node" not in (logs / "ros_bridge.log").read_text():
+                time.sleep(1.0)
+            time.sleep(10.0)   # warm-up: numba compilation, first maps
+            procs = {name: psutil.Process(pids[name]) for name in ("ros_bridge", "social_navigation")}
+            before = {name: sum(p.cpu_times()[:2]) for name, p in procs.items()}
+            started = time.monotonic()
+            time.sleep(seconds)
+            wall = time.monotonic() - started
+            after = {name: sum(p.cpu_times()[:2]) for name, p in procs.items()}
+        finally:
+            if launcher.poll() is None:
+                os.killpg(launcher.pid, signal.SIGINT)
+                try:
+                    launcher.wait(timeout=120)
+                except subprocess.TimeoutExpired:
+                    os.killpg(launcher.pid, signal.SIGKILL)
+                    launcher.wait(timeout=10)
+    return {f"live_{name}_cpu_share_{scene}": round((after[name] - before[name]) / wall, 4) for name in procs}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--samples", type=int, default=200)
+    parser.add_argument("--live-seconds", type=float, default=30.0, help="0: skip the live run")
     parser.add_argument("--subscriber", nargs=3, metavar=("ENDPOINT", "DOMAIN", "SECONDS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.subscriber:
@@ -295,6 +340,8 @@ def main() -> None:
                     "social_map_build_ms_1000x600": round(social_map_build_ms(), 1)})
         out.update({k: round(v, 3) if isinstance(v, float) else v
                     for k, v in latency(endpoint, args.samples).items()})
+        if args.live_seconds > 0:
+            out.update(live(endpoint, args.live_seconds))
     finally:
         _stop(router)
     print(json.dumps(out))
