@@ -321,7 +321,7 @@ def _restart_stuck(graph: Any, supervisor: Supervisor, watch: ProgressWatch,
     """Kill the agents whose heartbeat stopped (the next poll restarts them); True if any."""
     now = time.monotonic()
     killed = False
-    for name in AGENTS:
+    for name in [n for n in supervisor.processes if n != "router"]:   # the agents, the ROS bridge too
         managed = supervisor.processes[name]
         if managed.pid is None or not managed.alive:
             continue
