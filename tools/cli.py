@@ -23,6 +23,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.chaos",         # chronav chaos (fault injection)
     "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
     "tools.evaluate",      # chronav evaluate (planner studies)
+    "tools.export_cli",    # chronav export (a run as rosbag2 MCAP)
+    "tools.ros_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -36,7 +36,8 @@ def _status_table(status: dict[str, Any]) -> Table:
 
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
                       as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
-                      startup_timeout_s: float | None = None) -> int:
+                      startup_timeout_s: float | None = None, ros_domain: int | None = None,
+                      robot: str = "sim") -> int:
     """Run the system with a progress display; print the result (and the metrics report); exit code.
 
     Exit codes: 0 every mission done; 1 a mission not done, a timeout or an agent given up;
@@ -48,8 +49,8 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     err = Console(stderr=True)
     interactive = sys.stderr.isatty() and not as_json
     last_print = {"t": 0.0}
-    limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s))
-              if v is not None}
+    limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
+                                ("ros_domain", ros_domain), ("robot", robot)) if v is not None}
 
     def plain_tick(status: dict[str, Any]) -> None:
         if time.monotonic() - last_print["t"] >= 5.0:

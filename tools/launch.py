@@ -37,6 +37,8 @@ from tools.supervisor import ProgressWatch, Supervisor
 
 AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
                            "executive")
+#: started with `--ros` (agents/ros_bridge): the run's topics over rmw_zenoh, /goal_pose -> missions
+ROS_BRIDGE = "ros_bridge"
 DEFAULT_SCENE = "icra_usecase"
 TERMINAL_STATES = ("done", "failed")
 NOT_STARTED = "not started"
@@ -178,11 +180,13 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                startup_timeout_s: float = DEFAULT_STARTUP_TIMEOUT_S,
                agent_options: dict[str, list[str]] | None = None,
                on_tick: Callable[[dict[str, object]], None] | None = None,
-               metrics_report: bool = True) -> RunResult:
+               metrics_report: bool = True, ros_domain: int | None = None, robot: str = "sim") -> RunResult:
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C.
 
     ``metrics_report=False`` skips the social-vs-baseline metrics the demo logs into the recording
-    (``chronav evaluate`` measures each run itself, whatever its planner)."""
+    (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
+    the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
+    instead of the simulated one (docs/ros2.md)."""
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
     from dsr import DSRError, join
@@ -194,6 +198,10 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     from agents.runtime.drawing.dsr_graph import GraphLogger
 
     check_rate(rate)
+    if robot not in ("sim", "ros"):
+        raise LaunchError(f"--robot {robot!r}: give sim (the simulated robot) or ros (a ROS 2 robot through --ros)")
+    if robot == "ros" and ros_domain is None:
+        raise LaunchError("--robot ros needs the ROS 2 bridge: add --ros (and --ros-domain N if not 0)")
     check_timeout(timeout_s)
     check_timeout(hang_timeout_s, "--hang-timeout")
     check_timeout(startup_timeout_s, "--startup-timeout")
@@ -205,13 +213,17 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    security = prepare_run_security(run_dir, graph_name, AGENTS)
+    agents = AGENTS if ros_domain is None else (*AGENTS, ROS_BRIDGE)
+    # the bridge's identity always: `chronav ros bridge --run` may join the run later
+    security = prepare_run_security(run_dir, graph_name, (*AGENTS, ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]
-    for name in AGENTS:
+    for name in agents:
         options = [*(["-o", f"rate={rate}"] if rate is not None and name == "sim_robot" else [])]
+        options += ["-o", f"ros_domain={ros_domain}"] if name == ROS_BRIDGE else []
+        options += ["-o", "robot=ros"] if robot == "ros" and name in ("sim_robot", ROS_BRIDGE) else []
         for opt in (agent_options or {}).get(name, []):
             options += ["-o", opt]
         supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
@@ -242,7 +254,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                 raise LaunchError(f"the Zenoh router did not listen on {endpoint}; see {router.log_path}")
         else:
             write_connect_file(run_dir, run_id=run_id, endpoint=endpoint, graph=graph_name, security=security)
-            for name in AGENTS:
+            for name in agents:
                 supervisor.start(name)
             write_pids(run_dir, supervisor, router.pid)
             settings = ZenohSettings.from_env({**env, "CHRONAV_ZENOH_USER": security.reader.user,
@@ -286,7 +298,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     finally:
         # Still under our handlers: a second Ctrl-C must not cut the clean-up short.
         try:
-            supervisor.stop_all(order=[*reversed(AGENTS), "router"])
+            supervisor.stop_all(order=[*reversed(agents), "router"])
             recorder.close()
             if record:
                 rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")),
@@ -309,7 +321,7 @@ def _restart_stuck(graph: Any, supervisor: Supervisor, watch: ProgressWatch,
     """Kill the agents whose heartbeat stopped (the next poll restarts them); True if any."""
     now = time.monotonic()
     killed = False
-    for name in AGENTS:
+    for name in [n for n in supervisor.processes if n != "router"]:   # the agents, the ROS bridge too
         managed = supervisor.processes[name]
         if managed.pid is None or not managed.alive:
             continue
@@ -337,7 +349,8 @@ def _write_result(result: RunResult) -> None:
     (result.run_dir / "result.json").write_text(json.dumps({
         "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
         "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
-        "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error}, indent=2))
+        "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error,
+        "scene_path": str(result.scene_path.resolve()) if result.scene_path else None}, indent=2))
 
 
 def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
@@ -383,15 +396,29 @@ def register(app: typer.Typer) -> None:
                                                      callback=_option_check(check_timeout, "--startup-timeout")),
                no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
                restart_limit: int = typer.Option(3, min=0, help="restarts allowed per agent"),
+               ros: bool = typer.Option(False, "--ros", help="also start the ROS 2 bridge (topics over rmw_zenoh; "
+                                        "router endpoint from CHRONAV_ROS_ENDPOINT, default tcp/127.0.0.1:7447)"),
+               ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
+                                              help="ROS_DOMAIN_ID of --ros (default: $ROS_DOMAIN_ID or 0)"),
+               robot: str = typer.Option("sim", "--robot", help="sim: the simulated robot; ros: a ROS 2 robot "
+                                         "(its /odom and /scan in, /cmd_vel out; needs --ros)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
         The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
         from tools.console import run_with_progress
 
+        domain = None
+        if ros or ros_domain is not None or robot == "ros":
+            try:
+                domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
+            except ValueError:
+                raise typer.BadParameter(f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')!r} is not a number; "
+                                         "set it to 0-232 or give --ros-domain N") from None
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
-                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout)
+                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
+                                 robot=robot)
         raise typer.Exit(code)
 
     @app.command("demo")

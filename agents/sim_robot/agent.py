@@ -12,6 +12,11 @@ time steps. So the clock runs in four modes, decided every loop from the DSR:
   otherwise run at ``clock.rate``.
 - **starting**: the scene has missions the executive has not written yet: the clock stands still,
   so a mission due at the start of the day starts then, however long the agents take to start.
+
+With ``-o robot=ros`` (``chronav launch --robot ros``) the robot is a ROS 2 robot: its pose,
+velocity and laser come through the ROS bridge (agents/ros_bridge), which also sends it the
+navigation's commands; this agent then only runs the clock at real time and the simulated world
+(people, doors), with the robot's reported pose as their robot.
 """
 
 from __future__ import annotations
@@ -72,6 +77,7 @@ class SimRobotAgent(Agent):
         self.busy_rate = float(self.config.option("busy_rate", str(BUSY_RATE)))
         self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
+        self.external = self.config.option("robot", "sim") == "ros"   # a ROS 2 robot reports its own pose
         # The bumper: a move that brings the body into contact is refused; moving away always works.
         self._contact_m = robot.radius * 0.9
         self._bumped = False
@@ -141,7 +147,9 @@ class SimRobotAgent(Agent):
         if self.now_s >= end_s:
             self._set_clock(mode="finished", finished=True)
             return
-        if mode == "driving":
+        if self.external:
+            self._follow_external(wall_now, mode)
+        elif mode == "driving":
             robot = self.graph.get_node_by_name(self.scene.robot.name)
             fresh = float(robot.attrs.get("cmd_stamp", -1.0)) >= float(robot.attrs.get("pose_stamp", 0.0))
             if not self._rate_allows(wall_now, self.control_dt):
@@ -198,6 +206,26 @@ class SimRobotAgent(Agent):
         if self._agenda_hold is None or self._agenda_hold[0] != pending:
             self._agenda_hold = (pending, wall_now)
         return wall_now - self._agenda_hold[1] < AGENDA_HOLD_WALL_S
+
+    def _follow_external(self, wall_now: float, mode: str) -> None:
+        """--robot ros: real time, the robot where the bridge last put it (no lockstep, no skips)."""
+        if mode == "starting":
+            return
+        dt = (wall_now - self._wall_anchor) - (self.now_s - self._sim_anchor)
+        if dt < self.control_dt:
+            return
+        g = self.graph
+        robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
+        edge = g.get_edge(world.id, robot.id, "RT") if robot is not None and world is not None else None
+        if edge is not None:
+            a = robot.attrs
+            self.state = RobotState(float(edge.attrs["x"]), float(edge.attrs["y"]), float(edge.attrs["theta"]),
+                                    Velocity(float(a.get("v", 0.0)), float(a.get("vy", 0.0)), float(a.get("omega", 0.0))))
+        self.now_s += min(dt, 1.0)
+        self._publish()
+        if self._trajectory_file is not None and mode == "driving":
+            s = self.state
+            self._trajectory_file.write(f"{self.now_s:.3f},{s.x:.4f},{s.y:.4f},{s.theta:.5f}\n")
 
     def _due_now(self) -> bool:
         """A pending mission's time has come (the executive is about to start it)."""
@@ -338,18 +366,23 @@ class SimRobotAgent(Agent):
         g, s = self.graph, self.state
         self._update_people()
         people_xy = np.array([[p.x, p.y] for p in self._people]).reshape(-1, 2)
-        ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
         robot = g.get_node_by_name(self.scene.robot.name)
+        if self.external:   # the ROS robot's own laser, as the bridge wrote it
+            ranges = np.asarray(robot.attrs.get("laser_ranges") or [self.laser.max_range] * len(self.laser.angles))
+        else:
+            ranges = self.laser.scan(s.x, s.y, s.theta, people_xy)
         world = g.get_node_by_name(WORLD)
         room = self._room_change(s.x, s.y)
         with g.transaction():
-            g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
+            if not self.external:
+                g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
             if room is not None:
                 for edge in g.edges_from(robot.id, "in"):
                     g.delete_edge(robot.id, edge.dst, "in")
                 g.insert_or_assign_edge(robot.id, room.id, "in", attrs={})
-            g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
-                                            "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
+            if not self.external:
+                g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
+                                                "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})
             g.update_node(g.get_node_by_name(CLOCK).id, attrs={"now_s": self.now_s})
             write_ground_truth(g, self._people, self.now_s)
         self.rec.set_time(self.now_s)

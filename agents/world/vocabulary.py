@@ -130,6 +130,8 @@ FLOAT, INT, BOOL, STR, FLOATS, STRS = "float", "int", "bool", "str", "floats", "
 SIM_ROBOT, OBSERVER, RECOGNITION = "sim_robot", "human_observer", "object_recognition"
 AGENDA_AGENT, EXECUTIVE, NAVIGATION, AGENDA_TOOL = "agenda", "executive", "social_navigation", "agenda_tool-*"
 ALL_AGENTS = (SIM_ROBOT, OBSERVER, RECOGNITION, AGENDA_AGENT, NAVIGATION, EXECUTIVE)
+#: the optional ROS 2 bridge (chronav launch --ros): it creates pose missions from /goal_pose
+ROS_BRIDGE = "ros_bridge"
 
 
 @dataclass(frozen=True)
@@ -164,8 +166,9 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.CLOCK, (SIM_ROBOT,), _attrs(SIM_ROBOT, now_s=FLOAT, start_s=FLOAT, end_s=FLOAT, rate=FLOAT,
                                                   mode=STR, finished=BOOL)),
     NodeSpec(NodeType.ROBOT, (SIM_ROBOT,), {
-        **_attrs(SIM_ROBOT, radius=FLOAT, kinematics=STR, max_speed=FLOAT, laser_angles=FLOATS, pose_stamp=FLOAT,
-                 v=FLOAT, vy=FLOAT, omega=FLOAT, laser_ranges=FLOATS),
+        **_attrs(SIM_ROBOT, radius=FLOAT, kinematics=STR, max_speed=FLOAT, laser_angles=FLOATS),
+        # the simulated robot's motion, or a ROS 2 robot's as the bridge reports it (--robot ros)
+        **_attrs((SIM_ROBOT, ROS_BRIDGE), pose_stamp=FLOAT, v=FLOAT, vy=FLOAT, omega=FLOAT, laser_ranges=FLOATS),
         **_attrs((SIM_ROBOT, NAVIGATION), nav_active=BOOL),
         **_attrs(NAVIGATION, cmd_vx=FLOAT, cmd_vy=FLOAT, cmd_omega=FLOAT, cmd_stamp=FLOAT, path_x=FLOATS,
                  path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
@@ -186,9 +189,11 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.AGENDA_REQUEST, (AGENDA_TOOL,), {
         **_attrs(AGENDA_TOOL, change=STR, requested_by=STR, requested_s=FLOAT),
         **_attrs(AGENDA_AGENT, state=STR, message=STR, answered_s=FLOAT)}),
-    NodeSpec(NodeType.MISSION, (EXECUTIVE,), _attrs(EXECUTIVE, mission_id=STR, goal=STR, time_s=FLOAT, state=STR,
-                                                    description=STR, replans=INT, started_s=FLOAT,
-                                                    finished_s=FLOAT, reason=STR, plan=STRS)),
+    # the ROS bridge only creates missions (a /goal_pose, due now); the executive runs them
+    NodeSpec(NodeType.MISSION, (EXECUTIVE, ROS_BRIDGE), {
+        **_attrs(EXECUTIVE, started_s=FLOAT, finished_s=FLOAT, reason=STR, plan=STRS),
+        **_attrs((EXECUTIVE, ROS_BRIDGE), mission_id=STR, goal=STR, time_s=FLOAT, state=STR, description=STR,
+                 replans=INT)}),
     NodeSpec(NodeType.INTENTION, (EXECUTIVE,), {
         **_attrs(EXECUTIVE, kind=STR, goal_x=FLOAT, goal_y=FLOAT, goal_theta=FLOAT, goal_has_theta=BOOL,
                  until_s=FLOAT, target=STR, pass_through=BOOL, rooms=STRS, mission_id=STR, step=INT, rule=STR,
@@ -198,13 +203,15 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.SENSOR, (OBSERVER, RECOGNITION, AGENDA_AGENT), _attrs((OBSERVER, RECOGNITION, AGENDA_AGENT),
                                                                             observed_s=FLOAT)),
     # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them
-    NodeSpec(NodeType.HEARTBEAT, ALL_AGENTS, _attrs(ALL_AGENTS, beat=INT, pid=INT, wall_s=FLOAT)),
+    NodeSpec(NodeType.HEARTBEAT, (*ALL_AGENTS, ROS_BRIDGE), _attrs((*ALL_AGENTS, ROS_BRIDGE), beat=INT, pid=INT,
+                                                                   wall_s=FLOAT)),
 )}
 
 _POSE = {"x": FLOAT, "y": FLOAT, "theta": FLOAT}
 
 EDGES: tuple[EdgeSpec, ...] = (
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROOM, NodeType.ROBOT), (SIM_ROBOT,), _POSE),
+    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROBOT,), (ROS_BRIDGE,), _POSE),   # --robot ros
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.PERSON,), (OBSERVER,), _POSE),
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.OBJECT,), (RECOGNITION,), _POSE),
     EdgeSpec(EdgeType.IN, (NodeType.ROBOT,), (NodeType.ROOM,), (SIM_ROBOT,)),

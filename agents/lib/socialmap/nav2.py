@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -67,10 +69,28 @@ def social_costs(smap: SocialMap) -> CostArray:
 
 
 def keepout_values(costs: CostArray, scale: MaskScale) -> NDArray[np.int8]:
-    """Keepout mask values (0..99 traversable, 100 forbidden) of a cost grid."""
-    finite = np.isfinite(costs)
-    graded = np.rint((np.where(finite, costs, scale.free_cost) - scale.free_cost) / scale.multiplier)
-    return np.where(finite, np.clip(graded, 0, KEEPOUT_STEPS), LETHAL).astype(np.int8)
+    """Keepout mask values (0..99 traversable, 100 forbidden) of a cost grid.
+
+    One compiled pass (the ROS bridge converts a 1000 x 600 grid several times a second; six
+    numpy passes took 14 ms of CPU), in the grid's own float type as numpy would compute it."""
+    costs = np.ascontiguousarray(costs)
+    if costs.dtype not in (np.float32, np.float64):
+        costs = costs.astype(np.float64)
+    out = np.empty(costs.shape, dtype=np.int8)
+    _keepout_kernel(costs.reshape(-1), costs.dtype.type(scale.free_cost), costs.dtype.type(scale.multiplier),
+                    out.reshape(-1))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _keepout_kernel(costs: Any, free: Any, multiplier: Any, out: Any) -> None:
+    for i in range(costs.size):
+        c = costs[i]
+        if not np.isfinite(c):
+            out[i] = LETHAL
+        else:
+            graded = np.rint((c - free) / multiplier)
+            out[i] = 0 if graded < 0 else (KEEPOUT_STEPS if graded > KEEPOUT_STEPS else np.int8(graded))
 
 
 def costs_from_keepout(values: NDArray[np.integer], scale: MaskScale) -> NDArray[np.float64]:

@@ -1,0 +1,6 @@
+import sys
+
+from agents.ros_bridge.agent import RosBridgeAgent
+from agents.runtime.base import run_agent
+
+sys.exit(run_agent(RosBridgeAgent))

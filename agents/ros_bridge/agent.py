@@ -1,0 +1,326 @@
+"""The ROS 2 bridge agent: reads the DSR, publishes ROS 2 topics over Zenoh; /goal_pose -> mission.
+
+Why an agent of its own (not code inside the navigation): the bridge is an optional window on
+the system, started with ``chronav launch --ros`` or alone against a running system; it talks to
+the other agents only through the DSR, like any agent, and to ROS 2 through a second Zenoh
+session towards the ROS side's router (rmw_zenohd), so the run's own Zenoh network keeps its
+credentials and ACL and ROS nodes never see chronav's graph traffic.
+
+What it publishes (names, frames and QoS in config.py, conventions in wire.py):
+``/map`` (the building as the planner rasterises it, without the robot's inflation),
+``/social_costmap`` (the navigation's social map of the moment, built from the DSR by the same
+``NavigationMaps`` the navigation agent uses, as 0..100 with walls 100), ``/keepout_filter_mask``
++ ``/costmap_filter_info`` (the social layers as ``chronav map export`` writes them),
+``/people`` (people_msgs/People), ``/plan`` (the path the navigation adopted), ``/tf``
+(map -> odom -> base_link and map -> person/<name>), ``/odom``, ``/scan``, ``/agenda`` (JSON),
+``/clock`` (the scene's clock).  Each topic has a wall-clock rate limit and is published only
+when what it shows changed.
+
+What it subscribes: ``/goal_pose`` (geometry_msgs/PoseStamped in the map frame) becomes a pose
+mission (``mission/ros_goal_<n>``, due now) that the executive plans and runs like any other.
+A goal in another frame, or not finite, is refused with a log line; nothing is written.
+
+``-o robot=ros`` (``chronav launch --robot ros``): the robot is a ROS 2 robot.  The bridge then
+does not publish ``/odom``, ``/scan`` and the odom -> base_link transform (the robot does); it
+subscribes them and writes the robot's pose (``/odom`` read in the map frame: a robot whose
+odometry is not aligned with the map needs a localiser that publishes map poses on that topic),
+velocity and laser (resampled to the scene's rays) into the DSR, stamped with the scene clock,
+at most ``robot_rate_hz`` times a second; and it publishes the navigation's every command on
+``/cmd_vel`` (geometry_msgs/Twist) the moment the command reaches its replica (a DSR signal, not
+the loop's period), and a stop when the bridge ends.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import time
+from typing import Any
+
+import numpy as np
+
+from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE
+from agents.ros_bridge import messages as msgs
+from agents.ros_bridge.config import BridgeConfig, BridgeConfigError, TopicSpec, config_from_options
+from agents.ros_bridge.maps import Grid, RosMaps
+from agents.ros_bridge.wire import RosNode, RosPublisher, ros_session_config
+from agents.runtime.base import Agent
+from agents.runtime.recording import Recorder
+from agents.world.dsr_readers import closed_doors, dsr_people
+from agents.world.vocabulary import WORLD, MissionState, NodeType, activities, mission_name, now_s
+from scenes.clock import format_clock
+
+GOAL_PREFIX = "ros_goal_"
+MAX_PENDING_GOALS = 16
+ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (the simulator's is 10)
+#: share of one core the bridge may spend rebuilding the social map from the DSR (a 1000 x 600
+#: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
+SOCIAL_MAP_CPU_BUDGET = 0.25
+RETRY_S = 2.0            # between attempts to reach the ROS side's router
+
+
+class RosBridgeAgent(Agent):
+    kind = "ros_bridge"
+
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
+        self.graph = graph
+        self.rec = recorder
+        try:
+            self.cfg: BridgeConfig = config_from_options(self.config.options)
+        except BridgeConfigError as exc:
+            raise SystemExit(f"ros_bridge: {exc}") from None
+        self.epoch_s = msgs.day_epoch_s(self.scene.clock.date, self.scene.clock.timezone)
+        self.maps = RosMaps(self.scene)
+        self.scale = self.maps.scale
+        self.session: Any = None
+        self.node: RosNode | None = None
+        self.pubs: dict[str, RosPublisher] = {}
+        self._last: dict[str, float] = {}
+        self._seen: dict[str, Any] = {}
+        self._social_next = -math.inf
+        self._retry_at = -math.inf
+        self.stats: dict[str, dict[str, float]] = {}
+        self.external = self.config.option("robot", "sim") == "ros"
+        self._odom: Any = None
+        self._scan: Any = None
+        self._robot_written = -math.inf
+        self._last_cmd: Any = None
+        self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
+        self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
+            f"mission/{GOAL_PREFIX}"))
+        if self.external:
+            graph.connect("node_updated", self._on_robot_command)
+        self._open_ros()
+
+    def _open_ros(self) -> bool:
+        """Join the ROS side; while its router is not there, log it and try again every
+        RETRY_S (the run goes on: the bridge is a window, not a part the robot needs)."""
+        import zenoh
+
+        try:
+            self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
+        except zenoh.ZError:
+            self._retry_at = time.monotonic() + RETRY_S
+            self.log.warning("the ROS 2 side's Zenoh router at %s does not answer; trying again in %.0f s "
+                             "(start it with `ros2 run rmw_zenoh_cpp rmw_zenohd`, or give its endpoint with "
+                             "CHRONAV_ROS_ENDPOINT or --ros-endpoint)", self.cfg.endpoint, RETRY_S)
+            return False
+        self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        topics = self.cfg.topics
+        own_robot = () if self.external else ("odom", "scan")
+        for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
+                               ("keepout_filter_mask", msgs.OCCUPANCY_GRID),
+                               ("costmap_filter_info", msgs.COSTMAP_FILTER_INFO), ("people", msgs.PEOPLE),
+                               ("plan", msgs.PATH), ("tf", msgs.TF), ("odom", msgs.ODOMETRY),
+                               ("scan", msgs.LASER_SCAN), ("agenda", msgs.STRING), ("clock", msgs.CLOCK)):
+            spec: TopicSpec = getattr(topics, key)
+            if spec.enabled and (key not in ("odom", "scan") or key in own_robot):
+                self.pubs[key] = self.node.create_publisher(spec.name, type_name, spec.qos.qos())
+        if topics.goal_pose.enabled:
+            self.node.create_subscription(topics.goal_pose.name, msgs.POSE_STAMPED, topics.goal_pose.qos.qos(),
+                                          self._on_goal, on_error=self.log.warning)
+        if self.external:
+            self._setup_external()
+        self.log.info("ROS 2 node /%s on domain %d via %s: %s", self.cfg.node, self.cfg.domain, self.cfg.endpoint,
+                      ", ".join(p.topic for p in self.pubs.values()))
+        return True
+
+    # ------------------------------------------------------------------ --robot ros
+    def _setup_external(self) -> None:
+        topics = self.cfg.topics
+        assert self.node is not None
+        self.cmd_pub = self.node.create_publisher(topics.cmd_vel.name, msgs.TWIST, topics.cmd_vel.qos.qos())
+        self.node.create_subscription(topics.odom.name, msgs.ODOMETRY, topics.odom.qos.qos(),
+                                      lambda m: setattr(self, "_odom", m), on_error=self.log.warning)
+        self.node.create_subscription(topics.scan.name, msgs.LASER_SCAN, topics.scan.qos.qos(),
+                                      lambda m: setattr(self, "_scan", m), on_error=self.log.warning)
+
+    def _on_robot_command(self, node: Any, *_rest: object) -> None:
+        """The navigation's command reached this replica: send it now (the agent's thread)."""
+        if node.type != NodeType.ROBOT or self.node is None:
+            return
+        a = node.attrs
+        cmd = (a.get("cmd_stamp"), a.get("cmd_vx"), a.get("cmd_vy"), a.get("cmd_omega"))
+        if cmd[0] is None or cmd == self._last_cmd:
+            return
+        self._last_cmd = cmd
+        self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
+
+    def _write_robot(self, t_s: float, wall: float) -> None:
+        """The ROS robot's latest odometry and scan into the DSR, as the simulator would write them."""
+        odom, g = self._odom, self.graph
+        if odom is None or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
+            return
+        robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
+        if robot is None or world is None:
+            return
+        p, tw = odom.pose.pose, odom.twist.twist
+        attrs: dict[str, Any] = {"pose_stamp": t_s, "v": float(tw.linear.x), "vy": float(tw.linear.y),
+                                 "omega": float(tw.angular.z)}
+        angles = robot.attrs.get("laser_angles") or []
+        if self._scan is not None and angles:
+            attrs["laser_ranges"] = resample_scan(self._scan, angles, self.scene.robot.laser_range)
+        with g.transaction():
+            g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": float(p.position.x), "y": float(p.position.y),
+                                                                     "theta": msgs.yaw_of(p.orientation)})
+            g.update_node(robot.id, attrs=attrs)
+        self._robot_written = wall
+
+    # ------------------------------------------------------------------ subscriptions
+    def _on_goal(self, message: Any) -> None:
+        """Zenoh's thread: only queue it; the DSR is written from the agent's loop."""
+        try:
+            x, y, yaw = msgs.goal_of(message)
+        except ValueError as exc:
+            self.log.warning("goal refused: %s", exc)
+            return
+        try:
+            self.goals.put_nowait((x, y, yaw, str(message.header.frame_id)))
+        except queue.Full:
+            self.log.warning("goal (%.2f, %.2f) refused: %d goals already wait", x, y, MAX_PENDING_GOALS)
+
+    def _take_goals(self, t_s: float) -> None:
+        while True:
+            try:
+                x, y, yaw, frame = self.goals.get_nowait()
+            except queue.Empty:
+                return
+            if frame not in (self.cfg.frames.map, ""):
+                self.log.warning("goal in frame %r refused: give goals in %r", frame, self.cfg.frames.map)
+                continue
+            self._goal_count += 1
+            mission_id = f"{GOAL_PREFIX}{self._goal_count}"
+            goal = f"pose:{x:.3f},{y:.3f},{yaw:.4f}"
+            self.graph.insert_node(type=NodeType.MISSION, name=mission_name(mission_id),
+                                   attrs={"mission_id": mission_id, "goal": goal, "time_s": t_s,
+                                          "state": MissionState.PENDING, "description": "goal from ROS 2 /goal_pose",
+                                          "replans": 0})
+            self.rec.event(f"{format_clock(t_s)} ROS 2 goal {goal} -> mission {mission_id}")
+            self.log.info("goal %s -> mission %s", goal, mission_id)
+
+    # ------------------------------------------------------------------ loop
+    def step(self) -> None:
+        if self.node is None and (time.monotonic() < self._retry_at or not self._open_ros()):
+            return
+        g = self.graph
+        t_s = now_s(g)
+        if t_s is None or g.get_node_by_name(WORLD) is None:
+            return
+        self._take_goals(t_s)
+        wall = time.monotonic()
+        if self.external:
+            self._write_robot(t_s, wall)
+        stamp = msgs.ros_time(t_s, self.epoch_s)
+        frames = self.cfg.frames
+        robot = g.get_node_by_name(self.scene.robot.name)
+        self._publish_if("clock", wall, t_s, lambda: msgs.clock(stamp))
+        if self._due("map", wall):
+            closed = tuple(closed_doors(g))
+            self._publish_if("map", wall, closed, lambda: self._map(stamp, closed))
+        if "costmap_filter_info" in self.pubs and "costmap_filter_info" not in self._seen:
+            self._publish_if("costmap_filter_info", wall, True, lambda: msgs.costmap_filter_info(
+                KEEPOUT_FILTER_TYPE, self.pubs["keepout_filter_mask"].topic if "keepout_filter_mask" in self.pubs
+                else self.cfg.topics.keepout_filter_mask.name, self.scale.base, self.scale.multiplier, stamp,
+                frames.map))
+        if self._due("agenda", wall):
+            text = msgs.agenda_json(activities(g))
+            self._publish_if("agenda", wall, text, lambda: msgs.string(text))
+        if robot is not None:
+            self._robot_topics(robot, wall, t_s, stamp)
+        people = None
+        if self._due("people", wall) or self._due("tf", wall):
+            people = dsr_people(g)
+        if people is not None:
+            key = tuple((p.name, round(p.x, 3), round(p.y, 3)) for p in people)
+            self._publish_if("people", wall, (t_s, key), lambda: msgs.people(people, stamp, frames.map))
+        if (self._due("social_costmap", wall) or self._due("keepout_filter_mask", wall)) and wall >= self._social_next:
+            self._social(wall, t_s, stamp, people)
+        if robot is not None and people is not None:
+            self._publish_if("tf", wall, (t_s, robot.attrs.get("pose_stamp")), lambda: self._tf(robot, people, stamp))
+
+    def _due(self, key: str, wall: float) -> bool:
+        if key not in self.pubs:
+            return False
+        rate = getattr(self.cfg.topics, key).rate_hz
+        return rate is None or wall - self._last.get(key, -math.inf) >= 1.0 / rate
+
+    def _publish_if(self, key: str, wall: float, token: Any, build: Any) -> None:
+        """Publish topic ``key`` when its rate allows and ``token`` (what it shows) changed; a
+        look that found no change counts against the rate too."""
+        if not self._due(key, wall):
+            return
+        self._last[key] = wall
+        if self._seen.get(key, object()) == token:
+            return
+        started = time.perf_counter()
+        size = self.pubs[key].publish(build())
+        self._seen[key] = token
+        stat = self.stats.setdefault(key, {"count": 0, "bytes": 0, "seconds": 0.0})
+        stat["count"] += 1
+        stat["bytes"] += size
+        stat["seconds"] += time.perf_counter() - started
+
+    def _grid(self, grid: Grid, stamp: Any) -> Any:
+        return msgs.occupancy_grid(grid.values, grid.origin, grid.resolution, stamp, self.cfg.frames.map)
+
+    def _map(self, stamp: Any, closed: tuple[str, ...]) -> Any:
+        return self._grid(self.maps.building(closed), stamp)
+
+    def _social(self, wall: float, t_s: float, stamp: Any, people: list | None) -> None:
+        started = time.process_time()
+        costmap, keepout = self.maps.social(self.maps.nav.build(self.graph, t_s))
+        self._social_next = wall + (time.process_time() - started) / SOCIAL_MAP_CPU_BUDGET
+        self._publish_if("social_costmap", wall, t_s, lambda: self._grid(costmap, stamp))
+        self._publish_if("keepout_filter_mask", wall, t_s, lambda: self._grid(keepout, stamp))
+
+    def _robot_topics(self, robot: Any, wall: float, t_s: float, stamp: Any) -> None:
+        a, frames = robot.attrs, self.cfg.frames
+        try:
+            x, y, theta = self.graph.world_pose(robot.id)
+        except (LookupError, ValueError):
+            return
+        pose_stamp = a.get("pose_stamp")
+        self._publish_if("odom", wall, pose_stamp, lambda: msgs.odometry(
+            x, y, theta, float(a.get("v", 0.0)), float(a.get("vy", 0.0)), float(a.get("omega", 0.0)), stamp,
+            frames.odom, frames.base))
+        ranges, angles = a.get("laser_ranges"), a.get("laser_angles")
+        if ranges and angles and len(ranges) == len(angles):
+            self._publish_if("scan", wall, pose_stamp, lambda: msgs.laser_scan(
+                ranges, angles, self.scene.robot.laser_range, stamp, frames.laser))
+        xs, ys = a.get("path_x") or [], a.get("path_y") or []
+        if len(xs) == len(ys) and xs:
+            self._publish_if("plan", wall, a.get("planned_s"), lambda: msgs.path(xs, ys, stamp, frames.map))
+
+    def _tf(self, robot: Any, people: list, stamp: Any) -> Any:
+        frames = self.cfg.frames
+        x, y, theta = self.graph.world_pose(robot.id)
+        transforms = [msgs.transform(frames.map, frames.odom, 0.0, 0.0, 0.0, stamp)]
+        if not self.external:   # a ROS robot publishes its own odom -> base_link
+            transforms.append(msgs.transform(frames.odom, frames.base, x, y, theta, stamp))
+        transforms += [msgs.transform(frames.map, f"{frames.person_prefix}{p.name}", p.x, p.y, p.theta, stamp)
+                       for p in people]
+        return msgs.tf_message(transforms)
+
+    def teardown(self) -> None:
+        summary = ", ".join(f"{k} {int(v['count'])} msgs {v['seconds'] * 1000:.0f} ms"
+                            for k, v in sorted(self.stats.items()))
+        self.log.info("published: %s", summary or "nothing")
+        if self.node is None:
+            return
+        if self.external:
+            self.cmd_pub.publish(msgs.twist(0.0, 0.0, 0.0))   # leave the robot stopped
+        self.node.close()
+        self.session.close()
+
+
+def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[float]:
+    """A LaserScan's ranges at the scene's ray angles (nearest ray; no return or out of the scan's
+    field of view: ``range_max``, as the simulator's laser reports a ray that hits nothing)."""
+    ranges = np.asarray(scan.ranges, dtype=float)
+    if len(ranges) == 0 or scan.angle_increment == 0:
+        return [range_max] * len(angles)
+    index = np.rint((np.asarray(angles) - scan.angle_min) / scan.angle_increment).astype(int)
+    inside = (index >= 0) & (index < len(ranges))
+    picked = np.where(inside, ranges[np.clip(index, 0, len(ranges) - 1)], range_max)
+    valid = np.isfinite(picked) & (picked >= scan.range_min) & (picked <= scan.range_max)
+    return np.minimum(np.where(valid, picked, range_max), range_max).tolist()

@@ -1,0 +1,65 @@
+"""`chronav ros bridge SCENE [--run RUN]`: the ROS 2 bridge alone, against a system already running.
+
+Why a command (beside `chronav launch --ros`): a researcher often starts RViz or a robot after the
+run; the bridge then joins the run's DSR as its own agent, with the identity every run provisions
+for it (``<run>/secrets/ros_bridge.password``, readable by the run's owner only), and serves the
+ROS side until Ctrl-C.  Against a system started by hand (no run directory) it joins without
+credentials, as the agents of such a system do.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import typer
+
+ros_app = typer.Typer(help="chronav and ROS 2 (docs/ros2.md).", no_args_is_help=True)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(ros_app, name="ros")
+
+
+@ros_app.command("bridge")
+def bridge(scene: str = typer.Argument(..., help="the running system's scene file or name"),
+           run: str = typer.Option(None, "--run", help="'latest', a run directory or a run id (default: your "
+                                                       "newest live run)"),
+           ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
+                                          help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID or 0)"),
+           ros_endpoint: str = typer.Option(None, "--ros-endpoint", help="the ROS side's Zenoh router "
+                                            "(default: $CHRONAV_ROS_ENDPOINT or tcp/127.0.0.1:7447)"),
+           ros_config: Path = typer.Option(None, "--ros-config", help="YAML: topics, frames, QoS (docs/ros2.md)")
+           ) -> None:
+    """Publish a running system's map, social costmap, people, plan, tf, odom, scan and agenda to ROS 2;
+    /goal_pose becomes a pose mission.  Runs until Ctrl-C."""
+    from agents.ros_bridge.agent import RosBridgeAgent
+    from agents.runtime.base import run_agent
+    from tools.connection import ConnectionProblem, resolve_target
+
+    try:
+        target = resolve_target(None, None, run, role="reader")
+    except ConnectionProblem as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        raise typer.Exit(2) from None
+    env = {"CHRONAV_ZENOH_CONNECT": ",".join(target.connect), "CHRONAV_ZENOH_MODE": "client",
+           "CHRONAV_GRAPH": target.graph}
+    if target.run_dir is not None:
+        password = target.run_dir / "secrets" / "ros_bridge.password"
+        if not password.exists():
+            sys.stderr.write(f"error: run {target.run_dir} has no identity for the ROS bridge ({password}); "
+                             "it was started by an older chronav: restart it, or use `chronav launch --ros`\n")
+            raise typer.Exit(2)
+        env.update(CHRONAV_ZENOH_USER="ros_bridge", CHRONAV_ZENOH_PASSWORD_FILE=str(password))
+    for key in [k for k in os.environ if k.startswith("CHRONAV_ZENOH_")]:
+        os.environ.pop(key)
+    os.environ.update(env)
+    argv = ["--scene", scene, "--name", "ros_bridge", "--graph", target.graph]
+    for key, value in (("ros_domain", ros_domain), ("ros_endpoint", ros_endpoint), ("ros_config", ros_config)):
+        if value is not None:
+            argv += ["-o", f"{key}={value}"]
+    if target.run_dir is not None:
+        argv += ["--run-dir", str(target.run_dir)]
+    sys.stderr.write(f"ROS 2 bridge joining {target.describe()}\n")
+    raise typer.Exit(run_agent(RosBridgeAgent, argv))
