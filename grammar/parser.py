@@ -20,6 +20,7 @@ from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from grammar.errors import GrammarError, GrammarWarning, SourcePos, shorten
+from grammar.files import MAX_GRAMMAR_BYTES, read_bounded, regular_file_problem
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder
 from grammar.validate import check_grammar, check_rule, check_target
@@ -187,6 +188,9 @@ def _resolve_include(path: str, including: Path | None, pos: SourcePos) -> Path:
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()
+        problem = regular_file_problem(candidate) if candidate.exists() else None
+        if problem is not None:   # a FIFO or a directory is not "not found": say what it is
+            raise GrammarError.at(pos, f"included file {shorten(path)!r} at {shorten(str(candidate), 200)} {problem}")
     looked = ", ".join(str(c) for c in candidates)
     raise GrammarError.at(pos, f"included file {shorten(path)!r} not found (looked at: {shorten(looked, 300)}); "
                                "set AGGLPATH to the directories that hold it")
@@ -242,12 +246,12 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
 
 def _read(path: str | os.PathLike[str], what: str) -> str:
     """A grammar or target file's text (UTF-8, an initial byte-order mark allowed)."""
-    try:
-        data = Path(path).read_bytes()
+    try:   # a regular file of at most MAX_GRAMMAR_BYTES: never /dev/zero, a FIFO or a directory
+        data = read_bounded(path, MAX_GRAMMAR_BYTES, what)
     except FileNotFoundError:
         raise GrammarError(f"{what} file not found", str(path)) from None
-    except IsADirectoryError:
-        raise GrammarError(f"is a directory, not a {what} file", str(path)) from None
+    except ValueError as exc:
+        raise GrammarError(str(exc), str(path)) from None
     except OSError as exc:
         raise GrammarError(f"cannot read {what} file: {exc.strerror or exc}", str(path)) from None
     try:

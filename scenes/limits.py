@@ -45,7 +45,8 @@ class Limit:
         raw = env.get(self.env, "").strip()
         if not raw:
             return self.default
-        if not raw.isdigit() or len(raw) > 18 or int(raw) <= 0:
+        # ASCII digits only: str.isdigit() is also true of "²" and "٣", which int() refuses or reads.
+        if not (raw.isascii() and raw.isdigit()) or len(raw) > 18 or int(raw) <= 0:
             raise LimitConfigError(f"{self.env}={raw[:40]!r}", None, None, "",
                                    f"expected a positive whole number of {self.unit} (default {self.default})")
         return int(raw)

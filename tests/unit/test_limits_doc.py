@@ -46,6 +46,6 @@ def test_a_limit_is_configured_by_its_environment_variable() -> None:
     limit = Limit("demo", 10, "things", "a test limit")
     assert limit.value({}) == 10
     assert limit.value({"CHRONAV_LIMIT_DEMO": "25"}) == 25
-    for bad in ("0", "-3", "ten", "1e9", "9" * 30):
+    for bad in ("0", "-3", "ten", "1e9", "9" * 30, "\u00b2", "\u0663"):
         with pytest.raises(LimitConfigError, match="CHRONAV_LIMIT_DEMO.*positive whole number"):
             limit.value({"CHRONAV_LIMIT_DEMO": bad})

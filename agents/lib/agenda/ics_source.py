@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 from agents.lib.agenda.model import AgendaSourceError, local_midnight, problem
 from scenes.limits import ICS_BYTES, RECURRENCE_STEPS
+from scenes.files import read_bounded
 from scenes.yamlio import SourceError
 
 if TYPE_CHECKING:
@@ -544,12 +545,7 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
 def load_ics_file(path: str | Path) -> IcsAgenda:
     path = Path(path)
     try:
-        size = path.stat().st_size
-        if size > ICS_BYTES.value():
-            raise AgendaSourceError([problem(str(path), None, f"{size:,} bytes; an .ics file may have at most "
-                                             f"{ICS_BYTES.value():,} ({ICS_BYTES.env})")])
-        data = path.read_bytes()
-    except OSError as exc:
-        raise AgendaSourceError([problem(str(path), None,
-                                         f"cannot read file: {exc.strerror}")]) from None
+        data = read_bounded(path, max_bytes=ICS_BYTES.value(), limit_env=ICS_BYTES.env, what=".ics file")
+    except SourceError as exc:
+        raise AgendaSourceError([exc]) from None
     return parse_ics(data, str(path))
