@@ -22,6 +22,12 @@ from scenes.names import Name
 from scenes.yamlio import as_date
 
 
+# A slower clock would never reach the day's first mission (1e-300 sim s per wall s was accepted).
+MIN_CLOCK_RATE = 0.01
+# Finer cells are not a floor plan any more (5e-324 overflowed the grid's cell count).
+MIN_RESOLUTION_M = 0.001
+
+
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -70,7 +76,7 @@ class Clock(Strict):
     timezone: str = "Europe/Madrid"
     start: ClockTime = "09:00"
     end: ClockTime = "14:00"
-    rate: Real = Field(60.0, gt=0, le=1_000_000, description="sim seconds per wall second")
+    rate: Real = Field(60.0, ge=MIN_CLOCK_RATE, le=1_000_000, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
 
 
@@ -326,7 +332,7 @@ class MapRef(Strict):
 class Scene(Strict):
     name: Name
     description: str = ""
-    resolution: Real = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
+    resolution: Real = Field(0.05, ge=MIN_RESOLUTION_M, le=1.0, description="cost grid cell size (m)")
     clock: Clock = Clock()
     map: MapRef | None = Field(None, description="building map (ROS map_server format); its occupied cells are walls")
     walls: list[list[Point]] = Field(default_factory=list, description="polylines (at least one unless a map is given)")
