@@ -26,6 +26,8 @@ from scenes.yamlio import as_date
 MIN_CLOCK_RATE = 0.01
 # Finer cells are not a floor plan any more (5e-324 overflowed the grid's cell count).
 MIN_RESOLUTION_M = 0.001
+# The simulated day: a calendar date a care home could plan for (9999-12-31 overflowed the agenda).
+MIN_DATE, MAX_DATE = dt.date(1900, 1, 1), dt.date(2999, 12, 31)
 
 
 class Strict(BaseModel):
@@ -79,6 +81,13 @@ class Clock(Strict):
     rate: Real = Field(60.0, ge=MIN_CLOCK_RATE, le=1_000_000, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
 
+
+    @field_validator("date")
+    @classmethod
+    def _date_range(cls, value: dt.date) -> dt.date:
+        if not MIN_DATE <= value <= MAX_DATE:   # the agenda expands days around it; 9999-12-31 overflowed
+            raise ValueError(f"the simulated day {value.isoformat()} is outside {MIN_DATE.year}-{MAX_DATE.year}")
+        return value
 
     @field_validator("timezone")
     @classmethod
