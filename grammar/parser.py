@@ -28,6 +28,9 @@ from grammar.validate import check_grammar, check_rule, check_target
 GRAMMAR_DIR = Path(__file__).resolve().parent
 LARK_FILE = GRAMMAR_DIR / "aggl.lark"
 
+MAX_INCLUDES = 200
+"""Includes read in all while loading one grammar (docs/limits.md): 24 files each including the
+next twice asked for 2^24 reads; real grammars include a handful of files once each."""
 MAX_NESTING = 100
 """Deepest parse tree accepted (docs/grammar.md, "Limits"): one level per formula connective
 (``not``, ``and``, ``exists``...), about three per parenthesis of a ``where``. Deeper input is
@@ -198,7 +201,7 @@ def _resolve_include(path: str, including: Path | None, pos: SourcePos) -> Path:
 
 def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = None,
                   path: Path | None = None, includes: bool = True,
-                  _stack: tuple[Path, ...] = ()) -> Grammar:
+                  _stack: tuple[Path, ...] = (), _included: list[int] | None = None) -> Grammar:
     """Parse grammar text; ``path`` (the file it came from) anchors relative includes.
     ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``."""
     text = text.removeprefix("\ufeff")
@@ -227,7 +230,12 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
             if target in _stack or target == path:
                 raise GrammarError.at(item.pos, f"include cycle: {shorten(item.path)!r} includes itself")
             stack = _stack + ((path,) if path is not None else ())
-            inner = load_grammar(target, _stack=stack)
+            _included = [0] if _included is None else _included   # shared by the whole include tree
+            _included[0] += 1
+            if _included[0] > MAX_INCLUDES:   # files including the next twice: 2^24 loads
+                raise GrammarError.at(item.pos, f"more than {MAX_INCLUDES} includes in all (an include inside an "
+                                                "included file counts each time it is read); include each file once")
+            inner = load_grammar(target, _stack=stack, _included=_included)
             rules.extend(inner.rules)
             combos.extend(inner.combos)
             warnings.extend(inner.warnings)
@@ -263,11 +271,11 @@ def _read(path: str | os.PathLike[str], what: str) -> str:
 
 
 def load_grammar(path: str | os.PathLike[str], *, dialect: str | None = None, includes: bool = True,
-                 _stack: tuple[Path, ...] = ()) -> Grammar:
+                 _stack: tuple[Path, ...] = (), _included: list[int] | None = None) -> Grammar:
     """Read and parse a grammar file (either dialect); includes resolve relative to it."""
     text = _read(path, "grammar")
     return parse_grammar(text, str(path), dialect=dialect, path=Path(path).resolve(), includes=includes,
-                         _stack=_stack)
+                         _stack=_stack, _included=_included)
 
 
 def parse_target(text: str, file: str = "<string>") -> Target:
