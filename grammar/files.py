@@ -13,7 +13,7 @@ import errno
 import os
 import stat
 
-MAX_GRAMMAR_BYTES = 4 * 1024 * 1024
+MAX_GRAMMAR_BYTES = 16 * 1024 * 1024
 """Largest grammar or target file read (AGM's biggest real grammars are some 100 KB)."""
 
 
