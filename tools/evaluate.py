@@ -175,7 +175,9 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
 
     _check_extras()
     chosen = parse_planners(planners)
-    if not 1 <= seeds <= MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
+    if seeds < 1:
+        raise EvaluateError("--seeds: give at least 1")
+    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
         raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
     try:
         check_timeout(timeout_s)
