@@ -113,6 +113,26 @@ def test_a_200000_character_csv_cell_is_a_located_error(tmp_path: Path) -> None:
     check(["metrics", _h("bom.yaml"), str(csv)], 2, f"{csv}:3: a cell of more than 131,072 characters")
 
 
+RARE_BUT_REAL = ("FREQ=YEARLY;BYMONTH=2;BYMONTHDAY=29", "FREQ=MONTHLY;BYDAY=FR;BYMONTHDAY=13",
+                 "FREQ=YEARLY;BYWEEKNO=53;BYDAY=MO", "FREQ=MONTHLY;BYMONTHDAY=-1", "FREQ=YEARLY;BYYEARDAY=366",
+                 "FREQ=MONTHLY;BYDAY=2MO;BYMONTH=2", "FREQ=DAILY;BYMONTH=2,4;BYMONTHDAY=30",
+                 "FREQ=MINUTELY;BYMONTH=2;BYMONTHDAY=29;BYDAY=MO", "FREQ=DAILY;COUNT=3")
+NEVER = ("FREQ=DAILY;BYMONTH=4;BYMONTHDAY=31", "FREQ=MINUTELY;BYMONTH=2;BYMONTHDAY=30,31",
+         "FREQ=MONTHLY;BYMONTH=2;BYMONTHDAY=-30", "FREQ=YEARLY;BYMONTH=1;BYYEARDAY=100", "FREQ=DAILY;INTERVAL=0",
+         "FREQ=DAILY;COUNT=0")
+
+
+@pytest.mark.parametrize("rule", RARE_BUT_REAL + NEVER)
+def test_only_rules_that_can_never_occur_are_refused(rule: str) -> None:
+    """The yearly probe refuses what names no date, and nothing rare but real (Feb 29 on a Monday)."""
+    import icalendar
+
+    from agents.lib.agenda.ics_source import _rule_problems
+
+    problems = _rule_problems(icalendar.vRecur.from_ical(rule))
+    assert bool(problems) == (rule in NEVER), problems
+
+
 def test_50000_rdates_are_refused_before_they_are_expanded(tmp_path: Path) -> None:
     dates = ",".join(f"20261125T{9 + i // 3600:02d}{i // 60 % 60:02d}{i % 60:02d}" for i in range(50_000))
     (tmp_path / "many.ics").write_text(
