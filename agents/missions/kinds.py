@@ -11,6 +11,7 @@ both turn a mission string into a grammar mission here, so they cannot read one 
 from __future__ import annotations
 
 import math
+import unicodedata
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,6 +70,8 @@ def parse_mission(text: str) -> MissionRequest:
     if isinstance(text, str) and len(text) > MAX_MISSION_CHARS:
         raise MissionStringError(f"a mission of {len(text):,} characters ({shown(text, ECHO_CHARS)}); a mission "
                                  f"is at most {MAX_MISSION_CHARS:,}: {SYNTAX}")
+    if isinstance(text, str):   # names are compared in NFC (scenes/names.py): "josé" typed either way
+        text = unicodedata.normalize("NFC", text)
     if not isinstance(text, str) or ":" not in text:
         raise MissionStringError(f"mission {shown(text, ECHO_CHARS)!r} is not KIND:ARGUMENT; missions are "
                                  f"{SYNTAX}")

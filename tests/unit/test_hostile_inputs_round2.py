@@ -208,6 +208,14 @@ def test_from_map_writes_its_values_with_a_yaml_emitter(tmp_path: Path) -> None:
     assert written["name"] == name and "resolution" not in written
 
 
+def test_a_name_typed_in_either_unicode_form_is_the_same_name(tmp_path: Path) -> None:
+    scene = tmp_path / "jose.yaml"   # the scene says josé with one code point, the mission with two
+    scene.write_text((HOSTILE / "bom.yaml").read_text(encoding="utf-8-sig").replace("name: ana", "name: jos\u00e9"),
+                     encoding="utf-8")
+    exit_code, _, output = run(["plan", str(scene), "--mission", "person:jose\u0301"])
+    assert exit_code == 0 and "no person named" not in output, output
+
+
 def test_a_100000_character_mission_is_not_echoed_whole() -> None:
     for extra in ([], ["--json"]):
         output = check(["plan", _h("bom.yaml"), "--mission", "room:" + "x" * 100_000, *extra], 2,
