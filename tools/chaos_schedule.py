@@ -13,9 +13,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from scenes.errors import SourceError
-from scenes.files import read_text_bounded
-from scenes.names import shown
 from tools.launch import AGENTS
 
 PROCESSES: tuple[str, ...] = (*AGENTS, "router")
@@ -135,6 +132,10 @@ def load_schedule(path: Path) -> list[Fault]:
     """A schedule file: a JSON list of faults (the "fault" objects of a chaos summary replay a run).
 
     ``change`` may be given as an object; errors name the file and the fault's index."""
+    from scenes.errors import SourceError   # here, not at the top: `chronav --help` imports this module
+    from scenes.files import read_text_bounded
+    from scenes.names import shown
+
     try:   # a regular file of at most MAX_SCHEDULE_BYTES (docs/limits.md), never /dev/zero or a FIFO
         items = json.loads(read_text_bounded(path, max_bytes=MAX_SCHEDULE_BYTES, what="JSON schedule"))
     except SourceError as exc:
