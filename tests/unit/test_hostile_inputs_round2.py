@@ -223,6 +223,10 @@ def test_a_100000_character_mission_is_not_echoed_whole() -> None:
         assert output.count("x" * 100) <= 1
     exit_code, _, output = run(["plan", _h("bom.yaml"), "--mission", "room:" + "x" * 900, "--json"])
     assert exit_code == 1 and "no room named" in output and len(output) < 1_500, output[:3000]
+    for args in (["path", _h("bom.yaml"), *PATH_ARGS, "--planner", "p" * 100_000],
+                 ["evaluate", _h("bom.yaml"), "--planners", "p" * 100_000]):
+        exit_code, _, output = run(args)
+        assert exit_code == 2 and "unknown planner" in output and len(output) < 2_000, output[:3000]
 
 
 if __name__ == "__main__":  # the table of the note
