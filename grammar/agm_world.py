@@ -42,6 +42,7 @@ from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import DefusedXMLParser, ParseError
 
 from grammar.errors import GrammarError, shorten
+from grammar.files import read_bounded
 
 RESERVED = ("name", "type")
 PREFIX = "agm:"
@@ -217,15 +218,12 @@ def parse_agm_world(text: str, file: str = "<string>") -> AgmWorld:
 
 def load_agm_world(path: str | os.PathLike[str]) -> AgmWorld:
     file = str(path)
-    try:
-        size = Path(path).stat().st_size
-        if size > MAX_WORLD_BYTES:
-            raise WorldFileError(f"world file of {size} bytes is larger than the limit of {MAX_WORLD_BYTES}", file)
-        data = Path(path).read_bytes()
+    try:   # a regular file of at most MAX_WORLD_BYTES: never /dev/zero, a FIFO or a directory
+        data = read_bounded(path, MAX_WORLD_BYTES, "world")
     except FileNotFoundError:
         raise WorldFileError("world file not found", file) from None
-    except IsADirectoryError:
-        raise WorldFileError("is a directory, not a world file", file) from None
+    except ValueError as exc:
+        raise WorldFileError(str(exc), file) from None
     except OSError as exc:
         raise WorldFileError(f"cannot read world file: {exc.strerror or exc}", file) from None
     try:
@@ -322,12 +320,14 @@ def load_world(path: str | os.PathLike[str]) -> nx.MultiDiGraph:
         raise WorldFileError(f"unknown world file type {shorten(suffix or '(none)')!r}: use an AGM world "
                              "(.xml) or a node-link graph (.json)", file)
     try:
-        if Path(path).stat().st_size > MAX_WORLD_BYTES:
-            raise WorldFileError(f"world file larger than the limit of {MAX_WORLD_BYTES} bytes", file)
-        text = Path(path).read_text(encoding="utf-8-sig")
+        text = read_bounded(path, MAX_WORLD_BYTES, "world").decode("utf-8-sig")
     except FileNotFoundError:
         raise WorldFileError("world file not found", file) from None
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:
+        raise WorldFileError(f"not UTF-8 text ({exc.reason})", file) from None
+    except ValueError as exc:   # not a regular file, or too large
+        raise WorldFileError(str(exc), file) from None
+    except OSError as exc:
         raise WorldFileError(f"cannot read world file: {getattr(exc, 'strerror', None) or exc}", file) from None
     try:
         data = json.loads(text)

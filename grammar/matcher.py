@@ -170,12 +170,23 @@ def _own_to_var(expr: Expr, var: str) -> Expr:
     return expr
 
 
+class MatchBudgetExceeded(Exception):
+    """Matching tried more candidate nodes than the planner's budget allows (see ``Matcher.budget``)."""
+
+
 class Matcher:
-    """Matches patterns of one grammar (its type table) on states of one world."""
+    """Matches patterns of one grammar (its type table) on states of one world.
+
+    ``budget`` (None: unbounded) is how many more candidate nodes matching may try before it
+    raises :class:`MatchBudgetExceeded`; the planner sets it from its expansion bound, because one
+    match can be exponential on its own (a 9-room ring sought in a 40-room clique tries billions of
+    bindings inside the first expansion, so ``--max-expansions 1`` did not stop it)."""
 
     def __init__(self, types: TypeTable, world: World) -> None:
         self.types = types
         self.world = world
+        self.budget: int | None = None
+        self.tried = 0   # candidate nodes tried, in all (for the budget's message and measurements)
         self._compiled: dict[tuple[int, frozenset[str]], CompiledPattern] = {}
         self._ancestors = lru_cache(maxsize=None)(types.ancestors)
         self._free: dict[int, tuple[Pattern, frozenset[str], tuple[str, ...]]] = {}
@@ -377,6 +388,11 @@ class Matcher:
             return
         step = steps[depth]
         for cand in self._candidates(step, state, b):
+            self.tried += 1
+            if self.budget is not None:
+                self.budget -= 1
+                if self.budget < 0:
+                    raise MatchBudgetExceeded
             if cand in used or not self.type_ok(state.type_of(cand), step.type):
                 continue
             b[step.var] = cand

@@ -22,6 +22,7 @@ from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from grammar.errors import MAX_PATH_CHARS, GrammarError, GrammarWarning, SourcePos, shorten
+from grammar.files import MAX_GRAMMAR_BYTES, read_bounded, regular_file_problem
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder
 from grammar.validate import check_grammar, check_rule, check_target
@@ -29,6 +30,9 @@ from grammar.validate import check_grammar, check_rule, check_target
 GRAMMAR_DIR = Path(__file__).resolve().parent
 LARK_FILE = GRAMMAR_DIR / "aggl.lark"
 
+MAX_INCLUDES = 200
+"""Includes read in all while loading one grammar (docs/limits.md): 24 files each including the
+next twice asked for 2^24 reads; real grammars include a handful of files once each."""
 MAX_NESTING = 100
 """Deepest parse tree accepted (docs/grammar.md, "Limits"): one level per formula connective
 (``not``, ``and``, ``exists``...), about three per parenthesis of a ``where``. Deeper input is
@@ -193,6 +197,10 @@ def _resolve_include(path: str, including: Path | None, pos: SourcePos) -> Path:
     for candidate in candidates:
         if candidate.is_file():
             return candidate.resolve()
+        problem = regular_file_problem(candidate) if candidate.exists() else None
+        if problem is not None:   # a FIFO or a directory is not "not found": say what it is
+            raise GrammarError.at(pos, f"included file {shorten(path, MAX_PATH_CHARS)!r} at "
+                                       f"{shorten(str(candidate), MAX_PATH_CHARS)} {problem}")
     looked = "; ".join(shorten(str(c), MAX_PATH_CHARS) for c in candidates[:MAX_LISTED_PLACES])
     more = f" and {len(candidates) - MAX_LISTED_PLACES} more" if len(candidates) > MAX_LISTED_PLACES else ""
     raise GrammarError.at(pos, f"included file {shorten(path, MAX_PATH_CHARS)!r} not found (looked at: "
@@ -233,7 +241,7 @@ def _resolve_redefinitions(rules: list[Rule], warnings: list[GrammarWarning]) ->
 
 def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = None,
                   path: Path | None = None, includes: bool = True, strict: bool = False,
-                  _stack: tuple[Path, ...] = ()) -> Grammar:
+                  _stack: tuple[Path, ...] = (), _included: list[int] | None = None) -> Grammar:
     """Parse grammar text; ``path`` (the file it came from) anchors relative includes.
     ``includes=False`` checks the text alone, as AGM's ``includeIncludes=False``. ``strict``
     refuses what is only warned about otherwise (what AGM accepts but is probably a mistake:
@@ -264,7 +272,12 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
             if target in _stack or target == path:
                 raise GrammarError.at(item.pos, f"include cycle: {shorten(item.path)!r} includes itself")
             stack = _stack + ((path,) if path is not None else ())
-            inner = load_grammar(target, _stack=stack)
+            _included = [0] if _included is None else _included   # shared by the whole include tree
+            _included[0] += 1
+            if _included[0] > MAX_INCLUDES:   # files including the next twice: 2^24 loads
+                raise GrammarError.at(item.pos, f"more than {MAX_INCLUDES} includes in all (an include inside an "
+                                                "included file counts each time it is read); include each file once")
+            inner = load_grammar(target, _stack=stack, _included=_included)
             rules.extend(inner.rules)
             combos.extend(inner.combos)
             warnings.extend(inner.warnings)
@@ -286,12 +299,12 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
 
 def _read(path: str | os.PathLike[str], what: str) -> str:
     """A grammar or target file's text (UTF-8, an initial byte-order mark allowed)."""
-    try:
-        data = Path(path).read_bytes()
+    try:   # a regular file of at most MAX_GRAMMAR_BYTES: never /dev/zero, a FIFO or a directory
+        data = read_bounded(path, MAX_GRAMMAR_BYTES, what)
     except FileNotFoundError:
         raise GrammarError(f"{what} file not found", str(path)) from None
-    except IsADirectoryError:
-        raise GrammarError(f"is a directory, not a {what} file", str(path)) from None
+    except ValueError as exc:
+        raise GrammarError(str(exc), str(path)) from None
     except OSError as exc:
         raise GrammarError(f"cannot read {what} file: {exc.strerror or exc}", str(path)) from None
     try:
@@ -303,11 +316,12 @@ def _read(path: str | os.PathLike[str], what: str) -> str:
 
 
 def load_grammar(path: str | os.PathLike[str], *, dialect: str | None = None, includes: bool = True,
-                 strict: bool = False, _stack: tuple[Path, ...] = ()) -> Grammar:
+                 strict: bool = False, _stack: tuple[Path, ...] = (),
+                 _included: list[int] | None = None) -> Grammar:
     """Read and parse a grammar file (either dialect); includes resolve relative to it."""
     text = _read(path, "grammar")
     return parse_grammar(text, str(path), dialect=dialect, path=Path(path).resolve(), includes=includes,
-                         strict=strict, _stack=_stack)
+                         strict=strict, _stack=_stack, _included=_included)
 
 
 def parse_target(text: str, file: str = "<string>", *, strict: bool = False) -> Target:

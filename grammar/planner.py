@@ -34,13 +34,18 @@ from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
 from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
-from grammar.matcher import Bindings, CompiledPattern, Matcher, Reader
+from grammar.matcher import Bindings, CompiledPattern, MatchBudgetExceeded, Matcher, Reader
 from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
 from grammar.relevance import condition_reads, drop_useless_removers, relevant_rules
 from grammar.rewrite import apply_rule
 from grammar.world import State, World
 
 DEFAULT_MAX_EXPANSIONS = 20_000
+# Candidate nodes matching may try per allowed expansion (docs/limits.md). Measured: 30-50 per
+# expansion on the shipped grammar (bench_planner_symbolic, 10-200 rooms), so 250 leaves a 5x
+# margin; the floor lets the first expansions of a small bound match a large world.
+MATCH_TRIES_PER_EXPANSION = 250
+MIN_MATCH_BUDGET = 100_000
 
 
 @dataclass(frozen=True)
@@ -205,6 +210,20 @@ class Planner:
         ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search."""
         if max_expansions < 1:
             raise PlanningError(f"max_expansions must be >= 1, got {max_expansions}")
+        # The expansion bound also bounds matching, which can be exponential within one expansion.
+        budget = max(MIN_MATCH_BUDGET, max_expansions * MATCH_TRIES_PER_EXPANSION)
+        self.matcher.budget = budget
+        try:
+            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose)
+        except MatchBudgetExceeded:
+            return NoPlan(f"expansion limit of {max_expansions} reached while matching patterns ({budget:,} candidate "
+                          "nodes tried, the bound that limit sets on matching); the target or a rule matches the "
+                          "world in too many ways")
+        finally:
+            self.matcher.budget = None
+
+    def _plan(self, target: Target, max_expansions: int, heuristic: str | Callable[[State], float], prune: bool,
+              start: State | None, expand: bool, diagnose: bool) -> PlanResult:
         start = start if start is not None else self.world.initial_state()
         missing = self._missing_constants(target, start)
         if missing:

@@ -15,16 +15,17 @@ Everything is a candidate for a person to rename, merge or redraw: the output sa
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import heapq
-import json
 
 import numba
 import numpy as np
 import shapely
+import yaml
 from numpy.typing import NDArray
 from scipy import ndimage
 
@@ -33,6 +34,7 @@ from scenes.occupancy import OccupancyMap
 EIGHT = np.ones((3, 3), dtype=bool)
 WALL_MARGIN_CELLS = 2        # rooms reach this far into the walls around them
 MIN_DOOR_WIDTH_M = 0.6       # a narrower gap between two rooms is noise, not a door
+MAX_DOOR_WIDTH_M = 20.0      # as a scene's door (scenes/model.py Door.width)
 
 
 @dataclass(frozen=True)
@@ -195,9 +197,15 @@ def layout_from_map(occupancy: OccupancyMap, *, unknown_is_wall: bool = True, do
                     min_room_area_m2: float = 2.0) -> MapLayout:
     """Candidate rooms (largest first), doors and a robot pose (the most open free spot)."""
     res = occupancy.resolution
+    if not (math.isfinite(door_width_m) and 0 < door_width_m <= MAX_DOOR_WIDTH_M):
+        raise LayoutError(f"a door width of {door_width_m:g} m; give one between 0 and {MAX_DOOR_WIDTH_M:g} m")
     free = ~occupancy.blocked(unknown_is_wall)
     if not free.any():
         raise LayoutError("the map has no free cell")
+    map_area = occupancy.rows * occupancy.cols * res * res
+    if not (math.isfinite(min_room_area_m2) and 0 < min_room_area_m2 <= map_area):
+        raise LayoutError(f"no free area of at least {min_room_area_m2:g} m2 on the map: the whole map is "
+                          f"{map_area:.4g} m2")
     distance_cells = ndimage.distance_transform_edt(free)   # to the nearest wall cell's centre
     cores, count = _cores(free, distance_cells, 0.5 * door_width_m / res + 0.5, max(4, round(0.25 / res ** 2)))
     labels = _rooms(free, distance_cells, cores, count, max(1, round(min_room_area_m2 / res ** 2)))
@@ -226,9 +234,25 @@ def layout_from_map(occupancy: OccupancyMap, *, unknown_is_wall: bool = True, do
     return MapLayout(rooms=rooms, doors=doors, robot=(round(x, 3), round(y, 3), 0.0))
 
 
+class _OneLineDumper(yaml.SafeDumper):
+    """PyYAML's safe emitter, with every text that holds a line break or a control character
+    double-quoted and escaped: each value stays on its line of the template."""
+
+
+def _represent_text(dumper: yaml.SafeDumper, value: str) -> yaml.ScalarNode:
+    style = '"' if any(not ch.isprintable() for ch in value) else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", value, style=style)
+
+
+_OneLineDumper.add_representer(str, _represent_text)
+
+
 def _flow(value: object) -> str:
-    """A value in YAML flow style (JSON is YAML)."""
-    return json.dumps(value)
+    """A value in YAML flow style on one line, written by the YAML emitter (never pasted text: a
+    ``--name`` of ``x\nresolution: 0.1`` stays one quoted name, not a second key)."""
+    text = yaml.dump(value, Dumper=_OneLineDumper, default_flow_style=True, width=float("inf"),
+                     allow_unicode=True)
+    return text.removesuffix("\n...\n").removesuffix("\n")
 
 
 def scene_text(layout: MapLayout, map_yaml: Path, out: Path, name: str, unknown_is_wall: bool,
@@ -241,6 +265,8 @@ def scene_text(layout: MapLayout, map_yaml: Path, out: Path, name: str, unknown_
     doors = "\n".join(f"  - {{name: {d.name}, between: {_flow(list(d.between))}, position: {_flow(list(d.position))}, "
                       f"width: {d.width:g}}}" for d in layout.doors) or "  []"
     x, y, theta = layout.robot
+    if not layout.rooms:
+        raise LayoutError("no room could be drawn on the map")
     first = layout.rooms[0].name
     mission = (f"  - {{id: visit_{layout.rooms[1].name}, time: \"09:30\", goal: {{room: {layout.rooms[1].name}}}, "
                f"description: \"a first errand: from {first} to {layout.rooms[1].name}\"}}"
@@ -249,8 +275,8 @@ def scene_text(layout: MapLayout, map_yaml: Path, out: Path, name: str, unknown_
 # Rooms are candidates: the map's free space cut at passages narrower than {door_width_m:g} m (the doors
 # below are those passages). Rename, merge or redraw them, then fill in the commented examples.
 # Check it with `chronav scene check` after every edit.
-name: {name}
-description: Scene on the building map {Path(map_yaml).name} (candidate rooms and doors to review).
+name: {_flow(name)}
+description: {_flow(f"Scene on the building map {Path(map_yaml).name} (candidate rooms and doors to review).")}
 map: {_flow(map_value)}
 clock: {{date: 2026-11-25, timezone: Europe/Madrid, start: "09:00", end: "12:00", rate: 60, skip_idle: true}}
 

@@ -45,7 +45,8 @@ class Limit:
         raw = env.get(self.env, "").strip()
         if not raw:
             return self.default
-        if not raw.isdigit() or len(raw) > 18 or int(raw) <= 0:
+        # ASCII digits only: str.isdigit() is also true of "²" and "٣", which int() refuses or reads.
+        if not (raw.isascii() and raw.isdigit()) or len(raw) > 18 or int(raw) <= 0:
             raise LimitConfigError(f"{self.env}={raw[:40]!r}", None, None, "",
                                    f"expected a positive whole number of {self.unit} (default {self.default})")
         return int(raw)
@@ -63,10 +64,12 @@ ICS_BYTES = Limit("ics_bytes", 4 * 1024 * 1024, "bytes", "size of one .ics calen
 RECURRENCE_STEPS = Limit("recurrence_steps", 100_000, "steps",
                          "steps a recurrence rule may take from its first occurrence to the end of the "
                          "simulated day (FREQ=SECONDLY without COUNT/UNTIL would take millions)")
+RECURRENCE_DATES = Limit("recurrence_dates", 5_000, "dates",
+                         "RDATE and EXDATE values in one .ics file (each is expanded into a copy of its event)")
 ACTIVITIES_PER_DAY = Limit("activities_per_day", 2_000, "activities", "activities on one simulated day")
 GRID_CELLS = Limit("grid_cells", 16_000_000, "cells",
                    "cells of a scene's cost grid (64 MB per layer at 4 bytes a cell)")
 TRAJECTORY_SAMPLES = Limit("trajectory_samples", 2_000_000, "samples", "rows of a trajectory CSV")
 
 LIMITS: tuple[Limit, ...] = (YAML_BYTES, YAML_DEPTH, YAML_NODES, YAML_INT_DIGITS, TEXT_CHARS, NAME_CHARS,
-                             ICS_BYTES, RECURRENCE_STEPS, ACTIVITIES_PER_DAY, GRID_CELLS, TRAJECTORY_SAMPLES)
+                             ICS_BYTES, RECURRENCE_STEPS, RECURRENCE_DATES, ACTIVITIES_PER_DAY, GRID_CELLS, TRAJECTORY_SAMPLES)

@@ -197,6 +197,7 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
             inside(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}")
             clear(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}", PERSON_BODY_RADIUS_M,
                   "a person's body")
+    _check_bodies_apart(scene, located)
     for i, person in enumerate(scene.people):
         route = [person.pose, *(w.pose for w in person.waypoints)]
         for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
@@ -227,6 +228,28 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
             what = f"goal of mission {mission.id!r}"
             inside(key, pose.x, pose.y, what)
             clear(key, pose.x, pose.y, what, robot.radius, "the robot's radius")
+
+
+def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
+    """No two people, and not the robot and a person, start where their bodies overlap: two people
+    on one spot, or a robot started on a resident, is a typing mistake (``path`` then says the
+    robot's start is blocked), not a scene."""
+    robot = scene.robot
+    for i, person in enumerate(scene.people):
+        gap = math.hypot(person.pose.x - robot.pose.x, person.pose.y - robot.pose.y)
+        if gap < robot.radius + PERSON_BODY_RADIUS_M:
+            raise located.error(("robot", "pose"), f"robot at ({robot.pose.x:g}, {robot.pose.y:g}) starts on person "
+                                f"{person.name!r} at ({person.pose.x:g}, {person.pose.y:g}): {gap:.2f} m apart, closer "
+                                f"than the robot's radius plus a person's body ({robot.radius + PERSON_BODY_RADIUS_M:g} m); "
+                                "move one of them")
+    for i, person in enumerate(scene.people):
+        for j, other in enumerate(scene.people[:i]):
+            gap = math.hypot(person.pose.x - other.pose.x, person.pose.y - other.pose.y)
+            if gap < 2 * PERSON_BODY_RADIUS_M:
+                raise located.error(("people", i, "pose"), f"person {person.name!r} at ({person.pose.x:g}, "
+                                    f"{person.pose.y:g}) stands on person {other.name!r} at ({other.pose.x:g}, "
+                                    f"{other.pose.y:g}): {gap:.2f} m apart, closer than two bodies "
+                                    f"({2 * PERSON_BODY_RADIUS_M:g} m); move one of them")
 
 
 ROOM_SAMPLES = 4_000           # cell centres sampled per room to measure how much of it is wall

@@ -22,6 +22,14 @@ from scenes.names import Name
 from scenes.yamlio import as_date
 
 
+# A slower clock would never reach the day's first mission (1e-300 sim s per wall s was accepted).
+MIN_CLOCK_RATE = 0.01
+# Finer cells are not a floor plan any more (5e-324 overflowed the grid's cell count).
+MIN_RESOLUTION_M = 0.001
+# The simulated day: a calendar date a care home could plan for (9999-12-31 overflowed the agenda).
+MIN_DATE, MAX_DATE = dt.date(1900, 1, 1), dt.date(2999, 12, 31)
+
+
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -70,9 +78,16 @@ class Clock(Strict):
     timezone: str = "Europe/Madrid"
     start: ClockTime = "09:00"
     end: ClockTime = "14:00"
-    rate: Real = Field(60.0, gt=0, le=1_000_000, description="sim seconds per wall second")
+    rate: Real = Field(60.0, ge=MIN_CLOCK_RATE, le=1_000_000, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
 
+
+    @field_validator("date")
+    @classmethod
+    def _date_range(cls, value: dt.date) -> dt.date:
+        if not MIN_DATE <= value <= MAX_DATE:   # the agenda expands days around it; 9999-12-31 overflowed
+            raise ValueError(f"the simulated day {value.isoformat()} is outside {MIN_DATE.year}-{MAX_DATE.year}")
+        return value
 
     @field_validator("timezone")
     @classmethod
@@ -326,7 +341,7 @@ class MapRef(Strict):
 class Scene(Strict):
     name: Name
     description: str = ""
-    resolution: Real = Field(0.05, gt=0, le=1.0, description="cost grid cell size (m)")
+    resolution: Real = Field(0.05, ge=MIN_RESOLUTION_M, le=1.0, description="cost grid cell size (m)")
     clock: Clock = Clock()
     map: MapRef | None = Field(None, description="building map (ROS map_server format); its occupied cells are walls")
     walls: list[list[Point]] = Field(default_factory=list, description="polylines (at least one unless a map is given)")

@@ -9,6 +9,7 @@ never drive the terminal of the person reading it.
 
 from __future__ import annotations
 
+import unicodedata
 from typing import Annotated
 
 from pydantic import AfterValidator
@@ -17,7 +18,13 @@ from scenes.limits import NAME_CHARS
 
 
 def check_name(value: str) -> str:
-    """A name: not empty, at most NAME_CHARS characters, printable (no control characters)."""
+    """A name: not empty, at most NAME_CHARS characters, printable (no control characters), in
+    Unicode's composed form (NFC).
+
+    Why NFC: "josé" typed on one keyboard is é (one code point), pasted from another e + U+0301;
+    both look the same to a person, so they are the same name (two people named "josé" in the two
+    forms were accepted as different people)."""
+    value = unicodedata.normalize("NFC", value)
     limit = NAME_CHARS.value()
     if len(value) > limit:
         raise ValueError(f"a name of {len(value):,} characters; names have at most {limit} "

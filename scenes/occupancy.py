@@ -27,7 +27,9 @@ comments, binary or ASCII, 8 or 16 bit; PNG grey, grey+alpha, RGB, RGBA or palet
 
 from __future__ import annotations
 
+import io
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -37,12 +39,20 @@ import yaml
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from scenes.files import read_bounded
+from scenes.limits import GRID_CELLS
 from scenes.yamlio import SourceError, load_located_file, validate_located
 
 OCCUPIED = 100         # nav_msgs/OccupancyGrid: occupied
 FREE = 0
 UNKNOWN = -1
 MAX_MAP_CELLS = 25_000_000   # 5000 x 5000: a 250 m x 250 m building at 5 cm
+# A map cell is one cell of the scene's grid; finer or coarser than these is a mistake in the file
+# (1e-200 m divided by zero, 1e300 m overflowed), and a corner further away is not a building.
+MIN_MAP_RESOLUTION_M = 0.001
+MAX_MAP_RESOLUTION_M = 10.0
+MAX_MAP_ORIGIN_M = 100_000.0
+MAX_MAP_IMAGE_BYTES = 256 * 1024 * 1024   # larger than any image of MAX_MAP_CELLS pixels
 YAW_TOLERANCE_RAD = 1e-9
 
 
@@ -52,7 +62,7 @@ class MapYaml(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     image: str = Field(min_length=1, description="image file, relative to the yaml")
-    resolution: float = Field(gt=0, description="metres per pixel")
+    resolution: float = Field(ge=MIN_MAP_RESOLUTION_M, le=MAX_MAP_RESOLUTION_M, description="metres per pixel")
     origin: tuple[float, float, float] = Field(description="[x, y, yaw] of the lower-left pixel's corner")
     negate: bool = Field(description="0: white is free; 1: black is free")
     occupied_thresh: float = Field(ge=0.0, le=1.0)
@@ -81,6 +91,9 @@ class MapYaml(BaseModel):
     def _origin(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
         if not all(math.isfinite(v) for v in value):
             raise ValueError("origin must be three finite numbers [x, y, yaw]")
+        if max(abs(value[0]), abs(value[1])) > MAX_MAP_ORIGIN_M:
+            raise ValueError(f"origin [{value[0]:g}, {value[1]:g}] is more than {MAX_MAP_ORIGIN_M:,.0f} m from the "
+                             "map frame's origin; a building map's corner is within a few hundred metres of it")
         if abs(value[2]) > YAW_TOLERANCE_RAD:
             raise ValueError(f"origin yaw is {value[2]:g} rad; chronav needs an unrotated map (yaw 0): "
                              "rotate the image instead")
@@ -220,16 +233,30 @@ def load_occupancy(yaml_path: str | Path) -> OccupancyMap:
 
     if not image_path.exists():
         raise image_error("no such image file")
+    try:   # a regular file (a FIFO would block Pillow forever), within a byte bound
+        data = read_bounded(image_path, max_bytes=MAX_MAP_IMAGE_BYTES, what="map image")
+    except SourceError as exc:
+        raise image_error(exc.message) from None
+    # Each pixel is a cell of the scene's grid, so a map of more cells than the grid may have could
+    # never be used: refused from the image's header, before its pixels are decoded (a 35 KB PNG
+    # can hold 5000 x 5000 of them).
+    max_pixels = min(MAX_MAP_CELLS, GRID_CELLS.value())
+    too_big = (f"chronav reads maps of 1 to {max_pixels:,} pixels, one grid cell each ({GRID_CELLS.env}); "
+               "crop it or use a coarser resolution")
     try:
-        with Image.open(image_path) as image:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(io.BytesIO(data))
+        with image:
             width, height = image.size
-            if width * height > MAX_MAP_CELLS or width == 0 or height == 0:
-                raise image_error(f"the image is {width} x {height} pixels; chronav reads maps of 1 to "
-                                  f"{MAX_MAP_CELLS:,} pixels (crop it or use a coarser resolution)")
+            if width * height > max_pixels or width == 0 or height == 0:
+                raise image_error(f"the image is {width:,} x {height:,} pixels; {too_big}")
             image.load()
             levels, top, transparent = _levels(image, meta.mode)
     except SourceError:
         raise
+    except Image.DecompressionBombError:   # Pillow's own bound (179 million pixels) met in the header
+        raise image_error(f"the image has more than {Image.MAX_IMAGE_PIXELS:,} pixels; {too_big}") from None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
         raise image_error(f"not a readable map image ({exc}); map_server images are PGM or PNG") from None
     lookup = occupancy_values(np.arange(top + 1, dtype=np.float64) / top, None, meta)

@@ -32,6 +32,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from scenes.errors import SourceError
+from scenes.files import read_text_bounded
 from scenes.limits import TEXT_CHARS, YAML_BYTES, YAML_DEPTH, YAML_INT_DIGITS, YAML_NODES
 
 KeyPath = tuple[str | int, ...]
@@ -315,27 +316,9 @@ def load_located(text: str, file: str) -> LocatedYaml:
 
 
 def read_text_file(path: str | Path, *, max_bytes: int, limit_env: str, what: str = "file") -> str:
-    """A UTF-8 text file (a leading byte-order mark dropped), size-checked before it is read."""
-    path = Path(path)
-    try:
-        size = path.stat().st_size
-        if size > max_bytes:
-            raise SourceError(str(path), None, None, "", f"{size:,} bytes; a {what} may have at most "
-                              f"{max_bytes:,} ({limit_env})")
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise SourceError(str(path), None, None, "", "no such file") from None
-    except IsADirectoryError:
-        raise SourceError(str(path), None, None, "", "is a directory, not a file") from None
-    except OSError as exc:
-        raise SourceError(str(path), None, None, "", f"cannot read file: {exc.strerror}") from None
-    try:
-        return data.decode("utf-8").removeprefix("\ufeff")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        column = exc.start - (data.rfind(b"\n", 0, exc.start) + 1) + 1
-        raise SourceError(str(path), line, column, "", f"not UTF-8 text (byte 0x{data[exc.start]:02x}); "
-                          "save the file as UTF-8") from None
+    """A UTF-8 text file (a leading byte-order mark dropped), size-checked before it is read; only a
+    regular file (scenes/files.py: a FIFO, a directory or /dev/zero is refused as such)."""
+    return read_text_bounded(path, max_bytes=max_bytes, limit_env=limit_env, what=what)
 
 
 def load_located_file(path: str | Path) -> LocatedYaml:

@@ -161,17 +161,19 @@ def load_change(path: Path, *, replace: bool) -> dict[str, Any]:
     """
     from agents.lib.agenda.model import AgendaSourceError
     from agents.lib.agenda.yaml_source import parse_agenda_text
+    from scenes.errors import SourceError
+    from scenes.files import read_text_bounded
+    from scenes.limits import ICS_BYTES, YAML_BYTES
 
     fmt = AGENDA_FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise LocalRefusal(f"{path}: unknown agenda format {path.suffix or '(no suffix)'!r}; "
                            "use a .ics (iCalendar) or .yaml file")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise LocalRefusal(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise LocalRefusal(f"{path}: cannot read it: {exc}") from None
+    limit = ICS_BYTES if fmt == "ics" else YAML_BYTES
+    try:   # a regular file within its size bound: /dev/zero, a FIFO or a directory is refused as such
+        text = read_text_bounded(path, max_bytes=limit.value(), limit_env=limit.env, what=f"{fmt} agenda file")
+    except SourceError as exc:
+        raise LocalRefusal(str(exc)) from None
     try:
         parse_agenda_text(text, fmt, str(path))
     except AgendaSourceError as exc:

@@ -19,6 +19,11 @@ PROCESSES: tuple[str, ...] = (*AGENTS, "router")
 ACTIONS: tuple[str, ...] = ("kill", "stop", "agenda")
 Action = Literal["kill", "stop", "agenda"]
 
+# Bounds of a chaos run (docs/limits.md): each fault waits for the system to converge before the
+# next, so a run of more faults than this would not end in a working day; a schedule file is small.
+MAX_FAULTS = 1_000
+MAX_SCHEDULE_BYTES = 1024 * 1024
+
 
 class ChaosError(Exception):
     """The chaos run could not be set up (bad schedule, scene, ...); the message says why."""
@@ -101,6 +106,9 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
     missions = [m.id for m in sorted(loaded.scene.missions, key=lambda m: parse_clock(m.time))]
     if faults < 0 or duration_s <= 0:
         raise ChaosError(f"need faults >= 0 and duration > 0 (got {faults}, {duration_s})")
+    if faults > MAX_FAULTS:
+        raise ChaosError(f"--faults {faults:,}: a chaos run injects at most {MAX_FAULTS:,} faults (each waits "
+                         "for the system to converge); run several shorter chaos runs instead")
     if faults and not missions:
         raise ChaosError(f"scene {loaded.scene.name!r} has no missions to inject faults into")
     rng = random.Random(seed)
@@ -124,12 +132,20 @@ def load_schedule(path: Path) -> list[Fault]:
     """A schedule file: a JSON list of faults (the "fault" objects of a chaos summary replay a run).
 
     ``change`` may be given as an object; errors name the file and the fault's index."""
-    try:
-        items = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ChaosError(f"{path}: cannot read a JSON schedule: {exc}") from None
+    from scenes.errors import SourceError   # here, not at the top: `chronav --help` imports this module
+    from scenes.files import read_text_bounded
+    from scenes.names import shown
+
+    try:   # a regular file of at most MAX_SCHEDULE_BYTES (docs/limits.md), never /dev/zero or a FIFO
+        items = json.loads(read_text_bounded(path, max_bytes=MAX_SCHEDULE_BYTES, what="JSON schedule"))
+    except SourceError as exc:
+        raise ChaosError(str(exc)) from None
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ChaosError(f"{path}: cannot read a JSON schedule: {shown(exc, 200)}") from None
     if not isinstance(items, list):
         raise ChaosError(f"{path}: a schedule is a JSON list of faults")
+    if len(items) > MAX_FAULTS:
+        raise ChaosError(f"{path}: {len(items):,} faults; a schedule has at most {MAX_FAULTS:,}")
     faults: list[Fault] = []
     for index, item in enumerate(items):
         try:

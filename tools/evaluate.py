@@ -161,6 +161,9 @@ class _Progress:
                            f"ETA {eta / 60:.1f} min", highlight=False, markup=False, soft_wrap=True)
 
 
+MAX_SEEDS = 10_000   # seeds per scene and planner in one study (docs/limits.md)
+
+
 def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int, out: Path | None,
              executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str) -> dict[str, Any]:
     """The whole study; returns what ``--json`` prints."""
@@ -174,6 +177,8 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     chosen = parse_planners(planners)
     if seeds < 1:
         raise EvaluateError("--seeds: give at least 1")
+    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
+        raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
     try:
         check_timeout(timeout_s)
     except LaunchError as exc:

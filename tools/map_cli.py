@@ -176,6 +176,12 @@ def register(app: typer.Typer) -> None:
         for option, value in (("--door-width", door_width), ("--min-room-area", min_room_area)):
             if not (math.isfinite(value) and value > 0):
                 raise typer.BadParameter("must be a positive number", param_hint=option)
+        from scenes.names import check_name
+
+        try:   # the scene's name as `scene check` will read it (it is written by the YAML emitter too)
+            check_name(name or out.stem)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--name" if name is not None else "--out") from None
         if out.exists() and not force:
             _fail(f"{out} exists; pass --force to overwrite it")
         try:

@@ -56,7 +56,10 @@ def plan_scene(scene: Path, mission: str, at_s: float | None, grammar_file: Path
         _fail(str(exc))
         return
     t_s = world.scene.clock.start_s if at_s is None else at_s
-    payload: dict[str, Any] = {"scene": world.scene.name, "mission": mission, "at_s": t_s, "at": format_clock(t_s),
+    from scenes.names import shown
+
+    echoed = shown(mission, 80)   # the mission as typed, cut to a readable length (it may be 100,000 characters)
+    payload: dict[str, Any] = {"scene": world.scene.name, "mission": echoed, "at_s": t_s, "at": format_clock(t_s),
                                "grammar": str(planner.grammar_file)}
     try:
         plan, steps = preview_mission(planner, graph_at(world, t_s), mission)
@@ -76,7 +79,7 @@ def plan_scene(scene: Path, mission: str, at_s: float | None, grammar_file: Path
                 payload["diagnosis"] = diagnosis.to_dict()
         if as_json:
             typer.echo(json.dumps(payload))
-        typer.echo(f"no plan for {mission!r} at {format_clock(t_s)}: {exc}", err=True)
+        typer.echo(f"no plan for {echoed!r} at {format_clock(t_s)}: {exc}", err=True)
         diagnosis = getattr(result, "diagnosis", None)
         if diagnosis is not None:  # the grammar's why: blocking rule, condition and facts
             for line in diagnosis.lines()[1:]:
@@ -91,7 +94,7 @@ def plan_scene(scene: Path, mission: str, at_s: float | None, grammar_file: Path
         typer.echo(json.dumps(payload))
         return
     planned_as = "" if plan.grammar_mission == mission else f" (planned as {plan.grammar_mission})"
-    typer.echo(f"plan for {mission!r} at {format_clock(t_s)}{planned_as}: {len(steps)} step(s) in "
+    typer.echo(f"plan for {echoed!r} at {format_clock(t_s)}{planned_as}: {len(steps)} step(s) in "
                f"{payload['intentions']} intention(s), cost {result.cost:g}, {result.expanded} state(s) expanded")
     if not steps:
         typer.echo("  (already satisfied: nothing to do)")

@@ -11,10 +11,12 @@ both turn a mission string into a grammar mission here, so they cannot read one 
 from __future__ import annotations
 
 import math
+import unicodedata
 from dataclasses import dataclass
 from typing import Any
 
 from agents.world.vocabulary import ACTIVITY_PREFIX, NodeType, activity_id_of, activity_name
+from scenes.names import shown
 
 ROOM, OBJECT, PERSON, GROUP, WAIT, POSE = "room", "object", "person", "group", "wait", "pose"
 KINDS = (ROOM, OBJECT, PERSON, GROUP, WAIT, POSE)
@@ -23,6 +25,10 @@ SYNTAX = ("room:NAME, object:NAME, person:NAME, group:P1+P2[+...], wait:ACTIVITY
 _NODE_TYPE = {ROOM: NodeType.ROOM, OBJECT: NodeType.OBJECT, PERSON: NodeType.PERSON, GROUP: NodeType.PERSON,
               WAIT: NodeType.ACTIVITY}
 _LISTED = 12   # names listed in an error message, at most
+# A mission names at most a group of people (names of at most 100 characters): a longer text is a
+# mistake, refused before it is parsed and echoed (docs/limits.md).
+MAX_MISSION_CHARS = 1_000
+ECHO_CHARS = 80   # how much of a mission text an error message shows (scenes.names.shown)
 _PLURAL = {NodeType.PERSON: "people"}
 
 
@@ -61,19 +67,26 @@ def parse_mission(text: str) -> MissionRequest:
     from grammar import MissionError
     from grammar import parse_mission as parse_grammar_mission
 
+    if isinstance(text, str) and len(text) > MAX_MISSION_CHARS:
+        raise MissionStringError(f"a mission of {len(text):,} characters ({shown(text, ECHO_CHARS)}); a mission "
+                                 f"is at most {MAX_MISSION_CHARS:,}: {SYNTAX}")
+    if isinstance(text, str):   # names are compared in NFC (scenes/names.py): "josé" typed either way
+        text = unicodedata.normalize("NFC", text)
     if not isinstance(text, str) or ":" not in text:
-        raise MissionStringError(f"mission {text!r} is not KIND:ARGUMENT; missions are {SYNTAX}")
+        raise MissionStringError(f"mission {shown(text, ECHO_CHARS)!r} is not KIND:ARGUMENT; missions are "
+                                 f"{SYNTAX}")
     kind, _, arg = (part.strip() for part in text.partition(":"))
     if kind not in KINDS:
-        raise MissionStringError(f"unknown mission kind {kind!r} in {text!r}; expected one of {', '.join(KINDS)}")
+        raise MissionStringError(f"unknown mission kind {shown(kind, 40)!r} in {shown(text, ECHO_CHARS)!r}; "
+                                 f"expected one of {', '.join(KINDS)}")
     if not arg:
-        raise MissionStringError(f"mission {text!r} has no argument; missions are {SYNTAX}")
+        raise MissionStringError(f"mission {shown(text, ECHO_CHARS)!r} has no argument; missions are {SYNTAX}")
     if kind == POSE:
         return MissionRequest(text, kind, (), _pose(text, arg))
     if kind == WAIT:
         activity = arg.removeprefix(ACTIVITY_PREFIX).strip()
         if not activity:
-            raise MissionStringError(f"mission {text!r} names no activity")
+            raise MissionStringError(f"mission {shown(text, ECHO_CHARS)!r} names no activity")
         arg = activity_name(activity)
     try:
         parsed = parse_grammar_mission(f"{kind}:{arg}")
@@ -89,15 +102,16 @@ def _pose(text: str, arg: str) -> tuple[float, float, float | None]:
     except ValueError:
         values = []
     if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values):
-        raise MissionStringError(f"bad pose mission {text!r}: expected pose:X,Y or pose:X,Y,THETA with finite "
+        raise MissionStringError(f"bad pose mission {shown(text, ECHO_CHARS)!r}: expected pose:X,Y or "
+                                 "pose:X,Y,THETA with finite "
                                  "numbers (metres, radians), e.g. pose:12.5,6.2,0")
     return (values[0], values[1], values[2] if len(values) == 3 else None)
 
 
 def _listing(names: list[str]) -> str:
-    shown = sorted(names)[:_LISTED]
-    more = len(names) - len(shown)
-    return ", ".join(shown) + (f" and {more} more" if more > 0 else "") if shown else "none"
+    listed = sorted(names)[:_LISTED]
+    more = len(names) - len(listed)
+    return ", ".join(listed) + (f" and {more} more" if more > 0 else "") if listed else "none"
 
 
 def check_names(request: MissionRequest, graph: Any) -> str | None:
@@ -112,9 +126,9 @@ def check_names(request: MissionRequest, graph: Any) -> str | None:
             continue
         known = [n.name for n in graph.nodes_of_type(node_type)]
         if request.kind == WAIT:
-            return (f"no activity {activity_id_of(name)!r} on today's agenda; activities: "
+            return (f"no activity {shown(activity_id_of(name), 60)!r} on today's agenda; activities: "
                     f"{_listing([activity_id_of(k) for k in known])}")
         if node is not None:
-            return f"{name!r} is a {node.type}, not a {node_type}"
-        return f"no {node_type} named {name!r}; {_PLURAL.get(node_type, node_type + 's')}: {_listing(known)}"
+            return f"{shown(name, 60)!r} is a {node.type}, not a {node_type}"
+        return f"no {node_type} named {shown(name, 60)!r}; {_PLURAL.get(node_type, node_type + 's')}: {_listing(known)}"
     return None

@@ -20,10 +20,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from agents.missions.kinds import GROUP, POSE, ROOM, MissionRequest, MissionStringError, check_names, parse_mission
+from agents.missions.kinds import (ECHO_CHARS, GROUP, POSE, ROOM, MissionRequest, MissionStringError, check_names,
+                                   parse_mission)
 from agents.missions.steps import PlanStep, Rule, StepFailed, Var
 from agents.world.dsr_readers import symbolic_view
 from scenes.model import Scene
+from scenes.names import shown
 
 
 class NoMissionPlan(StepFailed):
@@ -71,13 +73,13 @@ class MissionPlanner:
         request = parse_mission(goal_text)
         problem = check_names(request, graph)
         if problem is not None:
-            raise NoMissionPlan(f"mission {goal_text!r}: {problem}")
+            raise NoMissionPlan(f"mission {shown(goal_text, ECHO_CHARS)!r}: {problem}")
         room = None
         if request.kind == POSE:
             assert request.pose is not None
             room = self.scene.room_at(request.pose[0], request.pose[1])
             if room is None:
-                raise NoMissionPlan(f"mission {goal_text!r}: ({request.pose[0]:g}, {request.pose[1]:g}) is in no "
+                raise NoMissionPlan(f"mission {shown(goal_text, ECHO_CHARS)!r}: ({request.pose[0]:g}, {request.pose[1]:g}) is in no "
                                     f"room of scene {self.scene.name!r}")
         grammar_mission = request.grammar_mission(room)
         options = {} if self.max_expansions is None else {"max_expansions": self.max_expansions}

@@ -236,7 +236,7 @@ def test_not_an_ics_file_and_duplicate_uids() -> None:
     text = "\n".join(["BEGIN:VCALENDAR", "VERSION:2.0", *event, *event, "END:VCALENDAR", ""])
     with pytest.raises(AgendaSourceError, match=r"dup.ics:9: UID=same: a second event .*first at line 3"):
         parse_ics(text, "dup.ics")
-    with pytest.raises(AgendaSourceError, match="cannot read file"):
+    with pytest.raises(AgendaSourceError, match="no_such_agenda.ics: no such file"):
         load_ics_file(DATA / "no_such_agenda.ics")
     with pytest.raises(AgendaSourceError, match="not UTF-8 text"):
         parse_ics(b"\xff\xfeB\x00E\x00", "utf16.ics")

@@ -65,7 +65,7 @@ def test_scene_from_map_passes_the_check_and_plans_between_rooms(tmp_path: Path)
     summary = json.loads(result.stdout)
     assert len(summary["rooms"]) == 3 and len(summary["doors"]) == 3, summary
     text = out.read_text()
-    assert "map: \"../maps/floor.yaml\"" in text and "# - name: tv" in text and "# - {id: serious_game" in text
+    assert "map: ../maps/floor.yaml\n" in text and "# - name: tv" in text and "# - {id: serious_game" in text
 
     check = runner.invoke(app, ["scene", "check", str(out)])
     assert check.exit_code == 0, check.output

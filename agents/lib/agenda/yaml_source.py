@@ -153,10 +153,17 @@ def scene_agenda(located: LocatedYaml, scene_dir: Path) -> list[ActivitySpec | I
     if isinstance(ref, str):
         target = Path(ref)
         target = target if target.is_absolute() else scene_dir / target
-        if not target.is_file():
+        if not target.exists():
             raise AgendaSourceError([located.error(("agenda_file",), f"agenda file {ref!r} not found "
                                                    f"(looked for {target})")])
-        sources.extend(load_agenda_file(target))
+        try:   # a FIFO or a directory is refused as such (scenes/files.py), not "not found"
+            sources.extend(load_agenda_file(target))
+        except AgendaSourceError as exc:
+            problem = exc.problems[0]
+            if problem.line is None:   # the file as a whole: say which key of the scene named it
+                raise AgendaSourceError([located.error(("agenda_file",), f"agenda file {ref!r}: {problem.message}")]) \
+                    from None
+            raise
     return sources
 
 

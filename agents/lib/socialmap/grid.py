@@ -66,9 +66,16 @@ def grid_shape(bounds: Sequence[float], resolution: float, max_cells: int | None
     if not (math.isfinite(resolution) and resolution > 0):
         raise SocialMapInputError(f"resolution must be a positive number of metres, got {resolution!r}")
     width, height = xmax - xmin, ymax - ymin
-    cols = max(1, math.ceil(width / resolution - 1e-9))
-    rows = max(1, math.ceil(height / resolution - 1e-9))
     limit = GRID_CELLS.value() if max_cells is None else max_cells
+    cols_f, rows_f = width / resolution, height / resolution   # inf for 1e308 m or 5e-324 m cells
+    if not (math.isfinite(cols_f) and math.isfinite(rows_f)):
+        raise GridTooLargeError(
+            f"the map is {_metres(width)} m x {_metres(height)} m; at {resolution:g} m cells that is "
+            f"{cols_f:.3g} x {rows_f:.3g} cells, more than the limit of {limit:,} ({GRID_CELLS.env}); "
+            + (f"use cells of at least {coarsest:.3g} m (the scene's `resolution`)"
+               if math.isfinite(coarsest := math.sqrt(width * height / limit)) else "draw a building of real size"))
+    cols = max(1, math.ceil(cols_f - 1e-9))
+    rows = max(1, math.ceil(rows_f - 1e-9))
     if rows * cols > limit:
         coarsest = math.sqrt(width * height / limit)
         raise GridTooLargeError(
@@ -79,6 +86,8 @@ def grid_shape(bounds: Sequence[float], resolution: float, max_cells: int | None
 
 
 def _metres(value: float) -> str:
+    if value >= 1e9:   # 1e308 m: a number, not 300 digits
+        return f"{value:.3g}"
     return f"{value:,.0f}" if value >= 100 else f"{value:g}"
 
 

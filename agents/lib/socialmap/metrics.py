@@ -289,6 +289,24 @@ def _check_geometries(argument: str, geoms: Mapping[str, object]) -> None:
                                     f"({shapely.is_valid_reason(geom)})")
 
 
+def _csv_rows(path: Path, text: str) -> Iterator[tuple[int, list[str]]]:
+    """(line number, cells) of each CSV line; the csv module's own refusals (a cell over its
+    131,072-character limit, a NUL byte) as located errors instead of a ``_csv.Error`` traceback."""
+    reader = csv.reader(text.splitlines())
+    lineno = 0
+    while True:
+        try:
+            fields = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            detail = (f"a cell of more than {csv.field_size_limit():,} characters; cells are numbers"
+                      if "field limit" in str(exc) else f"not CSV ({str(exc)[:100]})")
+            raise TrajectoryFormatError(f"{path}:{reader.line_num}: {detail}") from None
+        lineno = reader.line_num
+        yield lineno, fields
+
+
 def _csv_records(path: Path, header: tuple[str, ...], what: str, max_rows: int) -> Iterator[tuple[int, list[str]]]:
     """(line number, stripped cells) of each row of a CSV after its header, blank lines skipped.
 
@@ -302,7 +320,7 @@ def _csv_records(path: Path, header: tuple[str, ...], what: str, max_rows: int) 
     names = ",".join(header)
     header_seen = False
     count = 0
-    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
+    for lineno, fields in _csv_rows(path, text):
         if not fields or all(not f.strip() for f in fields):
             continue
         cells = [f.strip() for f in fields]

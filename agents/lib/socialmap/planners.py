@@ -46,6 +46,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from agents.lib.socialmap.grid import COST_DTYPE, CostArray, CostPatch, GridParams, GridSpec, compose
 from agents.lib.socialmap.layers import interaction_patches
 from agents.lib.socialmap.types import Person
+from scenes.names import shown
 
 if TYPE_CHECKING:
     from agents.lib.socialmap.social_map import SocialMap
@@ -80,7 +81,7 @@ class InflationParams(BaseModel):
 def check_planner(name: str) -> PlannerName:
     """``name`` if it is a planner, else UnknownPlannerError saying which exist."""
     if name not in PLANNERS:
-        raise UnknownPlannerError(f"unknown planner {name!r}; choose one of {', '.join(PLANNERS)}")
+        raise UnknownPlannerError(f"unknown planner {shown(name, 40)!r}; choose one of {', '.join(PLANNERS)}")
     return name  # type: ignore[return-value]
 
 
