@@ -33,8 +33,8 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
 DATE = dt.date(2026, 11, 25)
 ZONES = "/world/decision/zones/intimate"
-REPLAN_GAP_S = 2.0       # map rebuilt every 0.2 s of sim time while driving; sim time flows on while a search runs
-PERSON_SLACK_M = 0.3     # tracker noise and lag: a zone around a belief this close to the truth is true
+REPLAN_GAP_S = 1.0       # the map is rebuilt every 0.2 s of sim time while the robot drives (lockstep)
+PERSON_SLACK_M = 0.5     # tracker noise and lag, a walker's zone stretched ahead: this close to a true person is true
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +87,9 @@ def test_zones_are_logged_at_every_social_map_update_with_their_stamp(run: dict[
     assert arrived, "the mission arrived"
     driving = map_times[(map_times >= paths[0]) & (map_times <= arrived[0])]
     assert len(driving) > 10
-    gaps = np.diff(driving)
+    # From the first replan on (before it the simulator's clock still flows while the robot waits
+    # for its first command), the map is rebuilt, and logged, every replan period.
+    gaps = np.diff(driving[1:])
     assert gaps.max() <= REPLAN_GAP_S, f"the zones shown were {gaps.max():.1f} s old at some instant"
     # After arrival the navigation uses no map: the layer is cleared, not left showing old zones.
     after = [r for r in zones if _seconds(r["sim_time"]) >= arrived[0]]
