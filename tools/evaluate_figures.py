@@ -97,7 +97,7 @@ def box_plot(rows: Sequence[Mapping[str, Any]], metric: str, planners: Sequence[
         return None
     cols = min(4, len(missions))
     nrows = math.ceil(len(missions) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(3.2 * cols + 0.6, 3.3 * nrows + 0.5), squeeze=False)
+    fig, axes = plt.subplots(nrows, cols, figsize=(max(4.8, 3.2 * cols + 0.6), 3.3 * nrows + 0.5), squeeze=False)
     for ax in axes.flat[len(missions):]:
         ax.set_visible(False)
     for ax, (scene, mission) in zip(axes.flat, missions, strict=False):
@@ -130,9 +130,10 @@ def box_plot(rows: Sequence[Mapping[str, Any]], metric: str, planners: Sequence[
         ax.grid(axis="y", alpha=0.3)
         ax.tick_params(axis="y", labelsize=8)
     counts = [len(d) for m in missions for p in planners if (d := _values(rows, m, p, metric)) is not None]
-    kind = "box plot per planner" if counts and min(counts) >= BOX_MIN_SEEDS else \
-        f"seeds as dots, bar = mean (box plots from {BOX_MIN_SEEDS} seeds)"
-    fig.suptitle(f"{metric_label(metric)}: {kind}", fontsize=11)
+    kind = "dots: seeds; boxes: quartiles" if counts and min(counts) >= BOX_MIN_SEEDS else \
+        f"dots: seeds; bar: mean (boxes from {BOX_MIN_SEEDS} seeds)"
+    fig.suptitle(metric_label(metric), fontsize=11)
+    fig.text(0.5, 0.005, kind, ha="center", va="bottom", fontsize=8, color="#555555")
     # Fixed margins, not tight_layout: laying out draws every figure twice (most of the report's time).
     fig.subplots_adjust(left=0.1 if cols > 1 else 0.2, right=0.98, bottom=0.22 / nrows, top=1 - 0.14 / nrows,
                         wspace=0.35, hspace=0.55)
@@ -278,18 +279,17 @@ def r_curves(maps: Any, step_s: float = 60.0) -> tuple[np.ndarray, dict[str, np.
     return times, curves
 
 
-TICK_STEPS_S = (300.0, 600.0, 900.0, 1800.0, 3600.0, 7200.0)
+TICK_STEPS_S = (300.0, 600.0, 900.0, 1800.0, 3600.0, 7200.0, 10800.0, 21600.0)
 
 
-def clock_ticks(start_s: float, end_s: float, at_least: int = 5) -> np.ndarray:
-    """Clock ticks on round times, the widest step that still gives ``at_least`` of them
-    (a 90-minute day on whole hours had two labels)."""
-    for step in reversed(TICK_STEPS_S):
+def clock_ticks(start_s: float, end_s: float, at_most: int = 12) -> np.ndarray:
+    """Clock ticks on round times, the finest step that gives at most ``at_most`` of them (a
+    90-minute day on whole hours had two labels; a nine-hour day gets hourly ones)."""
+    for step in TICK_STEPS_S:
         ticks = np.arange(math.ceil(start_s / step) * step, end_s + 1e-6, step)
-        if len(ticks) >= at_least:
+        if len(ticks) <= at_most:
             return ticks
-    step = TICK_STEPS_S[0]
-    return np.arange(math.ceil(start_s / step) * step, end_s + 1e-6, step)
+    return ticks
 
 
 def _hhmm(t_s: float) -> str:

@@ -32,7 +32,8 @@ SHOWN_TYPES = frozenset(TYPE_COLOURS)
 HIDDEN_EDGES = {"RT", "in"}
 #: activities worth a node: what runs or is about to (the rest of the day is in R(t) and the agenda)
 SHOWN_ACTIVITY_STATES = frozenset({"upcoming", "running"})
-COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 190.0, 34.0, 85.0, 30.0
+# Compact: the view zooms to fit the whole graph, so a wide layout would shrink every label.
+COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 125.0, 30.0, 58.0, 18.0
 
 
 class GraphLogger:
@@ -69,7 +70,8 @@ class GraphLogger:
 
 
 def label(node_type: str, name: str, state: str) -> str:
-    text = short_id(name) if node_type == "person" else name
+    """Short: a person's id without role, an activity or mission without its ``kind/`` prefix."""
+    text = short_id(name) if node_type == "person" else name.rsplit("/", 1)[-1]
     return f"{text} [{state}]" if state and node_type in ("activity", "mission") else text
 
 
@@ -117,9 +119,10 @@ def layout(graph: Any, node_ids: list[int]) -> list[tuple[float, float]]:
             k = counts.get(col, 0)
             counts[col] = k + 1
             placed[node.id] = (col * COLUMN_PX + (k % 2) * PERSON_COLUMN_PX, (rows[col] + 0.5 + k // 2) * ROW_PX)
+    missions_col = extra + (1 if any(x >= extra * COLUMN_PX for x, _ in placed.values()) else 0)
     for node in sorted(nodes.values(), key=lambda n: n.name):
         if node.type == "mission":
-            col = extra + 1
+            col = missions_col
             placed[node.id] = (col * COLUMN_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
     return [placed.get(i, ((extra + 1) * COLUMN_PX, 0.0)) for i in node_ids]

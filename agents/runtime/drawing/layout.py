@@ -68,7 +68,8 @@ def blueprint(scene: Any | None = None) -> Any:
     if wide:
         body = rrb.Vertical(
             map_view,
-            rrb.Horizontal(rrb.Vertical(r_of_t, rrb.Tabs(robot, missions)), graph, legend, column_shares=[3, 3, 2]),
+            rrb.Horizontal(rrb.Vertical(r_of_t, rrb.Tabs(robot, missions), row_shares=[3, 2]), graph, legend,
+                           column_shares=[3, 3, 2]),
             events,
             row_shares=[6, 4, 2],
         )

@@ -245,9 +245,11 @@ class DecisionLogger:
             return
         import rerun as rr
 
-        for part in ("zones", "objects", "path", "band", "stamp_label"):
-            self.rec.log(f"{DECISION}/{part}", rr.Clear(recursive=True))
-        self.rec.log(f"{DECISION}/cost", rr.Clear(recursive=False))
+        # Each leaf cleared by name (not one recursive clear): readers of the recording's
+        # dataframes see the clear at the entity itself, as the viewer does.
+        for part in (*(f"zones/{zone}" for zone in ZONE_COLOURS), "objects/interaction", "objects/labels", "path",
+                     "band", "stamp_label", "cost"):
+            self.rec.log(f"{DECISION}/{part}", rr.Clear(recursive=False))
         self.rec.log(f"{DECISION}/stamp", rr.TextLog(why))
         self._image_key = None
         self._cleared = True
