@@ -5,8 +5,8 @@ Usage:
   python -m tools.screenshot RECORDING.rrd OUT_DIR --tour [--size 1600x900]
 
 Without ``--at`` the picture is at the recording's last instant (its last ``sim_time`` row).
-``--tour`` writes three PNGs per mission into OUT_DIR: its start, the robot's closest approach to
-a person during it (from the recording's true positions) and its arrival (done or failed), named
+``--tour`` writes three PNGs per mission into OUT_DIR: its start (the first path the navigation
+adopted for it), the robot's closest approach to a person during it (from the recording's true positions) and its arrival (done or failed), named
 ``<mission>-1-start-HHMMSS.png`` ...; the instants come from the executive's events and the
 world layer of the recording itself, so the tour needs nothing but the .rrd.
 
@@ -41,6 +41,7 @@ TIMELINE = "sim_time"
 CLOCK_TIMELINE = "clock"
 MISSION_STARTED = re.compile(r"mission (\S+) \((.*)\) started")
 MISSION_ENDED = re.compile(r"mission (\S+) (done|failed)")
+PATH_ADOPTED = re.compile(r"social_navigation: path ")
 
 
 class ScreenshotError(RuntimeError):
@@ -132,10 +133,15 @@ def tour_stops(store: Any) -> list[Stop]:
               for t, v in _column(store, "/world/truth/people", "Points2D:positions")]
     people_times = np.array([t for t, _ in people])
     last = end_of(store)
+    # The start is shown when the navigation adopted its first path (the map it planned on is then
+    # in the decision layer), or at the mission's start if it never planned.
+    planned = [t for t, texts in _column(store, "/events/social_navigation", "TextLog:text")
+               if any(PATH_ADOPTED.search(text) for text in texts)]
     stops: list[Stop] = []
     for mission, start, end in mission_windows(store):
         finish = end if end is not None else last
-        stops.append(Stop(mission, "start", start))
+        first_path = next((t for t in planned if start <= t <= finish), start)
+        stops.append(Stop(mission, "start", first_path))
         best: tuple[float, float] | None = None
         for t, xy in robot:
             if not start <= t <= finish or not len(people_times):

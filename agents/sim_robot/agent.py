@@ -354,5 +354,5 @@ class SimRobotAgent(Agent):
         s = self.state
         log_robot(self.rec, self.scene.robot.name, self.scene.robot.radius, (s.x, s.y, s.theta),
                   math.hypot(s.velocity.vx, s.velocity.vy), self.laser.points(s.x, s.y, s.theta, ranges), self._trail,
-                  self._trail_times)
+                  self._trail_times, now_s=self.now_s)
         log_true_people(self.rec, [p.name for p in self._people], [(p.x, p.y) for p in self._people])

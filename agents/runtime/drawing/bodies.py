@@ -44,9 +44,10 @@ def _heading(x: float, y: float, theta: float, length: float) -> list[list[float
 
 
 def log_robot(rec: Any, name: str, radius: float, pose: tuple[float, float, float], speed_mps: float,
-              laser_points: Any, trail: Sequence[Sequence[float]], trail_times: Sequence[float] = ()) -> None:
+              laser_points: Any, trail: Sequence[Sequence[float]], trail_times: Sequence[float] = (),
+              now_s: float | None = None) -> None:
     """The robot's true state at the recorder's current sim time (world layer).  ``trail_times``
-    (sim s per trail point, optional) cuts the trail to the last ROBOT_TRAIL_S."""
+    (sim s per trail point) and ``now_s`` cut the trail to the last ROBOT_TRAIL_S before now."""
     if not rec.enabled:
         return
     import rerun as rr
@@ -64,14 +65,19 @@ def log_robot(rec: Any, name: str, radius: float, pose: tuple[float, float, floa
     rec.log("world/truth/robot/laser", rr.Points2D(laser_points, radii=0.03, colors=[LASER_RGB],
                                                     draw_order=ORDER_LASER))
     rec.scalar("metrics/robot/speed_m_s", speed_mps)
-    if trail and len(trail) % TRAIL_EVERY == 0:
-        recent = list(trail)
-        if trail_times and len(trail_times) == len(trail):
-            cut = trail_times[-1] - ROBOT_TRAIL_S
-            recent = [p for p, t in zip(trail, trail_times, strict=True) if t >= cut]
-        if len(recent) >= 2:
-            rec.log("world/truth/robot/trail", rr.LineStrips2D([list(map(list, recent))], colors=[ROBOT_TRAIL_RGBA],
-                                                               radii=0.02, draw_order=ORDER_TRAIL))
+    recent = list(trail)
+    if trail_times and len(trail_times) == len(trail):
+        cut = (now_s if now_s is not None else trail_times[-1]) - ROBOT_TRAIL_S
+        recent = [p for p, t in zip(trail, trail_times, strict=True) if t >= cut]
+    # Re-logged as it grows (every TRAIL_EVERY poses) and once when it has aged out entirely.
+    shown = getattr(rec, "_trail_shown", 0)
+    if len(recent) >= 2 and (len(trail) % TRAIL_EVERY == 0 or shown == 0) and len(trail) != shown:
+        rec.log("world/truth/robot/trail", rr.LineStrips2D([list(map(list, recent))], colors=[ROBOT_TRAIL_RGBA],
+                                                           radii=0.02, draw_order=ORDER_TRAIL))
+        rec._trail_shown = len(trail)
+    elif len(recent) < 2 and shown:
+        rec.log("world/truth/robot/trail", rr.Clear(recursive=False))
+        rec._trail_shown = 0
 
 
 def log_true_people(rec: Any, names: Sequence[str], xy: Sequence[Sequence[float]]) -> None:

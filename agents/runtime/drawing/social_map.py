@@ -49,6 +49,8 @@ PATH_RGB = (255, 255, 255)
 BAND_RGB = (120, 220, 255)
 OBJECT_LABEL_RGB = (255, 215, 120)
 STAMP_RGB = (230, 230, 230)
+WALL_RGB = (185, 185, 185)
+ORDER_WALLS = 3.0
 STALE_AFTER_S = 1.0       # people seen longer ago than this are stale belief: the stamp says so
 # Draw order (bodies.py holds the other layers): image -10 < interaction 1 < zones 2 < path 20.
 ORDER_IMAGE, ORDER_INTERACTION, ORDER_ZONES, ORDER_PATH, ORDER_LABELS = -10.0, 1.0, 2.0, 20.0, 25.0
@@ -259,4 +261,6 @@ def log_walls(rec: Any, walls: list[list[list[float]]]) -> None:
     if rec.enabled:
         import rerun as rr
 
-        rec.log("world/map/walls", rr.LineStrips2D(walls, colors=[[20, 20, 20]], radii=0.06), static=True)
+        # Light grey: the floor is black (free) or dark grey (inflated walls) and the viewer's background is dark.
+        rec.log("world/map/walls", rr.LineStrips2D(walls, colors=[WALL_RGB], radii=0.06, draw_order=ORDER_WALLS),
+                static=True)
