@@ -33,7 +33,7 @@ HIDDEN_EDGES = {"RT", "in"}
 #: activities worth a node: what runs or is about to (the rest of the day is in R(t) and the agenda)
 SHOWN_ACTIVITY_STATES = frozenset({"upcoming", "running"})
 # Compact: the view zooms to fit the whole graph, so a wide layout would shrink every label.
-COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 125.0, 30.0, 58.0, 18.0
+COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 140.0, 30.0, 60.0, 18.0
 
 
 class GraphLogger:
