@@ -102,32 +102,40 @@ def image_key(smap: Any) -> tuple[Any, ...]:
             tuple((s.name, int(s.band), bool(s.forbidden)) for s in smap.object_spaces))
 
 
-def zone_rings(smap: Any) -> dict[str, list[list[list[float]]]]:
+def zone_rings(smap: Any) -> dict[str, list[np.ndarray]]:
     """The outlines of the cells the planner priced as each person zone (social cost 2, personal
     4, intimate not traversable), predictions of walkers included: exactly what the navigation
     searched on.  Why the grid and not the density contours (``SocialMap.zone_polygons``): the
-    grid is what was used, and contouring three levels of it costs a few ms where re-contouring
-    the density costs ~30 ms, too much five times a second in the lockstep navigation."""
+    grid is what was used, and contouring three levels of the people's patches (only the window
+    they cover) costs a few ms where re-contouring the density costs ~30 ms, too much five times
+    a second in the lockstep navigation."""
     import contourpy
 
-    people = smap.layer("people")
-    level = np.zeros(people.shape, dtype=np.float32)
-    level[people >= 2.0] = 1.0
-    level[people >= 4.0] = 2.0
-    level[~np.isfinite(people)] = 3.0
+    patches = [p for p in (*smap.zone_patches, *smap.prediction_patches) if p.values.size]
+    out: dict[str, list[np.ndarray]] = {zone: [] for zone in ("social", "personal", "intimate")}
+    if not patches:
+        return out
+    r0 = min(p.rows.start for p in patches)
+    r1 = max(p.rows.stop for p in patches)
+    c0 = min(p.cols.start for p in patches)
+    c1 = max(p.cols.stop for p in patches)
+    # One free cell of padding all round, so every zone is a closed ring.
+    level = np.zeros((r1 - r0 + 2, c1 - c0 + 2), dtype=np.float32)
+    for patch in patches:
+        values = patch.values
+        band = np.where(~np.isfinite(values), 3.0, np.where(values >= 4.0, 2.0, np.where(values >= 2.0, 1.0, 0.0)))
+        window = level[patch.rows.start - r0 + 1:patch.rows.stop - r0 + 1,
+                       patch.cols.start - c0 + 1:patch.cols.stop - c0 + 1]
+        np.maximum(window, band, out=window)
     spec = smap.spec
-    # Pad with free cells so every zone is a closed ring, even against the grid's edge.
-    padded = np.pad(level, 1)
-    generator = contourpy.contour_generator(z=padded, name="serial", line_type="Separate")
-    out: dict[str, list[list[list[float]]]] = {}
+    generator = contourpy.contour_generator(z=level, name="serial", line_type="Separate")
     for zone, threshold in (("social", 0.5), ("personal", 1.5), ("intimate", 2.5)):
-        rings = []
         for line in generator.lines(threshold):
-            xy = np.empty_like(line, dtype=float)
-            xy[:, 0] = spec.x0 + (line[:, 0] - 0.5) * spec.resolution
-            xy[:, 1] = spec.y0 + (line[:, 1] - 0.5) * spec.resolution
-            rings.append(np.round(xy, 3).tolist())
-        out[zone] = rings
+            # padded column j is grid column c0 + j - 1, whose centre is x0 + (c0 + j - 0.5) * res
+            xy = np.empty(line.shape, dtype=float)
+            xy[:, 0] = spec.x0 + (line[:, 0] + c0 - 0.5) * spec.resolution
+            xy[:, 1] = spec.y0 + (line[:, 1] + r0 - 0.5) * spec.resolution
+            out[zone].append(xy.astype(np.float32))   # arrays: Rerun takes them as they are (tolist() cost most)
     return out
 
 
@@ -173,7 +181,8 @@ class DecisionLogger:
                         static=True)
             self._static_logged = True
         key = image_key(smap)
-        if key != self._image_key:
+        changed = key != self._image_key
+        if changed:
             rec.log(f"{DECISION}/cost", rr.SegmentationImage(class_image(smap), draw_order=ORDER_IMAGE))
             self._image_key = key
         rings_of = zone_rings(smap)
@@ -187,7 +196,7 @@ class DecisionLogger:
             else:
                 rec.log(f"{DECISION}/zones/{zone}", rr.Clear(recursive=False),
                         rr.AnyValues(map_s=float(smap.t_s), people=names or [""]))
-        self._log_objects(smap)
+        self._log_objects(smap, outlines=changed)
         self.log_stamp(stamp, anchor)
 
     def log_stamp(self, stamp: DecisionStamp, anchor: Sequence[float] | None = None) -> None:
@@ -205,7 +214,9 @@ class DecisionLogger:
             self.rec.log(f"{DECISION}/stamp_label", rr.Points2D([list(anchor)], radii=0.01, colors=[STAMP_RGB],
                                                                   labels=[text], draw_order=ORDER_LABELS))
 
-    def _log_objects(self, smap: Any) -> None:
+    def _log_objects(self, smap: Any, outlines: bool) -> None:
+        """Each object's R at the object (every map: R creeps); the outlines of the interaction
+        spaces in their band colour only when a band changed (they are fixed shapes)."""
         import rerun as rr
 
         strips, colours, anchors, labels = [], [], [], []
@@ -217,7 +228,7 @@ class DecisionLogger:
             centre = space.footprint.centroid
             anchors.append([float(centre.x), float(centre.y)])
             labels.append(f"{space.name} R={space.r:.1f}{' (active)' if space.active else ''}")
-        if strips:
+        if strips and outlines:
             self.rec.log(f"{DECISION}/objects/interaction",
                          rr.LineStrips2D(strips, colors=colours, radii=0.03, draw_order=ORDER_INTERACTION))
         if anchors:
