@@ -34,6 +34,7 @@ HIDDEN_EDGES = {"RT", "in"}
 SHOWN_ACTIVITY_STATES = frozenset({"upcoming", "running"})
 # Compact: the view zooms to fit the whole graph, so a wide layout would shrink every label.
 COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 140.0, 30.0, 60.0, 18.0
+CROWDED_ROOM = 4   # more people than this in a room: they go two to a row
 
 
 class GraphLogger:
@@ -111,14 +112,16 @@ def layout(graph: Any, node_ids: list[int]) -> list[tuple[float, float]]:
             col = extra if obj is None else round(placed[obj][0] / COLUMN_PX)
             placed[node.id] = (col * COLUMN_PX + ACTIVITY_INDENT_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
+    people = [(n, _room_of(graph, n, rooms)) for n in sorted(nodes.values(), key=lambda n: n.name)
+              if n.type == "person"]
+    people = [(n, extra if col is None else col) for n, col in people]
+    per_room = {col: sum(1 for _, c in people if c == col) for _, col in people}
     counts: dict[int, int] = {}
-    for node in sorted(nodes.values(), key=lambda n: n.name):
-        if node.type == "person":
-            col = _room_of(graph, node, rooms)
-            col = extra if col is None else col
-            k = counts.get(col, 0)
-            counts[col] = k + 1
-            placed[node.id] = (col * COLUMN_PX + (k % 2) * PERSON_COLUMN_PX, (rows[col] + 0.5 + k // 2) * ROW_PX)
+    for node, col in people:   # a grid of two only where a room is crowded: labels need the width
+        k = counts.get(col, 0)
+        counts[col] = k + 1
+        across = 2 if per_room[col] > CROWDED_ROOM else 1
+        placed[node.id] = (col * COLUMN_PX + (k % across) * PERSON_COLUMN_PX, (rows[col] + 0.5 + k // across) * ROW_PX)
     missions_col = extra + (1 if any(x >= extra * COLUMN_PX for x, _ in placed.values()) else 0)
     for node in sorted(nodes.values(), key=lambda n: n.name):
         if node.type == "mission":
