@@ -8,7 +8,7 @@ bookkeeping nodes: on center_day they were ~30 more nodes in an unreadable colum
 
 Layout (why not the building's geometry): people crowd a room, and nodes placed where they stand
 overlap.  Each room is a column, ordered west to east as in the building; under a room come its
-objects (each activity beside its object) and then its people in a grid of two; the robot sits
+objects, their running or upcoming activities and then its people (two to a row in a crowded room); the robot sits
 in its room's column, the missions in a last column.  Positions are fixed, so the view does
 not jump when the graph changes.
 
