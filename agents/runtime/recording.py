@@ -123,11 +123,14 @@ CLOCK_PREFIX = re.compile(r"^(-?\d{2}:\d{2}(?::\d{2})?) ")
 
 
 def event_text(agent: str, text: str) -> str:
-    """``"09:30:01 m0930 started"`` -> ``"09:30:01 executive: m0930 started"``."""
+    """``"09:30:01 m0930 started"`` -> ``"09:30:01 executive: m0930 started"``; a clock given
+    as ``HH:MM`` (``format_clock`` on whole minutes) is written ``HH:MM:00``, so every event
+    reads the same way."""
     found = CLOCK_PREFIX.match(text)
     if found is None:
         return f"{agent}: {text}"
-    return f"{found.group(1)} {agent}: {text[found.end():]}"
+    clock = found.group(1) if found.group(1).count(":") == 2 else f"{found.group(1)}:00"
+    return f"{clock} {agent}: {text[found.end():]}"
 
 
 def _ns(epoch_s: float, sim_s: float) -> Any:

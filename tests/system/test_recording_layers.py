@@ -136,6 +136,6 @@ def test_time_columns_carry_the_scene_clock(run: dict[str, Any]) -> None:
                  if r[f"/events/{agent}:TextLog:text"]]
         assert texts, agent
         for text in texts:
-            found = re.match(rf"(\d\d:\d\d(?::\d\d)?) {agent}: ", text)
+            found = re.match(rf"(\d\d:\d\d:\d\d) {agent}: ", text)
             assert found is not None, f"event without its clock time: {text!r}"
             assert "09:00" <= found.group(1) <= "09:04:01", text

@@ -88,7 +88,7 @@ def test_clock_timeline_and_event_text(recorder: Recorder) -> None:
     assert naive == pd.Timestamp("2026-11-25 09:30:47.250"), "the clock is the scene's date + sim time"
     assert [t[0] for t in table.column("/events/social_navigation:TextLog:text").to_pylist()] == [
         "09:30:47 social_navigation: stalled", "social_navigation: door d opened"]
-    assert event_text("executive", "10:45 mission m done") == "10:45 executive: mission m done"
+    assert event_text("executive", "10:45 mission m done") == "10:45:00 executive: mission m done"
 
 
 def test_dsr_view_keeps_rooms_objects_people_and_folds_the_rest(tmp_path: Path,
