@@ -1,12 +1,16 @@
 """The figures of a study (matplotlib, Agg backend: no display needed).
 
-- ``box_<metric>.png``: per metric, one panel per mission, a box per planner over the seeds (the
-  seeds themselves drawn as dots: with 3-10 seeds a box alone hides how few they are);
+- ``box_<metric>.png``: per metric, one panel per mission, the seeds of each planner as dots;
+  with at least ``BOX_MIN_SEEDS`` seeds a box over them, below that a strip plot (dots and their
+  mean): a box of 2 points draws quartiles that do not exist.  The y axis is the metric with
+  its unit; run metadata (``METADATA_COLUMNS``, e.g. the trajectory's sample count) is no metric
+  and gets no figure;
 - ``paths_<scene>_<mission>.png``: every planner's driven trajectories over the map at the
   mission's time (walls, object footprints, interaction spaces shaded by R, the people's
   intimate / personal / social zones, the people), from the offline world (agents/world/offline.py)
   so the picture is the world the metrics were measured against;
-- ``r_of_t_<scene>.png``: each object's R(t) over the scene's day, missions marked.
+- ``r_of_t_<scene>.png``: each object's R(t) over the scene's day, missions marked, clock ticks
+  spaced for the day's length.
 """
 
 from __future__ import annotations
@@ -27,6 +31,9 @@ PLANNER_COLOURS = {"social": "#0072B2", "departure": "#56B4E9", "static": "#009E
 OTHER_COLOURS = ("#E69F00", "#F0E442", "#000000", "#999999")
 ZONE_COLOURS = {"social": "#FFF3B0", "personal": "#FFC971", "intimate": "#E4572E"}
 DPI = 110
+BOX_MIN_SEEDS = 5
+#: columns of the table that describe a run rather than measure it: shown, never plotted or tested
+METADATA_COLUMNS = frozenset({"samples"})
 
 def _catalogue_label(metric: str) -> str:
     from agents.lib.socialmap.metric_catalog import column_label
@@ -47,7 +54,7 @@ def metric_label(metric: str) -> str:
     """A reader's name for a metric column with its unit (metric_catalog.py: the same names as
     `chronav metrics` and the demo table; unknown columns keep their column name)."""
     if metric == "samples":
-        return "trajectory samples"
+        return "trajectory samples (count)"
     return _catalogue_label(metric)
 
 
@@ -80,7 +87,7 @@ def box_plot(rows: Sequence[Mapping[str, Any]], metric: str, planners: Sequence[
         return None
     cols = min(4, len(missions))
     nrows = math.ceil(len(missions) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(3.2 * cols + 0.6, 3.3 * nrows + 0.5), squeeze=False)
+    fig, axes = plt.subplots(nrows, cols, figsize=(max(4.8, 3.2 * cols + 0.6), 3.3 * nrows + 0.5), squeeze=False)
     for ax in axes.flat[len(missions):]:
         ax.set_visible(False)
     for ax, (scene, mission) in zip(axes.flat, missions, strict=False):
@@ -92,20 +99,31 @@ def box_plot(rows: Sequence[Mapping[str, Any]], metric: str, planners: Sequence[
             colours.append(planner_colour(planner, planners))
         positions = np.arange(1, len(planners) + 1)
         present = [i for i, d in enumerate(data) if len(d)]
-        boxes = ax.boxplot([data[i] for i in present], positions=positions[present], widths=0.55,
-                           patch_artist=True, showfliers=False, medianprops={"color": "black"})
-        for patch, i in zip(boxes["boxes"], present, strict=True):
-            patch.set_facecolor(colours[i])
-            patch.set_alpha(0.45)
+        boxed = [i for i in present if len(data[i]) >= BOX_MIN_SEEDS]
+        if boxed:
+            boxes = ax.boxplot([data[i] for i in boxed], positions=positions[boxed], widths=0.55,
+                               patch_artist=True, showfliers=False, medianprops={"color": "black"})
+            for patch, i in zip(boxes["boxes"], boxed, strict=True):
+                patch.set_facecolor(colours[i])
+                patch.set_alpha(0.45)
         jitter = np.random.default_rng(0)    # the same dots every time the report is built
         for i in present:
             xs = positions[i] + jitter.uniform(-0.12, 0.12, len(data[i]))
-            ax.scatter(xs, data[i], s=16, color=colours[i], edgecolor="black", linewidth=0.4, zorder=3)
+            ax.scatter(xs, data[i], s=22, color=colours[i], edgecolor="black", linewidth=0.4, zorder=3)
+            if i not in boxed:   # strip plot: the mean as a short bar across the dots
+                ax.hlines(float(np.mean(data[i])), positions[i] - 0.25, positions[i] + 0.25, color="black",
+                          linewidth=1.5, zorder=4)
         ax.set_xticks(positions, labels, rotation=30, ha="right", fontsize=9)
+        ax.set_xlim(0.4, len(planners) + 0.6)
+        ax.set_ylabel(metric_label(metric), fontsize=8)
         ax.set_title(f"{scene} / {mission}" if len({s for s, _ in missions}) > 1 else mission, fontsize=10)
         ax.grid(axis="y", alpha=0.3)
         ax.tick_params(axis="y", labelsize=8)
-    fig.suptitle(metric_label(metric), fontsize=12)
+    counts = [len(d) for m in missions for p in planners if (d := _values(rows, m, p, metric)) is not None]
+    kind = "dots: seeds; boxes: quartiles" if counts and min(counts) >= BOX_MIN_SEEDS else \
+        f"dots: seeds; bar: mean (boxes from {BOX_MIN_SEEDS} seeds)"
+    fig.suptitle(metric_label(metric), fontsize=11)
+    fig.text(0.5, 0.005, kind, ha="center", va="bottom", fontsize=8, color="#555555")
     # Fixed margins, not tight_layout: laying out draws every figure twice (most of the report's time).
     fig.subplots_adjust(left=0.1 if cols > 1 else 0.2, right=0.98, bottom=0.22 / nrows, top=1 - 0.14 / nrows,
                         wspace=0.35, hspace=0.55)
@@ -251,6 +269,31 @@ def r_curves(maps: Any, step_s: float = 60.0) -> tuple[np.ndarray, dict[str, np.
     return times, curves
 
 
+TICK_STEPS_S = (300.0, 600.0, 900.0, 1800.0, 3600.0, 7200.0, 10800.0, 21600.0)
+
+
+def clock_ticks(start_s: float, end_s: float, at_most: int = 12) -> np.ndarray:
+    """Clock ticks on round times, the finest step that gives at most ``at_most`` of them (a
+    90-minute day on whole hours had two labels; a nine-hour day gets hourly ones)."""
+    for step in TICK_STEPS_S:
+        ticks = np.arange(math.ceil(start_s / step) * step, end_s + 1e-6, step)
+        if len(ticks) <= at_most:
+            return ticks
+    return ticks
+
+
+def _hhmm(t_s: float) -> str:
+    whole = int(round(t_s))
+    return f"{whole // 3600:02d}:{whole % 3600 // 60:02d}"
+
+
+def study_metrics(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The table's metric columns that measure something (METADATA_COLUMNS left out)."""
+    from tools.evaluate_table import metric_columns
+
+    return [m for m in metric_columns(rows) if m not in METADATA_COLUMNS]
+
+
 def r_of_t_figure(maps: Any, missions: Sequence[tuple[str, float]], path: Path) -> Path:
     """R(t) per object over the day; a dashed line at each mission's time."""
     plt = _pyplot()
@@ -263,11 +306,12 @@ def r_of_t_figure(maps: Any, missions: Sequence[tuple[str, float]], path: Path) 
     for mission, t_s in missions:
         ax.axvline(t_s / 3600.0, color="#555555", linestyle="--", linewidth=1.0)
         ax.annotate(f"{mission}\n{_clock(t_s)}", (t_s / 3600.0, top * 1.02), ha="center", va="bottom", fontsize=8)
-    ticks = np.arange(math.floor(hours[0]), math.ceil(hours[-1]) + 1)
-    ax.set_xticks(ticks, [f"{int(h):02d}:00" for h in ticks])
+    ticks = clock_ticks(times[0], times[-1])
+    ax.set_xticks(ticks / 3600.0, [_hhmm(t) for t in ticks])
     ax.set_xlim(hours[0], hours[-1])
     ax.set_ylim(0, top * 1.25)
-    ax.set_ylabel("R(t): interaction-space cost")
+    ax.set_xlabel("time of day (HH:MM, the scene's clock)")
+    ax.set_ylabel("R(t): interaction-space cost\n(cost units, as the grid's)")
     ax.set_title(f"{maps.world.scene.name}: R(t) of each object over the day (dashed: missions)", fontsize=11)
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
@@ -280,8 +324,6 @@ def r_of_t_figure(maps: Any, missions: Sequence[tuple[str, float]], path: Path) 
 def all_figures(rows: Sequence[Mapping[str, Any]], scenes: Mapping[str, Any], out_dir: Path,
                 planner_order: Sequence[str]) -> dict[str, list[Path]]:
     """Every figure of the study under ``out_dir``: {"paths": [...], "r_of_t": [...], "boxes": [...]}."""
-    from tools.evaluate_table import metric_columns
-
     planners = planners_of(rows, planner_order)
     figures: dict[str, list[Path]] = {"paths": [], "r_of_t": [], "boxes": []}
     for scene, mission in missions_of(rows):
@@ -295,7 +337,7 @@ def all_figures(rows: Sequence[Mapping[str, Any]], scenes: Mapping[str, Any], ou
                 times.setdefault(row["mission"], float(row["mission_time_s"]))
         figures["r_of_t"].append(r_of_t_figure(maps, sorted(times.items(), key=lambda kv: kv[1]),
                                                out_dir / f"r_of_t_{slug(scene)}.png"))
-    for metric in metric_columns(rows):
+    for metric in study_metrics(rows):
         made = box_plot(rows, metric, planners, out_dir / f"box_{slug(metric)}.png")
         if made is not None:
             figures["boxes"].append(made)

@@ -151,12 +151,18 @@ def _mission_table(summaries: Sequence[Summary], scene: str, mission: str, plann
 
     cells = {(s.planner, s.metric): s for s in summaries if s.scene == scene and s.mission == mission}
     head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
-    body = []
+    from tools.evaluate_figures import METADATA_COLUMNS
+
+    body, meta = [], []
     for metric in metrics:
         if not any((p, metric) in cells for p in planners):
             continue
         row = "".join(f"<td>{format_cell(cells.get((p, metric)))}</td>" for p in planners)
-        body.append(f'<tr><td title="{html.escape(metric)}">{html.escape(metric_label(metric))}</td>{row}</tr>')
+        line = f'<tr><td title="{html.escape(metric)}">{html.escape(metric_label(metric))}</td>{row}</tr>'
+        (meta if metric in METADATA_COLUMNS else body).append(line)
+    if meta:
+        body.append(f"<tr><th colspan='{len(planners) + 1}'>run metadata (not a metric, not tested)</th></tr>")
+        body.extend(meta)
     return f"<table><tr><th>metric (mean &plusmn; std over seeds)</th>{head}</tr>{''.join(body)}</table>"
 
 
@@ -206,8 +212,11 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     from agents.lib.socialmap.planners import PLANNER_HELP
     from tools.evaluate_table import metric_columns
 
+    from tools.evaluate_figures import METADATA_COLUMNS
+
     summaries = summarise(rows)
-    tests = paired_tests(rows)
+    # Run metadata (the trajectory's sample count...) describes a run; testing it would claim a finding.
+    tests = [t for t in paired_tests(rows) if t.metric not in METADATA_COLUMNS]
     write_summary(summaries, out_dir / SUMMARY)
     write_tests(tests, out_dir / TESTS)
     planners = planners_of(rows, planner_order) if rows else list(planner_order)
@@ -252,8 +261,12 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                  "pairs the smallest attainable p is large (6 pairs: 0.031).</p>")
     parts.append(_tests_table(tests))
     parts.append("<h2>R(t) over the day</h2>" + "".join(_img(p) for p in figures.get("r_of_t", [])))
-    parts.append("<h2>Trajectories per mission</h2>" + "".join(_img(p) for p in figures.get("paths", [])))
-    parts.append("<h2>Metrics by planner across seeds</h2>" + "".join(_img(p) for p in figures.get("boxes", [])))
+    others = [p for p in figures.get("paths", []) if p != main]   # the main figure is shown once, above
+    if others:
+        parts.append("<h2>Trajectories of the other missions</h2>" + "".join(_img(p) for p in others))
+    parts.append("<h2>Metrics by planner across seeds</h2><p class='note'>Every seed is a dot; box plots need at "
+                 "least 5 seeds per planner, below that a bar marks the mean.</p>"
+                 + "".join(_img(p) for p in figures.get("boxes", [])))
     parts.append("<h2>Runs</h2><table><tr><th>scene</th><th>planner</th><th>seed</th><th>outcome</th>"
                  "<th>wall s</th><th>host</th><th>recording</th><th>run directory</th></tr>")
     for run in sorted(runs, key=lambda r: (r["spec"]["scene"], r["spec"]["planner"], r["spec"]["seed"])):

@@ -194,7 +194,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     from agents.world.write_policy import policy_from_env
     from agents.world.scene_world import load_world
     from agents.runtime.drawing.social_map import log_walls
-    from agents.runtime.drawing.layout import blueprint, world_frame
+    from agents.runtime.drawing.layout import blueprint, log_legend, world_frame
     from agents.runtime.drawing.dsr_graph import GraphLogger
 
     check_rate(rate)
@@ -242,12 +242,13 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     previous_sigterm = signal.signal(signal.SIGTERM, on_sigint)  # stopped by a supervisor: clean up too
     missions: dict[str, dict[str, object]] = {}
     metrics: dict[str, object] = {}
-    recorder = Recorder("launcher", run_dir if record else None, run_id)
+    recorder = Recorder("launcher", run_dir if record else None, run_id, day=spec.clock.date)
     rrd_path: Path | None = None
     try:
-        recorder.send_blueprint(blueprint())
+        recorder.send_blueprint(blueprint(spec))
         world_frame(recorder)
         log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
+        log_legend(recorder, spec)
         supervisor.start("router")
         if not wait_for_port(port, 15, give_up=lambda: stop_requested["flag"] or not router.alive):
             if not stop_requested["flag"]:

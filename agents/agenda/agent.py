@@ -17,6 +17,7 @@ from agents.lib.agenda.changes import AgendaChangeError, apply_change, parse_cha
 from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S, ChronemicsParams
 from agents.lib.agenda.model import AgendaDay
 from agents.runtime.base import Agent
+from agents.runtime.drawing.series import log_series_styles
 from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
 from agents.world.freshness import mark_observed
@@ -35,6 +36,7 @@ class AgendaAgent(Agent):
         self._restore_runtime_changes()
         self._complete = False
         self._published: AgendaDay | None = None
+        log_series_styles(recorder, "metrics/objects", sorted(self.world.object_names))
 
     # ----------------------------------------------------------------- restart safety
     def _restore_runtime_changes(self) -> None:

@@ -31,7 +31,7 @@ from agents.world.interactions import interaction_pairs, observed_conversations,
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
 from scenes.geometry import angle_difference
 
-TRAIL_S = 60.0               # the recording shows each person's last minute of track
+TRAIL_S = 20.0               # the recording shows each person's last 20 s of track (a crowd stays legible)
 TRAIL_SPACING_S = 0.5
 DRAW_EVERY_S = 0.5
 PUBLISH_MOVE_M = 0.03

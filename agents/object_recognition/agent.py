@@ -13,6 +13,7 @@ from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import write_object
 from agents.world.vocabulary import WORLD, ClockView
+from scenes.clock import format_clock
 
 CHECK_PERIOD_S = 5.0
 
@@ -36,4 +37,4 @@ class ObjectRecognitionAgent(Agent):
         self.rec.set_time(clock.now_s)  # its events belong on the sim_time timeline like everyone's
         for obj in self.scene.objects:
             if write_object(g, obj, self.scene.room_at(obj.pose.x, obj.pose.y)):
-                self.rec.event(f"recognised {obj.kind} {obj.name!r}")
+                self.rec.event(f"{format_clock(clock.now_s)} recognised {obj.kind} {obj.name!r}")

@@ -92,7 +92,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     # Started by the launcher: if it dies (even by SIGKILL) this agent must not linger as an orphan.
     parent = os.getppid() if os.environ.get("CHRONAV_EXIT_WITH_PARENT") == "1" else None
     agent = agent_cls(config)
-    recorder = Recorder(config.name, config.run_dir, config.recording_id)
+    recorder = Recorder(config.name, config.run_dir, config.recording_id, day=agent.scene.clock.date)
     settings = ZenohSettings.from_env()
     policy = policy_from_env()  # agents/world/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
     try:

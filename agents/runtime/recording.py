@@ -5,27 +5,45 @@ agent being SIGKILLed (the file keeps all but the last ~200 ms), needs no sink p
 first, and ``rerun rrd optimize`` turns the files into ONE recording because the recording id is
 shared.  Every agent logs under its own entity subtree so rows never collide.  Algorithms never
 call Rerun; agents hand their results to this layer.
+
+Two timelines carry the same instant: ``sim_time`` (a duration since the scene day's midnight,
+what tests and tools compute with) and ``clock`` (a timestamp: the scene's date plus that
+duration, written as if the scene's local time were UTC).  Why both: Rerun prints a duration as
+"+9h 35m 10s" but a timestamp as a clock, and a researcher reads the day by its clock
+("09:35:10").  The viewer's default time zone is UTC, so the clock reads as the scene's own.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import os
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 APP_ID = "chronav"
 TIMELINE = "sim_time"
+CLOCK_TIMELINE = "clock"
+DEFAULT_DAY = dt.date(2026, 11, 25)   # only when no scene date is given (the scenes' own default)
+
+
+def clock_epoch_s(day: dt.date | None) -> float:
+    """POSIX seconds of ``day``'s midnight read as UTC: the ``clock`` timeline's zero."""
+    day = day or DEFAULT_DAY
+    return dt.datetime(day.year, day.month, day.day, tzinfo=dt.timezone.utc).timestamp()
 
 
 class Recorder:
     """Logs to ``<run_dir>/rrd/<agent>-<pid>.rrd``; a no-op when disabled (tests, RERUN=off)."""
 
-    def __init__(self, agent: str, run_dir: Path | None, recording_id: str | None) -> None:
+    def __init__(self, agent: str, run_dir: Path | None, recording_id: str | None,
+                 day: dt.date | None = None) -> None:
         self.agent = agent
         self.enabled = bool(run_dir and recording_id and os.environ.get("RERUN", "on") != "off")
         self._rec: Any = None
         self.path: Path | None = None
+        self._epoch_s = clock_epoch_s(day)
         if not self.enabled:
             return
         import rerun as rr
@@ -38,12 +56,18 @@ class Recorder:
         self._rec = rr.RecordingStream(APP_ID, recording_id=recording_id)
         self._rec.save(self.path)
 
+    def set_day(self, day: dt.date | None) -> None:
+        """The scene's date, for the ``clock`` timeline (set before the first ``set_time``)."""
+        self._epoch_s = clock_epoch_s(day)
+
     def set_time(self, sim_s: float) -> None:
-        """Seconds since local midnight of the sim day, so the viewer reads as a clock."""
+        """Seconds since local midnight of the sim day, on both timelines (see the module doc)."""
         if self._rec is not None:
             import rerun as rr
 
             rr.set_time(TIMELINE, duration=sim_s, recording=self._rec)
+            # Integer nanoseconds: float epoch seconds would round 0.1 s steps to ~200 ns.
+            rr.set_time(CLOCK_TIMELINE, timestamp=_ns(self._epoch_s, sim_s), recording=self._rec)
 
     def log(self, entity: str, *archetypes: Any, static: bool = False) -> None:
         if self._rec is not None:
@@ -56,11 +80,14 @@ class Recorder:
             self._rec.log(entity, rr.Scalars(float(value)))
 
     def event(self, text: str, level: str = "INFO") -> None:
-        """Agent decisions as text, one log per agent under ``events/<agent>``."""
+        """Agent decisions as text, one log per agent under ``events/<agent>``, written
+        ``"HH:MM[:SS] agent: message"`` (the clock first when the agent gave it): the viewer's
+        event table then reads by itself, with no time or entity column."""
         if self._rec is not None:
             import rerun as rr
 
-            self._rec.log(f"events/{self.agent}", rr.TextLog(text, level=getattr(rr.TextLogLevel, level)))
+            self._rec.log(f"events/{self.agent}", rr.TextLog(event_text(self.agent, text),
+                                                             level=getattr(rr.TextLogLevel, level)))
 
     def line_strip(self, entity: str, points: Sequence[Sequence[float]], color: Sequence[int],
                    radius: float = 0.03, static: bool = False) -> None:
@@ -69,6 +96,13 @@ class Recorder:
 
             self._rec.log(entity, rr.LineStrips2D([list(map(list, points))], colors=[color], radii=radius),
                           static=static)
+
+    def clear(self, entity: str, recursive: bool = True) -> None:
+        """Nothing is at ``entity`` from now on (a layer that stopped being true)."""
+        if self._rec is not None:
+            import rerun as rr
+
+            self._rec.log(entity, rr.Clear(recursive=recursive))
 
     def send_blueprint(self, blueprint: Any) -> None:
         if self._rec is not None:
@@ -83,3 +117,23 @@ class Recorder:
         if self._rec is not None:
             self._rec.disconnect()
             self._rec = None
+
+
+CLOCK_PREFIX = re.compile(r"^(-?\d{2}:\d{2}(?::\d{2})?) ")
+
+
+def event_text(agent: str, text: str) -> str:
+    """``"09:30:01 m0930 started"`` -> ``"09:30:01 executive: m0930 started"``; a clock given
+    as ``HH:MM`` (``format_clock`` on whole minutes) is written ``HH:MM:00``, so every event
+    reads the same way."""
+    found = CLOCK_PREFIX.match(text)
+    if found is None:
+        return f"{agent}: {text}"
+    clock = found.group(1) if found.group(1).count(":") == 2 else f"{found.group(1)}:00"
+    return f"{clock} {agent}: {text[found.end():]}"
+
+
+def _ns(epoch_s: float, sim_s: float) -> Any:
+    import numpy as np
+
+    return np.datetime64(int(round(epoch_s)) * 1_000_000_000 + int(round(sim_s * 1e9)), "ns")

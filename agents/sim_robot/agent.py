@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from agents.runtime.base import Agent
-from agents.runtime.drawing.bodies import log_robot
+from agents.runtime.drawing.bodies import log_robot, log_true_people
 from agents.runtime.recording import Recorder
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
@@ -40,6 +40,7 @@ from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
 from agents.world.vocabulary import AGENDA, CLOCK, WORLD, MissionState, intentions, missions
 from scenes.geometry import project_on_segments
+from scenes.clock import format_clock
 
 CONTROL_DT_S = 0.1
 PEOPLE_HEADER = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
@@ -97,6 +98,7 @@ class SimRobotAgent(Agent):
         self._last_mode: str | None = None
         self._room_name: str | None = None
         self._trail: list[list[float]] = []
+        self._trail_times: list[float] = []   # sim s of each trail point (the recording shows the last minutes)
         self._publish()
 
     # ----------------------------------------------------------------- world setup
@@ -128,7 +130,7 @@ class SimRobotAgent(Agent):
         and a closed door blocks the laser and the base like a wall."""
         g = self.graph
         for name, is_open in set_doors(g, doors_at(self.scene, self.now_s)):
-            self.rec.event(f"door {name} {'opened' if is_open else 'closed'}")
+            self.rec.event(f"{format_clock(self.now_s)} door {name} {'opened' if is_open else 'closed'}")
         closed = frozenset(closed_doors(g))
         if closed != self._closed_doors:
             self._closed_doors = closed
@@ -179,8 +181,10 @@ class SimRobotAgent(Agent):
                 # In pieces: the people walk through every skipped second (agents/world/people.py), and
                 # an hour of a busy centre is seconds of work; the loop beats its heartbeat between pieces.
                 # A scheduled event (agenda change, door, crowd routine) ends a piece: it fires on time.
+                skipped_from = self.now_s
                 self.skip_to(min(target, end_s, self.now_s + MAX_SKIP_S, event))
-                self.rec.event(f"idle: clock skipped to {self.now_s:.0f} s")
+                self.rec.event(f"{format_clock(self.now_s)} idle: clock skipped from {format_clock(skipped_from)} "
+                               f"to {format_clock(self.now_s)}")
             else:
                 # A mission is due and the executive is starting it: time runs as while agents plan.
                 rate = self.busy_rate if self._due_now() else self.rate
@@ -290,7 +294,7 @@ class SimRobotAgent(Agent):
             vel = Velocity(0.0, 0.0, vel.omega)
             x, y, theta = integrate(state.x, state.y, state.theta, vel, dt)
             if not self._bumped:
-                self.rec.event("bumper: motion blocked by an obstacle", level="WARN")
+                self.rec.event(f"{format_clock(self.now_s)} bumper: motion blocked by an obstacle", level="WARN")
             self._bumped = True
         else:
             self._bumped = False
@@ -300,6 +304,9 @@ class SimRobotAgent(Agent):
         if self._trajectory_file is not None and self._last_mode == "driving":
             self._trajectory_file.write(f"{self.now_s:.3f},{x:.4f},{y:.4f},{theta:.5f}\n")
             self._trail.append([x, y])
+            self._trail_times.append(self.now_s)
+            if len(self._trail) > 4000:   # the recording keeps minutes of trail, not the day's
+                del self._trail[:2000], self._trail_times[:2000]
             if self._people_file is not None:
                 self._people_file.writelines(
                     f"{self.now_s:.3f},{p.name},{p.role},{p.x:.4f},{p.y:.4f},{p.theta:.5f},{p.vx:.4f},{p.vy:.4f},{p.group}\n"
@@ -404,4 +411,6 @@ class SimRobotAgent(Agent):
     def _log_frame(self, ranges: np.ndarray) -> None:
         s = self.state
         log_robot(self.rec, self.scene.robot.name, self.scene.robot.radius, (s.x, s.y, s.theta),
-                  math.hypot(s.velocity.vx, s.velocity.vy), self.laser.points(s.x, s.y, s.theta, ranges), self._trail)
+                  math.hypot(s.velocity.vx, s.velocity.vy), self.laser.points(s.x, s.y, s.theta, ranges), self._trail,
+                  self._trail_times, now_s=self.now_s)
+        log_true_people(self.rec, [p.name for p in self._people], [(p.x, p.y) for p in self._people])

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from agents.runtime.base import Agent
-from agents.world.freshness import observed_up_to
+from agents.world.freshness import observed_s, observed_up_to
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap import elastic_band as eb
 from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
@@ -34,7 +34,7 @@ from agents.lib.socialmap import arrival, replan
 from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupied
 from agents.lib.socialmap.social_map import SocialMap, plan
-from agents.runtime.drawing.social_map import log_social_map
+from agents.runtime.drawing.social_map import DecisionLogger, DecisionStamp
 from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
@@ -158,7 +158,11 @@ class SocialNavigationAgent(Agent):
         replan.warm_up()               # numba: load (or compile) the kernels now, not on the first plan
         arrival.warm_up()
         self.route_rooms: tuple[str, ...] = ()
-        self._last_map_log_s = -math.inf
+        # The recording's decision layer: every map built is logged at its time (what was used).
+        self.decision = DecisionLogger(recorder)
+        self._planned_s: float | None = None   # when the path in use was planned (None: no path)
+        xmin, _ymin, _xmax, ymax = self.scene.bounds
+        self._stamp_anchor = (xmin, ymax + 0.5)
 
     # ----------------------------------------------------------------- helpers
     def _robot(self) -> Any:
@@ -166,8 +170,15 @@ class SocialNavigationAgent(Agent):
 
     def _build_map(self, now_s: float) -> SocialMap:
         """The social map, confined to the intention's ``rooms`` when the executive's symbolic plan
-        fixed the route's rooms (agents/world/navigation.py)."""
-        return self.maps.build(self.graph, now_s, self.route_rooms)
+        fixed the route's rooms (agents/world/navigation.py).  Logged to the recording as built:
+        the decision layer shows every map the navigation searched, at its time."""
+        smap = self.maps.build(self.graph, now_s, self.route_rooms)
+        self.decision.log_map(smap, self._stamp(smap.t_s), self._stamp_anchor)
+        return smap
+
+    def _stamp(self, map_s: float) -> DecisionStamp:
+        return DecisionStamp(map_s=map_s, planned_s=self._planned_s if self.band is not None else None,
+                             seen_s=observed_s(self.graph, "human_observer"))
 
     def _active_intention(self) -> IntentionView | None:
         """The navigate intention to carry out (one at a time: the executive cancels the previous)."""
@@ -195,7 +206,7 @@ class SocialNavigationAgent(Agent):
         if intention is None:
             if self.intention_id is not None or RobotView.from_node(robot).nav_active:
                 self._stop(robot, None, None)
-            self._maybe_log_map(now_s)
+            self.decision.clear()
             return
         if intention.node_id != self.intention_id:
             if observed_up_to(self.graph, now_s):  # after a clock skip, plan on today's people
@@ -338,7 +349,6 @@ class SocialNavigationAgent(Agent):
         self.map = new_map
         old_cost = path_cost(new_map.planning_grid, new_map.spec, self._remaining_global(pose))
         new_cost = path_cost(new_map.planning_grid, new_map.spec, new_path.points_m)
-        self._maybe_log_map(now_s)
         if math.isinf(old_cost) or (old_cost > REPLAN_GAIN * new_cost and old_cost - new_cost > REPLAN_MIN_GAIN):
             why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"
             points = self._route(pose, new_path)
@@ -385,7 +395,7 @@ class SocialNavigationAgent(Agent):
         self.graph.update_node(robot.id, attrs={"cmd_vx": vx, "cmd_vy": vy, "cmd_omega": omega,
                                                 "cmd_stamp": pose_stamp})
         if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:
-            self.rec.line_strip("world/navigation/band", self.band.points.tolist(), color=[0, 200, 120], radius=0.025)
+            self.decision.log_band(self.band.points.tolist())
 
     def _recover(self, robot: Any, now_s: float) -> None:
         assert self.goal is not None
@@ -449,11 +459,14 @@ class SocialNavigationAgent(Agent):
         self.band = None
         self.goal = self.asked_goal = None
         self.route_rooms = ()
+        self._planned_s = None
+        self.decision.clear()
 
     def _fail(self, reason: str) -> None:
         robot = self._robot()
         self.log.warning("navigation failed: %s", reason)
-        self.rec.event(f"navigation failed: {reason}", level="ERROR")
+        now_s = now_of(self.graph)
+        self.rec.event(f"{format_clock(now_s or 0.0)} navigation failed: {reason}", level="ERROR")
         self._stop(robot, self.intention_id, IntentionState.FAILED, reason)
 
     # ----------------------------------------------------------------- outputs
@@ -468,15 +481,6 @@ class SocialNavigationAgent(Agent):
                 intention = IntentionView.from_node(node)
                 self.graph.update_node(intention.node_id, attrs={**attrs, "replans": intention.replans + int(replan)})
         self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
-        self.rec.line_strip("world/navigation/global_path", points.tolist(), color=[255, 255, 255], radius=0.03)
-        self._maybe_log_map(now_s, force=True)
-
-    def _maybe_log_map(self, now_s: float, force: bool = False) -> None:
-        if not self.rec.enabled:
-            return
-        if not force and now_s - self._last_map_log_s < 30.0:
-            return
-        if self.map is None or (not force and abs(self.map.t_s - now_s) > REPLAN_PERIOD_S):
-            self.map = self._build_map(now_s)
-        self._last_map_log_s = now_s
-        log_social_map(self.rec, self.map)
+        self._planned_s = now_s
+        self.decision.log_path(points.tolist())
+        self.decision.log_stamp(self._stamp(now_s), self._stamp_anchor)   # every path is planned on a map of now_s

@@ -167,7 +167,7 @@ def test_added_activity_makes_the_driving_robot_go_round_the_tv(procs: ProcessGr
     assert math.hypot(after[-1, 1] - 11.2, after[-1, 2] - 1.0) < 0.5
 
     strips = [(t, np.asarray(s[0], dtype=float))
-              for t, s in _rows(store, "/world/navigation/global_path", "LineStrips2D:strips")]
+              for t, s in _rows(store, "/world/decision/path", "LineStrips2D:strips") if s]   # [] = cleared
     new_paths = [xy for t, xy in strips if t >= accepted_s]
     assert new_paths and not _inside(space, new_paths[0]).any() and new_paths[0][:, 1].max() > NORTH_OF_CABINET_Y
     assert any(_inside(space, xy).any() for t, xy in strips if t < accepted_s), "the first path crossed the TV"

@@ -42,7 +42,7 @@ def test_agenda_change_mid_mission_causes_a_replan(run: dict) -> None:
     assert any(CHANGE_S <= t < finished for t in replans), "no replan between the agenda change and arrival"
 
     table = SceneMaps.load("center_b").at(CHANGE_S).interaction_polygons()["ot_table"]
-    paths = strips_over_time(store, "/world/navigation/global_path")
+    paths = strips_over_time(store, "/world/decision/path")
     first = next(points for t, points in paths if t < CHANGE_S)
     after = [points for t, points in paths if CHANGE_S <= t <= finished]
     assert shapely.LineString(first).intersects(table), "before the change the short way crossed the table"

@@ -183,8 +183,8 @@ def test_restarted_agents_resume_from_the_replicated_state(kill_run: dict[str, A
 
 
 # What each agent logs under its own entity; the continuous ones must cover both sides of the kill.
-LOGGED = {"sim_robot": ("/world/robot/pose", True), "human_observer": ("/world/people/positions", True),
-          "agenda": ("/metrics/objects/tv", True), "social_navigation": ("/world/navigation/global_path", False),
+LOGGED = {"sim_robot": ("/world/truth/robot/body", True), "human_observer": ("/world/belief/people/positions", True),
+          "agenda": ("/metrics/objects/tv", True), "social_navigation": ("/world/decision/path", False),
           "executive": ("/events/executive", False), "object_recognition": ("/events/object_recognition", False)}
 
 
@@ -214,7 +214,7 @@ def test_the_recording_of_every_process_reads_back(kill_run: dict[str, Any]) -> 
             assert min(times) < killed_at[agent] < max(times), f"{entity} does not span the kill of {agent}"
     done = [text for _, text in texts(store, "/events/executive") if " done" in text]
     assert all(any(f"mission {m} done" in text for text in done) for m in MISSIONS), done
-    poses = store.reader(index="sim_time", contents="/world/robot/pose").to_arrow_table()
+    poses = store.reader(index="sim_time", contents="/world/truth/robot/body").to_arrow_table()
     times = [t.total_seconds() for t in poses.column("sim_time").to_pylist()]
     assert min(times) <= parse_clock("09:30") and max(times) >= parse_clock("13:15")
 

@@ -44,7 +44,7 @@ def test_every_mission_completes(icra_run: dict) -> None:
 
 def test_paths_follow_the_agenda(icra_run: dict) -> None:
     store = load_store(Path(icra_run["rrd"]))
-    paths = strips_over_time(store, "/world/navigation/global_path")
+    paths = strips_over_time(store, "/world/decision/path")
     tv = _tv_space()
     before = shapely.LineString(_path_at(paths, "09:30"))
     during = shapely.LineString(_path_at(paths, "11:15"))

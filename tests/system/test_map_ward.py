@@ -40,6 +40,6 @@ def test_map_ward_missions_complete_off_the_maps_walls(tmp_path: Path) -> None:
     assert np.hypot(*(trajectory[-1, 1:3] - (21.5, 3.5))) < 0.5, "the last mission ends in bedroom 4"
 
     store = load_store(Path(run["rrd"]))
-    hits = np.vstack([points for _, points in points_over_time(store, "/world/robot/laser")])
+    hits = np.vstack([points for _, points in points_over_time(store, "/world/truth/robot/laser")])
     on_walls = np.array([walls.clearance(x, y, reach_m=0.2) <= 0.03 for x, y in hits])
     assert len(hits) > 1000 and on_walls.mean() > 0.8, f"{on_walls.mean():.0%} of the laser hits are on the map's walls"

@@ -1,7 +1,19 @@
-"""Log the DSR itself to Rerun as a graph view (nodes coloured by type, typed edges).
+"""Log the DSR itself to Rerun as a graph view: what a reader needs, laid out by room.
+
+What is shown: rooms, objects, activities, people, the robot and missions, with their symbolic
+edges (``connected``, ``interacting``, an activity's object and participants, a mission's target).  What is folded: the
+RT tree (poses are the map view's job), ``in`` edges (the layout's columns say it), activities
+neither running nor upcoming, the clock, sensors, ground truth, intentions and other
+bookkeeping nodes: on center_day they were ~30 more nodes in an unreadable column.
+
+Layout (why not the building's geometry): people crowd a room, and nodes placed where they stand
+overlap.  Each room is a column, ordered west to east as in the building; under a room come its
+objects, their running or upcoming activities and then its people (two to a row in a crowded room); the robot sits
+in its room's column, the missions in a last column.  Positions are fixed, so the view does
+not jump when the graph changes.
 
 Why throttled and change-driven: the graph changes on every robot pose; a graph view needs the
-*structure* (nodes, typed edges), so we log only when that structure changes, at most once per
+*structure*, so it is logged only when the shown structure changes, at most once per
 ``min_period_s`` of sim time.
 """
 
@@ -9,12 +21,20 @@ from __future__ import annotations
 
 from typing import Any
 
+from agents.runtime.drawing.labels import short_id
+
 TYPE_COLOURS: dict[str, tuple[int, int, int]] = {
-    "world": (120, 120, 120), "room": (90, 160, 90), "door": (150, 200, 150), "person": (240, 160, 40),
-    "object": (160, 90, 200), "robot": (30, 120, 255), "activity": (230, 60, 60), "mission": (20, 180, 180),
-    "intention": (100, 220, 220), "clock": (200, 200, 200),
+    "room": (90, 160, 90), "person": (240, 160, 40), "object": (160, 90, 200), "robot": (0, 230, 90),
+    "activity": (230, 60, 60), "mission": (20, 180, 180),
 }
-HIDDEN_EDGES = {"RT"}  # poses are in the map view; the graph view shows the symbolic structure
+SHOWN_TYPES = frozenset(TYPE_COLOURS)
+# RT: poses are the map view's; in: a node's column is its room already (one edge per person was a web)
+HIDDEN_EDGES = {"RT", "in"}
+#: activities worth a node: what runs or is about to (the rest of the day is in R(t) and the agenda)
+SHOWN_ACTIVITY_STATES = frozenset({"upcoming", "running"})
+# Compact: the view zooms to fit the whole graph, so a wide layout would shrink every label.
+COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 140.0, 30.0, 60.0, 18.0
+CROWDED_ROOM = 4   # more people than this in a room: they go two to a row
 
 
 class GraphLogger:
@@ -27,8 +47,12 @@ class GraphLogger:
     def maybe_log(self, graph: Any, now_s: float | None, force: bool = False) -> None:
         if not self.rec.enabled or now_s is None:
             return
-        nodes = sorted((n.id, n.type, n.name, str(n.attrs.get("state", ""))) for n in _all_nodes(graph))
-        edges = sorted((e.src, e.dst, e.type) for e in _all_edges(graph) if e.type not in HIDDEN_EDGES)
+        shown = [n for n in _all_nodes(graph) if n.type in SHOWN_TYPES
+                 and (n.type != "activity" or n.attrs.get("state") in SHOWN_ACTIVITY_STATES)]
+        ids = {n.id for n in shown}
+        nodes = sorted((n.id, n.type, n.name, str(n.attrs.get("state", ""))) for n in shown)
+        edges = sorted((e.src, e.dst, e.type) for e in _all_edges(graph)
+                       if e.type not in HIDDEN_EDGES and e.src in ids and e.dst in ids)
         signature = (tuple(nodes), tuple(edges))
         if not force and signature == self._last_signature:
             return
@@ -37,54 +61,74 @@ class GraphLogger:
         import rerun as rr
 
         self._last_signature, self._last_time = signature, now_s
-        ids = [str(n[0]) for n in nodes]
-        labels = [f"{n[2]}" + (f" [{n[3]}]" if n[3] else "") for n in nodes]
-        colours = [TYPE_COLOURS.get(n[1], (180, 180, 180)) for n in nodes]
+        labels = [label(n[1], n[2], n[3]) for n in nodes]
+        colours = [TYPE_COLOURS[n[1]] for n in nodes]
         positions = layout(graph, [n[0] for n in nodes])
         self.rec.set_time(now_s)
-        self.rec.log("dsr", rr.GraphNodes(ids, labels=labels, colors=colours, positions=positions),
+        self.rec.log("dsr", rr.GraphNodes([str(n[0]) for n in nodes], labels=labels, colors=colours,
+                                          positions=positions, radii=6.0),
                      rr.GraphEdges([(str(s), str(d)) for s, d, _ in edges], graph_type="directed"))
 
 
-PX_PER_M = 60.0
+def label(node_type: str, name: str, state: str) -> str:
+    """Short: a person's id without role, an activity or mission without its ``kind/`` prefix."""
+    text = short_id(name) if node_type == "person" else name.rsplit("/", 1)[-1]
+    return f"{text} [{state}]" if state and node_type in ("activity", "mission") else text
+
+
+def _room_of(graph: Any, node: Any, rooms: dict[int, int]) -> int | None:
+    """The column of the room ``node`` is ``in`` (its ``in`` edge), or None."""
+    for edge in graph.edges_from(node.id, "in"):
+        if edge.dst in rooms:
+            return rooms[edge.dst]
+    return None
 
 
 def layout(graph: Any, node_ids: list[int]) -> list[tuple[float, float]]:
-    """Place the graph like the building: things with a pose where they are (rooms at their
-    centre, doors at the door), activities next to their object, the rest (world, clock,
-    missions, intentions, requests) in a column to the right, so the view reads like the map."""
-    placed: dict[int, tuple[float, float]] = {}
-    xmax = 0.0
-    for node_id in node_ids:
-        node = graph.get_node(node_id)
-        xy: tuple[float, float] | None = None
-        if node.type == "room" and node.attrs.get("polygon_x"):
-            xs, ys = node.attrs["polygon_x"], node.attrs.get("polygon_y", [])
-            xy = (sum(xs) / len(xs), sum(ys) / max(len(ys), 1))
-        elif node.type == "door" and "x" in node.attrs:
-            xy = (float(node.attrs["x"]), float(node.attrs["y"]))
-        elif node.type in ("person", "object", "robot"):
-            try:
-                x, y, _ = graph.world_pose(node_id)
-                xy = (x, y)
-            except Exception:  # noqa: BLE001 - no pose yet: goes to the column
-                xy = None
-        if xy is not None:
-            placed[node_id] = xy
-            xmax = max(xmax, xy[0])
-    column = 0
-    for node_id in node_ids:
-        if node_id in placed:
-            continue
-        node = graph.get_node(node_id)
-        obj = graph.get_node_by_name(str(node.attrs.get("object", ""))) if node.type == "activity" else None
-        if obj is not None and obj.id in placed:
-            ox, oy = placed[obj.id]
-            placed[node_id] = (ox + 0.6, oy + 0.6)
-        else:
-            placed[node_id] = (xmax + 3.0, column * 0.8)
-            column += 1
-    return [(placed[i][0] * PX_PER_M, -placed[i][1] * PX_PER_M) for i in node_ids]
+    """Column per room (west to east), objects then people under it; missions in a last column."""
+    nodes = {i: graph.get_node(i) for i in node_ids}
+    room_nodes = [n for n in nodes.values() if n.type == "room"]
+
+    def centre_x(node: Any) -> float:
+        xs = node.attrs.get("polygon_x") or [0.0]
+        return sum(xs) / len(xs)
+
+    room_nodes.sort(key=lambda n: (centre_x(n), n.name))
+    rooms = {n.id: col for col, n in enumerate(room_nodes)}
+    extra = len(room_nodes)        # column for nodes in no room, then missions
+    rows: dict[int, float] = {col: 1.0 for col in range(extra + 2)}
+    placed: dict[int, tuple[float, float]] = {n.id: (rooms[n.id] * COLUMN_PX, 0.0) for n in room_nodes}
+    objects_by_name: dict[str, int] = {}
+    for node in sorted(nodes.values(), key=lambda n: n.name):
+        if node.type in ("object", "robot"):
+            col = _room_of(graph, node, rooms)
+            col = extra if col is None else col
+            placed[node.id] = (col * COLUMN_PX, rows[col] * ROW_PX)
+            rows[col] += 1.0
+            objects_by_name[node.name] = node.id
+    for node in sorted(nodes.values(), key=lambda n: (str(n.attrs.get("object", "")), n.name)):
+        if node.type == "activity":   # a row of its own below the objects, indented: labels are long
+            obj = objects_by_name.get(str(node.attrs.get("object", "")))
+            col = extra if obj is None else round(placed[obj][0] / COLUMN_PX)
+            placed[node.id] = (col * COLUMN_PX + ACTIVITY_INDENT_PX, rows[col] * ROW_PX)
+            rows[col] += 1.0
+    people = [(n, _room_of(graph, n, rooms)) for n in sorted(nodes.values(), key=lambda n: n.name)
+              if n.type == "person"]
+    people = [(n, extra if col is None else col) for n, col in people]
+    per_room = {col: sum(1 for _, c in people if c == col) for _, col in people}
+    counts: dict[int, int] = {}
+    for node, col in people:   # a grid of two only where a room is crowded: labels need the width
+        k = counts.get(col, 0)
+        counts[col] = k + 1
+        across = 2 if per_room[col] > CROWDED_ROOM else 1
+        placed[node.id] = (col * COLUMN_PX + (k % across) * PERSON_COLUMN_PX, (rows[col] + 0.5 + k // across) * ROW_PX)
+    missions_col = extra + (1 if any(x >= extra * COLUMN_PX for x, _ in placed.values()) else 0)
+    for node in sorted(nodes.values(), key=lambda n: n.name):
+        if node.type == "mission":
+            col = missions_col
+            placed[node.id] = (col * COLUMN_PX, rows[col] * ROW_PX)
+            rows[col] += 1.0
+    return [placed.get(i, ((extra + 1) * COLUMN_PX, 0.0)) for i in node_ids]
 
 
 def _all_nodes(graph: Any) -> list[Any]:
