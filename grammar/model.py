@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Union
+from typing import Union, assert_never
 
 from grammar.agm_order import agm_creation_order
 from grammar.errors import GrammarWarning, SourcePos
@@ -181,16 +181,19 @@ def effect_atoms(formula: Formula | None) -> Iterator[Formula]:
     stack: list[Formula] = [formula] if formula is not None else []
     while stack:
         f = stack.pop()
-        if isinstance(f, FNot):
-            stack.append(f.body)
-        elif isinstance(f, (FAnd, FOr)):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
-        else:
-            yield f
+        match f:
+            case FNot():
+                stack.append(f.body)
+            case FAnd() | FOr():
+                stack.extend(f.items)
+            case FForall() | FExists():
+                stack.append(f.body)
+            case FWhen():
+                stack.append(f.then)
+            case FLink() | FSame() | FCreate() | FDelete() | FRetype():
+                yield f
+            case _:
+                assert_never(f)
 
 
 # --------------------------------------------------------------------------- patterns
