@@ -175,6 +175,37 @@ class FRetype:
 Formula = Union[FNot, FAnd, FOr, FLink, FSame, FExists, FForall, FWhen, FCreate, FDelete, FRetype]
 
 
+def formula_children(f: Formula) -> tuple[Formula, ...]:
+    """The formulas directly inside ``f``, in written order (a when: condition, then). One place
+    that knows every formula class: a class added to ``Formula`` but not here fails loudly."""
+    match f:
+        case FNot() | FExists() | FForall():
+            return (f.body,)
+        case FAnd() | FOr():
+            return f.items
+        case FWhen():
+            return (f.condition, f.then)
+        case FLink() | FSame() | FCreate() | FDelete() | FRetype():
+            return ()
+        case _:
+            assert_never(f)
+
+
+def expr_children(e: Expr) -> tuple[Expr, ...]:
+    """The expressions directly inside ``e`` (an ``exists`` holds a pattern, not expressions)."""
+    match e:
+        case Compare():
+            return (e.left, e.right)
+        case Not():
+            return (e.expr,)
+        case And() | Or() | ListLit():
+            return e.items
+        case Literal() | AttrRef() | VarRef() | Exists():
+            return ()
+        case _:
+            assert_never(e)
+
+
 def effect_atoms(formula: Formula | None) -> Iterator[Formula]:
     """The atoms an effect formula applies (links, node edits, ...), found through not, and, or,
     forall, exists and the THEN of a when (a when's condition is read, not applied)."""
