@@ -58,10 +58,11 @@ def _formula_labels(formula: Formula | None) -> tuple[set[str], bool]:
     labels: set[str] = set()
     edits = False
     for atom in effect_atoms(formula):
-        if isinstance(atom, FLink):
-            labels.add(atom.label)
-        elif isinstance(atom, (FCreate, FRetype)):
-            edits = True
+        match atom:
+            case FLink():
+                labels.add(atom.label)
+            case FCreate() | FRetype():
+                edits = True
     return labels, edits
 
 
