@@ -54,6 +54,7 @@ from agents.lib.socialmap.motion import MotionParams, oriented, stretched
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams, asymmetric_gaussian
 from agents.lib.socialmap.roles import RoleParams
 from agents.lib.socialmap.types import Person
+from scenes.angles import wrap_angle
 
 PERSON_RADIUS_M = 0.25
 BANDS: tuple[tuple[str, float, float], ...] = (("intimate", -math.inf, 0.45), ("personal", 0.45, 1.2),
@@ -95,7 +96,7 @@ class PeopleTracks:
 
         unwrapped = np.unwrap(self.theta, axis=0) if len(self.times) else self.theta
         return PeopleTracks(np.asarray(times, dtype=float), self.names, lerp(self.x), lerp(self.y),
-                            (lerp(unwrapped) + math.pi) % (2 * math.pi) - math.pi, lerp(self.vx), lerp(self.vy),
+                            wrap_angle(lerp(unwrapped)), lerp(self.vx), lerp(self.vy),
                             self.groups[idx], self.roles)
 
 
@@ -169,7 +170,7 @@ def social_force(source_xy: NDArray[np.float64], source_v: NDArray[np.float64], 
     length = np.maximum(np.hypot(interaction[..., 0], interaction[..., 1]), 1e-9)
     interaction_dir = interaction / length[..., None]
     theta = np.arctan2(interaction_dir[..., 1], interaction_dir[..., 0]) - np.arctan2(direction[..., 1], direction[..., 0])
-    theta = (theta + math.pi) % (2 * math.pi) - math.pi
+    theta = wrap_angle(theta)
     b = SF_GAMMA * length
     velocity_amount = -np.exp(-distance / b - (SF_N_PRIME * b * theta) ** 2)
     angle_amount = -np.sign(theta) * -np.exp(-distance / b - (SF_N * b * theta) ** 2)
@@ -184,7 +185,7 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
     n = len(t)
     dt = np.diff(t)
     step = np.hypot(*np.diff(xy, axis=0).T) if n > 1 else np.zeros(0)
-    turn = np.abs((np.diff(theta) + math.pi) % (2 * math.pi) - math.pi) if n > 1 else np.zeros(0)
+    turn = np.abs(wrap_angle(np.diff(theta))) if n > 1 else np.zeros(0)
     with np.errstate(divide="ignore", invalid="ignore"):
         speed = np.where(dt > 0, step / dt, 0.0)
         omega = np.where(dt > 0, turn / dt, 0.0)

@@ -41,6 +41,7 @@ from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.socialmap.dynamic_metrics import DynamicMetrics, PeopleTracks, dynamic_metrics, tracks_from_rows
+from scenes.angles import wrap_angle
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
 
@@ -178,7 +179,7 @@ def cumulative_heading_change(traj: FloatArray) -> float:
     if len(traj) < 2:
         return 0.0
     dtheta = np.diff(traj[:, 3])
-    wrapped = (dtheta + math.pi) % (2.0 * math.pi) - math.pi
+    wrapped = wrap_angle(dtheta)
     return float(np.abs(wrapped).sum())
 
 
