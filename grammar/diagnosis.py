@@ -348,15 +348,15 @@ class _Explainer:
         while stack:
             e = stack.pop(0)
             match e:
-                case AttrRef(var=None):
-                    if edge is not None:
-                        value = self.matcher.eval(e, self.state, b, edge)
-                        facts.append(f"{self.link_fact(*edge)}: {e.attr} = {value_text(value)}")
                 case AttrRef(var=str(var)):
                     node = b.get(var)
                     if node is not None:
                         facts.append(f"{self.name(node)}.{e.attr} = {value_text(self.state.attr(node, e.attr))}")
                         self.witness(var, node, [e.attr])
+                case AttrRef():  # the link the condition is written on
+                    if edge is not None:
+                        value = self.matcher.eval(e, self.state, b, edge)
+                        facts.append(f"{self.link_fact(*edge)}: {e.attr} = {value_text(value)}")
                 case VarRef():
                     if e.var in b:
                         self.witness(e.var, b[e.var])

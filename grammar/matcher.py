@@ -120,12 +120,14 @@ class CompiledPattern:
 def _expr_refs(expr: Expr, own: str | None, link: PatternLink | None) -> set[str]:
     """Variables an expression reads (``own`` = the node a ``[...]`` block is written on)."""
     match expr:
-        case AttrRef(var=None):
+        case AttrRef():
+            if expr.var is not None:
+                return {expr.var}
             if link is not None:
                 return {link.src, link.dst}
             return {own} if own else set()
-        case AttrRef(var=str(var)) | VarRef(var=var):
-            return {var}
+        case VarRef():
+            return {expr.var}
         case Compare() | Not() | And() | Or() | ListLit():
             out: set[str] = set()
             for item in expr_children(expr):
@@ -503,15 +505,15 @@ class Matcher:
         match expr:
             case Literal():
                 return expr.value
-            case AttrRef(var=None):
+            case AttrRef():
+                if expr.var is not None:
+                    node = b.get(expr.var)
+                    return None if node is None else state.attr(node, expr.attr)
                 if edge is None:
                     return None
                 if expr.attr == "type":
                     return edge[2]
                 return state.edge_attr(edge[0], edge[1], edge[2], expr.attr)
-            case AttrRef(var=str(var)):
-                node = b.get(var)
-                return None if node is None else state.attr(node, expr.attr)
             case VarRef():
                 node = b.get(expr.var)
                 return None if node is None else NodeRef(node)

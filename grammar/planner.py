@@ -301,7 +301,8 @@ class Planner:
 
     def _reconstruct(self, result: SearchResult[State, tuple[Rule, Bindings]], target: Target,
                      expand: bool) -> PlanResult:
-        expanded, generated, final = result.expanded, result.generated, result.goal
+        expanded, generated = result.expanded, result.generated
+        final = cast(State, result.goal)  # set when the search found the target
         match = cast(Bindings, result.witness)  # what _PlanTask.goal returns
         ids = _AgmIds(self.world)
         steps: list[PlanStep] = []

@@ -26,9 +26,10 @@ from typing import Generic, Literal, Protocol, TypeVar
 
 S = TypeVar("S", bound=Hashable)
 A = TypeVar("A")
+A_co = TypeVar("A_co", covariant=True)
 
 
-class SearchTask(Protocol[S, A]):
+class SearchTask(Protocol[S, A_co]):
     """What a search needs to know of a problem. States must be hashable (they key the search)."""
 
     def initial(self) -> S:
@@ -39,7 +40,7 @@ class SearchTask(Protocol[S, A]):
         """A witness (anything but None) when ``state`` satisfies the goal, else None."""
         ...
 
-    def successors(self, state: S) -> Iterable[tuple[A, S, float]]:
+    def successors(self, state: S) -> Iterable[tuple[A_co, S, float]]:
         """(action, next state, cost >= 0) for every action applicable in ``state``, in a fixed order."""
         ...
 
