@@ -112,42 +112,46 @@ def check_formula(formula: Formula, scope: frozenset[str], *, effect: bool, in_c
                 raise GrammarError.at(getattr(formula, "pos", None) or fallback,
                                       f"unknown variable {name!r} in {what} formula")
 
-    effect_place = effect and not in_condition
+    problem = _misplaced(formula, effect_place=effect and not in_condition)
+    if problem is not None:
+        raise GrammarError.at(formula_pos(formula) or fallback, problem)
     match formula:
         case FLink():
             names(formula.src, formula.dst)
         case FSame():
-            if effect_place:
-                raise GrammarError.at(formula.pos or fallback, "(= a b) is a test: in an effect it may only "
-                                      "appear inside the condition of a (when ...)")
             names(formula.a, formula.b)
-        case FNot():
-            if effect_place and not isinstance(formula.body, FLink):
-                raise GrammarError.at(formula_pos(formula) or fallback, "(not ...) in an effect removes a link: "
-                                      "it must wrap a link atom such as (not (in a b))")
-            check_formula(formula.body, scope, effect=effect, in_condition=in_condition, fallback=fallback)
-        case FAnd() | FOr():
-            if isinstance(formula, FOr) and effect_place:
-                raise GrammarError.at(formula_pos(formula) or fallback, "(or ...) has no meaning in an effect "
-                                      "(outside the condition of a (when ...))")
-            for item in formula.items:
-                check_formula(item, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+        case FDelete() | FRetype():
+            names(formula.var)
+        case FCreate():
+            pass  # introduces its variable (see _created_in)
         case FExists() | FForall():
-            if isinstance(formula, FExists) and effect_place:
-                raise GrammarError.at(formula_pos(formula) or fallback, "(exists ...) has no meaning in an effect")
             inner = scope | frozenset(v.name for v in formula.vars)
             check_formula(formula.body, inner, effect=effect, in_condition=in_condition, fallback=fallback)
         case FWhen():
             check_formula(formula.condition, scope, effect=effect, in_condition=True, fallback=fallback)
             check_formula(formula.then, scope, effect=effect, in_condition=in_condition, fallback=fallback)
-        case FCreate() | FDelete() | FRetype():
-            if not effect_place:
-                raise GrammarError.at(formula.pos or fallback, f"({type(formula).__name__[1:].lower()} ...) "
-                                      "changes the graph: it is only allowed in an effect")
-            if not isinstance(formula, FCreate):
-                names(formula.var)
+        case FNot() | FAnd() | FOr():
+            for item in formula_children(formula):
+                check_formula(item, scope, effect=effect, in_condition=in_condition, fallback=fallback)
         case _:
             assert_never(formula)
+
+
+def _misplaced(formula: Formula, *, effect_place: bool) -> str | None:
+    """Why ``formula`` has no meaning where it is written (an effect, or a condition), or None:
+    AGM gives tests no meaning in effects and graph edits none in conditions."""
+    match formula:
+        case FSame() if effect_place:
+            return "(= a b) is a test: in an effect it may only appear inside the condition of a (when ...)"
+        case FNot(body=body) if effect_place and not isinstance(body, FLink):
+            return "(not ...) in an effect removes a link: it must wrap a link atom such as (not (in a b))"
+        case FOr() if effect_place:
+            return "(or ...) has no meaning in an effect (outside the condition of a (when ...))"
+        case FExists() if effect_place:
+            return "(exists ...) has no meaning in an effect"
+        case FCreate() | FDelete() | FRetype() if not effect_place:
+            return f"({type(formula).__name__[1:].lower()} ...) changes the graph: it is only allowed in an effect"
+    return None
 
 
 def formula_pos(formula: Formula) -> SourcePos | None:
