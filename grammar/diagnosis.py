@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, assert_never
 
 from grammar.errors import SourcePos
 from grammar.matcher import Bindings, NodeRef
@@ -36,6 +36,7 @@ from grammar.model import (
     Expr,
     FAnd,
     FCreate,
+    FDelete,
     FExists,
     FForall,
     FLink,
@@ -46,6 +47,7 @@ from grammar.model import (
     FSame,
     FWhen,
     ListLit,
+    Literal,
     Not,
     Or,
     Pattern,
@@ -55,6 +57,8 @@ from grammar.model import (
     Target,
     Value,
     VarRef,
+    expr_children,
+    formula_children,
     effect_atoms,
 )
 from grammar.render import expr_text, formula_text, link_text, node_text, pattern_text, value_text
@@ -243,14 +247,19 @@ def _effect_adds(formula: Formula | None) -> set[str]:
     stack = [formula] if formula is not None else []
     while stack:
         f = stack.pop()
-        if isinstance(f, FLink):
-            out.add(f.label)
-        elif isinstance(f, FAnd):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
+        match f:
+            case FLink():
+                out.add(f.label)
+            case FAnd():
+                stack.extend(f.items)
+            case FForall() | FExists():
+                stack.append(f.body)
+            case FWhen():
+                stack.append(f.then)
+            case FNot() | FOr() | FSame() | FCreate() | FDelete() | FRetype():
+                pass  # adds no link (a not removes one; or has no meaning in an effect)
+            case _:
+                assert_never(f)
     return out
 
 
@@ -258,26 +267,20 @@ def _effect_removes(formula: Formula | None, label: str) -> bool:
     stack = [formula] if formula is not None else []
     while stack:
         f = stack.pop()
-        if isinstance(f, FNot) and isinstance(f.body, FLink) and f.body.label == label:
-            return True
-        if isinstance(f, FAnd):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
+        match f:
+            case FNot(body=FLink() as link) if link.label == label:
+                return True
+            case FAnd():
+                stack.extend(f.items)
+            case FForall() | FExists():
+                stack.append(f.body)
+            case FWhen():
+                stack.append(f.then)
+            case FNot() | FLink() | FOr() | FSame() | FCreate() | FDelete() | FRetype():
+                pass
+            case _:
+                assert_never(f)
     return False
-
-
-def _sub_exprs(e: Expr) -> list[Expr]:
-    """The expressions directly inside ``e`` (one walk for every question asked of an expression)."""
-    if isinstance(e, Compare):
-        return [e.left, e.right]
-    if isinstance(e, Not):
-        return [e.expr]
-    if isinstance(e, (And, Or, ListLit)):
-        return list(e.items)
-    return []
 
 
 def _attrs_read(exprs: Iterable[Expr]) -> set[str]:
@@ -287,7 +290,7 @@ def _attrs_read(exprs: Iterable[Expr]) -> set[str]:
         e = stack.pop()
         if isinstance(e, AttrRef):
             out.add(e.attr)
-        stack += _sub_exprs(e)
+        stack += expr_children(e)
     return out
 
 
@@ -299,7 +302,7 @@ def _expr_pos(expr: Expr) -> SourcePos | None:
         pos = getattr(e, "pos", None)
         if pos is not None:
             return pos
-        stack += _sub_exprs(e)
+        stack += expr_children(e)
     return None
 
 
@@ -310,11 +313,7 @@ def _formula_pos(formula: Formula) -> SourcePos | None:
         pos = getattr(f, "pos", None)
         if pos is not None:
             return pos
-        for attr in ("body", "condition", "then"):
-            inner = getattr(f, attr, None)
-            if inner is not None:
-                stack.append(inner)
-        stack.extend(getattr(f, "items", ()))
+        stack.extend(formula_children(f))
     return None
 
 
@@ -348,25 +347,25 @@ class _Explainer:
         stack = [expr]
         while stack:
             e = stack.pop(0)
-            if isinstance(e, AttrRef):
-                if e.var is None:
+            match e:
+                case AttrRef(var=str(var)):
+                    node = b.get(var)
+                    if node is not None:
+                        facts.append(f"{self.name(node)}.{e.attr} = {value_text(self.state.attr(node, e.attr))}")
+                        self.witness(var, node, [e.attr])
+                case AttrRef():  # the link the condition is written on
                     if edge is not None:
                         value = self.matcher.eval(e, self.state, b, edge)
                         facts.append(f"{self.link_fact(*edge)}: {e.attr} = {value_text(value)}")
-                    continue
-                node = b.get(e.var)
-                if node is None:
-                    continue
-                facts.append(f"{self.name(node)}.{e.attr} = {value_text(self.state.attr(node, e.attr))}")
-                self.witness(e.var, node, [e.attr])
-            elif isinstance(e, VarRef) and e.var in b:
-                self.witness(e.var, b[e.var])
-            elif isinstance(e, Compare):
-                stack += [e.left, e.right]
-            elif isinstance(e, Not):
-                stack.append(e.expr)
-            elif isinstance(e, (And, Or, ListLit)):
-                stack.extend(e.items)
+                case VarRef():
+                    if e.var in b:
+                        self.witness(e.var, b[e.var])
+                case Compare() | Not() | And() | Or() | ListLit():
+                    stack.extend(expr_children(e))
+                case Literal() | Exists():
+                    pass
+                case _:
+                    assert_never(e)
         return list(dict.fromkeys(facts))
 
     def match_facts(self, pattern: Pattern, match: Bindings) -> list[str]:
@@ -393,106 +392,122 @@ class _Explainer:
     # ------------------------------------------------------------------ expressions
     def why_false(self, expr: Expr, b: Bindings, edge: tuple[int, int, str] | None = None) -> list[str]:
         truth = self.matcher.truth
-        if isinstance(expr, Not):
-            return self.why_true(expr.expr, b, edge)
-        if isinstance(expr, And):
-            for item in expr.items:
-                if not truth(item, self.state, b, edge):
-                    return self.why_false(item, b, edge)
-            return []
-        if isinstance(expr, Or):
-            facts: list[str] = []
-            for item in expr.items:
-                facts += self.why_false(item, b, edge)
-            concrete = [f for f in facts if not f.startswith(_NOTHING)]
-            return list(dict.fromkeys(concrete or facts))
-        if isinstance(expr, Exists):
-            return [f"{_NOTHING}exists {{ {pattern_text(expr.pattern)} }}"]
-        return self.operand_facts(expr, b, edge)
+        match expr:
+            case Not():
+                return self.why_true(expr.expr, b, edge)
+            case And():
+                for item in expr.items:
+                    if not truth(item, self.state, b, edge):
+                        return self.why_false(item, b, edge)
+                return []
+            case Or():
+                facts: list[str] = []
+                for item in expr.items:
+                    facts += self.why_false(item, b, edge)
+                concrete = [f for f in facts if not f.startswith(_NOTHING)]
+                return list(dict.fromkeys(concrete or facts))
+            case Exists():
+                return [f"{_NOTHING}exists {{ {pattern_text(expr.pattern)} }}"]
+            case Literal() | ListLit() | AttrRef() | VarRef() | Compare():
+                return self.operand_facts(expr, b, edge)
+            case _:
+                assert_never(expr)
 
     def why_true(self, expr: Expr, b: Bindings, edge: tuple[int, int, str] | None = None) -> list[str]:
         truth = self.matcher.truth
-        if isinstance(expr, Not):
-            return self.why_false(expr.expr, b, edge)
-        if isinstance(expr, Or):
-            for item in expr.items:
-                if truth(item, self.state, b, edge):
-                    return self.why_true(item, b, edge)
-            return []
-        if isinstance(expr, And):
-            facts: list[str] = []
-            for item in expr.items:
-                facts += self.why_true(item, b, edge)
-            return list(dict.fromkeys(facts))
-        if isinstance(expr, Exists):
-            compiled = self.matcher._compile_exists(expr.pattern, b)
-            match = self.matcher.first_match(compiled, self.state, b)
-            return self.match_facts(expr.pattern, match) if match is not None else []
-        return self.operand_facts(expr, b, edge)
+        match expr:
+            case Not():
+                return self.why_false(expr.expr, b, edge)
+            case Or():
+                for item in expr.items:
+                    if truth(item, self.state, b, edge):
+                        return self.why_true(item, b, edge)
+                return []
+            case And():
+                facts: list[str] = []
+                for item in expr.items:
+                    facts += self.why_true(item, b, edge)
+                return list(dict.fromkeys(facts))
+            case Exists():
+                compiled = self.matcher._compile_exists(expr.pattern, b)
+                found = self.matcher.first_match(compiled, self.state, b)
+                return self.match_facts(expr.pattern, found) if found is not None else []
+            case Literal() | ListLit() | AttrRef() | VarRef() | Compare():
+                return self.operand_facts(expr, b, edge)
+            case _:
+                assert_never(expr)
 
     # ------------------------------------------------------------------ formulas
     def f_false(self, f: Formula, b: Bindings) -> list[str]:
         holds = self.formulas.holds
-        if isinstance(f, FLink):
-            s, d = b.get(f.src), b.get(f.dst)
-            if s is None or d is None:
-                return [f"({f.label} {f.src} {f.dst}): a variable is unbound"]
-            return [f"no link {self.name(s)} -{f.label}-> {self.name(d)}"]
-        if isinstance(f, FNot):
-            return self.f_true(f.body, b)
-        if isinstance(f, FAnd):
-            for item in f.items:
-                if not holds(item, self.state, b):
-                    return self.f_false(item, b)
-            return []
-        if isinstance(f, FOr):
-            facts: list[str] = []
-            for item in f.items:
-                facts += self.f_false(item, b)
-            return facts
-        if isinstance(f, FWhen):
-            return self.f_true(f.condition, b) + self.f_false(f.then, b)
-        if isinstance(f, FForall):
-            for inner in self.formulas._assignments(f.vars, f.body, self.state, b):
-                if not holds(f.body, self.state, inner):
-                    for decl in f.vars:
-                        self.witness(decl.name, inner[decl.name])
-                    return self.f_false(f.body, inner)
-            return []
-        if isinstance(f, FExists):
-            decls = " ".join(f"{v.name}:{v.type}" for v in f.vars)
-            return [f"no {decls} satisfies {formula_text(f.body)}"]
-        if isinstance(f, FSame):
-            return [f"{f.a} is {self._bound(f.a, b)} and {f.b} is {self._bound(f.b, b)}"]
-        return [formula_text(f)]
+        match f:
+            case FLink():
+                s, d = b.get(f.src), b.get(f.dst)
+                if s is None or d is None:
+                    return [f"({f.label} {f.src} {f.dst}): a variable is unbound"]
+                return [f"no link {self.name(s)} -{f.label}-> {self.name(d)}"]
+            case FNot():
+                return self.f_true(f.body, b)
+            case FAnd():
+                for item in f.items:
+                    if not holds(item, self.state, b):
+                        return self.f_false(item, b)
+                return []
+            case FOr():
+                facts: list[str] = []
+                for item in f.items:
+                    facts += self.f_false(item, b)
+                return facts
+            case FWhen():
+                return self.f_true(f.condition, b) + self.f_false(f.then, b)
+            case FForall():
+                for inner in self.formulas._assignments(f.vars, f.body, self.state, b):
+                    if not holds(f.body, self.state, inner):
+                        for decl in f.vars:
+                            self.witness(decl.name, inner[decl.name])
+                        return self.f_false(f.body, inner)
+                return []
+            case FExists():
+                decls = " ".join(f"{v.name}:{v.type}" for v in f.vars)
+                return [f"no {decls} satisfies {formula_text(f.body)}"]
+            case FSame():
+                return [f"{f.a} is {self._bound(f.a, b)} and {f.b} is {self._bound(f.b, b)}"]
+            case FCreate() | FDelete() | FRetype():
+                return [formula_text(f)]
+            case _:
+                assert_never(f)
 
     def f_true(self, f: Formula, b: Bindings) -> list[str]:
         holds = self.formulas.holds
-        if isinstance(f, FLink):
-            s, d = b.get(f.src), b.get(f.dst)
-            return [self.link_fact(s, d, f.label)] if s is not None and d is not None else []
-        if isinstance(f, FNot):
-            return self.f_false(f.body, b)
-        if isinstance(f, FOr):
-            for item in f.items:
-                if holds(item, self.state, b):
-                    return self.f_true(item, b)
-            return []
-        if isinstance(f, FAnd):
-            facts: list[str] = []
-            for item in f.items:
-                facts += self.f_true(item, b)
-            return facts
-        if isinstance(f, FExists):
-            for inner in self.formulas._assignments(f.vars, f.body, self.state, b):
-                if holds(f.body, self.state, inner):
-                    for decl in f.vars:
-                        self.witness(decl.name, inner[decl.name])
-                    return self.f_true(f.body, inner)
-            return []
-        if isinstance(f, FSame):
-            return [f"{f.a} and {f.b} are both {self._bound(f.a, b)}"]
-        return [formula_text(f)]
+        match f:
+            case FLink():
+                s, d = b.get(f.src), b.get(f.dst)
+                return [self.link_fact(s, d, f.label)] if s is not None and d is not None else []
+            case FNot():
+                return self.f_false(f.body, b)
+            case FOr():
+                for item in f.items:
+                    if holds(item, self.state, b):
+                        return self.f_true(item, b)
+                return []
+            case FAnd():
+                facts: list[str] = []
+                for item in f.items:
+                    facts += self.f_true(item, b)
+                return facts
+            case FExists():
+                for inner in self.formulas._assignments(f.vars, f.body, self.state, b):
+                    if holds(f.body, self.state, inner):
+                        for decl in f.vars:
+                            self.witness(decl.name, inner[decl.name])
+                        return self.f_true(f.body, inner)
+                return []
+            case FSame():
+                return [f"{f.a} and {f.b} are both {self._bound(f.a, b)}"]
+            case FWhen() | FForall() | FCreate() | FDelete() | FRetype():
+                return [formula_text(f)]
+            case _:
+                assert_never(f)
 
     def _bound(self, var: str, b: Bindings) -> str:
         return self.name(b[var]) if var in b else "unbound"

@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from itertools import product
+from typing import assert_never
 
 from grammar.errors import PlanningError
 from grammar.matcher import Bindings, Matcher
@@ -52,6 +53,10 @@ class Changes:
     add_edges: list[Edge] = field(default_factory=list)
     delete_nodes: list[int] = field(default_factory=list)
     retype: list[tuple[int, str]] = field(default_factory=list)
+
+
+Effect = Callable[[State, Bindings, "Changes", StateEditor], None]
+"""A compiled effect: records its changes for one application."""
 
 
 class FormulaEvaluator:
@@ -99,61 +104,66 @@ class FormulaEvaluator:
 
     # ------------------------------------------------------------------ conditions
     def holds(self, formula: Formula, state: State, b: Bindings) -> bool:
-        if isinstance(formula, FLink):
-            s, d = b.get(formula.src), b.get(formula.dst)
-            return s is not None and d is not None and state.has_edge(s, d, formula.label)
-        if isinstance(formula, FSame):
-            return b.get(formula.a) is not None and b.get(formula.a) == b.get(formula.b)
-        if isinstance(formula, FNot):
-            return not self.holds(formula.body, state, b)
-        if isinstance(formula, FAnd):
-            return all(self.holds(f, state, b) for f in formula.items)
-        if isinstance(formula, FOr):
-            return any(self.holds(f, state, b) for f in formula.items)
-        if isinstance(formula, FWhen):
-            return not self.holds(formula.condition, state, b) or self.holds(formula.then, state, b)
-        if isinstance(formula, FForall):  # the guard shortcut is exact here: unlinked nodes satisfy (when ...)
-            return all(self.holds(formula.body, state, inner)
-                       for inner in self._assignments(formula.vars, formula.body, state, b))
-        if isinstance(formula, FExists):
-            return any(self.holds(formula.body, state, inner)
-                       for inner in self._assignments(formula.vars, _NO_GUARD, state, b))
-        raise PlanningError(f"{type(formula).__name__} cannot be used as a condition")
+        match formula:
+            case FLink():
+                s, d = b.get(formula.src), b.get(formula.dst)
+                return s is not None and d is not None and state.has_edge(s, d, formula.label)
+            case FSame():
+                return b.get(formula.a) is not None and b.get(formula.a) == b.get(formula.b)
+            case FNot():
+                return not self.holds(formula.body, state, b)
+            case FAnd():
+                return all(self.holds(f, state, b) for f in formula.items)
+            case FOr():
+                return any(self.holds(f, state, b) for f in formula.items)
+            case FWhen():
+                return not self.holds(formula.condition, state, b) or self.holds(formula.then, state, b)
+            case FForall():  # the guard shortcut is exact here: unlinked nodes satisfy (when ...)
+                return all(self.holds(formula.body, state, inner)
+                           for inner in self._assignments(formula.vars, formula.body, state, b))
+            case FExists():
+                return any(self.holds(formula.body, state, inner)
+                           for inner in self._assignments(formula.vars, _NO_GUARD, state, b))
+            case FCreate() | FDelete() | FRetype():
+                raise PlanningError(f"{type(formula).__name__} cannot be used as a condition")
+            case _:
+                assert_never(formula)
 
     # ------------------------------------------------------------------ effects
     def collect(self, formula: Formula, state: State, b: Bindings, changes: Changes,
                 editor: StateEditor) -> None:
         """Record an effect's changes; its conditions read ``state`` (the graph before the rule).
         ``create`` allocates the node at once (through ``editor``) so later atoms can use it."""
-        if isinstance(formula, FLink):
-            changes.add_edges.append((self._node(b, formula.src), self._node(b, formula.dst), formula.label))
-        elif isinstance(formula, FNot):
-            body = formula.body
-            if not isinstance(body, FLink):
+        match formula:
+            case FLink():
+                changes.add_edges.append((self._node(b, formula.src), self._node(b, formula.dst), formula.label))
+            case FNot(body=FLink() as body):
+                changes.remove_edges.append((self._node(b, body.src), self._node(b, body.dst), body.label))
+            case FNot():
                 raise PlanningError("(not ...) in an effect must wrap a link atom")
-            changes.remove_edges.append((self._node(b, body.src), self._node(b, body.dst), body.label))
-        elif isinstance(formula, FAnd):
-            for item in formula.items:
-                self.collect(item, state, b, changes, editor)
-        elif isinstance(formula, FWhen):
-            if self.holds(formula.condition, state, b):
-                self.collect(formula.then, state, b, changes, editor)
-        elif isinstance(formula, FForall):
-            if len(formula.vars) == 1:  # the common case, without a generator
+            case FAnd():
+                for item in formula.items:
+                    self.collect(item, state, b, changes, editor)
+            case FWhen():
+                if self.holds(formula.condition, state, b):
+                    self.collect(formula.then, state, b, changes, editor)
+            case FForall() if len(formula.vars) == 1:  # the common case, without a generator
                 decl = formula.vars[0]
                 for n in self._domain(decl, formula.body, state, b):
                     self.collect(formula.body, state, {**b, decl.name: n}, changes, editor)
-                return
-            for inner in list(self._assignments(formula.vars, formula.body, state, b)):
-                self.collect(formula.body, state, inner, changes, editor)
-        elif isinstance(formula, FCreate):
-            b[formula.var] = editor.create_node(formula.type, formula.var)
-        elif isinstance(formula, FDelete):
-            changes.delete_nodes.append(self._node(b, formula.var))
-        elif isinstance(formula, FRetype):
-            changes.retype.append((self._node(b, formula.var), formula.type))
-        else:
-            raise PlanningError(f"{type(formula).__name__} has no meaning in an effect")
+            case FForall():
+                for inner in list(self._assignments(formula.vars, formula.body, state, b)):
+                    self.collect(formula.body, state, inner, changes, editor)
+            case FCreate():
+                b[formula.var] = editor.create_node(formula.type, formula.var)
+            case FDelete():
+                changes.delete_nodes.append(self._node(b, formula.var))
+            case FRetype():
+                changes.retype.append((self._node(b, formula.var), formula.type))
+            case FOr() | FExists() | FSame():
+                raise PlanningError(f"{type(formula).__name__} has no meaning in an effect")
+            case _:
+                assert_never(formula)
 
     # ------------------------------------------------------------------ compiled effects
     def apply_effect(self, formula: Formula, state: State, b: Bindings, changes: Changes,
@@ -166,82 +176,99 @@ class FormulaEvaluator:
             found = self._effects[key] = (formula, self._compile_effect(formula))
         found[1](state, b, changes, editor)
 
-    def _compile_effect(self, f: Formula) -> Callable[[State, Bindings, Changes, StateEditor], None]:
-        node = self._node
-        if isinstance(f, FLink):
-            label, src, dst = f.label, f.src, f.dst
+    def _compile_effect(self, f: Formula) -> Effect:
+        match f:
+            case FLink():
+                return self._add_link(f)
+            case FNot(body=FLink() as link):
+                return self._remove_link(link)
+            case FAnd():
+                parts = [self._compile_effect(item) for item in f.items]
 
-            def add(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                changes.add_edges.append((node(b, src), node(b, dst), label))
-            return add
-        if isinstance(f, FNot) and isinstance(f.body, FLink):
-            label, src, dst = f.body.label, f.body.src, f.body.dst
+                def both(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                    for part in parts:
+                        part(state, b, changes, editor)
+                return both
+            case FWhen():
+                condition, then = self._compile_condition(f.condition), self._compile_effect(f.then)
 
-            def remove(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                changes.remove_edges.append((node(b, src), node(b, dst), label))
-            return remove
-        if isinstance(f, FAnd):
-            parts = [self._compile_effect(item) for item in f.items]
+                def when(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                    if condition(state, b):
+                        then(state, b, changes, editor)
+                return when
+            case FForall() if len(f.vars) == 1:
+                return self._forall_one(f)
+            case FNot() | FOr() | FForall() | FExists() | FSame() | FCreate() | FDelete() | FRetype():
+                def generic(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                    self.collect(f, state, b, changes, editor)  # interpreted (and its errors raised) as written
+                return generic
+            case _:
+                assert_never(f)
 
-            def both(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                for part in parts:
-                    part(state, b, changes, editor)
-            return both
-        if isinstance(f, FWhen):
-            condition, then = self._compile_condition(f.condition), self._compile_effect(f.then)
+    def _add_link(self, f: FLink) -> Effect:
+        node, label, src, dst = self._node, f.label, f.src, f.dst
 
-            def when(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                if condition(state, b):
-                    then(state, b, changes, editor)
-            return when
-        if isinstance(f, FForall) and len(f.vars) == 1:
-            decl, body = f.vars[0], f.body
-            name, inner = decl.name, self._compile_effect(body)
-            domain = self._domain
-            guards = self._guard(body, name)
-            if guards is not None and len(guards) == 1:  # (forall x:T (when (label a x) ...)): walk a's links
-                link, forward = guards[0]
-                anchor, label, wanted, type_ok = (link.dst if forward else link.src), link.label, decl.type, \
-                    self.matcher.type_ok
+        def add(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+            changes.add_edges.append((node(b, src), node(b, dst), label))
+        return add
 
-                def guarded(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                    a = b.get(anchor)
-                    if a is None:
-                        for n in domain(decl, body, state, b):
-                            inner(state, {**b, name: n}, changes, editor)
-                        return
-                    linked = state.inn(a, label) if forward else state.out(a, label)
-                    for n in list(linked):
-                        if type_ok(state.type_of(n), wanted):
-                            inner(state, {**b, name: n}, changes, editor)
-                return guarded
+    def _remove_link(self, f: FLink) -> Effect:
+        node, label, src, dst = self._node, f.label, f.src, f.dst
 
-            def forall(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-                for n in domain(decl, body, state, b):
-                    inner(state, {**b, name: n}, changes, editor)
-            return forall
+        def remove(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+            changes.remove_edges.append((node(b, src), node(b, dst), label))
+        return remove
 
-        def generic(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
-            self.collect(f, state, b, changes, editor)
-        return generic
+    def _forall_one(self, f: FForall) -> Effect:
+        """``(forall x:T body)``; with a guard ``(when (label a x) ...)`` it walks a's links."""
+        decl, body = f.vars[0], f.body
+        name, inner = decl.name, self._compile_effect(body)
+        domain = self._domain
+        guards = self._guard(body, name)
+        if guards is not None and len(guards) == 1:
+            link, forward = guards[0]
+            anchor, label, wanted, type_ok = (link.dst if forward else link.src), link.label, decl.type, \
+                self.matcher.type_ok
+
+            def guarded(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+                a = b.get(anchor)
+                if a is None:
+                    for n in domain(decl, body, state, b):
+                        inner(state, {**b, name: n}, changes, editor)
+                    return
+                linked = state.inn(a, label) if forward else state.out(a, label)
+                for n in list(linked):
+                    if type_ok(state.type_of(n), wanted):
+                        inner(state, {**b, name: n}, changes, editor)
+            return guarded
+
+        def forall(state: State, b: Bindings, changes: Changes, editor: StateEditor) -> None:
+            for n in domain(decl, body, state, b):
+                inner(state, {**b, name: n}, changes, editor)
+        return forall
 
     def _compile_condition(self, f: Formula) -> Callable[[State, Bindings], bool]:
-        if isinstance(f, FLink):
-            label, src, dst = f.label, f.src, f.dst
+        match f:
+            case FLink():
+                label, src, dst = f.label, f.src, f.dst
 
-            def link(state: State, b: Bindings) -> bool:
-                s, d = b.get(src), b.get(dst)
-                return s is not None and d is not None and state.has_edge(s, d, label)
-            return link
-        if isinstance(f, FNot):
-            inner = self._compile_condition(f.body)
-            return lambda state, b: not inner(state, b)
-        if isinstance(f, (FAnd, FOr)):
-            parts = [self._compile_condition(item) for item in f.items]
-            if isinstance(f, FAnd):
+                def link(state: State, b: Bindings) -> bool:
+                    s, d = b.get(src), b.get(dst)
+                    return s is not None and d is not None and state.has_edge(s, d, label)
+                return link
+            case FNot():
+                inner = self._compile_condition(f.body)
+                return lambda state, b: not inner(state, b)
+            case FAnd():
+                parts = [self._compile_condition(item) for item in f.items]
                 return lambda state, b: all(part(state, b) for part in parts)
-            return lambda state, b: any(part(state, b) for part in parts)
-        return lambda state, b: self.holds(f, state, b)
+            case FOr():
+                parts = [self._compile_condition(item) for item in f.items]
+                return lambda state, b: any(part(state, b) for part in parts)
+            case FSame() | FWhen() | FForall() | FExists() | FCreate() | FDelete() | FRetype():
+                return lambda state, b: self.holds(f, state, b)
+            case _:
+                assert_never(f)
 
     @staticmethod
     def _node(b: Bindings, name: str) -> int:

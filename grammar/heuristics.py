@@ -29,6 +29,9 @@ from grammar.model import (
     FLink,
     Formula,
     FRetype,
+    Pattern,
+    PatternLink,
+    PatternNode,
     Rule,
     Target,
     effect_atoms,
@@ -53,15 +56,61 @@ class _UnitMove:
     cost: float
 
 
+def _unit_moves(rules: Iterable[Rule]) -> list[_UnitMove] | None:
+    """The rules' unit moves, or None when the heuristic cannot be proved admissible: no rule
+    moves, a rule edits nodes or moves otherwise, or an effect touches locations or adjacency."""
+    moves: list[_UnitMove] = []
+    adjacency_touched: set[str] = set()
+    effect_labels: set[str] = set()
+    for rule in rules:
+        labels, edits = _formula_labels(rule.effect)
+        if edits:
+            return None
+        effect_labels |= labels
+        adjacency_touched |= {l.label for l in (*rule.added_links, *rule.removed_links)}
+        move = _unit_move(rule, LOCATION_LABEL)
+        if move is False:
+            return None
+        if isinstance(move, _UnitMove):
+            moves.append(move)
+    if not moves:
+        return None
+    adjacency = {m.adjacency for m in moves}
+    if LOCATION_LABEL in effect_labels or adjacency & effect_labels or adjacency & adjacency_touched:
+        return None
+    return moves
+
+
+def _goal_rooms(pattern: Pattern, link: PatternLink, room_node: PatternNode, state: State,
+                movable: Callable[[int], bool]) -> set[int]:
+    """The rooms the target's location ``link`` asks for: a named room, or the room of a named
+    thing that does not move (``o->r(in)`` with ``o`` a constant object)."""
+    if room_node.constant is not None:
+        found = state.node_by_constant(room_node.constant)
+        return {found} if found is not None else set()
+    for anchor in pattern.links:
+        if anchor is link or anchor.negated or anchor.label != LOCATION_LABEL or anchor.dst != room_node.name:
+            continue
+        thing = pattern.node(anchor.src)
+        if thing is None or thing.constant is None:
+            continue
+        found = state.node_by_constant(thing.constant)
+        if found is None or movable(found):
+            continue
+        return set(state.out(found, LOCATION_LABEL))
+    return set()
+
+
 def _formula_labels(formula: Formula | None) -> tuple[set[str], bool]:
     """Link labels an effect formula touches (outside when-conditions) and whether it edits nodes."""
     labels: set[str] = set()
     edits = False
     for atom in effect_atoms(formula):
-        if isinstance(atom, FLink):
-            labels.add(atom.label)
-        elif isinstance(atom, (FCreate, FRetype)):
-            edits = True
+        match atom:
+            case FLink():
+                labels.add(atom.label)
+            case FCreate() | FRetype():
+                edits = True
     return labels, edits
 
 
@@ -134,35 +183,19 @@ class RoomDistanceHeuristic:
     @classmethod
     def derive(cls, rules: Iterable[Rule], target: Target, matcher: Matcher, state: State
                ) -> RoomDistanceHeuristic | None:
-        moves: list[_UnitMove] = []
-        adjacency_touched: set[str] = set()
-        effect_labels: set[str] = set()
-        for rule in rules:
-            labels, edits = _formula_labels(rule.effect)
-            if edits:
-                return None
-            effect_labels |= labels
-            adjacency_touched |= {l.label for l in (*rule.added_links, *rule.removed_links)}
-            move = _unit_move(rule, LOCATION_LABEL)
-            if move is False:
-                return None
-            if isinstance(move, _UnitMove):
-                moves.append(move)
-        if not moves:
-            return None
-        adjacency = {m.adjacency for m in moves}
-        if LOCATION_LABEL in effect_labels or adjacency & effect_labels or adjacency & adjacency_touched:
+        moves = _unit_moves(rules)
+        if moves is None:
             return None
         directions = {m.direction for m in moves}
         undirected = "both" in directions or directions == {"fwd", "bwd"}
         forward = directions == {"fwd"}
         move_cost = min(m.cost for m in moves)
+        adjacency = {m.adjacency for m in moves}
 
         def movable(node: int) -> bool:
             return any(matcher.type_ok(state.type_of(node), m.mover_var_type) for m in moves)
 
         pattern = target.pattern
-        best: RoomDistanceHeuristic | None = None
         for link in pattern.links:
             if link.negated or link.undirected or link.label != LOCATION_LABEL:
                 continue
@@ -177,29 +210,7 @@ class RoomDistanceHeuristic:
                 movers = [n for n in matcher.candidates_of_type(state, mover_node.type) if movable(n)]
             if not movers:
                 continue
-            goal_rooms: set[int] = set()
-            if room_node.constant is not None:
-                found = state.node_by_constant(room_node.constant)
-                if found is not None:
-                    goal_rooms.add(found)
-            else:
-                for anchor in pattern.links:
-                    if anchor is link or anchor.negated or anchor.label != LOCATION_LABEL \
-                            or anchor.dst != room_node.name:
-                        continue
-                    thing = pattern.node(anchor.src)
-                    if thing is None or thing.constant is None:
-                        continue
-                    found = state.node_by_constant(thing.constant)
-                    if found is None or movable(found):
-                        continue
-                    goal_rooms = set(state.out(found, LOCATION_LABEL))
-                    break
-                else:
-                    continue
-            if not goal_rooms:
-                continue
-            candidate = cls(matcher, movers, goal_rooms, adjacency, undirected, forward, move_cost)
-            if best is None:
-                best = candidate
-        return best
+            goal_rooms = _goal_rooms(pattern, link, room_node, state, movable)
+            if goal_rooms:
+                return cls(matcher, movers, goal_rooms, adjacency, undirected, forward, move_cost)
+        return None

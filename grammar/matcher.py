@@ -22,7 +22,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 import itertools
 from functools import lru_cache
-from typing import Any
+from typing import Any, assert_never
 
 from grammar.model import (
     ANY_TYPE,
@@ -40,6 +40,7 @@ from grammar.model import (
     TypeTable,
     Value,
     VarRef,
+    expr_children,
 )
 from grammar.world import State, World
 
@@ -118,26 +119,26 @@ class CompiledPattern:
 
 def _expr_refs(expr: Expr, own: str | None, link: PatternLink | None) -> set[str]:
     """Variables an expression reads (``own`` = the node a ``[...]`` block is written on)."""
-    if isinstance(expr, AttrRef):
-        if expr.var is None:
+    match expr:
+        case AttrRef():
+            if expr.var is not None:
+                return {expr.var}
             if link is not None:
                 return {link.src, link.dst}
             return {own} if own else set()
-        return {expr.var}
-    if isinstance(expr, VarRef):
-        return {expr.var}
-    if isinstance(expr, Compare):
-        return _expr_refs(expr.left, own, link) | _expr_refs(expr.right, own, link)
-    if isinstance(expr, Not):
-        return _expr_refs(expr.expr, own, link)
-    if isinstance(expr, (And, Or, ListLit)):
-        out: set[str] = set()
-        for item in expr.items:
-            out |= _expr_refs(item, own, link)
-        return out
-    if isinstance(expr, Exists):
-        return pattern_free_vars(expr.pattern)
-    return set()
+        case VarRef():
+            return {expr.var}
+        case Compare() | Not() | And() | Or() | ListLit():
+            out: set[str] = set()
+            for item in expr_children(expr):
+                out |= _expr_refs(item, own, link)
+            return out
+        case Exists():
+            return pattern_free_vars(expr.pattern)
+        case Literal():
+            return set()
+        case _:
+            assert_never(expr)
 
 
 def pattern_free_vars(pattern: Pattern) -> set[str]:
@@ -155,19 +156,23 @@ def pattern_free_vars(pattern: Pattern) -> set[str]:
 
 
 def _own_to_var(expr: Expr, var: str) -> Expr:
-    if isinstance(expr, AttrRef) and expr.var is None:
-        return AttrRef(var, expr.attr, expr.pos)
-    if isinstance(expr, Compare):
-        return Compare(expr.op, _own_to_var(expr.left, var), _own_to_var(expr.right, var))
-    if isinstance(expr, Not):
-        return Not(_own_to_var(expr.expr, var))
-    if isinstance(expr, And):
-        return And(tuple(_own_to_var(e, var) for e in expr.items))
-    if isinstance(expr, Or):
-        return Or(tuple(_own_to_var(e, var) for e in expr.items))
-    if isinstance(expr, ListLit):
-        return ListLit(tuple(_own_to_var(e, var) for e in expr.items))
-    return expr
+    match expr:
+        case AttrRef(var=None):
+            return AttrRef(var, expr.attr, expr.pos)
+        case Compare():
+            return Compare(expr.op, _own_to_var(expr.left, var), _own_to_var(expr.right, var))
+        case Not():
+            return Not(_own_to_var(expr.expr, var))
+        case And():
+            return And(tuple(_own_to_var(e, var) for e in expr.items))
+        case Or():
+            return Or(tuple(_own_to_var(e, var) for e in expr.items))
+        case ListLit():
+            return ListLit(tuple(_own_to_var(e, var) for e in expr.items))
+        case AttrRef() | Literal() | VarRef() | Exists():
+            return expr  # nothing of its own to rename (an exists declares its own nodes)
+        case _:
+            assert_never(expr)
 
 
 class MatchBudgetExceeded(Exception):
@@ -437,29 +442,33 @@ class Matcher:
     def _names_from(self, expr: Expr, var: str, state: State, b: Bindings,
                     edge: tuple[int, int, str] | None) -> set[Value] | None:
         """Every name ``var`` may have for ``expr`` to hold (a superset), or ``None`` if unknown."""
-        if isinstance(expr, Or):
-            out: set[Value] = set()
-            for item in expr.items:
-                part = self._names_from(item, var, state, b, edge)
-                if part is None:
-                    return None
-                out |= part
-            return out
-        if isinstance(expr, And):
-            for item in expr.items:
-                if _is_name_atom(item, var):
-                    return self._names_from(item, var, state, b, edge)
-            return None
-        if isinstance(expr, Compare) and _is_name_atom(expr, var):
-            mine_left = _is_name_ref(expr.left, var)
-            other = expr.right if mine_left else expr.left
-            value = self.eval(other, state, b, edge)
-            if expr.op == "==":
-                return {value} if isinstance(value, str) else set()
-            if isinstance(value, tuple):
-                return set(value)
-            return None if isinstance(value, str) else set()  # 'in' a string: substrings, unknown
-        return None
+        match expr:
+            case Or():
+                out: set[Value] = set()
+                for item in expr.items:
+                    part = self._names_from(item, var, state, b, edge)
+                    if part is None:
+                        return None
+                    out |= part
+                return out
+            case And():
+                for item in expr.items:
+                    if _is_name_atom(item, var):
+                        return self._names_from(item, var, state, b, edge)
+                return None
+            case Compare() if _is_name_atom(expr, var):
+                mine_left = _is_name_ref(expr.left, var)
+                other = expr.right if mine_left else expr.left
+                value = self.eval(other, state, b, edge)
+                if expr.op == "==":
+                    return {value} if isinstance(value, str) else set()
+                if isinstance(value, tuple):
+                    return set(value)
+                return None if isinstance(value, str) else set()  # 'in' a string: substrings, unknown
+            case Compare() | Literal() | ListLit() | AttrRef() | VarRef() | Not() | Exists():
+                return None
+            case _:
+                assert_never(expr)
 
     @staticmethod
     def _edges_of(link: PatternLink, state: State, b: Bindings) -> list[tuple[int, int, str]]:
@@ -492,36 +501,44 @@ class Matcher:
 
     # ------------------------------------------------------------------ expressions
     def truth(self, expr: Expr, state: State, b: Bindings, edge: tuple[int, int, str] | None = None) -> bool:
-        if isinstance(expr, And):
-            return all(self.truth(e, state, b, edge) for e in expr.items)
-        if isinstance(expr, Or):
-            return any(self.truth(e, state, b, edge) for e in expr.items)
-        if isinstance(expr, Not):
-            return not self.truth(expr.expr, state, b, edge)
-        if isinstance(expr, Exists):
-            return self._exists_holds(expr.pattern, state, b)
-        if isinstance(expr, Compare):
-            return _compare(expr.op, self.eval(expr.left, state, b, edge), self.eval(expr.right, state, b, edge))
-        return bool(self.eval(expr, state, b, edge))
+        match expr:
+            case And():
+                return all(self.truth(e, state, b, edge) for e in expr.items)
+            case Or():
+                return any(self.truth(e, state, b, edge) for e in expr.items)
+            case Not():
+                return not self.truth(expr.expr, state, b, edge)
+            case Exists():
+                return self._exists_holds(expr.pattern, state, b)
+            case Compare():
+                return _compare(expr.op, self.eval(expr.left, state, b, edge), self.eval(expr.right, state, b, edge))
+            case Literal() | AttrRef() | VarRef() | ListLit():
+                return bool(self.eval(expr, state, b, edge))
+            case _:
+                assert_never(expr)
 
     def eval(self, expr: Expr, state: State, b: Bindings, edge: tuple[int, int, str] | None = None) -> Any:
-        if isinstance(expr, Literal):
-            return expr.value
-        if isinstance(expr, AttrRef):
-            if expr.var is None:
+        match expr:
+            case Literal():
+                return expr.value
+            case AttrRef():
+                if expr.var is not None:
+                    node = b.get(expr.var)
+                    return None if node is None else state.attr(node, expr.attr)
                 if edge is None:
                     return None
                 if expr.attr == "type":
                     return edge[2]
                 return state.edge_attr(edge[0], edge[1], edge[2], expr.attr)
-            node = b.get(expr.var)
-            return None if node is None else state.attr(node, expr.attr)
-        if isinstance(expr, VarRef):
-            node = b.get(expr.var)
-            return None if node is None else NodeRef(node)
-        if isinstance(expr, ListLit):
-            return tuple(self.eval(e, state, b, edge) for e in expr.items)
-        return self.truth(expr, state, b, edge)
+            case VarRef():
+                node = b.get(expr.var)
+                return None if node is None else NodeRef(node)
+            case ListLit():
+                return tuple(self.eval(e, state, b, edge) for e in expr.items)
+            case And() | Or() | Not() | Exists() | Compare():
+                return self.truth(expr, state, b, edge)
+            case _:
+                assert_never(expr)
 
 
 def _is_name_ref(expr: Expr, var: str) -> bool:
@@ -540,15 +557,18 @@ def _is_name_atom(expr: Expr, var: str) -> bool:
 def _name_source(expr: Expr, var: str, bound: set[str], link: PatternLink | None) -> bool:
     """Does ``expr`` (if true) name ``var`` through values computable from ``bound`` variables?
     An ``or`` qualifies if every branch does, an ``and`` if one of its items does."""
-    if isinstance(expr, Or):
-        return bool(expr.items) and all(_name_source(item, var, bound, link) for item in expr.items)
-    if isinstance(expr, And):
-        return any(_is_name_atom(item, var) and _name_source(item, var, bound, link) for item in expr.items)
-    if not _is_name_atom(expr, var):
-        return False
-    assert isinstance(expr, Compare)
-    other = expr.right if _is_name_ref(expr.left, var) else expr.left
-    return not isinstance(other, Exists) and _expr_refs(other, None, link) <= bound
+    match expr:
+        case Or():
+            return bool(expr.items) and all(_name_source(item, var, bound, link) for item in expr.items)
+        case And():
+            return any(_is_name_atom(item, var) and _name_source(item, var, bound, link) for item in expr.items)
+        case Compare() if _is_name_atom(expr, var):
+            other = expr.right if _is_name_ref(expr.left, var) else expr.left
+            return not isinstance(other, Exists) and _expr_refs(other, None, link) <= bound
+        case Compare() | Literal() | ListLit() | AttrRef() | VarRef() | Not() | Exists():
+            return False
+        case _:
+            assert_never(expr)
 
 
 def _compare(op: str, left: Any, right: Any) -> bool:

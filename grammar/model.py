@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Union
+from typing import Union, assert_never
 
 from grammar.agm_order import agm_creation_order
 from grammar.errors import GrammarWarning, SourcePos
@@ -175,22 +175,56 @@ class FRetype:
 Formula = Union[FNot, FAnd, FOr, FLink, FSame, FExists, FForall, FWhen, FCreate, FDelete, FRetype]
 
 
+def formula_children(f: Formula) -> tuple[Formula, ...]:
+    """The formulas directly inside ``f``, in written order (a when: condition, then). One place
+    that knows every formula class: a class added to ``Formula`` but not here fails loudly."""
+    match f:
+        case FNot() | FExists() | FForall():
+            return (f.body,)
+        case FAnd() | FOr():
+            return f.items
+        case FWhen():
+            return (f.condition, f.then)
+        case FLink() | FSame() | FCreate() | FDelete() | FRetype():
+            return ()
+        case _:
+            assert_never(f)
+
+
+def expr_children(e: Expr) -> tuple[Expr, ...]:
+    """The expressions directly inside ``e`` (an ``exists`` holds a pattern, not expressions)."""
+    match e:
+        case Compare():
+            return (e.left, e.right)
+        case Not():
+            return (e.expr,)
+        case And() | Or() | ListLit():
+            return e.items
+        case Literal() | AttrRef() | VarRef() | Exists():
+            return ()
+        case _:
+            assert_never(e)
+
+
 def effect_atoms(formula: Formula | None) -> Iterator[Formula]:
     """The atoms an effect formula applies (links, node edits, ...), found through not, and, or,
     forall, exists and the THEN of a when (a when's condition is read, not applied)."""
     stack: list[Formula] = [formula] if formula is not None else []
     while stack:
         f = stack.pop()
-        if isinstance(f, FNot):
-            stack.append(f.body)
-        elif isinstance(f, (FAnd, FOr)):
-            stack.extend(f.items)
-        elif isinstance(f, (FForall, FExists)):
-            stack.append(f.body)
-        elif isinstance(f, FWhen):
-            stack.append(f.then)
-        else:
-            yield f
+        match f:
+            case FNot():
+                stack.append(f.body)
+            case FAnd() | FOr():
+                stack.extend(f.items)
+            case FForall() | FExists():
+                stack.append(f.body)
+            case FWhen():
+                stack.append(f.then)
+            case FLink() | FSame() | FCreate() | FDelete() | FRetype():
+                yield f
+            case _:
+                assert_never(f)
 
 
 # --------------------------------------------------------------------------- patterns

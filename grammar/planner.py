@@ -22,11 +22,10 @@ expanded there is no plan; a later step that cannot be expanded yet keeps ``expa
 
 from __future__ import annotations
 
-import heapq
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Union
+from typing import Union, cast
 
 import networkx as nx
 
@@ -35,9 +34,10 @@ from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
 from grammar.heuristics import Heuristic, RoomDistanceHeuristic, zero_heuristic
 from grammar.matcher import Bindings, CompiledPattern, MatchBudgetExceeded, Matcher, Reader
-from grammar.model import Grammar, Pattern, PatternNode, Rule, Target
+from grammar.model import FCreate, Grammar, Pattern, PatternNode, Rule, Target, effect_atoms
 from grammar.relevance import condition_reads, drop_useless_removers, relevant_rules
 from grammar.rewrite import apply_rule
+from grammar.search import SearchResult, astar
 from grammar.world import State, World
 
 DEFAULT_MAX_EXPANSIONS = 20_000
@@ -46,6 +46,12 @@ DEFAULT_MAX_EXPANSIONS = 20_000
 # margin; the floor lets the first expansions of a small bound match a large world.
 MATCH_TRIES_PER_EXPANSION = 250
 MIN_MATCH_BUDGET = 100_000
+MAX_STATE_SIZE = 1_000_000
+"""Bound on the facts (a state's links, nodes and attributes that differ from the world, plus one
+per state) that one search keeps: about 250 MB (measured: 242 MB peak for the whole process).
+Without it a rule that creates a node every time it applies made the kept states grow with the
+square of the expansions (3.8 GB at the default 20,000). For scale, the object mission on 200 rooms
+(tools/bench_planner_symbolic.py) keeps 2,660 facts, about 6 per expansion."""
 
 
 @dataclass(frozen=True)
@@ -130,6 +136,45 @@ class _Compiled:
     reader: Reader  # what decides its matches (relevance.condition_reads)
 
 
+def state_size(state: State) -> int:
+    """The facts a search state holds beyond the world it overlays (plus one for the state): what
+    its memory grows with (its overlay and the indexes built on it)."""
+    ov = state.overlay
+    return (1 + len(ov.added) + len(ov.removed) + len(ov.created) + len(ov.deleted) + len(ov.retyped)
+            + len(ov.attrs) + len(ov.activated))
+
+
+class _PlanTask:
+    """The planning problem as search.py sees it: states of the symbolic graph, one action per
+    (rule, bindings) application, the target's match as the goal's witness."""
+
+    def __init__(self, planner: Planner, target: Target, rules: list[_Compiled], start: State) -> None:
+        self.planner, self.target, self.rules, self.start = planner, target, rules, start
+        self.goal_pattern = planner.matcher.compile(target.pattern)
+
+    def initial(self) -> State:
+        return self.start
+
+    def goal(self, state: State) -> Bindings | None:
+        return self.planner.target_match(self.target, self.goal_pattern, state)
+
+    def successors(self, state: State) -> Iterator[tuple[tuple[Rule, Bindings], State, float]]:
+        for rule, b, nxt in self.planner.applications(state, self.rules):
+            yield (rule, b), nxt, rule.cost
+
+    size = staticmethod(state_size)
+
+
+def _size_limit_reason(limit: int, expanded: int, rules: list[Rule]) -> str:
+    """Why a search that filled its memory bound stopped, in the grammar's words."""
+    growing = [r.name for r in rules if r.created_nodes or any(isinstance(a, FCreate) for a in effect_atoms(r.effect))]
+    why = (f"rules {', '.join(growing[:5])} create nodes each time they apply, so the world keeps growing"
+           if growing else "the rules keep producing new, larger worlds")
+    return (f"the search stopped after {expanded} expansions: the worlds it had to remember reached "
+            f"{limit:,} facts (the memory bound, docs/limits.md) before the target matched; {why} "
+            f"and the target is probably unreachable: check the target and those rules")
+
+
 class Planner:
     """Plans on one world with one grammar; reuse it to plan several targets on the same world.
     ``exclude`` names rules not to use (the hierarchical rules being expanded)."""
@@ -204,17 +249,19 @@ class Planner:
     # ------------------------------------------------------------------ search
     def plan(self, target: Target, *, max_expansions: int = DEFAULT_MAX_EXPANSIONS,
              heuristic: str | Callable[[State], float] = "auto", prune: bool = True,
-             start: State | None = None, expand: bool = True, diagnose: bool = True) -> PlanResult:
-        """A* from the world (or from ``start``) to ``target``. ``prune`` drops rules irrelevant
-        to the target (relevance.py: same reachability and optimal cost, far fewer states);
-        ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search."""
+             start: State | None = None, expand: bool = True, diagnose: bool = True,
+             max_state_size: int = MAX_STATE_SIZE) -> PlanResult:
+        """A* (search.py) from the world (or from ``start``) to ``target``. ``prune`` drops rules
+        irrelevant to the target (relevance.py: same reachability and optimal cost, far fewer
+        states); ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search
+        (diagnosis.py); ``max_state_size`` bounds the facts the search keeps (docs/limits.md)."""
         if max_expansions < 1:
             raise PlanningError(f"max_expansions must be >= 1, got {max_expansions}")
         # The expansion bound also bounds matching, which can be exponential within one expansion.
         budget = max(MIN_MATCH_BUDGET, max_expansions * MATCH_TRIES_PER_EXPANSION)
         self.matcher.budget = budget
         try:
-            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose)
+            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose, max_state_size)
         except MatchBudgetExceeded:
             return NoPlan(f"expansion limit of {max_expansions} reached while matching patterns ({budget:,} candidate "
                           "nodes tried, the bound that limit sets on matching); the target or a rule matches the "
@@ -223,7 +270,7 @@ class Planner:
             self.matcher.budget = None
 
     def _plan(self, target: Target, max_expansions: int, heuristic: str | Callable[[State], float], prune: bool,
-              start: State | None, expand: bool, diagnose: bool) -> PlanResult:
+              start: State | None, expand: bool, diagnose: bool, max_state_size: int) -> PlanResult:
         start = start if start is not None else self.world.initial_state()
         missing = self._missing_constants(target, start)
         if missing:
@@ -231,59 +278,34 @@ class Planner:
         problem = type_problem(self, target, start)
         if problem is not None:
             return NoPlan(problem.summary, diagnosis=problem)
-        goal = self.matcher.compile(target.pattern)
-        rules = self.rules
-        if prune:
-            relevant = relevant_rules([c.rule for c in self.rules], target, self.grammar.types)
-            keep = {rule.name for rule in drop_useless_removers(relevant, target, self.grammar.types)}
-            rules = [c for c in self.rules if c.rule.name in keep]
+        rules = self._relevant(target) if prune else self.rules
         h = self._heuristic(heuristic, target, start, rules)
-
-        h0 = h(start)
-        if h0 == math.inf:
+        if h(start) == math.inf:
             return NoPlan("the target is unreachable: no chain of adjacency links leads the robot "
                           "to the room the target needs")
-        counter = 0
-        queue: list[tuple[float, float, int, State]] = [(h0, h0, counter, start)]
-        best_g: dict[State, float] = {start: 0.0}
-        parent: dict[State, tuple[State, Rule, Bindings]] = {}
-        closed: set[State] = set()
-        order: list[State] = []  # closed states in expansion order (for a deterministic diagnosis)
-        expanded = generated = 0
-        while queue:
-            f, h_value, _, state = heapq.heappop(queue)
-            if state in closed:
-                continue
-            g = best_g[state]
-            match = self.target_match(target, goal, state)
-            if match is not None:
-                return self._reconstruct(state, parent, g, match, expanded, generated, target, expand)
-            if expanded >= max_expansions:
-                return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
-                              expanded, generated)
-            closed.add(state)
-            if diagnose and len(order) < MAX_STATES:
-                order.append(state)
-            expanded += 1
-            for rule, b, nxt in self.applications(state, rules):
-                generated += 1
-                if nxt in closed:
-                    continue
-                g2 = g + rule.cost
-                if g2 >= best_g.get(nxt, math.inf):
-                    continue
-                h2 = h(nxt)
-                if h2 == math.inf:
-                    continue
-                best_g[nxt] = g2
-                parent[nxt] = (state, rule, b)
-                counter += 1
-                heapq.heappush(queue, (g2 + h2, h2, counter, nxt))
+        task = _PlanTask(self, target, rules, start)
+        result = astar(task, h, max_expansions=max_expansions, max_size=max_state_size,
+                       record=MAX_STATES if diagnose else 0)
+        expanded, generated = result.expanded, result.generated
+        if result.found:
+            return self._reconstruct(result, target, expand)
+        if result.outcome == "expansion_limit":
+            return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
+                          expanded, generated)
+        if result.outcome == "size_limit":
+            return NoPlan(_size_limit_reason(max_state_size, expanded, [c.rule for c in rules]),
+                          expanded, generated)
         reason = f"no sequence of rules reaches the target (all {expanded} reachable states searched)"
-        diagnosis = explain(self, target, order, [c.rule for c in rules]) if diagnose else None
+        diagnosis = explain(self, target, list(result.closed), [c.rule for c in rules]) if diagnose else None
         if diagnosis is not None and diagnosis.blockers:
             reason += f"; blocked: {diagnosis.blockers[0]}"
         return NoPlan(reason, expanded, generated, diagnosis)
+
+    def _relevant(self, target: Target) -> list[_Compiled]:
+        """The rules that can matter for ``target`` (relevance.py), in file order."""
+        relevant = relevant_rules([c.rule for c in self.rules], target, self.grammar.types)
+        keep = {rule.name for rule in drop_useless_removers(relevant, target, self.grammar.types)}
+        return [c for c in self.rules if c.rule.name in keep]
 
     def _heuristic(self, heuristic: str | Callable[[State], float], target: Target, start: State,
                    rules: list[_Compiled]) -> Heuristic:
@@ -296,19 +318,15 @@ class Planner:
             return derived if derived is not None else zero_heuristic
         raise PlanningError(f"unknown heuristic {heuristic!r} (use 'auto', 'zero' or a function)")
 
-    def _reconstruct(self, state: State, parent: dict[State, tuple[State, Rule, Bindings]], cost: float,
-                     match: Bindings, expanded: int, generated: int, target: Target, expand: bool
-                     ) -> PlanResult:
-        chain: list[tuple[State, Rule, Bindings, State]] = []
-        final = state
-        while state in parent:
-            before, rule, b = parent[state]
-            chain.append((before, rule, b, state))
-            state = before
-        chain.reverse()
+    def _reconstruct(self, result: SearchResult[State, tuple[Rule, Bindings]], target: Target,
+                     expand: bool) -> PlanResult:
+        expanded, generated = result.expanded, result.generated
+        final = cast(State, result.goal)  # set when the search found the target
+        match = cast(Bindings, result.witness)  # what _PlanTask.goal returns
         ids = _AgmIds(self.world)
         steps: list[PlanStep] = []
-        for index, (before, rule, b, after) in enumerate(chain):
+        for index, found in enumerate(result.path):
+            before, (rule, b), after = found.before, found.action, found.after
             names = {var: (before.name_of(n) if before.exists(n) else after.name_of(n)) for var, n in b.items()}
             agm = ids.step(rule, b, before, after)
             step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm)
@@ -323,7 +341,7 @@ class Planner:
                     step = replace(step, expansion=sub)
             steps.append(step)
         target_names = {var: final.name_of(n) for var, n in match.items()}
-        return Plan(tuple(steps), cost, expanded, generated, target_names, final)
+        return Plan(tuple(steps), result.cost, expanded, generated, target_names, final)
 
     def _expand(self, rule: Rule, bindings: Bindings, before: State) -> PlanResult:
         """Plan the right-hand side of hierarchical ``rule`` from ``before``, its left-hand nodes

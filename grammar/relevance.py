@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import assert_never
 
 from grammar.model import (
     ANY_TYPE,
@@ -41,12 +42,14 @@ from grammar.model import (
     FSame,
     FWhen,
     ListLit,
+    Literal,
     Not,
     Or,
     Pattern,
     Rule,
     Target,
     TypeTable,
+    VarRef,
     effect_atoms,
 )
 
@@ -97,18 +100,23 @@ def _pattern_scope(pattern: Pattern, scope: Mapping[str, str]) -> dict[str, str]
 
 
 def _expr_reads(expr: Expr, out: _Reads, scope: Mapping[str, str]) -> None:
-    if isinstance(expr, AttrRef):
-        out.attrs.add(expr.attr)
-    elif isinstance(expr, Compare):
-        _expr_reads(expr.left, out, scope)
-        _expr_reads(expr.right, out, scope)
-    elif isinstance(expr, Not):
-        _expr_reads(expr.expr, out, scope)
-    elif isinstance(expr, (And, Or, ListLit)):
-        for item in expr.items:
-            _expr_reads(item, out, scope)
-    elif isinstance(expr, Exists):
-        _pattern_reads(expr.pattern, out, scope)
+    match expr:
+        case AttrRef():
+            out.attrs.add(expr.attr)
+        case Compare():
+            _expr_reads(expr.left, out, scope)
+            _expr_reads(expr.right, out, scope)
+        case Not():
+            _expr_reads(expr.expr, out, scope)
+        case And() | Or() | ListLit():
+            for item in expr.items:
+                _expr_reads(item, out, scope)
+        case Exists():
+            _pattern_reads(expr.pattern, out, scope)
+        case Literal() | VarRef():
+            pass
+        case _:
+            assert_never(expr)
 
 
 def _pattern_reads(pattern: Pattern, out: _Reads, scope: Mapping[str, str]) -> None:
@@ -124,58 +132,64 @@ def _pattern_reads(pattern: Pattern, out: _Reads, scope: Mapping[str, str]) -> N
 
 def _formula_reads(formula: Formula | None, out: _Reads, scope: Mapping[str, str]) -> None:
     """Links read by a formula used as a condition."""
-    if formula is None:
-        return
-    if isinstance(formula, FLink):
-        out.links.update(_typed(formula.label, formula.src, formula.dst, scope))
-    elif isinstance(formula, FNot):
-        _formula_reads(formula.body, out, scope)
-    elif isinstance(formula, (FAnd, FOr)):
-        for item in formula.items:
-            _formula_reads(item, out, scope)
-    elif isinstance(formula, (FExists, FForall)):
-        _formula_reads(formula.body, out, {**scope, **{v.name: v.type for v in formula.vars}})
-    elif isinstance(formula, FWhen):
-        _formula_reads(formula.condition, out, scope)
-        _formula_reads(formula.then, out, scope)
-    elif isinstance(formula, FSame):
-        pass
+    match formula:
+        case None | FSame() | FCreate() | FDelete() | FRetype():
+            pass
+        case FLink():
+            out.links.update(_typed(formula.label, formula.src, formula.dst, scope))
+        case FNot():
+            _formula_reads(formula.body, out, scope)
+        case FAnd() | FOr():
+            for item in formula.items:
+                _formula_reads(item, out, scope)
+        case FExists() | FForall():
+            _formula_reads(formula.body, out, {**scope, **{v.name: v.type for v in formula.vars}})
+        case FWhen():
+            _formula_reads(formula.condition, out, scope)
+            _formula_reads(formula.then, out, scope)
+        case _:
+            assert_never(formula)
 
 
 def _effect_changes(formula: Formula | None, scope: Mapping[str, str]) -> set[TypedLink]:
     """Links an effect formula adds or removes (outside when-conditions)."""
-    if formula is None:
-        return set()
-    if isinstance(formula, FLink):
-        return set(_typed(formula.label, formula.src, formula.dst, scope))
-    if isinstance(formula, FNot):
-        return _effect_changes(formula.body, scope)
-    if isinstance(formula, FAnd):
-        out: set[TypedLink] = set()
-        for item in formula.items:
-            out |= _effect_changes(item, scope)
-        return out
-    if isinstance(formula, FForall):
-        return _effect_changes(formula.body, {**scope, **{v.name: v.type for v in formula.vars}})
-    if isinstance(formula, FWhen):
-        return _effect_changes(formula.then, scope)
-    return set()
+    match formula:
+        case FLink():
+            return set(_typed(formula.label, formula.src, formula.dst, scope))
+        case FNot():
+            return _effect_changes(formula.body, scope)
+        case FAnd():
+            out: set[TypedLink] = set()
+            for item in formula.items:
+                out |= _effect_changes(item, scope)
+            return out
+        case FForall():
+            return _effect_changes(formula.body, {**scope, **{v.name: v.type for v in formula.vars}})
+        case FWhen():
+            return _effect_changes(formula.then, scope)
+        case None | FOr() | FExists() | FSame() | FCreate() | FDelete() | FRetype():
+            return set()  # no link changes (node edits are handled by _edits_nodes)
+        case _:
+            assert_never(formula)
 
 
 def _effect_reads(formula: Formula | None, relevant: _Reads, types: _Types, out: _Reads,
                   scope: Mapping[str, str]) -> None:
     """Links read by the when-conditions of an effect whose branches change relevant links."""
-    if formula is None:
-        return
-    if isinstance(formula, FAnd):
-        for item in formula.items:
-            _effect_reads(item, relevant, types, out, scope)
-    elif isinstance(formula, FForall):
-        _effect_reads(formula.body, relevant, types, out, {**scope, **{v.name: v.type for v in formula.vars}})
-    elif isinstance(formula, FWhen):
-        if _touches(_effect_changes(formula.then, scope), relevant.links, types):
-            _formula_reads(formula.condition, out, scope)
-        _effect_reads(formula.then, relevant, types, out, scope)
+    match formula:
+        case FAnd():
+            for item in formula.items:
+                _effect_reads(item, relevant, types, out, scope)
+        case FForall():
+            _effect_reads(formula.body, relevant, types, out, {**scope, **{v.name: v.type for v in formula.vars}})
+        case FWhen():
+            if _touches(_effect_changes(formula.then, scope), relevant.links, types):
+                _formula_reads(formula.condition, out, scope)
+            _effect_reads(formula.then, relevant, types, out, scope)
+        case None | FLink() | FNot() | FOr() | FExists() | FSame() | FCreate() | FDelete() | FRetype():
+            pass  # no when-condition below
+        case _:
+            assert_never(formula)
 
 
 def _touches(changes: Iterable[TypedLink], reads: Iterable[TypedLink], types: _Types) -> bool:
@@ -282,19 +296,25 @@ def condition_reads(rule: Rule) -> tuple[frozenset[TypedLink], frozenset[str]]:
 
 def _is_clear(formula: FWhen) -> bool:
     """``(when (L a b) (not (L a b)))``: removes the link whether or not it was there."""
-    c, t = formula.condition, formula.then
-    return isinstance(c, FLink) and isinstance(t, FNot) and isinstance(t.body, FLink) and \
-        (c.label, c.src, c.dst) == (t.body.label, t.body.src, t.body.dst)
+    match formula.condition, formula.then:
+        case FLink() as c, FNot(body=FLink() as t):
+            return (c.label, c.src, c.dst) == (t.label, t.src, t.dst)
+    return False
 
 
 def _negative_expr(expr: Expr, negative: bool, out: set[TypedLink], scope: Mapping[str, str]) -> None:
-    if isinstance(expr, Not):
-        _negative_expr(expr.expr, not negative, out, scope)
-    elif isinstance(expr, (And, Or)):
-        for item in expr.items:
-            _negative_expr(item, negative, out, scope)
-    elif isinstance(expr, Exists):
-        _negative_pattern(expr.pattern, negative, out, scope)
+    match expr:
+        case Not():
+            _negative_expr(expr.expr, not negative, out, scope)
+        case And() | Or():
+            for item in expr.items:
+                _negative_expr(item, negative, out, scope)
+        case Exists():
+            _negative_pattern(expr.pattern, negative, out, scope)
+        case Literal() | ListLit() | AttrRef() | VarRef() | Compare():
+            pass  # reads no link
+        case _:
+            assert_never(expr)
 
 
 def _negative_pattern(pattern: Pattern, negative: bool, out: set[TypedLink], scope: Mapping[str, str],
@@ -313,38 +333,44 @@ def _negative_pattern(pattern: Pattern, negative: bool, out: set[TypedLink], sco
 
 
 def _negative_formula(formula: Formula | None, negative: bool, out: set[TypedLink], scope: Mapping[str, str]) -> None:
-    if formula is None:
-        return
-    if isinstance(formula, FLink):
-        if negative:
-            out.update(_typed(formula.label, formula.src, formula.dst, scope))
-    elif isinstance(formula, FNot):
-        _negative_formula(formula.body, not negative, out, scope)
-    elif isinstance(formula, (FAnd, FOr)):
-        for item in formula.items:
-            _negative_formula(item, negative, out, scope)
-    elif isinstance(formula, (FExists, FForall)):
-        _negative_formula(formula.body, negative, out, {**scope, **{v.name: v.type for v in formula.vars}})
-    elif isinstance(formula, FWhen):
-        _negative_formula(formula.condition, not negative, out, scope)
-        _negative_formula(formula.then, negative, out, scope)
+    match formula:
+        case FLink():
+            if negative:
+                out.update(_typed(formula.label, formula.src, formula.dst, scope))
+        case FNot():
+            _negative_formula(formula.body, not negative, out, scope)
+        case FAnd() | FOr():
+            for item in formula.items:
+                _negative_formula(item, negative, out, scope)
+        case FExists() | FForall():
+            _negative_formula(formula.body, negative, out, {**scope, **{v.name: v.type for v in formula.vars}})
+        case FWhen():
+            _negative_formula(formula.condition, not negative, out, scope)
+            _negative_formula(formula.then, negative, out, scope)
+        case None | FSame() | FCreate() | FDelete() | FRetype():
+            pass
+        case _:
+            assert_never(formula)
 
 
 def _effect_condition_reads(formula: Formula | None, out: set[TypedLink], scope: Mapping[str, str]) -> None:
     """Links read by an effect's when-conditions, unconditional clears excepted (both polarities)."""
-    if formula is None:
-        return
-    if isinstance(formula, FAnd):
-        for item in formula.items:
-            _effect_condition_reads(item, out, scope)
-    elif isinstance(formula, FForall):
-        _effect_condition_reads(formula.body, out, {**scope, **{v.name: v.type for v in formula.vars}})
-    elif isinstance(formula, FWhen):
-        if not _is_clear(formula):
-            reads = _Reads()
-            _formula_reads(formula.condition, reads, scope)
-            out.update(reads.links)
-        _effect_condition_reads(formula.then, out, scope)
+    match formula:
+        case FAnd():
+            for item in formula.items:
+                _effect_condition_reads(item, out, scope)
+        case FForall():
+            _effect_condition_reads(formula.body, out, {**scope, **{v.name: v.type for v in formula.vars}})
+        case FWhen():
+            if not _is_clear(formula):
+                reads = _Reads()
+                _formula_reads(formula.condition, reads, scope)
+                out.update(reads.links)
+            _effect_condition_reads(formula.then, out, scope)
+        case None | FLink() | FNot() | FOr() | FExists() | FSame() | FCreate() | FDelete() | FRetype():
+            pass  # no when-condition below
+        case _:
+            assert_never(formula)
 
 
 def _effect_edits(formula: Formula | None, scope: Mapping[str, str]) -> tuple[set[TypedLink], set[TypedLink]]:
@@ -354,18 +380,21 @@ def _effect_edits(formula: Formula | None, scope: Mapping[str, str]) -> tuple[se
     stack: list[tuple[Formula, Mapping[str, str]]] = [(formula, scope)] if formula is not None else []
     while stack:
         f, sc = stack.pop()
-        if isinstance(f, FLink):
-            adds.update(_typed(f.label, f.src, f.dst, sc))
-        elif isinstance(f, FNot) and isinstance(f.body, FLink):
-            removes.update(_typed(f.body.label, f.body.src, f.body.dst, sc))
-        elif isinstance(f, FAnd):
-            stack.extend((item, sc) for item in f.items)
-        elif isinstance(f, FForall):
-            stack.append((f.body, {**sc, **{v.name: v.type for v in f.vars}}))
-        elif isinstance(f, FWhen):
-            stack.append((f.then, sc))
-        else:  # anything else: count it as an unknown addition
-            adds.add((ANY_TYPE, ANY_TYPE, ANY_TYPE))
+        match f:
+            case FLink():
+                adds.update(_typed(f.label, f.src, f.dst, sc))
+            case FNot(body=FLink() as link):
+                removes.update(_typed(link.label, link.src, link.dst, sc))
+            case FAnd():
+                stack.extend((item, sc) for item in f.items)
+            case FForall():
+                stack.append((f.body, {**sc, **{v.name: v.type for v in f.vars}}))
+            case FWhen():
+                stack.append((f.then, sc))
+            case FNot() | FOr() | FExists() | FSame() | FCreate() | FDelete() | FRetype():
+                adds.add((ANY_TYPE, ANY_TYPE, ANY_TYPE))  # count it as an unknown addition
+            case _:
+                assert_never(f)
     return adds, removes
 
 

@@ -8,6 +8,8 @@ AGM's prefix form for formulas; it is for reading, not guaranteed to re-parse by
 
 from __future__ import annotations
 
+from typing import assert_never
+
 from grammar.model import (
     And,
     AttrRef,
@@ -61,28 +63,31 @@ def expr_text(expr: Expr) -> str:
 
 
 def _expr(expr: Expr, top: bool = False) -> str:
-    if isinstance(expr, Literal):
-        return value_text(expr.value)
-    if isinstance(expr, ListLit):
-        return "[" + ", ".join(_expr(e) for e in expr.items) + "]"
-    if isinstance(expr, AttrRef):
-        return expr.attr if expr.var is None else f"{expr.var}.{expr.attr}"
-    if isinstance(expr, VarRef):
-        return expr.var
-    if isinstance(expr, Compare):
-        return f"{_expr(expr.left)} {expr.op} {_expr(expr.right)}"
-    if isinstance(expr, Not):
-        inner = expr.expr
-        if isinstance(inner, Exists):
+    match expr:
+        case Literal():
+            return value_text(expr.value)
+        case ListLit():
+            return "[" + ", ".join(_expr(e) for e in expr.items) + "]"
+        case AttrRef():
+            return expr.attr if expr.var is None else f"{expr.var}.{expr.attr}"
+        case VarRef():
+            return expr.var
+        case Compare():
+            return f"{_expr(expr.left)} {expr.op} {_expr(expr.right)}"
+        case Not(expr=Exists() as inner):
             return "not " + _expr(inner)
-        return "not " + (_expr(inner) if isinstance(inner, (AttrRef, VarRef, Literal)) else f"({_expr(inner)})")
-    if isinstance(expr, (And, Or)):
-        word = " and " if isinstance(expr, And) else " or "
-        text = word.join(_expr(e) for e in expr.items)
-        return text if top else f"({text})"
-    if isinstance(expr, Exists):
-        return "exists { " + pattern_text(expr.pattern) + " }"
-    return repr(expr)
+        case Not(expr=AttrRef() | VarRef() | Literal() as inner):
+            return "not " + _expr(inner)
+        case Not():
+            return f"not ({_expr(expr.expr)})"
+        case And() | Or():
+            word = " and " if isinstance(expr, And) else " or "
+            text = word.join(_expr(e) for e in expr.items)
+            return text if top else f"({text})"
+        case Exists():
+            return "exists { " + pattern_text(expr.pattern) + " }"
+        case _:
+            assert_never(expr)
 
 
 def node_text(node: PatternNode) -> str:
@@ -107,26 +112,28 @@ def formula_text(formula: Formula) -> str:
 
 
 def _formula(f: Formula) -> str:
-    if isinstance(f, FLink):
-        return f"({f.label} {f.src} {f.dst})"
-    if isinstance(f, FSame):
-        return f"(= {f.a} {f.b})"
-    if isinstance(f, FNot):
-        return f"(not {_formula(f.body)})"
-    if isinstance(f, FAnd):
-        return "(and " + " ".join(_formula(i) for i in f.items) + ")"
-    if isinstance(f, FOr):
-        return "(or " + " ".join(_formula(i) for i in f.items) + ")"
-    if isinstance(f, (FExists, FForall)):
-        word = "exists" if isinstance(f, FExists) else "forall"
-        decls = " ".join(f"{v.name}:{v.type}" for v in f.vars)
-        return f"({word} {decls} {_formula(f.body)})"
-    if isinstance(f, FWhen):
-        return f"(when {_formula(f.condition)} {_formula(f.then)})"
-    if isinstance(f, FCreate):
-        return f"(create {f.var} {f.type})"
-    if isinstance(f, FDelete):
-        return f"(delete {f.var})"
-    if isinstance(f, FRetype):
-        return f"(retype {f.var} {f.type})"
-    return repr(f)
+    match f:
+        case FLink():
+            return f"({f.label} {f.src} {f.dst})"
+        case FSame():
+            return f"(= {f.a} {f.b})"
+        case FNot():
+            return f"(not {_formula(f.body)})"
+        case FAnd():
+            return "(and " + " ".join(_formula(i) for i in f.items) + ")"
+        case FOr():
+            return "(or " + " ".join(_formula(i) for i in f.items) + ")"
+        case FExists() | FForall():
+            word = "exists" if isinstance(f, FExists) else "forall"
+            decls = " ".join(f"{v.name}:{v.type}" for v in f.vars)
+            return f"({word} {decls} {_formula(f.body)})"
+        case FWhen():
+            return f"(when {_formula(f.condition)} {_formula(f.then)})"
+        case FCreate():
+            return f"(create {f.var} {f.type})"
+        case FDelete():
+            return f"(delete {f.var})"
+        case FRetype():
+            return f"(retype {f.var} {f.type})"
+        case _:
+            assert_never(f)

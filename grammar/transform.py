@@ -8,7 +8,7 @@ Only local, syntactic decisions are made here; cross-references are checked in v
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Any, assert_never
 
 from lark import Token, Transformer, v_args
 
@@ -139,19 +139,23 @@ def _number(text: str) -> int | float:
 
 def _own_attrs(expr: Expr) -> Expr:
     """Inside ``[...]`` a bare name is an attribute of the node/link the block is written on."""
-    if isinstance(expr, VarRef):
-        return AttrRef(None, expr.var, expr.pos)
-    if isinstance(expr, Compare):
-        return Compare(expr.op, _own_attrs(expr.left), _own_attrs(expr.right))
-    if isinstance(expr, Not):
-        return Not(_own_attrs(expr.expr))
-    if isinstance(expr, And):
-        return And(tuple(_own_attrs(e) for e in expr.items))
-    if isinstance(expr, Or):
-        return Or(tuple(_own_attrs(e) for e in expr.items))
-    if isinstance(expr, ListLit):
-        return ListLit(tuple(_own_attrs(e) for e in expr.items))
-    return expr  # Literal, AttrRef, Exists (its own blocks were converted where written)
+    match expr:
+        case VarRef():
+            return AttrRef(None, expr.var, expr.pos)
+        case Compare():
+            return Compare(expr.op, _own_attrs(expr.left), _own_attrs(expr.right))
+        case Not():
+            return Not(_own_attrs(expr.expr))
+        case And():
+            return And(tuple(_own_attrs(e) for e in expr.items))
+        case Or():
+            return Or(tuple(_own_attrs(e) for e in expr.items))
+        case ListLit():
+            return ListLit(tuple(_own_attrs(e) for e in expr.items))
+        case Literal() | AttrRef() | Exists():
+            return expr  # its own blocks were converted where written
+        case _:
+            assert_never(expr)
 
 
 @v_args(meta=True)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from typing import assert_never
 
 from grammar.errors import GrammarError, SourcePos, shorten
 from grammar.model import (
@@ -32,12 +33,15 @@ from grammar.model import (
     FWhen,
     Grammar,
     ListLit,
+    Literal,
     Not,
     Or,
     Pattern,
     Rule,
     Target,
     VarRef,
+    expr_children,
+    formula_children,
 )
 
 
@@ -74,25 +78,27 @@ def check_pattern(pattern: Pattern, scope: frozenset[str], where: str, *, allow_
 
 def check_expr(expr: Expr, scope: frozenset[str], *, fallback: SourcePos | None, own: bool = False) -> None:
     """Every variable an expression reads must be in scope; ``own`` allows bare attribute names."""
-    if isinstance(expr, AttrRef):
-        if expr.var is None:
-            if not own:
-                raise GrammarError.at(expr.pos or fallback, f"attribute {expr.attr!r} of what? write VAR.{expr.attr}")
-        elif expr.var not in scope:
-            raise GrammarError.at(expr.pos or fallback, f"unknown variable {expr.var!r} in {expr.var}.{expr.attr}")
-    elif isinstance(expr, VarRef):
-        if expr.var not in scope:
-            raise GrammarError.at(expr.pos or fallback, f"unknown variable {expr.var!r}")
-    elif isinstance(expr, Compare):
-        check_expr(expr.left, scope, fallback=fallback, own=own)
-        check_expr(expr.right, scope, fallback=fallback, own=own)
-    elif isinstance(expr, Not):
-        check_expr(expr.expr, scope, fallback=fallback, own=own)
-    elif isinstance(expr, (And, Or, ListLit)):
-        for item in expr.items:
-            check_expr(item, scope, fallback=fallback, own=own)
-    elif isinstance(expr, Exists):
-        check_pattern(expr.pattern, scope, "exists", allow_conditions=True, fallback=expr.pos or fallback)
+    match expr:
+        case AttrRef():
+            if expr.var is None:
+                if not own:
+                    raise GrammarError.at(expr.pos or fallback,
+                                          f"attribute {expr.attr!r} of what? write VAR.{expr.attr}")
+            elif expr.var not in scope:
+                raise GrammarError.at(expr.pos or fallback,
+                                      f"unknown variable {expr.var!r} in {expr.var}.{expr.attr}")
+        case VarRef():
+            if expr.var not in scope:
+                raise GrammarError.at(expr.pos or fallback, f"unknown variable {expr.var!r}")
+        case Compare() | Not() | And() | Or() | ListLit():
+            for item in expr_children(expr):
+                check_expr(item, scope, fallback=fallback, own=own)
+        case Exists():
+            check_pattern(expr.pattern, scope, "exists", allow_conditions=True, fallback=expr.pos or fallback)
+        case Literal():
+            pass
+        case _:
+            assert_never(expr)
 
 
 def check_formula(formula: Formula, scope: frozenset[str], *, effect: bool, in_condition: bool,
@@ -106,38 +112,46 @@ def check_formula(formula: Formula, scope: frozenset[str], *, effect: bool, in_c
                 raise GrammarError.at(getattr(formula, "pos", None) or fallback,
                                       f"unknown variable {name!r} in {what} formula")
 
-    if isinstance(formula, FLink):
-        names(formula.src, formula.dst)
-    elif isinstance(formula, FSame):
-        if effect and not in_condition:
-            raise GrammarError.at(formula.pos or fallback, "(= a b) is a test: in an effect it may only "
-                                  "appear inside the condition of a (when ...)")
-        names(formula.a, formula.b)
-    elif isinstance(formula, FNot):
-        if effect and not in_condition and not isinstance(formula.body, FLink):
-            raise GrammarError.at(formula_pos(formula) or fallback, "(not ...) in an effect removes a link: "
-                                  "it must wrap a link atom such as (not (in a b))")
-        check_formula(formula.body, scope, effect=effect, in_condition=in_condition, fallback=fallback)
-    elif isinstance(formula, (FAnd, FOr)):
-        if isinstance(formula, FOr) and effect and not in_condition:
-            raise GrammarError.at(formula_pos(formula) or fallback, "(or ...) has no meaning in an effect "
-                                  "(outside the condition of a (when ...))")
-        for item in formula.items:
-            check_formula(item, scope, effect=effect, in_condition=in_condition, fallback=fallback)
-    elif isinstance(formula, (FExists, FForall)):
-        if isinstance(formula, FExists) and effect and not in_condition:
-            raise GrammarError.at(formula_pos(formula) or fallback, "(exists ...) has no meaning in an effect")
-        inner = scope | frozenset(v.name for v in formula.vars)
-        check_formula(formula.body, inner, effect=effect, in_condition=in_condition, fallback=fallback)
-    elif isinstance(formula, FWhen):
-        check_formula(formula.condition, scope, effect=effect, in_condition=True, fallback=fallback)
-        check_formula(formula.then, scope, effect=effect, in_condition=in_condition, fallback=fallback)
-    elif isinstance(formula, (FCreate, FDelete, FRetype)):
-        if not effect or in_condition:
-            raise GrammarError.at(formula.pos or fallback, f"({type(formula).__name__[1:].lower()} ...) "
-                                  "changes the graph: it is only allowed in an effect")
-        if not isinstance(formula, FCreate):
+    problem = _misplaced(formula, effect_place=effect and not in_condition)
+    if problem is not None:
+        raise GrammarError.at(formula_pos(formula) or fallback, problem)
+    match formula:
+        case FLink():
+            names(formula.src, formula.dst)
+        case FSame():
+            names(formula.a, formula.b)
+        case FDelete() | FRetype():
             names(formula.var)
+        case FCreate():
+            pass  # introduces its variable (see _created_in)
+        case FExists() | FForall():
+            inner = scope | frozenset(v.name for v in formula.vars)
+            check_formula(formula.body, inner, effect=effect, in_condition=in_condition, fallback=fallback)
+        case FWhen():
+            check_formula(formula.condition, scope, effect=effect, in_condition=True, fallback=fallback)
+            check_formula(formula.then, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+        case FNot() | FAnd() | FOr():
+            for item in formula_children(formula):
+                check_formula(item, scope, effect=effect, in_condition=in_condition, fallback=fallback)
+        case _:
+            assert_never(formula)
+
+
+def _misplaced(formula: Formula, *, effect_place: bool) -> str | None:
+    """Why ``formula`` has no meaning where it is written (an effect, or a condition), or None:
+    AGM gives tests no meaning in effects and graph edits none in conditions."""
+    match formula:
+        case FSame() if effect_place:
+            return "(= a b) is a test: in an effect it may only appear inside the condition of a (when ...)"
+        case FNot(body=body) if effect_place and not isinstance(body, FLink):
+            return "(not ...) in an effect removes a link: it must wrap a link atom such as (not (in a b))"
+        case FOr() if effect_place:
+            return "(or ...) has no meaning in an effect (outside the condition of a (when ...))"
+        case FExists() if effect_place:
+            return "(exists ...) has no meaning in an effect"
+        case FCreate() | FDelete() | FRetype() if not effect_place:
+            return f"({type(formula).__name__[1:].lower()} ...) changes the graph: it is only allowed in an effect"
+    return None
 
 
 def formula_pos(formula: Formula) -> SourcePos | None:
@@ -145,12 +159,8 @@ def formula_pos(formula: Formula) -> SourcePos | None:
     pos = getattr(formula, "pos", None)
     if pos is not None:
         return pos
-    for attr in ("body", "condition", "then"):
-        inner = getattr(formula, attr, None)
-        if inner is not None:
-            return formula_pos(inner)
-    items = getattr(formula, "items", None)
-    return formula_pos(items[0]) if items else None
+    children = formula_children(formula)
+    return formula_pos(children[0]) if children else None
 
 
 def _created_in(formula: Formula | None) -> set[str]:
@@ -160,12 +170,8 @@ def _created_in(formula: Formula | None) -> set[str]:
     if isinstance(formula, FCreate):
         return {formula.var}
     out: set[str] = set()
-    for attr in ("body", "condition", "then"):
-        inner = getattr(formula, attr, None)
-        if inner is not None:
-            out |= _created_in(inner)
-    for item in getattr(formula, "items", ()):
-        out |= _created_in(item)
+    for inner in formula_children(formula):
+        out |= _created_in(inner)
     return out
 
 
@@ -238,26 +244,16 @@ def _types_used(rule: Rule) -> Iterator[tuple[str, SourcePos | None]]:
             expr = exprs.pop()
             if isinstance(expr, Exists):
                 patterns.append(expr.pattern)
-            elif isinstance(expr, Compare):
-                exprs.extend((expr.left, expr.right))
-            elif isinstance(expr, Not):
-                exprs.append(expr.expr)
-            elif isinstance(expr, (And, Or, ListLit)):
-                exprs.extend(expr.items)
+            exprs.extend(expr_children(expr))
         else:
             formula = formulas.pop()
-            if isinstance(formula, (FExists, FForall)):
-                for decl in formula.vars:
-                    yield decl.type, decl.pos
-                formulas.append(formula.body)
-            elif isinstance(formula, (FCreate, FRetype)):
-                yield formula.type, formula.pos
-            elif isinstance(formula, FNot):
-                formulas.append(formula.body)
-            elif isinstance(formula, (FAnd, FOr)):
-                formulas.extend(formula.items)
-            elif isinstance(formula, FWhen):
-                formulas.extend((formula.condition, formula.then))
+            match formula:
+                case FExists() | FForall():
+                    for decl in formula.vars:
+                        yield decl.type, decl.pos
+                case FCreate() | FRetype():
+                    yield formula.type, formula.pos
+            formulas.extend(formula_children(formula))
 
 
 def check_grammar(grammar: Grammar, *, top_level: bool = True) -> None:

@@ -46,6 +46,7 @@ from shapely.geometry.base import BaseGeometry
 from agents.lib.socialmap.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetrics, PeopleTracks, dynamic_metrics,
                                                   tracks_from_rows)
 from agents.lib.socialmap.metric_catalog import CATALOG, column_label
+from scenes.angles import wrap_angle
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
 
@@ -230,7 +231,7 @@ def cumulative_heading_change(traj: FloatArray) -> float:
     if len(traj) < 2:
         return 0.0
     dtheta = np.diff(traj[:, 3])
-    wrapped = (dtheta + math.pi) % (2.0 * math.pi) - math.pi
+    wrapped = wrap_angle(dtheta)
     return float(np.abs(wrapped).sum())
 
 
