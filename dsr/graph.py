@@ -692,10 +692,14 @@ class DSRGraph:
             top = message.top_hlc
             if top:
                 self.clock.observe(top)
+            # whoever hands a message to apply_message vouches for its writers (the transport
+            # judges a state's table itself and passes none: dsr/transport.py _note_writers)
+            bound, writers = self._bound, self._writers
             for replica, agent in message.writers.items():
-                self._writers.setdefault(int(replica), agent)
-            if message.kind == "delta":
-                self._writers.setdefault(message.replica, message.agent)
+                if int(replica) not in bound:
+                    bound[int(replica)] = writers[int(replica)] = agent
+            if message.kind == "delta" and message.replica not in bound:
+                bound[message.replica] = writers[message.replica] = message.agent
             events: list[Event] = []
             changed = 0
             nodes, edges = self._nodes, self._edges
@@ -792,11 +796,28 @@ class DSRGraph:
         return self._bound.get(replica)
 
     def note_writer(self, replica: int, agent: str) -> None:
-        """Record a first-hand binding replica id -> agent."""
+        """Record a first-hand binding replica id -> agent (it replaces a relayed one: what
+        the agent's own key says beats what a relay said)."""
         if self._bound.get(replica) != agent:
             with self._lock:
-                self._bound.setdefault(replica, agent)
+                if replica not in self._bound:
+                    self._bound[replica] = agent
+                    self._writers[replica] = agent
+
+    def note_relayed_writer(self, replica: int, agent: str) -> None:
+        """Record a binding only relayed by another member's state (an agent that is not
+        running): used to attribute that replica's writes to the write policy, never served
+        in this replica's own state replies (it proves nothing: dsr/state_trust.py)."""
+        if replica not in self._writers:
+            with self._lock:
                 self._writers.setdefault(replica, agent)
+
+    def served_writers(self) -> dict[int, str]:
+        """The `writers` table of this replica's state replies: only bindings it can prove
+        (first-hand, vouched for by the agent itself, or taken from the state it joined
+        with), never a claim it merely relayed or deferred."""
+        with self._lock:
+            return dict(self._bound)
 
     def state_message(self, seen: dict[int, int] | None = None) -> bytes:
         """Full CRDT state (uncompacted tombstones included) as a "state" message, stamped
@@ -806,10 +827,10 @@ class DSRGraph:
             cache = self._snapshot_cache
             if cache is not None and cache[0] == self._version:
                 return cache[1]
-            clock = self.clock.last
+            clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             payload = wire.encode(kind="state", graph=self.graph_name, agent=self.agent,
                                   replica=self.replica_id, nodes=self._nodes.items(),
-                                  edges=self._edges.items(), writers=self._writers,
+                                  edges=self._edges.items(), writers=self._bound,
                                   clock=clock, seen={**(seen or {}), self.replica_id: clock})
             self._snapshot_cache = (self._version, payload)
             return payload
@@ -827,9 +848,9 @@ class DSRGraph:
         every change): in a live graph a few elements change between two joins (poses, people)
         while encoding all of them cost a 10k-node join most of its time."""
         with self._lock:
-            clock = self.clock.last
+            clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             node_ids, edge_keys = list(self._nodes), list(self._edges)
-            writers = dict(self._writers)
+            writers = dict(self._bound)
         seen = {**(seen or {}), self.replica_id: clock}
         chunks: list[tuple[list[int], list[EdgeKey]]] = []
         for start in range(0, len(node_ids), per_part):

@@ -79,6 +79,8 @@ class ReplicaStats:
     digests_sent: int = 0
     digests_received: int = 0
     anti_entropy: int = 0       # syncs started because a member's digest showed we lag
+    fetches_postponed: int = 0  # digest-triggered state fetches held back by the rate limit
+    forgeries_about_me: int = 0  # states forging a claim about this agent (answered at once)
     compacted: int = 0          # tombstones forgotten once every member had seen the removal
     tombstones: int = 0         # tombstones held (at the last digest)
 
@@ -148,6 +150,15 @@ class Replica:
         self.member_retention_s = member_retention_s
         #: how long a member must hold writes we lack before we fetch a state for them
         self.lag_grace_s = 4 * digest_interval
+        #: longest pause between two digest-triggered state fetches of one member
+        self.max_fetch_backoff_s = 30.0
+        #: member -> (no digest-triggered fetch before, pause after the next one)
+        self._fetch_backoff: dict[str, tuple[float, float]] = {}
+        #: monotonic clock of the anti-entropy timers (tests replace it)
+        self._now: Callable[[], float] = time.monotonic
+        #: this replica's clock when it started: a replica id stamping later is not one of
+        #: this agent's previous incarnations (state_trust.screen_state)
+        self._born = max(graph.clock.last, time.time_ns() // 1_000_000 << 16)
         self.stats = ReplicaStats()
         self._log_budget = _LogBudget()
         self.session: Any = None
@@ -351,13 +362,13 @@ class Replica:
                                      f"key of {claimed!r}")
         if message.replica == graph.replica_id:
             return "forged_writer", f"forged writer: uses this replica's id {message.replica}"
-        owner = graph.writer_agent(message.replica)
+        owner = graph.bound_agent(message.replica)
         if owner is not None and owner != message.agent:
             return "forged_writer", (f"forged writer: replica id {message.replica} belongs to "
                                      f"agent {owner!r}")
         if kind == "state":
             for replica, agent in message.writers.items():
-                known = graph.writer_agent(int(replica))
+                known = graph.bound_agent(int(replica))
                 if known is not None and known != agent:
                     return "forged_writer", (f"forged writer: state says replica {replica} is "
                                              f"{agent!r}, it is {known!r}")
@@ -478,12 +489,17 @@ class Replica:
             # Anti-entropy: the member holds writes we lack.  Deltas in flight, or a backlog
             # on a loaded machine, look the same for a while: only a lag that lasts
             # lag_grace_s (and at most once per lag_grace_s per writer) fetches a state.
-            now = time.monotonic()
+            now = self._now()
             since = member.behind
             for replica, hlc in message.seen.items():
                 if replica != mine and hlc > self._seen.get(replica, 0) and replica not in since:
                     since[replica] = (hlc, now)
             targets: set[str] = set()
+            if message.agent not in self._vouched:
+                # its own state (this incarnation) is not merged here yet: until it is, its
+                # watermark and its replica ids are unknown here and claims about it are
+                # deferred; fetch it now (also how a member answers a forged claim about it)
+                targets.add(message.agent)
             for replica, (hlc, at) in list(since.items()):
                 if self._seen.get(replica, 0) >= hlc:
                     del since[replica]
@@ -495,11 +511,29 @@ class Replica:
                     targets.add(owner if known is not None and known.live
                                 else message.agent)   # type: ignore[arg-type]
                     since[replica] = (message.seen.get(replica, hlc), now)
+            if not targets and not since:
+                self._fetch_backoff.pop(message.agent, None)    # settled: no debt left
+            targets = {t for t in targets if self._fetch_allowed(t, now)}
             lagging = bool(targets)
         if lagging and not self.graph.read_only:
             self.stats.anti_entropy += 1
             for target in sorted(targets):
                 self._request_sync(target)
+
+    def _fetch_allowed(self, target: str, now: float) -> bool:
+        """Rate limit of the state fetches digests ask for, per member: the first at once,
+        the next ones after a pause that doubles (lag_grace_s, 2x, 4x ... up to
+        max_fetch_backoff_s) while fetching that member does not settle what its digests
+        show (a member whose state is refused, or that keeps announcing writes its state
+        does not carry: `seen` ahead of its state).  Settled (a digest showing nothing we
+        lack) resets it.  So a member costs at most one fetch per change it makes, and a
+        misbehaving one a fetch per max_fetch_backoff_s.  Caller holds _table_lock."""
+        not_before, pause = self._fetch_backoff.get(target, (0.0, self.lag_grace_s))
+        if now < not_before:
+            self.stats.fetches_postponed += 1
+            return False
+        self._fetch_backoff[target] = (now + pause, min(2 * pause, self.max_fetch_backoff_s))
+        return True
 
     def _request_sync(self, agent: str) -> None:
         """Queue a state fetch, once: digests of several members may point at the same one."""
@@ -624,19 +658,18 @@ class Replica:
                     self._reject(key, *problem)
                     return
                 self.graph.note_writer(message.replica, message.agent)
+                live = self.live_agents()
                 if self._joined:
-                    message = self._screen(key, message)
+                    message = self._screen(key, message, live)
                 kept, text = self.policy.review_state(message, self.graph)
                 if text is not None:    # refused whole (kept is None), or in part
                     self._reject(key, "policy", text)
                 if kept is None:
                     return
-                self.graph.apply_message(kept)
-                for replica, agent in kept.writers.items():
-                    # an agent vouches for its own incarnations; the first state of a join
-                    # has nothing to be checked against and is trusted (state_trust.py)
-                    if agent == message.agent or not self._joined:
-                        self.graph.note_writer(int(replica), agent)
+                self._note_writers(message.agent, kept.writers, live)
+                self.graph.apply_message(wire.Decoded(
+                    kept.kind, kept.graph, kept.agent, kept.replica, {}, kept.nodes, kept.edges,
+                    kept.top_hlc))
                 self._note_seen(message)
             self.stats.state_merged += 1
         except WireError as exc:
@@ -644,6 +677,29 @@ class Replica:
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+
+    def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
+        """Which `writers` entries of a merged state this replica takes as its own knowledge
+        (and will serve in its state replies: DSRGraph.served_writers), and which only to
+        attribute relayed writes (dsr/state_trust.py):
+        - the sender's own replica ids (an agent vouches for its incarnations), and ids the
+          screening let through as this agent's previous incarnations: proven;
+        - every entry of the first state of a join: nothing to check it against, trusted
+          (documented limit); except entries about other running agents: their own messages
+          will say;
+        - after the join, an entry about an agent that is not running: attribution only, never
+          served (a relay proves nothing); about a running agent: nothing (deferred until that
+          agent's own messages or state say it)."""
+        graph = self.graph
+        me = graph.agent
+        for key, agent in writers.items():
+            replica = int(key)
+            if graph.bound_agent(replica) is not None:
+                continue
+            if agent == sender or agent == me or (not self._joined and agent not in live):
+                graph.note_writer(replica, agent)
+            elif agent not in live:
+                graph.note_relayed_writer(replica, agent)
 
     def _note_seen(self, message: wire.Decoded) -> None:
         """After merging a state: we now hold what its sender held of its own writes, and of
@@ -665,21 +721,34 @@ class Replica:
                 if hlc >= self._seen.get(replica, 0):   # (one that is not running sends
                     self._seen[replica] = hlc          # nothing more: a relay's is true)
 
-    def _screen(self, key: str, message: wire.Decoded) -> wire.Decoded:
+    def _screen(self, key: str, message: wire.Decoded, live: set[str]) -> wire.Decoded:
         from dsr.state_trust import screen_state
         graph = self.graph
         with self._table_lock:
             seen = dict(self._seen)
-        live = self.live_agents()
-        live.add(graph.agent)
-        with self._table_lock:
             vouched = set(self._vouched)
+        live = live | {graph.agent}
         screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
-                                live=live, seen=seen, vouched=vouched)
+                                live=live, seen=seen, vouched=vouched,
+                                me=(graph.agent, graph.replica_id, self._born),
+                                attributed=graph.writer_agent)
         self.stats.deferred += screened.deferred
         for reason, text in screened.problems:
             self._reject(key, reason, text)
+        if screened.about_me:
+            self._answer_forgery(message.agent)
         return screened.message
+
+    def _answer_forgery(self, liar: str) -> None:
+        """A state forged a claim about this agent: say at once what it really published (a
+        digest on its own key: every member that has not merged this agent's own state
+        since it (re)started then fetches it, dsr/transport.py `_on_digest`), so the
+        members that deferred the claim learn the truth and refuse it from then on."""
+        self.stats.forgeries_about_me += 1
+        log.warning("DSR %s: the state of %r forged a claim about %s; publishing a digest",
+                    self.graph.agent, liar, self.graph.agent)
+        if self._publisher is not None and not self.graph.read_only:
+            self.publish_digest()
 
     # ------------------------------------------------------------------ anti-entropy
     def _initial_sync(self) -> None:
