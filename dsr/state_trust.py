@@ -65,7 +65,7 @@ def _stampers(state: ElementState) -> Iterator[int]:
 def screen_state(message: Decoded, *, local: Callable[[str, object], ElementState | None],
                  binding: Callable[[int], str | None], live: set[str],
                  seen: dict[int, int], vouched: set[str] | None = None,
-                 me: tuple[str, int, int] | None = None,
+                 me: tuple[str, int] | None = None,
                  attributed: Callable[[int], str | None] | None = None) -> Screened:
     """The part of a state reply whose stamps are credible (see the module docstring).
 
@@ -73,11 +73,10 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
     so it knows every replica id they vouch for; a table entry for another of them is a lie.
     For a running agent not in it the entry cannot be judged yet: its stamps are deferred.
 
-    `me`: (this replica's agent, its replica id, the clock when it started).  This replica
-    knows first-hand what it wrote: a stamp of its own id that would change its state is
-    forged whatever its time (forged_stamp), and a table entry giving it an unknown replica
-    id is forged (forged_writer) when that id stamped anything since this replica started (its
-    previous incarnations all ended before: their ids are accepted as such).
+    `me`: (this replica's agent, its replica id).  This replica knows first-hand what it
+    wrote: a stamp of its own id that would change its state is forged whatever its time
+    (forged_stamp), and a table entry giving its agent a replica id it does not know (its own,
+    or a previous incarnation listed in the state it joined with) is forged (forged_writer).
 
     `attributed`: this replica's attribution of replica ids, relayed ones included (a claim
     relayed while its agent was not running): a stamp it gives to a running agent is judged
@@ -87,7 +86,7 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
     result = Screened(message)
     lying: dict[int, str] = {}
     writers = dict(message.writers)
-    my_agent, my_replica, born = me if me is not None else (None, 0, 0)
+    my_agent, my_replica = me if me is not None else (None, 0)
     if me is not None:
         seen = {**seen, my_replica: _ALL_OF_IT}
     for key, agent in message.writers.items():
@@ -96,8 +95,8 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
         if known is not None or agent == sender or replica == message.replica:
             continue
         if agent == my_agent:
-            if _latest_stamp(message, replica) < born:
-                continue            # a previous incarnation of this agent
+            # this agent learnt its previous incarnations from the state it joined with (and
+            # a relay serves only what it can prove): an id it does not know is not its own
             result.about_me = True
         elif not (agent in vouched and agent in live):
             continue
@@ -133,22 +132,6 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
              for k, s in message.edges]
     result.message = _with(message, nodes, edges, writers)
     return result
-
-
-def _latest_stamp(message: Decoded, replica: int) -> int:
-    """The newest stamp `replica` put anywhere in the message (0: none)."""
-    latest = 0
-    for entries in (message.nodes, message.edges):
-        for _, state in entries:
-            hlc = state.add.get(replica, 0)
-            if state.meta is not None and state.meta[1] == replica:
-                hlc = max(hlc, state.meta[0])
-            for reg in state.attrs.values():
-                if reg[1] == replica and reg[0] > hlc:
-                    hlc = reg[0]
-            if hlc > latest:
-                latest = hlc
-    return latest
 
 
 def removal_changes_view(state: ElementState, held: ElementState | None) -> bool:

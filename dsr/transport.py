@@ -156,9 +156,6 @@ class Replica:
         self._fetch_backoff: dict[str, tuple[float, float]] = {}
         #: monotonic clock of the anti-entropy timers (tests replace it)
         self._now: Callable[[], float] = time.monotonic
-        #: this replica's clock when it started: a replica id stamping later is not one of
-        #: this agent's previous incarnations (state_trust.screen_state)
-        self._born = max(graph.clock.last, time.time_ns() // 1_000_000 << 16)
         self.stats = ReplicaStats()
         self._log_budget = _LogBudget()
         self.session: Any = None
@@ -730,7 +727,7 @@ class Replica:
         live = live | {graph.agent}
         screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
                                 live=live, seen=seen, vouched=vouched,
-                                me=(graph.agent, graph.replica_id, self._born),
+                                me=(graph.agent, graph.replica_id),
                                 attributed=graph.writer_agent)
         self.stats.deferred += screened.deferred
         for reason, text in screened.problems:
