@@ -285,3 +285,42 @@ def test_a_forged_old_stamp_under_ones_own_id_is_counted_by_oneself():
     assert sim.stats.rejects.get("forged_stamp") == 1 and sim.stats.deferred == 0
     assert sim.graph.get_attr(world.clock, "now_s") == 1.0
     assert sim.stats.forgeries_about_me == 1
+
+
+def test_an_old_removal_one_member_still_holds_is_not_called_forged_after_a_restart():
+    """Regression (issue #31, point 3): a person's `in` edge is removed, most members forget
+    the removal (compaction), one does not before the edge is added again; its state then
+    carries the old removal (rem dots, `cleared`, receipt) on a present edge.  A member that
+    (re)joined from a compacted copy refused that part as forged_stamp every time it merged
+    the honest member's state.  The old removal hides nothing it holds: not a forgery."""
+    net = Net(POLICY)
+    sim, observer, keeper = (net.add(a) for a in ("sim_robot", "human_observer",
+                                                  "social_navigation"))
+    room = sim.graph.insert_node("room", "hall").id
+    person = observer.graph.insert_node("person", "ana").id
+    observer.graph.insert_or_assign_edge(person, room, "in")
+    net.maintain()
+    observer.graph.delete_edge(person, room, "in")
+    for _ in range(3):                   # everybody acknowledges; all but `keeper` compact
+        keeper.publish_digest()
+        sim.maintain()
+        observer.maintain()
+    assert sim.graph.tombstones() == 0 and keeper.graph.tombstones() == 1
+    observer.graph.insert_or_assign_edge(person, room, "in")          # the person is back
+    assert keeper.graph.element_state("edge", (person, room, "in")).cleared > 0
+    restarted = net.add("executive")     # joins from sim's compacted copy, then merges all
+    for _ in range(3):
+        restarted._merge_state(state_sample(keeper))
+    assert restarted.stats.rejects == {}, restarted.stats.last_reject
+    assert restarted.graph.get_edge(person, room, "in") is not None
+    # a removal that would hide the edge, stamped by the observer and never published by it,
+    # is still a forgery
+    edge = restarted.graph.element_state("edge", (person, room, "in"))
+    hlc = observer.graph.published_hlc()
+    document = orjson.loads(keeper.graph.state_message(keeper.seen()))
+    entry = next(e for e in document["edges"] if (e["src"], e["dst"]) == (person, room))
+    entry.update(rem=[[r, h] for r, h in edge.add.items()], cleared=hlc,
+                 attrs={REMOVAL_RECEIPT: [hlc, observer.graph.replica_id, True]})
+    restarted._merge_state(state_sample(keeper, orjson.dumps(document)))
+    assert restarted.stats.rejects == {"forged_stamp": 1}
+    assert restarted.graph.get_edge(person, room, "in") is not None
