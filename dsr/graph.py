@@ -28,7 +28,7 @@ from dsr.crdt import ElementState
 from dsr.errors import (DSRError, EdgeNotFoundError, InvalidAttributeError,
                         InvalidIdentifierError, NameTakenError, NodeNotFoundError, PoseError,
                         ReadOnlyGraphError, TransactionError, WriteRefusedError)
-from dsr.limits import LIMITS, value_bytes
+from dsr.limits import LIMITS, node_problem, value_bytes
 from dsr.hlc import HybridLogicalClock
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
                        check_node_id, check_type_name, make_node)
@@ -312,6 +312,16 @@ class DSRGraph:
                 "bytes per message (CHRONAV_DSR_MAX_DELTA_BYTES): split it into smaller "
                 "transactions")
 
+    def _check_node_limits(self, node_id: int, values: Attrs, fresh: bool = False) -> None:
+        """Refuse a write that would take a node over max_node_attrs / max_node_bytes
+        (dsr/limits.py): every receiver would drop its delta."""
+        state = None if fresh else self._nodes.get(node_id)
+        problem = node_problem(node_id, state.attrs if state is not None else None, values,
+                               registers=False)
+        if problem is not None:
+            raise InvalidAttributeError(f"{problem[1]}: the other replicas would drop this "
+                                        "write; keep large or many values out of one node")
+
     def _commit(self, tx: _Transaction, outbox: Outbox | None) -> Outgoing | None:
         self._signals.post(tx.events)
         if not tx.out_nodes and not tx.out_edges:
@@ -359,6 +369,8 @@ class DSRGraph:
             node_id = self.ids.next(lambda i: i in self._nodes)
         elif node_id in self._view:
             raise InvalidIdentifierError(f"node id {node_id} already exists; use update_node")
+        if values:
+            self._check_node_limits(node_id, values, fresh=True)
         hlc = self.clock.tick()
         me = self.replica_id
         self._local_node(tx, node_id, add=((me, hlc),), meta=(hlc, me, (type_, name)),
@@ -380,6 +392,7 @@ class DSRGraph:
                     raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
                 if self.local_policy is not None:
                     self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
+                self._check_node_limits(node_id, values)
                 hlc = self.clock.tick()
                 me = self.replica_id
                 regs = {k: (hlc, me, v) for k, v in values.items()}
@@ -427,6 +440,7 @@ class DSRGraph:
                 if self.local_policy is not None:
                     self._check_local("node", node_id,
                                       {"attrs": dict.fromkeys(values, (0, 0, 0))})
+                self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             events: list[Event] = []
@@ -461,6 +475,7 @@ class DSRGraph:
         with self._write(rollback=False) as tx:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+            self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             self._local_node(tx, node_id, attrs={k: (hlc, me, v) for k, v in values.items()})
@@ -545,7 +560,8 @@ class DSRGraph:
         raises WriteRefusedError naming the write (what every other replica would refuse)."""
         from dsr.writes import local_writes
         refusal = self.local_policy.refusal
-        for write in local_writes(self, self.agent, element, key, delta, self._cascade):
+        valued = getattr(self.local_policy, "valued", frozenset())
+        for write in local_writes(self, self.agent, element, key, delta, self._cascade, valued):
             problem = refusal(write)
             if problem is not None:
                 raise WriteRefusedError(problem)

@@ -34,7 +34,7 @@ from dsr.collector import FREEZE_AFTER_JOIN_NODES, gc_paused, tune_collector
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
-from dsr.limits import LIMITS
+from dsr.limits import LIMITS, node_problem
 from dsr.policy import AllowAll, WritePolicy
 from dsr.receiver import DeltaReceiver, receiver_of
 from dsr.signals import SpinPolicy
@@ -55,7 +55,7 @@ class TransportError(DSRError, ConnectionError):
 
 #: reasons a received message (or part of a state) is refused; counted one by one
 REASONS = ("invalid", "too_large", "wrong_graph", "wrong_kind", "forged_writer", "forged_stamp",
-           "clock_ahead", "removal_receipt", "policy")
+           "clock_ahead", "removal_receipt", "policy", "too_many_attrs", "node_too_large")
 
 
 @dataclass
@@ -439,6 +439,16 @@ class Replica:
                     self._reject(key, "policy", problem_text)
                     return
             graph = self.graph
+            if message.nodes:
+                held = graph._nodes.get
+                for node_id, state in message.nodes:
+                    if state.attrs:
+                        current = held(node_id)
+                        problem = node_problem(node_id, current.attrs if current is not None
+                                               else None, state.attrs, registers=True)
+                        if problem is not None:
+                            self._reject(key, *problem)
+                            return
             if graph._bound.get(message.replica) is None:
                 graph.note_writer(message.replica, message.agent)
             graph.apply_message(message)
@@ -665,8 +675,8 @@ class Replica:
                     return
                 self._note_writers(message.agent, kept.writers, live)
                 self.graph.apply_message(wire.Decoded(
-                    kept.kind, kept.graph, kept.agent, kept.replica, {}, kept.nodes, kept.edges,
-                    kept.top_hlc))
+                    kept.kind, kept.graph, kept.agent, kept.replica, {},
+                    self._within_node_limits(key, kept.nodes), kept.edges, kept.top_hlc))
                 self._note_seen(message)
             self.stats.state_merged += 1
         except WireError as exc:
@@ -674,6 +684,22 @@ class Replica:
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+
+    def _within_node_limits(self, key: str, nodes: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
+        """A state's node entries minus those that would take a node over the node limits
+        (dsr/limits.py); each dropped entry is counted under its reason."""
+        held = self.graph.element_state
+        kept = []
+        for node_id, state in nodes:
+            if state.attrs:
+                current = held("node", node_id)
+                problem = node_problem(node_id, current.attrs if current is not None else None,
+                                       state.attrs, registers=True)
+                if problem is not None:
+                    self._reject(key, *problem)
+                    continue
+            kept.append((node_id, state))
+        return kept
 
     def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
         """Which `writers` entries of a merged state this replica takes as its own knowledge
