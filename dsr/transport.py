@@ -177,6 +177,8 @@ class Replica:
         #: agents whose own state (this incarnation) has been merged: their replica ids known
         self._vouched: set[str] = set()
         self._pending_syncs: set[str] = set()
+        #: writers the `seen` of the last state merged covers (completeness of a join's copy)
+        self._state_cover = 0
         self._members: dict[str, Member] = {}
         #: agent -> the Zenoh KeyExpr of its delta key, declared in this session
         self._writer_keys: dict[str, Any] = {}
@@ -736,6 +738,7 @@ class Replica:
         with self._table_lock:
             if message.clock:                   # the last part of the state: all merged
                 self._vouched.add(sender)
+                self._state_cover = len(message.seen)
             for replica, hlc in message.seen.items():
                 owner = graph.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
@@ -787,7 +790,11 @@ class Replica:
             self._declare_writer_key(member, True)
         random.shuffle(members)          # spread the load when many agents start together
         for member in members:
-            if self._sync(member):
+            # a member whose state covers every running member (its `seen` has as many
+            # writers) is a complete copy; a tool that serves only its own writes is not:
+            # merge it and go on (docs/dsr_wire_format.md, "Writing as a foreign client")
+            self._state_cover = 0
+            if self._sync(member) and self._state_cover >= len(members):
                 return
         if not members:
             self._sync(_ALL)
