@@ -194,6 +194,17 @@ def test_every_limit_is_documented_with_its_variable():
         assert row is not None, f"{var} is not in the Limits table of docs/dsr_wire_format.md"
 
 
+def test_every_counter_and_refusal_reason_is_documented():
+    from dsr.transport import REASONS, ReplicaStats
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "dsr_wire_format.md").read_text()
+    section = doc[doc.index("## Refusals and counters"):]
+    rows = [line for line in section.splitlines() if line.startswith("| `")]
+    for field in dataclasses.fields(ReplicaStats):
+        assert any(f"`{field.name}`" in row.split("|")[1] for row in rows), field.name
+    for reason in REASONS:
+        assert any(row.startswith(f"| `{reason}` |") for row in rows), reason
+
+
 # ---------------------------------------------------------------------------- clock
 def test_a_stamp_beyond_the_maximum_offset_is_refused_and_does_not_drag_the_clock():
     writer, guard = DSRGraph("w"), Replica(DSRGraph("guard"))
