@@ -152,8 +152,8 @@ class Replica:
         self.lag_grace_s = 4 * digest_interval
         #: longest pause between two digest-triggered state fetches of one member
         self.max_fetch_backoff_s = 30.0
-        #: member -> (no digest-triggered fetch before, pause after the next one)
-        self._fetch_backoff: dict[str, tuple[float, float]] = {}
+        #: member -> (no digest-triggered fetch before, pause after the next one, last fetch)
+        self._fetch_backoff: dict[str, tuple[float, float, float]] = {}
         #: monotonic clock of the anti-entropy timers (tests replace it)
         self._now: Callable[[], float] = time.monotonic
         self.stats = ReplicaStats()
@@ -520,8 +520,6 @@ class Replica:
                     targets.add(owner if known is not None and known.live
                                 else message.agent)   # type: ignore[arg-type]
                     since[replica] = (message.seen.get(replica, hlc), now)
-            if not targets and not since:
-                self._fetch_backoff.pop(message.agent, None)    # settled: no debt left
             targets = {t for t in targets if self._fetch_allowed(t, now)}
             lagging = bool(targets)
         if lagging and not self.graph.read_only:
@@ -532,16 +530,21 @@ class Replica:
     def _fetch_allowed(self, target: str, now: float) -> bool:
         """Rate limit of the state fetches digests ask for, per member: the first at once,
         the next ones after a pause that doubles (lag_grace_s, 2x, 4x ... up to
-        max_fetch_backoff_s) while fetching that member does not settle what its digests
-        show (a member whose state is refused, or that keeps announcing writes its state
-        does not carry: `seen` ahead of its state).  Settled (a digest showing nothing we
-        lack) resets it.  So a member costs at most one fetch per change it makes, and a
-        misbehaving one a fetch per max_fetch_backoff_s.  Caller holds _table_lock."""
-        not_before, pause = self._fetch_backoff.get(target, (0.0, self.lag_grace_s))
+        max_fetch_backoff_s) as long as digests keep asking (a member whose state is
+        refused, or that keeps announcing writes its state does not carry; or this replica
+        is so loaded that it lags behind its own queue of deltas: fetching a state then
+        makes it slower still).  The pause starts again from lag_grace_s only after a quiet
+        period of twice the longest pause.  So a member costs one fetch per change it makes
+        (a lost delta), and at most one per max_fetch_backoff_s when something keeps them
+        coming.  Caller holds _table_lock."""
+        base, longest = self.lag_grace_s, self.max_fetch_backoff_s
+        not_before, pause, last = self._fetch_backoff.get(target, (0.0, base, -2 * longest))
         if now < not_before:
             self.stats.fetches_postponed += 1
             return False
-        self._fetch_backoff[target] = (now + pause, min(2 * pause, self.max_fetch_backoff_s))
+        if now - last >= 2 * longest:
+            pause = base
+        self._fetch_backoff[target] = (now + pause, min(2 * pause, longest), now)
         return True
 
     def _request_sync(self, agent: str) -> None:
