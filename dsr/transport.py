@@ -441,16 +441,24 @@ class Replica:
                     self._reject(key, "policy", problem_text)
                     return
             graph = self.graph
-            if message.nodes:
-                held = graph._nodes.get
-                for node_id, state in message.nodes:
-                    if state.attrs:
-                        current = held(node_id)
-                        problem = node_problem(node_id, current.attrs if current is not None
-                                               else None, state.attrs, registers=True)
-                        if problem is not None:
-                            self._reject(key, *problem)
-                            return
+            held = graph._nodes.get
+            for node_id, state in message.nodes:     # node limits (dsr/limits.py)
+                attrs = state.attrs
+                if not attrs:
+                    continue
+                current = held(node_id)
+                if current is not None and attrs.keys() <= current.attrs.keys():
+                    for reg in attrs.values():      # scalars over existing keys: cannot grow
+                        kind = type(reg[2])
+                        if kind is str or kind is list:
+                            break
+                    else:
+                        continue
+                problem = node_problem(node_id, current.attrs if current is not None else None,
+                                       attrs, registers=True)
+                if problem is not None:
+                    self._reject(key, *problem)
+                    return
             if graph._bound.get(message.replica) is None:
                 graph.note_writer(message.replica, message.agent)
             graph.apply_message(message)
