@@ -264,7 +264,7 @@ def stats(
     from rich.table import Table
     table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
-                   "policy", "deferred", "tombstones", "compacted"):
+                   "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
         table.add_column(column, overflow="fold")
     for agent, report in document["members"].items():
         counters = report.get("stats", {})
@@ -272,7 +272,9 @@ def stats(
         table.add_row(agent, str(report.get("nodes")), str(counters.get("received")),
                       str(counters.get("applied")), str(counters.get("published")),
                       reasons or "0", str(counters.get("rejected_policy")),
-                      str(counters.get("deferred")), str(report.get("tombstones")),
+                      str(counters.get("deferred")),
+                      f"{counters.get('syncs')} ({counters.get('fetches_postponed', 0)})",
+                      str(report.get("tombstones")),
                       str(counters.get("compacted")))
     Console().print(table)
     router = document.get("router")
