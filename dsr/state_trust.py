@@ -102,9 +102,12 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
             continue
         lying[replica] = agent
         del writers[key]
+    if lying:                               # one refusal per state, however many entries
+        replica, agent = next(iter(lying.items()))
+        more = f" (and {len(lying) - 1} more such entries)" if len(lying) > 1 else ""
         result.problems.append((
             "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
-            f"but {agent!r} is running and never used or vouched for that replica"))
+            f"but {agent!r} is running and never used or vouched for that replica{more}"))
 
     def agent_of(replica: int) -> str | None:
         agent = binding(replica) or writers.get(str(replica))

@@ -703,15 +703,20 @@ class Replica:
         (dsr/limits.py); each dropped entry is counted under its reason."""
         held = self.graph.element_state
         kept = []
+        problems: dict[str, tuple[str, int]] = {}
         for node_id, state in nodes:
             if state.attrs:
                 current = held("node", node_id)
                 problem = node_problem(node_id, current.attrs if current is not None else None,
                                        state.attrs, registers=True)
                 if problem is not None:
-                    self._reject(key, *problem)
+                    first, count = problems.get(problem[0], (problem[1], 0))
+                    problems[problem[0]] = (first, count + 1)
                     continue
             kept.append((node_id, state))
+        for reason, (text, count) in problems.items():   # one refusal per reason and state
+            self._reject(key, reason, text + (f" (and {count - 1} more nodes)" if count > 1
+                                              else ""))
         return kept
 
     def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
