@@ -22,6 +22,18 @@ running:
   it; counted as `deferred`).  `seen[z]` exists only once z's own state has been merged here
   (dsr/transport.py `_advance`): until then every such stamp is deferred.
 
+- this replica knows first-hand what it wrote itself: a relayed stamp of its own replica id
+  that would change it is forged whatever its time (forged_stamp), and a table entry giving
+  its own agent a replica id it does not know is a lie (forged_writer); the transport then
+  publishes a digest at once, so members that deferred the claim fetch its state and refuse
+  the claim from then on;
+- a relayed removal that hides nothing this replica shows (an old removal on an element added
+  again, which another member has already compacted) forges nothing: it is not judged.
+
+What a replica serves in its own state replies is decided elsewhere (DSRGraph.served_writers,
+transport `_note_writers`): only bindings it can prove, never a claim it relayed or deferred,
+so a lie told to one member is not repeated as that member's word.
+
 Writes of agents that are not running (a previous incarnation, a tool that has exited) can
 only come relayed: they are attributed through the table and judged by the write policy.  The
 first state a replica merges when it joins has nothing to be checked against and is trusted
