@@ -447,13 +447,19 @@ class Replica:
                 if not attrs:
                     continue
                 current = held(node_id)
-                if current is not None and attrs.keys() <= current.attrs.keys():
-                    for reg in attrs.values():      # scalars over existing keys: cannot grow
+                if current is not None:             # scalars over existing keys: cannot grow
+                    if len(attrs) == 1:             # (the common update: one key)
+                        ((name, reg),) = attrs.items()
                         kind = type(reg[2])
-                        if kind is str or kind is list:
-                            break
-                    else:
-                        continue
+                        if name in current.attrs and kind is not str and kind is not list:
+                            continue
+                    elif attrs.keys() <= current.attrs.keys():
+                        for reg in attrs.values():
+                            kind = type(reg[2])
+                            if kind is str or kind is list:
+                                break
+                        else:
+                            continue
                 problem = node_problem(node_id, current.attrs if current is not None else None,
                                        attrs, registers=True)
                 if problem is not None:
