@@ -732,8 +732,9 @@ class Replica:
         - the sender's own replica ids (an agent vouches for its incarnations), and ids the
           screening let through as this agent's previous incarnations: proven;
         - every entry of the first state of a join: nothing to check it against, trusted
-          (documented limit); except entries about other running agents: their own messages
-          will say;
+          (documented limit; its sender served only what it could prove).  Entries about
+          running agents included: a joiner that left them out would relay their writes
+          without attribution to the next joiner, whose policy would refuse them;
         - after the join, an entry about an agent that is not running: attribution only, never
           served (a relay proves nothing); about a running agent: nothing (deferred until that
           agent's own messages or state say it)."""
@@ -743,7 +744,7 @@ class Replica:
             replica = int(key)
             if graph.bound_agent(replica) is not None:
                 continue
-            if agent == sender or agent == me or (not self._joined and agent not in live):
+            if agent == sender or agent == me or not self._joined:
                 graph.note_writer(replica, agent)
             elif agent not in live:
                 graph.note_relayed_writer(replica, agent)

@@ -324,3 +324,25 @@ def test_an_old_removal_one_member_still_holds_is_not_called_forged_after_a_rest
     restarted._merge_state(state_sample(keeper, orjson.dumps(document)))
     assert restarted.stats.rejects == {"forged_stamp": 1}
     assert restarted.graph.get_edge(person, room, "in") is not None
+
+
+def test_a_joiner_relays_what_it_joined_with_attributed():
+    """A member that has just joined serves the bindings of the state it joined with, running
+    agents' included: a second joiner starting from it would otherwise refuse their writes
+    (`policy`: a register no agent vouches for) though nobody lied."""
+    net = Net(POLICY)
+    sim, observer = net.add("sim_robot"), net.add("human_observer")
+    sim.graph.insert_node("room", "hall")
+    observer.graph.insert_node("person", "ana")
+    net.maintain()
+    first = Replica(DSRGraph("executive"), policy=POLICY)
+    second = Replica(DSRGraph("agenda"), policy=POLICY)
+    for joiner in (first, second):
+        for name in ("sim_robot", "human_observer"):
+            joiner._members[name] = Member(name)
+    first._merge_state(state_sample(sim))          # its join: before any message of the others
+    first._joined = True
+    second._members["executive"] = Member("executive")
+    second._merge_state(state_sample(first))       # its join, from the first joiner
+    assert second.stats.rejects == {}, second.stats.last_reject
+    assert second.graph.get_node_by_name("ana") is not None
