@@ -84,9 +84,15 @@ class IdAllocator:
                 return node_id
 
 
-def _scalars(values: Attrs) -> bool:
-    """Only scalar values (8 bytes each as the node limits count them): written over keys a
-    node already has, they cannot take it over a node limit (dsr/limits.py node_problem)."""
+def _cannot_grow(values: Attrs, held: dict[str, Any]) -> bool:
+    """Only scalar values (8 bytes each as the node limits count them) written over keys the
+    node already has: they cannot take it over a node limit (dsr/limits.py node_problem)."""
+    if len(values) == 1:                 # the common update: one key
+        ((key, value),) = values.items()
+        kind = type(value)
+        return key in held and kind is not str and kind is not list
+    if not values.keys() <= held.keys():
+        return False
     for value in values.values():
         kind = type(value)
         if kind is str or kind is list:
@@ -402,8 +408,7 @@ class DSRGraph:
                     raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
                 if self.local_policy is not None:
                     self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
-                if not values.keys() <= self._nodes[node_id].attrs.keys() \
-                        or not _scalars(values):         # else it cannot grow: no check
+                if not _cannot_grow(values, self._nodes[node_id].attrs):
                     self._check_node_limits(node_id, values)
                 hlc = self.clock.tick()
                 me = self.replica_id
@@ -453,7 +458,7 @@ class DSRGraph:
                 if self.local_policy is not None:
                     self._check_local("node", node_id,
                                       {"attrs": dict.fromkeys(values, (0, 0, 0))})
-                if not values.keys() <= nodes[node_id].attrs.keys() or not _scalars(values):
+                if not _cannot_grow(values, nodes[node_id].attrs):
                     self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
