@@ -706,7 +706,7 @@ class Replica:
 
     def _within_node_limits(self, key: str, nodes: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
         """A state's node entries minus those that would take a node over the node limits
-        (dsr/limits.py); each dropped entry is counted under its reason."""
+        (dsr/limits.py); counted once per reason and state (saying how many nodes)."""
         held = self.graph.element_state
         kept = []
         problems: dict[str, tuple[str, int]] = {}
@@ -729,8 +729,9 @@ class Replica:
         """Which `writers` entries of a merged state this replica takes as its own knowledge
         (and will serve in its state replies: DSRGraph.served_writers), and which only to
         attribute relayed writes (dsr/state_trust.py):
-        - the sender's own replica ids (an agent vouches for its incarnations), and ids the
-          screening let through as this agent's previous incarnations: proven;
+        - the sender's own replica ids (an agent vouches for its incarnations): proven (after
+          the join, the screening has removed every entry naming this replica's own agent
+          that it does not know: state_trust.screen_state);
         - every entry of the first state of a join: nothing to check it against, trusted
           (documented limit; its sender served only what it could prove).  Entries about
           running agents included: a joiner that left them out would relay their writes
