@@ -49,7 +49,9 @@ def stats_key(graph: str) -> str:
 class AclDenials:
     """Counts of denied messages by (user, message kind, flow, key); thread-safe."""
 
-    def __init__(self, out: Callable[[str], None] | None = None) -> None:
+    def __init__(self, out: Callable[[str], None] | None = None, *, counting: bool = True) -> None:
+        #: False: the router runs without an ACL (nothing is denied, nothing is counted)
+        self.counting = counting
         self.total = 0
         self.by_kind: dict[tuple[str, str, str, str], int] = {}
         self._lock = threading.Lock()
@@ -111,7 +113,7 @@ class AclDenials:
     def report(self) -> dict[str, Any]:
         with self._lock:
             kinds = sorted(self.by_kind.items(), key=lambda item: -item[1])
-            return {"format": FORMAT, "acl_denied": self.total,
+            return {"format": FORMAT, "acl": self.counting, "acl_denied": self.total,
                     "denials": [{"user": u, "message": m, "flow": f, "key": k, "count": n}
                                 for (u, m, f, k), n in kinds[:100]]}
 

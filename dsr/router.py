@@ -99,8 +99,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dsr.router: {exc}", file=sys.stderr)
         return 2
     exit_on_sigterm()
-    denials = AclDenials()
-    if settings.acl_file is not None or settings.config_file is not None:
+    denials = AclDenials(counting=settings.acl_file is not None or settings.config_file is not None)
+    if denials.counting:
         capture_zenoh_log(denials.on_log_line)   # the ACL's refusals, counted and logged
     try:
         session = zenoh.open(conf)

@@ -278,7 +278,9 @@ def stats(
                       str(counters.get("compacted")))
     Console().print(table)
     router = document.get("router")
-    if router is not None:
+    if router is not None and not router.get("acl", True):
+        typer.echo("router: no access-control list (nothing is denied or counted)")
+    elif router is not None:
         kinds = "; ".join(f"{d['message']} on {d['key']} by {d['user']!r}: {d['count']}"
                           for d in router.get("denials", [])[:10])
         typer.echo(f"router: {router.get('acl_denied', 0)} message(s) denied by the ACL"
