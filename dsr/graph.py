@@ -28,7 +28,7 @@ from dsr.crdt import ElementState
 from dsr.errors import (DSRError, EdgeNotFoundError, InvalidAttributeError,
                         InvalidIdentifierError, NameTakenError, NodeNotFoundError, PoseError,
                         ReadOnlyGraphError, TransactionError, WriteRefusedError)
-from dsr.limits import LIMITS, value_bytes
+from dsr.limits import LIMITS, node_problem, value_bytes
 from dsr.hlc import HybridLogicalClock
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
                        check_node_id, check_type_name, make_node)
@@ -82,6 +82,22 @@ class IdAllocator:
             node_id = (self.prefix << 32) | self._counter
             if not taken(node_id):
                 return node_id
+
+
+def _cannot_grow(values: Attrs, held: dict[str, Any]) -> bool:
+    """Only scalar values (8 bytes each as the node limits count them) written over keys the
+    node already has: they cannot take it over a node limit (dsr/limits.py node_problem)."""
+    if len(values) == 1:                 # the common update: one key
+        ((key, value),) = values.items()
+        kind = type(value)
+        return key in held and kind is not str and kind is not list
+    if not values.keys() <= held.keys():
+        return False
+    for value in values.values():
+        kind = type(value)
+        if kind is str or kind is list:
+            return False
+    return True
 
 
 def _settled(state: ElementState, acked: Callable[[int, int], bool]) -> bool:
@@ -312,6 +328,16 @@ class DSRGraph:
                 "bytes per message (CHRONAV_DSR_MAX_DELTA_BYTES): split it into smaller "
                 "transactions")
 
+    def _check_node_limits(self, node_id: int, values: Attrs, fresh: bool = False) -> None:
+        """Refuse a write that would take a node over max_node_attrs / max_node_bytes
+        (dsr/limits.py): every receiver would drop its delta."""
+        state = None if fresh else self._nodes.get(node_id)
+        problem = node_problem(node_id, state.attrs if state is not None else None, values,
+                               registers=False)
+        if problem is not None:
+            raise InvalidAttributeError(f"{problem[1]}: the other replicas would drop this "
+                                        "write; keep large or many values out of one node")
+
     def _commit(self, tx: _Transaction, outbox: Outbox | None) -> Outgoing | None:
         self._signals.post(tx.events)
         if not tx.out_nodes and not tx.out_edges:
@@ -359,6 +385,8 @@ class DSRGraph:
             node_id = self.ids.next(lambda i: i in self._nodes)
         elif node_id in self._view:
             raise InvalidIdentifierError(f"node id {node_id} already exists; use update_node")
+        if values:
+            self._check_node_limits(node_id, values, fresh=True)
         hlc = self.clock.tick()
         me = self.replica_id
         self._local_node(tx, node_id, add=((me, hlc),), meta=(hlc, me, (type_, name)),
@@ -380,6 +408,8 @@ class DSRGraph:
                     raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
                 if self.local_policy is not None:
                     self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
+                if not _cannot_grow(values, self._nodes[node_id].attrs):
+                    self._check_node_limits(node_id, values)
                 hlc = self.clock.tick()
                 me = self.replica_id
                 regs = {k: (hlc, me, v) for k, v in values.items()}
@@ -421,12 +451,15 @@ class DSRGraph:
                     self._update_node_tx(node_id, values)
                 return
             view = self._view
+            nodes = self._nodes
             for node_id, values in checked.items():
                 if node_id not in view:
                     raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
                 if self.local_policy is not None:
                     self._check_local("node", node_id,
                                       {"attrs": dict.fromkeys(values, (0, 0, 0))})
+                if not _cannot_grow(values, nodes[node_id].attrs):
+                    self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             events: list[Event] = []
@@ -461,6 +494,7 @@ class DSRGraph:
         with self._write(rollback=False) as tx:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+            self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             self._local_node(tx, node_id, attrs={k: (hlc, me, v) for k, v in values.items()})
@@ -545,7 +579,8 @@ class DSRGraph:
         raises WriteRefusedError naming the write (what every other replica would refuse)."""
         from dsr.writes import local_writes
         refusal = self.local_policy.refusal
-        for write in local_writes(self, self.agent, element, key, delta, self._cascade):
+        valued = getattr(self.local_policy, "valued", frozenset())
+        for write in local_writes(self, self.agent, element, key, delta, self._cascade, valued):
             problem = refusal(write)
             if problem is not None:
                 raise WriteRefusedError(problem)
@@ -692,10 +727,14 @@ class DSRGraph:
             top = message.top_hlc
             if top:
                 self.clock.observe(top)
+            # whoever hands a message to apply_message vouches for its writers (the transport
+            # judges a state's table itself and passes none: dsr/transport.py _note_writers)
+            bound, writers = self._bound, self._writers
             for replica, agent in message.writers.items():
-                self._writers.setdefault(int(replica), agent)
-            if message.kind == "delta":
-                self._writers.setdefault(message.replica, message.agent)
+                if int(replica) not in bound:
+                    bound[int(replica)] = writers[int(replica)] = agent
+            if message.kind == "delta" and message.replica not in bound:
+                bound[message.replica] = writers[message.replica] = message.agent
             events: list[Event] = []
             changed = 0
             nodes, edges = self._nodes, self._edges
@@ -792,11 +831,28 @@ class DSRGraph:
         return self._bound.get(replica)
 
     def note_writer(self, replica: int, agent: str) -> None:
-        """Record a first-hand binding replica id -> agent."""
+        """Record a first-hand binding replica id -> agent (it replaces a relayed one: what
+        the agent's own key says beats what a relay said)."""
         if self._bound.get(replica) != agent:
             with self._lock:
-                self._bound.setdefault(replica, agent)
+                if replica not in self._bound:
+                    self._bound[replica] = agent
+                    self._writers[replica] = agent
+
+    def note_relayed_writer(self, replica: int, agent: str) -> None:
+        """Record a binding only relayed by another member's state (an agent that is not
+        running): used to attribute that replica's writes to the write policy, never served
+        in this replica's own state replies (it proves nothing: dsr/state_trust.py)."""
+        if replica not in self._writers:
+            with self._lock:
                 self._writers.setdefault(replica, agent)
+
+    def served_writers(self) -> dict[int, str]:
+        """The `writers` table of this replica's state replies: only bindings it can prove
+        (first-hand, vouched for by the agent itself, or taken from the state it joined
+        with), never a claim it merely relayed or deferred."""
+        with self._lock:
+            return dict(self._bound)
 
     def state_message(self, seen: dict[int, int] | None = None) -> bytes:
         """Full CRDT state (uncompacted tombstones included) as a "state" message, stamped
@@ -806,10 +862,10 @@ class DSRGraph:
             cache = self._snapshot_cache
             if cache is not None and cache[0] == self._version:
                 return cache[1]
-            clock = self.clock.last
+            clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             payload = wire.encode(kind="state", graph=self.graph_name, agent=self.agent,
                                   replica=self.replica_id, nodes=self._nodes.items(),
-                                  edges=self._edges.items(), writers=self._writers,
+                                  edges=self._edges.items(), writers=self._bound,
                                   clock=clock, seen={**(seen or {}), self.replica_id: clock})
             self._snapshot_cache = (self._version, payload)
             return payload
@@ -827,9 +883,9 @@ class DSRGraph:
         every change): in a live graph a few elements change between two joins (poses, people)
         while encoding all of them cost a 10k-node join most of its time."""
         with self._lock:
-            clock = self.clock.last
+            clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             node_ids, edge_keys = list(self._nodes), list(self._edges)
-            writers = dict(self._writers)
+            writers = dict(self._bound)
         seen = {**(seen or {}), self.replica_id: clock}
         chunks: list[tuple[list[int], list[EdgeKey]]] = []
         for start in range(0, len(node_ids), per_part):

@@ -15,6 +15,15 @@ of a graph must apply the same limits; they are documented in docs/dsr_wire_form
 - `max_clock_offset_ms` (CHRONAV_DSR_MAX_CLOCK_OFFSET_MS, default 1000): the HLC paper's
   maximum offset: a received message stamped more than this ahead of the receiver's wall
   clock is dropped, so no writer can drag the others' clocks further ahead than this.
+- `max_node_attrs` (CHRONAV_DSR_MAX_NODE_ATTRS, default 512): attributes of one node.
+- `max_node_bytes` (CHRONAV_DSR_MAX_NODE_BYTES, default 2 MiB): the sum of the sizes of one
+  node's attribute values (each counted as for `max_value_bytes`).  Both are checked against
+  what the node would hold after the write: a local write raises InvalidAttributeError, a
+  received delta is dropped whole (reason `too_many_attrs` / `node_too_large`), a state reply
+  loses that node's entry (same reasons).  Why: the value and message limits alone let a
+  writer grow one node without bound over many deltas (60,000 attributes, 3.35 MB, were
+  accepted by every agent).  Per node, so judged on each replica's current copy: writers
+  must stay well below them (chronav's largest node holds a few dozen attributes).
 - `max_waiting_deltas` (CHRONAV_DSR_MAX_WAITING_DELTAS, default 10,000): received deltas
   waiting in a replica's Zenoh channel to be handled (dsr/receiver.py).  When it is full,
   Zenoh's network thread waits and the senders are slowed down; nothing is dropped.  (Local to
@@ -34,7 +43,9 @@ _ENV = {"max_value_bytes": "CHRONAV_DSR_MAX_VALUE_BYTES",
         "max_delta_bytes": "CHRONAV_DSR_MAX_DELTA_BYTES",
         "max_state_bytes": "CHRONAV_DSR_MAX_STATE_BYTES",
         "max_clock_offset_ms": "CHRONAV_DSR_MAX_CLOCK_OFFSET_MS",
-        "max_waiting_deltas": "CHRONAV_DSR_MAX_WAITING_DELTAS"}
+        "max_waiting_deltas": "CHRONAV_DSR_MAX_WAITING_DELTAS",
+        "max_node_attrs": "CHRONAV_DSR_MAX_NODE_ATTRS",
+        "max_node_bytes": "CHRONAV_DSR_MAX_NODE_BYTES"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,6 +55,8 @@ class Limits:
     max_state_bytes: int = 256 * 1024 * 1024
     max_clock_offset_ms: int = 1000
     max_waiting_deltas: int = 10_000
+    max_node_attrs: int = 512
+    max_node_bytes: int = 2 * 1024 * 1024
 
     @classmethod
     def from_env(cls, environ: Mapping[str, str] | None = None) -> Limits:
@@ -81,3 +94,45 @@ def value_bytes(value: object) -> int:
             return sum(value_bytes(item) for item in items)
         return 8 * len(items)
     return 8
+
+
+#: attribute key of a removal receipt (dsr/crdt.py REMOVAL_RECEIPT; not counted in a node)
+_RECEIPT = "~removed"
+
+
+def node_problem(node_id: int, held: Mapping[str, tuple[int, int, object]] | None,
+                 new: Mapping[str, object], *, registers: bool,
+                 limits: Limits | None = None) -> tuple[str, str] | None:
+    """(reason, sentence) if the node would exceed `max_node_attrs` / `max_node_bytes` once
+    `new` (key -> value, or key -> register when `registers`) is written over `held` (its
+    current registers), else None.
+
+    Cheap in the common case: writing scalars to keys the node already has cannot grow it
+    past its current size by more than 8 bytes a key, so nothing is summed."""
+    current: Mapping[str, object] = held if held is not None else {}
+    if new.keys() <= current.keys():
+        for item in new.values():
+            kind = type(item[2] if registers else item)  # type: ignore[index]
+            if kind is str or kind is list:
+                break
+        else:
+            return None
+    limits = limits or LIMITS
+    keys = current.keys() | new.keys()
+    keys.discard(_RECEIPT)
+    if len(keys) > limits.max_node_attrs:
+        return "too_many_attrs", (f"node {node_id} would have {len(keys)} attributes, over "
+                                  f"the limit of {limits.max_node_attrs} per node "
+                                  "(CHRONAV_DSR_MAX_NODE_ATTRS)")
+    size = 0
+    for key, item in new.items():
+        if key != _RECEIPT:
+            size += value_bytes(item[2] if registers else item)  # type: ignore[index]
+    for key, reg in current.items():
+        if key not in new and key != _RECEIPT:
+            size += value_bytes(reg[2])  # type: ignore[index]
+    if size > limits.max_node_bytes:
+        return "node_too_large", (f"node {node_id} would hold {size} bytes of values, over "
+                                  f"the limit of {limits.max_node_bytes} per node "
+                                  "(CHRONAV_DSR_MAX_NODE_BYTES)")
+    return None

@@ -24,7 +24,9 @@ rules:
 
 A write is allowed when some rule matches its writer, element type (and end types), and grants
 its operation (`create`, `delete`) or its attribute (`attrs` patterns minus `except_attrs`).
-Values given at creation come with `create`, except the keys of `except_attrs`.
+Values given at creation come with `create`, except the keys of `except_attrs`, and a key of
+`init_values` only with one of the values it lists (a staff tool creates an `agenda_request`
+`pending`; only the agenda may answer it).
 Deleting a node also deletes its edges: such edge deletes are allowed to whoever may delete the
 node.  Types this replica has not seen yet (a delta overtaking the node's creation) match any
 pattern: the write lands on an element nobody can see until its creator's write arrives.
@@ -66,6 +68,10 @@ class Rule(BaseModel):
     ops: list[Literal["create", "delete"]] = []
     attrs: list[Pattern] = []
     except_attrs: list[Pattern] = []
+    #: attribute -> the only values it may be given at creation under this rule's `create`
+    #: (e.g. a request must be created `pending`: only its answerer sets another state)
+    init_values: dict[Annotated[str, StringConstraints(min_length=1, max_length=128)],
+                      list[str | bool | int | float]] = {}
     #: why the grant exists (documentation only)
     why: str = ""
 
@@ -79,6 +85,9 @@ class Rule(BaseModel):
             raise ValueError("a rule grants `ops`, `attrs` or both")
         if self.except_attrs and not self.attrs:
             raise ValueError("`except_attrs` needs `attrs`")
+        if self.init_values and "create" not in self.ops:
+            raise ValueError("`init_values` restricts values given at creation: needs "
+                             "`ops: [create]`")
         return self
 
     def permits(self, write: Write) -> bool:
@@ -92,6 +101,8 @@ class Rule(BaseModel):
             key = write.attr or ""
             if any(fnmatchcase(key, p) for p in self.except_attrs):
                 return False
+            if write.op == "init" and key in self.init_values:
+                return write.value in self.init_values[key]
             # a value given at creation comes with the create grant
             return _match(key, self.attrs) or (write.op == "init" and "create" in self.ops)
         return write.op in self.ops
@@ -119,6 +130,8 @@ class RulePolicy:
         self.source = source
         self._by_writer: dict[str, tuple[Rule, ...]] = {}
         self._decisions: dict[Write, bool] = {}
+        #: keys some rule restricts at creation: only their initial values enter the questions
+        self.valued: frozenset[str] = frozenset(k for r in self.rules for k in r.init_values)
 
     def rules_for(self, agent: str) -> tuple[Rule, ...]:
         found = self._by_writer.get(agent)
@@ -159,7 +172,7 @@ class RulePolicy:
         problem = self._no_grant(message.agent)
         if problem is not None:
             return problem
-        for write in delta_writes(message, graph):
+        for write in delta_writes(message, graph, self.valued):
             if not self.allowed(write):
                 return f"{explain(write)} ({self.source})"
         return None
@@ -176,7 +189,7 @@ class RulePolicy:
         problem = self._no_grant(message.agent)
         if problem is not None:
             return None, f"{problem}: its state is not trusted"
-        kept, dropped = review_state(message, graph, self.allowed)
+        kept, dropped = review_state(message, graph, self.allowed, self.valued)
         return kept, None if dropped is None else f"{dropped} ({self.source})"
 
 
@@ -190,5 +203,8 @@ def explain(write: Write) -> str:
     if write.op == "attr":
         return f"agent {write.writer!r} may not set {write.attr!r} on a {what}"
     if write.op == "init":
+        if write.value is not None:
+            return (f"agent {write.writer!r} may not create a {what} with {write.attr!r} = "
+                    f"{write.value!r}")
         return f"agent {write.writer!r} may not create a {what} with {write.attr!r}"
     return f"agent {write.writer!r} may not {write.op} a {what}"

@@ -3,6 +3,11 @@
 Why Python: no `zenohd` binary is packaged on the registries we use; the eclipse-zenoh wheel can
 run in router mode.  Agents connect to it in client mode.  Prints one "ready" line on stdout.
 
+ACL denials (dsr/acl_denials.py): Zenoh drops a message its access-control list denies without
+a word to the sender; the router counts each one (by user, message kind and key), logs the
+first ones and then a summary every 10 s, and answers `chronav/<graph>/router?stats` with the
+counts (`chronav dsr stats` shows them).
+
 Security (docs/deployment.md): `--credentials` turns on user/password authentication (every
 client must present a listed user), `--acl` loads an access-control list on the key space,
 `--tls-*` serve tls/ endpoints.  The same settings can come from CHRONAV_ZENOH_* variables or a
@@ -21,6 +26,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
+from dsr.acl_denials import AclDenials, capture_zenoh_log, stats_key
 from dsr.config import (DEFAULT_ROUTER, ENV_CONNECT, ENV_LISTEN, ENV_MODE, ZenohSettings,
                         check_endpoint, clean_zenoh_error)
 from dsr.errors import ConfigError
@@ -93,6 +99,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dsr.router: {exc}", file=sys.stderr)
         return 2
     exit_on_sigterm()
+    denials = AclDenials(counting=settings.acl_file is not None or settings.config_file is not None)
+    if denials.counting:
+        capture_zenoh_log(denials.on_log_line)   # the ACL's refusals, counted and logged
     try:
         session = zenoh.open(conf)
     except zenoh.ZError as exc:
@@ -100,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
               file=sys.stderr)
         return 1
     try:
+        session.declare_queryable(stats_key("*"), denials.on_query, complete=True)
         print(f"dsr.router ready on {','.join(settings.listen) or '(config file endpoints)'}"
               f" ({settings.describe()})", flush=True)
         threading.Event().wait()

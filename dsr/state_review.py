@@ -25,7 +25,8 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from dsr.crdt import REMOVAL_RECEIPT, ElementState
-from dsr.writes import Element, GraphLookup, Write, message_node_types, node_types, removes
+from dsr.writes import (Element, GraphLookup, Write, init_value, message_node_types,
+                        node_types, removes)
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
@@ -35,8 +36,10 @@ _MAX_REPORTED = 3
 
 
 class _Review:
-    def __init__(self, message: Decoded, graph: GraphLookup, allowed: Allowed) -> None:
+    def __init__(self, message: Decoded, graph: GraphLookup, allowed: Allowed,
+                 valued: frozenset[str] = frozenset()) -> None:
         self.message, self.graph, self.allowed = message, graph, allowed
+        self.valued = valued
         self.problems: list[str] = []
         self.dropped = 0
         self._writers: dict[int, str | None] = {}
@@ -58,13 +61,14 @@ class _Review:
             self.problems.append(problem)
 
     def ok(self, replica: int, element: Element, types: tuple[str | None, ...], op: str,
-           attr: str | None, src: str | None, dst: str | None) -> bool:
+           attr: str | None, src: str | None, dst: str | None, value: object = None) -> bool:
         """Memoised per stamping replica: a 10,000-node state repeats a few dozen questions."""
-        key = (replica, element, types, op, attr, src, dst)
+        key = (replica, element, types, op, attr, src, dst, value)
         if key not in self._memo:
             from dsr.policy_rules import explain
             who = self.writer(replica)
-            writes = [Write(who, element, t, op, attr, src, dst) for t in types]  # type: ignore[arg-type]
+            writes = [Write(who, element, t, op, attr, src, dst, value=value)  # type: ignore[arg-type]
+                      for t in types]
             refused = next((w for w in writes if not self.allowed(w)), None)
             self._memo[key] = None if refused is None else explain(refused)
         problem = self._memo[key]
@@ -82,10 +86,12 @@ class _Review:
         bad_meta = state.meta is not None and not ok(state.meta[1], element, types, "create",
                                                      None, src, dst)
         add = state.add
-        bad_attrs = [key for key, (hlc, replica, _v) in state.attrs.items()
+        valued = self.valued
+        bad_attrs = [key for key, (hlc, replica, value) in state.attrs.items()
                      if key != REMOVAL_RECEIPT and not ok(
                          replica, element, types, "init" if add.get(replica) == hlc else "attr",
-                         key, src, dst)]
+                         key, src, dst, init_value(value) if key in valued
+                         and add.get(replica) == hlc else None)]
         bad_removal = removes(state) and _news(state, local) and not self._removal_allowed(
             state, element, types, src, dst)
         if not (bad_adds or bad_meta or bad_attrs or bad_removal):
@@ -128,11 +134,13 @@ def _news(state: ElementState, local: ElementState | None) -> bool:
     return any(hlc > local.rem.get(replica, 0) for replica, hlc in state.rem.items())
 
 
-def review_state(message: Decoded, graph: GraphLookup, allowed: Allowed) -> tuple[Decoded, str | None]:
-    """The acceptable part of a state, and a summary of what was dropped (None: nothing)."""
+def review_state(message: Decoded, graph: GraphLookup, allowed: Allowed,
+                 valued: frozenset[str] = frozenset()) -> tuple[Decoded, str | None]:
+    """The acceptable part of a state, and a summary of what was dropped (None: nothing).
+    `valued`: keys whose initial values the policy judges (dsr/writes.py Write.value)."""
     from dsr.wire import Decoded as DecodedMessage
 
-    review = _Review(message, graph, allowed)
+    review = _Review(message, graph, allowed, valued)
     element_state = graph.element_state
     nodes = []
     for node_id, state in message.nodes:

@@ -22,6 +22,18 @@ running:
   it; counted as `deferred`).  `seen[z]` exists only once z's own state has been merged here
   (dsr/transport.py `_advance`): until then every such stamp is deferred.
 
+- this replica knows first-hand what it wrote itself: a relayed stamp of its own replica id
+  that would change it is forged whatever its time (forged_stamp), and a table entry giving
+  its own agent a replica id it does not know is a lie (forged_writer); the transport then
+  publishes a digest at once, so members that deferred the claim fetch its state and refuse
+  the claim from then on;
+- a relayed removal that hides nothing this replica shows (an old removal on an element added
+  again, which another member has already compacted) forges nothing: it is not judged.
+
+What a replica serves in its own state replies is decided elsewhere (DSRGraph.served_writers,
+transport `_note_writers`): only bindings it can prove, never a claim it relayed or deferred,
+so a lie told to one member is not repeated as that member's word.
+
 Writes of agents that are not running (a previous incarnation, a tool that has exited) can
 only come relayed: they are attributed through the table and judged by the write policy.  The
 first state a replica merges when it joins has nothing to be checked against and is trusted
@@ -46,6 +58,12 @@ class Screened:
     problems: list[Problem] = field(default_factory=list)
     refused: int = 0
     deferred: int = 0
+    #: the state forged a claim about this replica's own agent (a table entry it never made,
+    #: or a stamp of its own replica id it never wrote): it should make its own state known
+    about_me: bool = False
+
+#: the watermark of this replica's own id: it holds every write it ever stamped
+_ALL_OF_IT = 2**64
 
 
 def _stampers(state: ElementState) -> Iterator[int]:
@@ -58,30 +76,56 @@ def _stampers(state: ElementState) -> Iterator[int]:
 
 def screen_state(message: Decoded, *, local: Callable[[str, object], ElementState | None],
                  binding: Callable[[int], str | None], live: set[str],
-                 seen: dict[int, int], vouched: set[str] | None = None) -> Screened:
+                 seen: dict[int, int], vouched: set[str] | None = None,
+                 me: tuple[str, int] | None = None,
+                 attributed: Callable[[int], str | None] | None = None) -> Screened:
     """The part of a state reply whose stamps are credible (see the module docstring).
 
     `vouched`: running agents whose own state (current incarnation) this replica has merged,
     so it knows every replica id they vouch for; a table entry for another of them is a lie.
-    For a running agent not in it the entry cannot be judged yet: its stamps are deferred."""
+    For a running agent not in it the entry cannot be judged yet: its stamps are deferred.
+
+    `me`: (this replica's agent, its replica id).  This replica knows first-hand what it
+    wrote: a stamp of its own id that would change its state is forged whatever its time
+    (forged_stamp), and a table entry giving its agent a replica id it does not know (its own,
+    or a previous incarnation listed in the state it joined with) is forged (forged_writer).
+
+    `attributed`: this replica's attribution of replica ids, relayed ones included (a claim
+    relayed while its agent was not running): a stamp it gives to a running agent is judged
+    like one the table gives to it."""
     vouched = live if vouched is None else vouched
     sender = message.agent
     result = Screened(message)
     lying: dict[int, str] = {}
     writers = dict(message.writers)
+    my_agent, my_replica = me if me is not None else (None, 0)
+    if me is not None:
+        seen = {**seen, my_replica: _ALL_OF_IT}
     for key, agent in message.writers.items():
         replica = int(key)
         known = binding(replica)
-        if known is None and agent != sender and agent in vouched and agent in live \
-                and replica != message.replica:
-            lying[replica] = agent
-            del writers[key]
-            result.problems.append((
-                "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
-                f"but {agent!r} is running and never used or vouched for that replica"))
+        if known is not None or agent == sender or replica == message.replica:
+            continue
+        if agent == my_agent:
+            # this agent learnt its previous incarnations from the state it joined with (and
+            # a relay serves only what it can prove): an id it does not know is not its own
+            result.about_me = True
+        elif not (agent in vouched and agent in live):
+            continue
+        lying[replica] = agent
+        del writers[key]
+    if lying:                               # one refusal per state, however many entries
+        replica, agent = next(iter(lying.items()))
+        more = f" (and {len(lying) - 1} more such entries)" if len(lying) > 1 else ""
+        result.problems.append((
+            "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
+            f"but {agent!r} is running and never used or vouched for that replica{more}"))
 
     def agent_of(replica: int) -> str | None:
-        return binding(replica) or writers.get(str(replica))
+        agent = binding(replica) or writers.get(str(replica))
+        if agent is None and attributed is not None:
+            agent = attributed(replica)
+        return agent
 
     # replicas whose relayed stamps must be checked: running agents other than the sender
     suspects: dict[int, str] = {}
@@ -103,6 +147,27 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
              for k, s in message.edges]
     result.message = _with(message, nodes, edges, writers)
     return result
+
+
+def removal_changes_view(state: ElementState, held: ElementState | None) -> bool:
+    """Would merging the removal information of `state` (its `rem` dots and `cleared`) hide
+    anything `held` shows?  A removal that hides nothing (an old removal of an element that
+    was added again since, which another member has already forgotten: compaction is not
+    simultaneous) is covered by what this replica holds: relaying it proves nothing and
+    forges nothing, so it is never called forged (docs/dsr_wire_format.md, "Tombstones")."""
+    if held is None:
+        return False
+    rem = state.rem
+    for replica, hlc in held.add.items():
+        if hlc > held.rem.get(replica, 0) and hlc <= rem.get(replica, 0):
+            return True
+    cleared = state.cleared
+    if cleared > held.cleared:
+        floor = held.cleared
+        for key, reg in held.attrs.items():
+            if key != REMOVAL_RECEIPT and floor < reg[0] <= cleared:
+                return True
+    return False
 
 
 def _with(message: Decoded, nodes: list[tuple[int, ElementState]],
@@ -130,8 +195,10 @@ def _screen(result: Screened, element: str, key: object, state: ElementState,
         if replica in lying:
             result.refused += 1
             return
-        if hlc <= seen.get(replica, 0):
+        watermark = seen.get(replica, 0)
+        if hlc <= watermark:
             result.refused += 1
+            result.about_me = result.about_me or watermark == _ALL_OF_IT
             if len(result.problems) < 5:
                 result.problems.append((
                     "forged_stamp", f"state of {result.message.agent!r} carries a write "
@@ -151,7 +218,8 @@ def _screen(result: Screened, element: str, key: object, state: ElementState,
               register_wins(state.meta, held.meta if held is not None else None))
     for attr, reg in state.attrs.items():
         if attr == REMOVAL_RECEIPT:
-            judge(("removal", None), reg[1], reg[0], reg[0] > floor)
+            judge(("removal", None), reg[1], reg[0],
+                  reg[0] > floor and removal_changes_view(state, held))
         else:
             judge(("attr", attr), reg[1], reg[0], reg[0] > floor and register_wins(
                 reg, held.attrs.get(attr) if held is not None else None))

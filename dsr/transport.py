@@ -34,7 +34,7 @@ from dsr.collector import FREEZE_AFTER_JOIN_NODES, gc_paused, tune_collector
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
-from dsr.limits import LIMITS
+from dsr.limits import LIMITS, node_problem
 from dsr.policy import AllowAll, WritePolicy
 from dsr.receiver import DeltaReceiver, receiver_of
 from dsr.signals import SpinPolicy
@@ -55,7 +55,7 @@ class TransportError(DSRError, ConnectionError):
 
 #: reasons a received message (or part of a state) is refused; counted one by one
 REASONS = ("invalid", "too_large", "wrong_graph", "wrong_kind", "forged_writer", "forged_stamp",
-           "clock_ahead", "removal_receipt", "policy")
+           "clock_ahead", "removal_receipt", "policy", "too_many_attrs", "node_too_large")
 
 
 @dataclass
@@ -79,6 +79,8 @@ class ReplicaStats:
     digests_sent: int = 0
     digests_received: int = 0
     anti_entropy: int = 0       # syncs started because a member's digest showed we lag
+    fetches_postponed: int = 0  # digest-triggered state fetches held back by the rate limit
+    forgeries_about_me: int = 0  # states forging a claim about this agent (answered at once)
     compacted: int = 0          # tombstones forgotten once every member had seen the removal
     tombstones: int = 0         # tombstones held (at the last digest)
 
@@ -148,6 +150,12 @@ class Replica:
         self.member_retention_s = member_retention_s
         #: how long a member must hold writes we lack before we fetch a state for them
         self.lag_grace_s = 4 * digest_interval
+        #: longest pause between two digest-triggered state fetches of one member
+        self.max_fetch_backoff_s = 30.0
+        #: member -> (no digest-triggered fetch before, pause after the next one, last fetch)
+        self._fetch_backoff: dict[str, tuple[float, float, float]] = {}
+        #: monotonic clock of the anti-entropy timers (tests replace it)
+        self._now: Callable[[], float] = time.monotonic
         self.stats = ReplicaStats()
         self._log_budget = _LogBudget()
         self.session: Any = None
@@ -169,6 +177,8 @@ class Replica:
         #: agents whose own state (this incarnation) has been merged: their replica ids known
         self._vouched: set[str] = set()
         self._pending_syncs: set[str] = set()
+        #: writers the `seen` of the last state merged covers (completeness of a join's copy)
+        self._state_cover = 0
         self._members: dict[str, Member] = {}
         #: agent -> the Zenoh KeyExpr of its delta key, declared in this session
         self._writer_keys: dict[str, Any] = {}
@@ -351,13 +361,13 @@ class Replica:
                                      f"key of {claimed!r}")
         if message.replica == graph.replica_id:
             return "forged_writer", f"forged writer: uses this replica's id {message.replica}"
-        owner = graph.writer_agent(message.replica)
+        owner = graph.bound_agent(message.replica)
         if owner is not None and owner != message.agent:
             return "forged_writer", (f"forged writer: replica id {message.replica} belongs to "
                                      f"agent {owner!r}")
         if kind == "state":
             for replica, agent in message.writers.items():
-                known = graph.writer_agent(int(replica))
+                known = graph.bound_agent(int(replica))
                 if known is not None and known != agent:
                     return "forged_writer", (f"forged writer: state says replica {replica} is "
                                              f"{agent!r}, it is {known!r}")
@@ -431,6 +441,30 @@ class Replica:
                     self._reject(key, "policy", problem_text)
                     return
             graph = self.graph
+            held = graph._nodes.get
+            for node_id, state in message.nodes:     # node limits (dsr/limits.py)
+                attrs = state.attrs
+                if not attrs:
+                    continue
+                current = held(node_id)
+                if current is not None:             # scalars over existing keys: cannot grow
+                    if len(attrs) == 1:             # (the common update: one key)
+                        ((name, reg),) = attrs.items()
+                        kind = type(reg[2])
+                        if name in current.attrs and kind is not str and kind is not list:
+                            continue
+                    elif attrs.keys() <= current.attrs.keys():
+                        for reg in attrs.values():
+                            kind = type(reg[2])
+                            if kind is str or kind is list:
+                                break
+                        else:
+                            continue
+                problem = node_problem(node_id, current.attrs if current is not None else None,
+                                       attrs, registers=True)
+                if problem is not None:
+                    self._reject(key, *problem)
+                    return
             if graph._bound.get(message.replica) is None:
                 graph.note_writer(message.replica, message.agent)
             graph.apply_message(message)
@@ -478,12 +512,17 @@ class Replica:
             # Anti-entropy: the member holds writes we lack.  Deltas in flight, or a backlog
             # on a loaded machine, look the same for a while: only a lag that lasts
             # lag_grace_s (and at most once per lag_grace_s per writer) fetches a state.
-            now = time.monotonic()
+            now = self._now()
             since = member.behind
             for replica, hlc in message.seen.items():
                 if replica != mine and hlc > self._seen.get(replica, 0) and replica not in since:
                     since[replica] = (hlc, now)
             targets: set[str] = set()
+            if message.agent not in self._vouched:
+                # its own state (this incarnation) is not merged here yet: until it is, its
+                # watermark and its replica ids are unknown here and claims about it are
+                # deferred; fetch it now (also how a member answers a forged claim about it)
+                targets.add(message.agent)
             for replica, (hlc, at) in list(since.items()):
                 if self._seen.get(replica, 0) >= hlc:
                     del since[replica]
@@ -495,11 +534,32 @@ class Replica:
                     targets.add(owner if known is not None and known.live
                                 else message.agent)   # type: ignore[arg-type]
                     since[replica] = (message.seen.get(replica, hlc), now)
+            targets = {t for t in targets if self._fetch_allowed(t, now)}
             lagging = bool(targets)
         if lagging and not self.graph.read_only:
             self.stats.anti_entropy += 1
             for target in sorted(targets):
                 self._request_sync(target)
+
+    def _fetch_allowed(self, target: str, now: float) -> bool:
+        """Rate limit of the state fetches digests ask for, per member: the first at once,
+        the next ones after a pause that doubles (lag_grace_s, 2x, 4x ... up to
+        max_fetch_backoff_s) as long as digests keep asking (a member whose state is
+        refused, or that keeps announcing writes its state does not carry; or this replica
+        is so loaded that it lags behind its own queue of deltas: fetching a state then
+        makes it slower still).  The pause starts again from lag_grace_s only after a quiet
+        period of twice the longest pause.  So a member costs one fetch per change it makes
+        (a lost delta), and at most one per max_fetch_backoff_s when something keeps them
+        coming.  Caller holds _table_lock."""
+        base, longest = self.lag_grace_s, self.max_fetch_backoff_s
+        not_before, pause, last = self._fetch_backoff.get(target, (0.0, base, -2 * longest))
+        if now < not_before:
+            self.stats.fetches_postponed += 1
+            return False
+        if now - last >= 2 * longest:
+            pause = base
+        self._fetch_backoff[target] = (now + pause, min(2 * pause, longest), now)
+        return True
 
     def _request_sync(self, agent: str) -> None:
         """Queue a state fetch, once: digests of several members may point at the same one."""
@@ -624,19 +684,18 @@ class Replica:
                     self._reject(key, *problem)
                     return
                 self.graph.note_writer(message.replica, message.agent)
+                live = self.live_agents()
                 if self._joined:
-                    message = self._screen(key, message)
+                    message = self._screen(key, message, live)
                 kept, text = self.policy.review_state(message, self.graph)
                 if text is not None:    # refused whole (kept is None), or in part
                     self._reject(key, "policy", text)
                 if kept is None:
                     return
-                self.graph.apply_message(kept)
-                for replica, agent in kept.writers.items():
-                    # an agent vouches for its own incarnations; the first state of a join
-                    # has nothing to be checked against and is trusted (state_trust.py)
-                    if agent == message.agent or not self._joined:
-                        self.graph.note_writer(int(replica), agent)
+                self._note_writers(message.agent, kept.writers, live)
+                self.graph.apply_message(wire.Decoded(
+                    kept.kind, kept.graph, kept.agent, kept.replica, {},
+                    self._within_node_limits(key, kept.nodes), kept.edges, kept.top_hlc))
                 self._note_seen(message)
             self.stats.state_merged += 1
         except WireError as exc:
@@ -644,6 +703,52 @@ class Replica:
         except Exception:  # noqa: BLE001
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+
+    def _within_node_limits(self, key: str, nodes: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
+        """A state's node entries minus those that would take a node over the node limits
+        (dsr/limits.py); counted once per reason and state (saying how many nodes)."""
+        held = self.graph.element_state
+        kept = []
+        problems: dict[str, tuple[str, int]] = {}
+        for node_id, state in nodes:
+            if state.attrs:
+                current = held("node", node_id)
+                problem = node_problem(node_id, current.attrs if current is not None else None,
+                                       state.attrs, registers=True)
+                if problem is not None:
+                    first, count = problems.get(problem[0], (problem[1], 0))
+                    problems[problem[0]] = (first, count + 1)
+                    continue
+            kept.append((node_id, state))
+        for reason, (text, count) in problems.items():   # one refusal per reason and state
+            self._reject(key, reason, text + (f" (and {count - 1} more nodes)" if count > 1
+                                              else ""))
+        return kept
+
+    def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
+        """Which `writers` entries of a merged state this replica takes as its own knowledge
+        (and will serve in its state replies: DSRGraph.served_writers), and which only to
+        attribute relayed writes (dsr/state_trust.py):
+        - the sender's own replica ids (an agent vouches for its incarnations): proven (after
+          the join, the screening has removed every entry naming this replica's own agent
+          that it does not know: state_trust.screen_state);
+        - every entry of the first state of a join: nothing to check it against, trusted
+          (documented limit; its sender served only what it could prove).  Entries about
+          running agents included: a joiner that left them out would relay their writes
+          without attribution to the next joiner, whose policy would refuse them;
+        - after the join, an entry about an agent that is not running: attribution only, never
+          served (a relay proves nothing); about a running agent: nothing (deferred until that
+          agent's own messages or state say it)."""
+        graph = self.graph
+        me = graph.agent
+        for key, agent in writers.items():
+            replica = int(key)
+            if graph.bound_agent(replica) is not None:
+                continue
+            if agent == sender or agent == me or not self._joined:
+                graph.note_writer(replica, agent)
+            elif agent not in live:
+                graph.note_relayed_writer(replica, agent)
 
     def _note_seen(self, message: wire.Decoded) -> None:
         """After merging a state: we now hold what its sender held of its own writes, and of
@@ -657,6 +762,7 @@ class Replica:
         with self._table_lock:
             if message.clock:                   # the last part of the state: all merged
                 self._vouched.add(sender)
+                self._state_cover = len(message.seen)
             for replica, hlc in message.seen.items():
                 owner = graph.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
@@ -665,21 +771,34 @@ class Replica:
                 if hlc >= self._seen.get(replica, 0):   # (one that is not running sends
                     self._seen[replica] = hlc          # nothing more: a relay's is true)
 
-    def _screen(self, key: str, message: wire.Decoded) -> wire.Decoded:
+    def _screen(self, key: str, message: wire.Decoded, live: set[str]) -> wire.Decoded:
         from dsr.state_trust import screen_state
         graph = self.graph
         with self._table_lock:
             seen = dict(self._seen)
-        live = self.live_agents()
-        live.add(graph.agent)
-        with self._table_lock:
             vouched = set(self._vouched)
+        live = live | {graph.agent}
         screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
-                                live=live, seen=seen, vouched=vouched)
+                                live=live, seen=seen, vouched=vouched,
+                                me=(graph.agent, graph.replica_id),
+                                attributed=graph.writer_agent)
         self.stats.deferred += screened.deferred
         for reason, text in screened.problems:
             self._reject(key, reason, text)
+        if screened.about_me:
+            self._answer_forgery(message.agent)
         return screened.message
+
+    def _answer_forgery(self, liar: str) -> None:
+        """A state forged a claim about this agent: say at once what it really published (a
+        digest on its own key: every member that has not merged this agent's own state
+        since it (re)started then fetches it, dsr/transport.py `_on_digest`), so the
+        members that deferred the claim learn the truth and refuse it from then on."""
+        self.stats.forgeries_about_me += 1
+        log.warning("DSR %s: the state of %r forged a claim about %s; publishing a digest",
+                    self.graph.agent, liar, self.graph.agent)
+        if self._publisher is not None and not self.graph.read_only:
+            self.publish_digest()
 
     # ------------------------------------------------------------------ anti-entropy
     def _initial_sync(self) -> None:
@@ -695,7 +814,11 @@ class Replica:
             self._declare_writer_key(member, True)
         random.shuffle(members)          # spread the load when many agents start together
         for member in members:
-            if self._sync(member):
+            # a member whose state covers every running member (its `seen` has as many
+            # writers) is a complete copy; a tool that serves only its own writes is not:
+            # merge it and go on (docs/dsr_wire_format.md, "Writing as a foreign client")
+            self._state_cover = 0
+            if self._sync(member) and self._state_cover >= len(members):
                 return
         if not members:
             self._sync(_ALL)

@@ -37,6 +37,9 @@ class Write(NamedTuple):
     src: str | None = None      # edges: type of the source node
     dst: str | None = None      # edges: type of the destination node
     cascade: str | None = None  # edge delete caused by deleting a node of this type
+    #: op "init" of a key some rule restricts at creation (`init_values`): the value given;
+    #: else None (values stay out of the question, so decisions stay few and cacheable)
+    value: object = None
 
 
 class GraphLookup(Protocol):
@@ -73,8 +76,15 @@ def node_types(node_id: int, state: ElementState, graph: GraphLookup) -> set[str
     return {t for t in (known, new) if t is not None} or {None}
 
 
-def delta_writes(message: Decoded, graph: GraphLookup) -> Iterator[Write]:
-    """Every write of a validated delta, attributed to its sender (duplicates possible)."""
+def init_value(value: object) -> object:
+    """The value of an initial register as a write names it (hashable; lists as tuples)."""
+    return tuple(value) if type(value) is list else value
+
+
+def delta_writes(message: Decoded, graph: GraphLookup,
+                 valued: frozenset[str] = frozenset()) -> Iterator[Write]:
+    """Every write of a validated delta, attributed to its sender (duplicates possible).
+    `valued`: keys whose initial values the policy judges (Write.value)."""
     agent = message.agent
     created = message_node_types(message, graph)
 
@@ -86,30 +96,35 @@ def delta_writes(message: Decoded, graph: GraphLookup) -> Iterator[Write]:
         if removes(state):
             deleted[node_id] = type_of(node_id)
         for type_ in node_types(node_id, state, graph):
-            yield from _element_writes(agent, state, "node", type_, None, None, None)
+            yield from _element_writes(agent, state, "node", type_, None, None, None, valued)
     for (src, dst, edge_type), state in message.edges:
         cascade = (deleted.get(src) or deleted.get(dst)) if removes(state) else None
         yield from _element_writes(agent, state, "edge", edge_type, type_of(src), type_of(dst),
-                                   cascade)
+                                   cascade, valued)
 
 
 def _element_writes(agent: str, state: ElementState, element: Element, type_: str | None,
-                    src: str | None, dst: str | None, cascade: str | None) -> Iterator[Write]:
+                    src: str | None, dst: str | None, cascade: str | None,
+                    valued: frozenset[str] = frozenset()) -> Iterator[Write]:
     if state.add or state.meta is not None:
         yield Write(agent, element, type_, "create", None, src, dst)
     removal = removes(state)
     if removal:
         yield Write(agent, element, type_, "delete", None, src, dst, cascade)
     add = state.add
-    for key, (hlc, replica, _value) in state.attrs.items():
+    for key, (hlc, replica, value) in state.attrs.items():
         if removal and key == REMOVAL_RECEIPT:
             continue
         op: Op = "init" if add.get(replica) == hlc else "attr"
-        yield Write(agent, element, type_, op, key, src, dst)
+        if op == "init" and key in valued:
+            yield Write(agent, element, type_, op, key, src, dst, value=init_value(value))
+        else:
+            yield Write(agent, element, type_, op, key, src, dst)
 
 
 def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tuple[int, int, str],
-                 delta: dict[str, object], cascade: str | None = None) -> Iterator[Write]:
+                 delta: dict[str, object], cascade: str | None = None,
+                 valued: frozenset[str] = frozenset()) -> Iterator[Write]:
     """The writes of one local change (the keyword pieces of a delta) before it is applied:
     the same questions receivers will ask about the delta (see delta_writes)."""
     from dsr.crdt import ElementState
@@ -121,8 +136,8 @@ def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tu
                          attrs=dict(delta.get("attrs") or {}))  # type: ignore[arg-type]
     if element == "node":
         for type_ in node_types(key, state, graph):  # type: ignore[arg-type]
-            yield from _element_writes(agent, state, "node", type_, None, None, None)
+            yield from _element_writes(agent, state, "node", type_, None, None, None, valued)
     else:
         src, dst, edge_type = key  # type: ignore[misc]
         yield from _element_writes(agent, state, "edge", edge_type, graph.node_type_of(src),
-                                   graph.node_type_of(dst), cascade)
+                                   graph.node_type_of(dst), cascade, valued)

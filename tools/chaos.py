@@ -13,7 +13,10 @@ one the tool measures:
   stops writing (the clock ticks), so this is a sampled measure: the first sample where all
   digests agree.
 
-"Writes lost" must be 0: every mission seen ``done`` is still done at the end, every agenda change
+"Trust" (``chaos_checks.trust_summary``): at the end, every member's refusal counters must be 0 (faults
+are not attacks: no honest state refused after a restart), no member may serve a writer claim about
+another that the other does not make, and the state fetches each member made (and held back) are
+reported, with the router's ACL denials.  "Writes lost" must be 0: every mission seen ``done`` is still done at the end, every agenda change
 answered ``accepted`` is in the agenda's change log exactly once, and the activities the agenda
 agent publishes are exactly the scene's agenda with that log replayed (what a restarted agenda
 agent rebuilds).  The run itself is `tools.launch.run_system`, unchanged: faults are injected
@@ -61,6 +64,7 @@ class ChaosReport:
     run_dir: str
     rrd: str | None
     events: list[str] = field(default_factory=list)
+    trust: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         """The one JSON object of `chronav chaos --json`."""
@@ -81,6 +85,7 @@ class ChaosReport:
             "agenda_requests": self.requests, "restarts": self.restarts,
             "wall_s": round(self.wall_s, 2), "run_dir": self.run_dir, "rrd": self.rrd,
             "faults": [f.as_dict() for f in self.faults], "events": self.events,
+            "trust": self.trust,
         }
 
 
@@ -119,13 +124,19 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
         chaos.close()
     pending = [name for name, state in requests.items() if state not in ("accepted", "refused")]
     # Faults the run outlived are reported (faults_injected < faults_planned), not failures.
-    ok = (result.ok and not lost and not pending and chaos.final_converged
+    # Kills, stops and restarts are not hostile: no member may refuse an honest one's state, and
+    # no member may serve a claim about another that the other does not make.
+    trust = chaos.trust
+    honest = bool(trust) and trust.get("refusals_total") == 0 \
+        and not trust.get("unproven_claims_served")
+    ok = (result.ok and not lost and not pending and chaos.final_converged and honest
           and all(o.converged_s is not None for o in chaos.outcomes if o.injected))
     report = ChaosReport(scene=loaded.scene.name, ok=ok, faults=chaos.outcomes, missions=missions,
                          writes_lost=len(lost), lost=lost, requests=requests, final_converged=chaos.final_converged,
                          final_divergence=chaos.final_divergence,
                          restarts=result.restarts, wall_s=result.wall_s, run_dir=str(result.run_dir),
-                         rrd=str(result.rrd_path) if result.rrd_path else None, events=result.events)
+                         rrd=str(result.rrd_path) if result.rrd_path else None, events=result.events,
+                         trust=trust)
     (result.run_dir / "chaos.json").write_text(json.dumps(report.summary(), indent=2))
     return report
 
@@ -182,4 +193,8 @@ def register(app: typer.Typer) -> None:
                           f"convergence max {summary['convergence_max_s']} s, writes lost {summary['writes_lost']}")
             for line in summary["lost"]:
                 console.print(f"  lost: {line}")
+            trust = summary.get("trust") or {}
+            console.print(f"refusals {trust.get('refusals_total')} {trust.get('refusals') or ''}, "
+                          f"unproven claims served {len(trust.get('unproven_claims_served') or [])}, "
+                          f"router ACL denials {trust.get('router_acl_denied')}")
         raise typer.Exit(0 if report.ok else 1)

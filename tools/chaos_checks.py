@@ -25,8 +25,74 @@ def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dic
         message = wire.decode(reply.ok.payload.to_bytes())
         copy = DSRGraph("probe", graph=graph_name)
         copy.apply_message(message)
+        copy.served_table = dict(message.writers)    # what that member vouches for (below)
         copies[message.agent] = copy
     return copies
+
+
+def unproven_claims(copies: dict[str, Any]) -> list[str]:
+    """Claims a member serves in its state's `writers` about ANOTHER member that answered,
+    which that member's own table does not make: a replica never serves a claim it cannot
+    prove (docs/dsr_wire_format.md, "What a replica serves"), so in a run without a liar this
+    is empty."""
+    own = {agent: {r for r, a in getattr(copy, "served_table", {}).items() if a == agent}
+           for agent, copy in copies.items()}
+    found = []
+    for agent, copy in copies.items():
+        for replica, claimed in getattr(copy, "served_table", {}).items():
+            if claimed != agent and claimed in own and replica not in own[claimed]:
+                found.append(f"{agent} serves replica {replica} as {claimed!r}, which "
+                             f"{claimed!r} does not list")
+    return found
+
+
+def member_stats(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, Any]:
+    """Every member's counters (`?stats`) and the router's ACL denials, as `chronav dsr stats`
+    gathers them: {"members": {agent: report}, "router": report or None}."""
+    import orjson
+    import zenoh
+
+    from dsr import wire
+    from dsr.acl_denials import FORMAT as ROUTER_FORMAT, stats_key
+    from dsr.transport import STATS_FORMAT
+
+    members: dict[str, Any] = {}
+    router = None
+    for key, wanted in ((wire.state_key(graph_name, "*") + "?stats", STATS_FORMAT),
+                        (stats_key(graph_name) + "?stats", ROUTER_FORMAT)):
+        for reply in session.get(key, target=zenoh.QueryTarget.ALL,
+                                 consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout_s):
+            if reply.ok is None:
+                continue
+            try:
+                report = orjson.loads(reply.ok.payload.to_bytes())
+            except orjson.JSONDecodeError:
+                continue
+            if isinstance(report, dict) and report.get("format") == wanted:
+                if wanted == STATS_FORMAT:
+                    members[str(report.get("agent"))] = report
+                else:
+                    router = report
+    return {"members": members, "router": router}
+
+
+def trust_summary(stats: dict[str, Any], copies: dict[str, Any]) -> dict[str, Any]:
+    """The trust counters of a run: refusals per member and reason (0 in a run without
+    hostile input, restarts included), state fetches, unproven claims served, ACL denials."""
+    refusals: dict[str, dict[str, int]] = {}
+    fetches: dict[str, dict[str, int]] = {}
+    for agent, report in stats.get("members", {}).items():
+        counters = report.get("stats", {})
+        rejects = {k: v for k, v in (counters.get("rejects") or {}).items() if v}
+        if rejects:
+            refusals[agent] = rejects
+        fetches[agent] = {k: int(counters.get(k, 0)) for k in
+                          ("syncs", "anti_entropy", "fetches_postponed", "state_served",
+                           "deferred", "forgeries_about_me")}
+    router = stats.get("router")
+    return {"refusals": refusals, "refusals_total": sum(sum(r.values()) for r in refusals.values()),
+            "fetches": fetches, "unproven_claims_served": unproven_claims(copies),
+            "router_acl_denied": None if router is None else router.get("acl_denied")}
 
 
 def describe_divergence(copies: dict[str, Any], limit: int = 4) -> str:

@@ -71,6 +71,8 @@ class ChaosRun:
         self.final_divergence = ""
         self._last_copies: dict[str, Any] = {}
         self._unsettled: tuple[FaultOutcome, float] | None = None
+        #: refusals, fetches, unproven claims and ACL denials at the end (chaos_checks)
+        self.trust: dict[str, Any] = {}
 
     # --------------------------------------------------------------- launcher thread
     def on_tick(self, status: dict[str, Any]) -> None:
@@ -92,6 +94,7 @@ class ChaosRun:
             final = self._converge(timeout_s=10.0, final=True)
             self.final_converged = final is not None
             self.final_divergence = "" if self.final_converged else self._divergence()
+            self.trust = self._trust()
             if self._unsettled is not None and final is not None:
                 outcome, t0 = self._unsettled
                 outcome.converged_s = round(time.monotonic() - t0, 3)
@@ -247,6 +250,18 @@ class ChaosRun:
             return {}
         self._last_copies = copies
         return {agent: copy.digest() for agent, copy in copies.items()}
+
+    def _trust(self) -> dict[str, Any]:
+        """The trust counters at the end of the run (tools/chaos_checks.trust_summary)."""
+        from tools.chaos_checks import member_stats, trust_summary
+        session = None if self._replica is None else self._replica.session
+        if session is None:
+            return {}
+        try:
+            return trust_summary(member_stats(session, self.graph.graph_name), self._last_copies)
+        except Exception as exc:  # noqa: BLE001 - a report, not a reason to fail the run
+            self.log(f"trust counters unavailable: {type(exc).__name__}: {exc}")
+            return {}
 
     def _divergence(self) -> str:
         """How the last sample failed: missing answers, or who differs on what."""

@@ -188,7 +188,9 @@ def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
     except zenoh.ZError:
         raise ConnectionProblem(unreachable_message(target)) from None
     members: dict[str, Any] = {}
+    router: dict[str, Any] | None = None
     try:
+        router = _router_stats(session, target.graph, timeout)
         replies = session.get(wire.state_key(target.graph, "*") + "?stats",
                               target=zenoh.QueryTarget.ALL,
                               consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
@@ -203,7 +205,25 @@ def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
                 members[str(report.get("agent"))] = report
     finally:
         session.close()
-    return {"graph": target.graph, "members": dict(sorted(members.items()))}
+    return {"graph": target.graph, "members": dict(sorted(members.items())), "router": router}
+
+
+def _router_stats(session: Any, graph: str, timeout: float) -> dict[str, Any] | None:
+    """The router's ACL denials (dsr/acl_denials.py), or None (a router without an ACL, or
+    one that is not chronav's dsr.router)."""
+    import orjson
+
+    from dsr.acl_denials import FORMAT, stats_key
+    for reply in session.get(stats_key(graph) + "?stats", timeout=timeout):
+        if reply.ok is None:
+            continue
+        try:
+            report = orjson.loads(reply.ok.payload.to_bytes())
+        except orjson.JSONDecodeError:
+            continue
+        if isinstance(report, dict) and report.get("format") == FORMAT:
+            return report
+    return None
 
 
 @dsr_app.command("stats")
@@ -244,7 +264,7 @@ def stats(
     from rich.table import Table
     table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
-                   "policy", "deferred", "tombstones", "compacted"):
+                   "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
         table.add_column(column, overflow="fold")
     for agent, report in document["members"].items():
         counters = report.get("stats", {})
@@ -252,6 +272,16 @@ def stats(
         table.add_row(agent, str(report.get("nodes")), str(counters.get("received")),
                       str(counters.get("applied")), str(counters.get("published")),
                       reasons or "0", str(counters.get("rejected_policy")),
-                      str(counters.get("deferred")), str(report.get("tombstones")),
+                      str(counters.get("deferred")),
+                      f"{counters.get('syncs')} ({counters.get('fetches_postponed', 0)})",
+                      str(report.get("tombstones")),
                       str(counters.get("compacted")))
     Console().print(table)
+    router = document.get("router")
+    if router is not None and not router.get("acl", True):
+        typer.echo("router: no access-control list (nothing is denied or counted)")
+    elif router is not None:
+        kinds = "; ".join(f"{d['message']} on {d['key']} by {d['user']!r}: {d['count']}"
+                          for d in router.get("denials", [])[:10])
+        typer.echo(f"router: {router.get('acl_denied', 0)} message(s) denied by the ACL"
+                   + (f" ({kinds})" if kinds else ""))

@@ -101,7 +101,9 @@ def test_hostile_payloads_never_change_or_kill_a_replica(procs, tmp_path):
     print(f"sent {sent}; replica stats {stats}")
     assert sent["delta"] > 100 and sent["state"] > 5
     assert stats["received"] == sent["delta"]
-    assert stats["rejected"] + stats["rejected_policy"] == sent["delta"] + sent["state"]
+    # every delta is refused once; a state may be refused for several reasons at once (a
+    # writers entry naming this agent is `forged_writer`, its parts also `policy`...)
+    assert stats["rejected"] + stats["rejected_policy"] >= sent["delta"] + sent["state"]
     assert stats["applied"] == 0 and stats["errors"] == 0
     assert status["digest"] == digest
     assert proc.poll() is None

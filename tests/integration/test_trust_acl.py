@@ -13,8 +13,11 @@ TLS (tls/ endpoints, certificates from deploy/make_certs.sh) is covered at the e
 
 from __future__ import annotations
 
+import json
+import os
 import shutil
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -108,6 +111,19 @@ def test_acl_stops_forged_deltas_and_agenda_injection(procs, tmp_path):
     stats = status_of(agenda)["stats"]
     # Dropped by the router: the forged deltas never reached the replica, not even to be refused.
     assert stats["rejected"] == 0 and stats["rejected_policy"] == 0, stats
+    # ... but counted there, and visible: `chronav dsr stats` and the router's log (issue #31)
+    shown = subprocess.run(
+        [sys.executable, "-m", "tools.cli", "dsr", "stats", "--json", "--connect", endpoint],
+        capture_output=True, text=True, timeout=60, cwd=REPO_ROOT,
+        env={**os.environ, **user_env("monitor")})
+    assert shown.returncode == 0, shown.stderr
+    router = json.loads(shown.stdout)["router"]
+    denied = {(d["user"], d["message"], d["key"]) for d in router["denials"]}
+    assert ("camera1", "put", "chronav/chronav/delta/agenda") in denied, router
+    assert ("camera1", "put", "chronav/chronav/delta/agenda_tool-evil") in denied, router
+    assert router["acl_denied"] >= 2
+    assert "ACL denied put (ingress) on chronav/chronav/delta/agenda by user 'camera1'" in \
+        (tmp_path / "router.log").read_text()
 
     # A late joiner gets the graph by state transfer: the impostors may not serve state.
     _, late = spawn_script(procs, tmp_path, "monitor", connect=endpoint, env=user_env("monitor"))

@@ -144,6 +144,23 @@ def test_every_process_killed_during_a_mission_and_the_missions_complete(kill_ru
 
 
 @slow
+def test_no_member_refuses_an_honest_one_after_the_restarts(kill_run: dict[str, Any]) -> None:
+    """Issue #31: after restarts, members refused parts of honest states as forged_stamp (an
+    old removal some had compacted); and replicas served writer claims they could not prove.
+    Every process was killed and restarted here: every refusal counter stays at 0, no claim is
+    served unproven, and each member fetched states a bounded number of times."""
+    trust = kill_run["trust"]
+    assert trust["refusals_total"] == 0, trust["refusals"]
+    assert trust["unproven_claims_served"] == [], trust["unproven_claims_served"]
+    assert set(AGENTS) <= set(trust["fetches"])
+    # Digest-triggered fetches: at most 5 per member in a first burst (pauses 2, 4, 8, 16 s),
+    # then one per 30 s (dsr/transport.py _fetch_allowed), whatever the load.
+    wall, members = kill_run["wall_s"], len(trust["fetches"]) - 1
+    for agent, counts in trust["fetches"].items():
+        assert counts["anti_entropy"] <= members * (5 + wall / 30), (agent, counts, wall)
+
+
+@slow
 def test_nothing_acknowledged_is_lost(kill_run: dict[str, Any]) -> None:
     assert kill_run["writes_lost"] == 0, kill_run["lost"]
     assert list(kill_run["agenda_requests"].values()) == ["accepted"]

@@ -388,3 +388,43 @@ def test_policy_from_env(tmp_path):
     assert isinstance(policy, RulePolicy) and policy.has_rights("abc") and not policy.has_rights("b")
     with pytest.raises(PolicyError, match="CHRONAV_WRITE_POLICY"):
         policy_from_env({"CHRONAV_WRITE_POLICY": str(tmp_path / "missing.yaml")})
+
+
+def test_a_tool_cannot_create_a_request_already_answered():
+    """Issue #31: "create includes the values given at creation" let a tool create an
+    agenda_request saying state=accepted.  `init_values` restricts it to `pending`: in deltas,
+    in relayed states, and on the tool's own replica before anything is sent."""
+    from dsr.errors import WriteRefusedError
+    guard = Guard()
+    tool = DSRGraph("agenda_tool-ward3")
+    sent: list[bytes] = []
+    tool.attach(sent.append)
+    asked = tool.insert_node("agenda_request", "agenda_request/ok", {"state": "pending",
+                                                                    "change": "{}"})
+    answered = tool.insert_node("agenda_request", "agenda_request/forged",
+                                {"state": "accepted", "change": "{}"})
+    tool.flush()
+    for payload in sent:
+        guard.delta("agenda_tool-ward3", payload)
+    assert guard.graph.get_node(asked.id) is not None
+    assert guard.graph.get_node(answered.id) is None
+    assert guard.stats.rejects == {"policy": 1}
+    assert "'state' = 'accepted'" in guard.stats.last_reject
+    relay = Guard(agent="relay")
+    relay.state(tool)                         # a state relaying the tool's writes
+    assert relay.graph.get_node(asked.id) is not None
+    assert "state" not in relay.graph.get_node(answered.id).attrs
+    assert relay.stats.rejects == {"policy": 1}
+    checked = Guard(agent="agenda_tool-ward3")    # the tool's own replica, policy attached
+    with pytest.raises(WriteRefusedError, match="'state' = 'refused'"):
+        checked.graph.insert_node("agenda_request", "agenda_request/x", {"state": "refused"})
+    # the agenda itself still answers requests
+    agenda = DSRGraph("agenda")
+    agenda.apply_message(wire.decode(tool.state_message()))
+    sent.clear()
+    agenda.attach(sent.append)
+    agenda.update_node(asked.id, {"state": "accepted"})
+    agenda.flush()
+    for payload in sent:
+        guard.delta("agenda", payload)
+    assert guard.graph.get_attr(asked.id, "state") == "accepted"

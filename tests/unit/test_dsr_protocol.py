@@ -127,8 +127,9 @@ def test_value_and_message_limits_on_local_writes_and_on_receipt():
     with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_DELTA_BYTES"), \
             graph.transaction():
         for i in range(LIMITS.max_delta_bytes // LIMITS.max_value_bytes + 1):
-            graph.update_node(node.id, {f"k{i}": chunk})
+            graph.insert_node("object", f"part{i}", {"k": chunk})   # (a node holds < 4 MiB)
     assert graph.get_node(node.id).attrs == {"ok": "y" * 1000}     # undone whole
+    assert len(graph) == 1
     message = raw_delta(graph, [{"id": node.id, "attrs": {"blob": [1, graph.replica_id, big]}}])
     with pytest.raises(WireError, match="per value"):
         wire.decode(orjson.dumps(message))
@@ -136,6 +137,45 @@ def test_value_and_message_limits_on_local_writes_and_on_receipt():
     huge = orjson.dumps(raw_delta(graph, [])) + b" " * LIMITS.max_delta_bytes
     guard._on_delta(FakeSample(wire.delta_key("chronav", "a"), huge))
     assert guard.stats.rejects == {"too_large": 1}
+
+
+def test_node_limits_count_attributes_and_bytes_locally_and_on_receipt():
+    """Issue #31: a node of 60,000 attributes (3.35 MB) was accepted by every agent."""
+    writer, guard = DSRGraph("a"), Replica(DSRGraph("guard"))
+    sent: list[bytes] = []
+    writer.attach(sent.append)
+    node = writer.insert_node("object", "o", {"x": 1.0})
+    many = {f"k{i}": 1.0 for i in range(LIMITS.max_node_attrs)}
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_NODE_ATTRS"):
+        writer.update_node(node.id, many)
+    chunk = "z" * (LIMITS.max_value_bytes - 10)
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_NODE_BYTES"):
+        for i in range(LIMITS.max_node_bytes // LIMITS.max_value_bytes + 1):
+            writer.update_node(node.id, {f"s{i}": chunk})
+    writer.flush()
+    for payload in sent:
+        guard._on_delta(FakeSample(wire.delta_key("chronav", "a"), payload))
+    assert guard.stats.rejects == {}
+    held = len(guard.graph.get_node(node.id).attrs)
+    # a foreign writer that does not check: the receivers count each limit under its reason
+    stamp = writer.clock.tick()
+    over = raw_delta(writer, [{"id": node.id, "attrs": {
+        f"n{i}": [stamp, writer.replica_id, 0.0] for i in range(LIMITS.max_node_attrs)}}])
+    guard._on_delta(delta_sample("a", over))
+    big = raw_delta(writer, [{"id": node.id, "attrs": {
+        "s_last": [stamp, writer.replica_id, chunk]}}])
+    guard._on_delta(delta_sample("a", big))
+    assert guard.stats.rejects == {"too_many_attrs": 1, "node_too_large": 1}
+    assert len(guard.graph.get_node(node.id).attrs) == held
+    # in a state reply, the node's entry is dropped and the rest merged
+    document = orjson.loads(writer.state_message())
+    document["nodes"][0]["attrs"].update(over["nodes"][0]["attrs"])
+    document["nodes"].append({"id": 5, "add": [[writer.replica_id, stamp]],
+                              "meta": [stamp, writer.replica_id, "object", "fine"]})
+    guard._merge_state(FakeSample(wire.state_key("chronav", "a"), orjson.dumps(document)))
+    assert guard.stats.rejects["too_many_attrs"] == 2
+    assert guard.graph.get_node_by_name("fine") is not None
+    assert len(guard.graph.get_node(node.id).attrs) == held
 
 
 def test_limits_come_from_the_environment_and_bad_values_name_the_variable():
@@ -152,6 +192,17 @@ def test_every_limit_is_documented_with_its_variable():
         var = f"CHRONAV_DSR_{field.name.upper()}"
         row = next((line for line in table.splitlines() if f"`{var}`" in line), None)
         assert row is not None, f"{var} is not in the Limits table of docs/dsr_wire_format.md"
+
+
+def test_every_counter_and_refusal_reason_is_documented():
+    from dsr.transport import REASONS, ReplicaStats
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "dsr_wire_format.md").read_text()
+    section = doc[doc.index("## Refusals and counters"):]
+    rows = [line for line in section.splitlines() if line.startswith("| `")]
+    for field in dataclasses.fields(ReplicaStats):
+        assert any(f"`{field.name}`" in row.split("|")[1] for row in rows), field.name
+    for reason in REASONS:
+        assert any(row.startswith(f"| `{reason}` |") for row in rows), reason
 
 
 # ---------------------------------------------------------------------------- clock

@@ -22,7 +22,7 @@ def fresh_parts(graph: DSRGraph, per_part: int) -> list[bytes]:
     return [wire.encode(kind="state", graph=graph.graph_name, agent=graph.agent,
                         replica=graph.replica_id,
                         nodes=[(i, graph._nodes[i]) for i in ids],
-                        edges=[(k, graph._edges[k]) for k in keys], writers=dict(graph._writers),
+                        edges=[(k, graph._edges[k]) for k in keys], writers=dict(graph._bound),
                         clock=clock if n == len(chunks) - 1 else 0,
                         seen=seen if n == len(chunks) - 1 else None)
             for n, (ids, keys) in enumerate(chunks)]
