@@ -17,7 +17,6 @@ time steps. So the clock runs in four modes, decided every loop from the DSR:
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +29,7 @@ from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, pol
 from agents.lib.crowd.model import PersonTruth, RobotBody
 from agents.world.building import closed_door_walls, footprint_polygons, scene_occupancy
 from agents.world.dsr_readers import closed_doors
+from agents.world.freshness import PERCEIVERS, observed_up_to
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at
@@ -71,6 +71,11 @@ class SimRobotAgent(Agent):
         self.busy_rate = float(self.config.option("busy_rate", str(BUSY_RATE)))
         self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
+        # Perception in lockstep (-o perception_lockstep=1, chronav evaluate and in-process runs): the
+        # clock moves on only once every perceiver has processed the current time, so the observer
+        # detects people at every clock tick, not at whatever ticks its loop happens to see.
+        self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
+        self._perception_since: float | None = None
         # The bumper: a move that brings the body into contact is refused; moving away always works.
         self._contact_m = robot.radius * 0.9
         self._bumped = False
@@ -82,7 +87,7 @@ class SimRobotAgent(Agent):
         self.feed = WorldFeed(self.world)
         self._people: tuple[PersonTruth, ...] = ()
         self._people_file = self._open_people()
-        self._wall_anchor = time.monotonic()
+        self._wall_anchor = self.wall_clock()
         self._sim_anchor = self.now_s
         self._waiting_since: float | None = None
         self._trajectory_file = self._open_trajectory()
@@ -134,10 +139,12 @@ class SimRobotAgent(Agent):
             self._last_mode = mode
             self._reanchor()
             self._set_clock(mode=mode)
-        wall_now = time.monotonic()
+        wall_now = self.wall_clock()
         end_s = self.scene.clock.end_s
         if self.now_s >= end_s:
             self._set_clock(mode="finished", finished=True)
+            return
+        if not self._perceived(wall_now):
             return
         if mode == "driving":
             robot = self.graph.get_node_by_name(self.scene.robot.name)
@@ -174,6 +181,20 @@ class SimRobotAgent(Agent):
                 if dt > 0:
                     self._advance(min(dt, 5.0), Velocity())
 
+    def _perceived(self, wall_now: float) -> bool:
+        """With perception in lockstep: have the perceivers processed the current clock value?  A
+        perceiver that does not answer within the watchdog (it died) no longer holds the clock."""
+        if not self.perception_lockstep or observed_up_to(self.graph, self.now_s, PERCEIVERS, slack_s=0.0):
+            self._perception_since = None
+            return True
+        self._perception_since = self._perception_since or wall_now
+        if wall_now - self._perception_since < self.watchdog_s:
+            return False
+        self.rec.event(f"perception did not answer t={self.now_s:.1f} s within {self.watchdog_s:g} s: "
+                       "the clock runs on", level="WARN")
+        self._perception_since = None
+        return True
+
     def _due_now(self) -> bool:
         """A pending mission's time has come (the executive is about to start it)."""
         return any(n.attrs.get("state") == "pending" and float(n.attrs.get("time_s", math.inf)) <= self.now_s
@@ -191,7 +212,7 @@ class SimRobotAgent(Agent):
         return (self.now_s + dt - self._sim_anchor) <= (wall_now - self._wall_anchor) * self.rate + dt
 
     def _reanchor(self) -> None:
-        self._wall_anchor = time.monotonic()
+        self._wall_anchor = self.wall_clock()
         self._sim_anchor = self.now_s
 
     def _mode(self) -> str:

@@ -137,6 +137,9 @@ class SocialNavigationAgent(Agent):
         self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
         self.cruise = self.maps.cruise_speed_mps
         self.control_dt = float(self.config.option("control_dt", "0.1"))
+        # -o perception_lockstep=1 (chronav evaluate, in-process runs): answer a pose only once the
+        # perceivers have processed its time, so plans read the people of that very tick.
+        self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
         self.blocked_since: float | None = None   # sim time since when no path exists (people in the way)
@@ -189,6 +192,8 @@ class SocialNavigationAgent(Agent):
         now_s = now_of(self.graph)
         robot = self._robot()
         if now_s is None or robot is None:
+            return
+        if self.perception_lockstep and not observed_up_to(self.graph, now_s, slack_s=0.0):
             return
         self.rec.set_time(now_s)
         intention = self._active_intention()
