@@ -383,15 +383,20 @@ def register(app: typer.Typer) -> None:
                                                      callback=_option_check(check_timeout, "--startup-timeout")),
                no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
                restart_limit: int = typer.Option(3, min=0, help="restarts allowed per agent"),
+               in_process: bool = typer.Option(False, "--in-process",
+                                               help="every agent in this process, stepped in lockstep on one graph "
+                                                    "(no router, no restarts; as fast as the machine allows)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
-        The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
+        With --in-process the same agents run in this one process, stepped in lockstep (reproducible
+        run for run). The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
         from tools.console import run_with_progress
 
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
-                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout)
+                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout,
+                                 in_process=in_process)
         raise typer.Exit(code)
 
     @app.command("demo")
