@@ -26,12 +26,14 @@ from typing import Any
 from tools.launch import AGENTS, TERMINAL_STATES, LaunchError, RunResult, check_rate, check_timeout
 
 #: the order of a round: the clock first, then who perceives the tick, then who acts on it
-ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "executive",
+ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
                                 "social_navigation")
 #: options that make a run independent of wall time (also given to the processes of an evaluate launch)
 LOCKSTEP_OPTIONS: dict[str, list[str]] = {
     "sim_robot": ["busy_rate=0", "perception_lockstep=1"],
     "social_navigation": ["perception_lockstep=1"],
+    "executive": ["perception_lockstep=1"],
+    "human_observer": ["perception_lockstep=1"],
 }
 assert sorted(ROUND_ORDER) == sorted(AGENTS)
 
@@ -76,6 +78,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     from agents.runtime.lockstep import AgentError, Lockstep
     from agents.runtime.recording import Recorder
     from agents.world.scene_world import load_world
+    from agents.world.write_policy import policy_from_env
     from dsr import DSRGraph
     from tools.launch import _make_run_dir, _write_result, scene_missions
     from tools.runs import runs_dir as default_runs_dir
@@ -98,7 +101,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
                                         recording_id=recording_id, options=options[name]))
               for name in ROUND_ORDER]
     recorders = [Recorder(name, run_dir if record else None, recording_id) for name in ROUND_ORDER]
-    scheduler = Lockstep(graph, agents, recorders)
+    scheduler = Lockstep(graph, agents, recorders, policy=policy_from_env())
     launcher = Recorder("launcher", run_dir if record else None, recording_id)
     missions: dict[str, dict[str, object]] = {}
     error: str | None = None

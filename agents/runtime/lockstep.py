@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -71,10 +72,14 @@ class Lockstep:
     """The scheduler: ``setup`` the agents on ``graph``, then ``run`` rounds until ``done()``."""
 
     def __init__(self, graph: Any, agents: Sequence[Agent], recorders: Sequence[Recorder], *,
-                 period_s: float = ROUND_PERIOD_S) -> None:
+                 period_s: float = ROUND_PERIOD_S, policy: Any = None) -> None:
+        """``policy``: the write policy a launch's replicas enforce (agents/world/write_policy.py);
+        each agent's writes are then checked under its own name, as its replica would check them."""
         if len(agents) != len(recorders):
             raise ValueError("one recorder per agent")
         self.graph = graph
+        if policy is not None:
+            graph.local_policy = policy
         self.agents = list(agents)
         self.recorders = list(recorders)
         self.period_s = period_s
@@ -87,7 +92,8 @@ class Lockstep:
         for agent, recorder in zip(self.agents, self.recorders, strict=True):
             agent.wall_clock = self.clock
             try:
-                agent.setup(self.graph, recorder)
+                with self._as(agent):
+                    agent.setup(self.graph, recorder)
             except Exception as exc:  # noqa: BLE001 - named and re-raised for the run's result
                 raise AgentError(agent.config.name, exc) from exc
             self._set_up.append(agent)
@@ -97,12 +103,24 @@ class Lockstep:
         """One tick: every agent steps once, the graph's signals delivered after each."""
         for agent in self.agents:
             try:
-                agent.step()
+                with self._as(agent):
+                    agent.step()
             except Exception as exc:  # noqa: BLE001
                 raise AgentError(agent.config.name, exc) from exc
             self.graph.dispatch()
         self.clock.advance(self.period_s)
         self.rounds += 1
+
+    @contextmanager
+    def _as(self, agent: Agent) -> Iterator[None]:
+        """The graph writes as ``agent`` meanwhile (one replica, one writer name at a time): what the
+        write policy checks, and what a launch's replica of that agent would write as."""
+        graph, previous = self.graph, self.graph.agent
+        graph.agent = agent.config.name
+        try:
+            yield
+        finally:
+            graph.agent = previous
 
     def run(self, done: Callable[[], bool], *, timeout_s: float = float("inf"),
             stop: threading.Event | None = None, on_round: Callable[[int], None] | None = None,

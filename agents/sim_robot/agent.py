@@ -29,7 +29,7 @@ from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, pol
 from agents.lib.crowd.model import PersonTruth, RobotBody
 from agents.world.building import closed_door_walls, footprint_polygons, scene_occupancy
 from agents.world.dsr_readers import closed_doors
-from agents.world.freshness import PERCEIVERS, observed_up_to
+from agents.world.freshness import LOCKSTEP, observed_up_to
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at
@@ -72,8 +72,9 @@ class SimRobotAgent(Agent):
         self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
         # Perception in lockstep (-o perception_lockstep=1, chronav evaluate and in-process runs): the
-        # clock moves on only once every perceiver has processed the current time, so the observer
-        # detects people at every clock tick, not at whatever ticks its loop happens to see.
+        # clock moves on only once every perceiver (and the executive after them) has processed the
+        # current time, so the observer detects people at every clock tick, not at whatever ticks its
+        # loop happens to see (agents/world/freshness.LOCKSTEP).
         self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self._perception_since: float | None = None
         # The bumper: a move that brings the body into contact is refused; moving away always works.
@@ -184,7 +185,7 @@ class SimRobotAgent(Agent):
     def _perceived(self, wall_now: float) -> bool:
         """With perception in lockstep: have the perceivers processed the current clock value?  A
         perceiver that does not answer within the watchdog (it died) no longer holds the clock."""
-        if not self.perception_lockstep or observed_up_to(self.graph, self.now_s, PERCEIVERS, slack_s=0.0):
+        if not self.perception_lockstep or observed_up_to(self.graph, self.now_s, LOCKSTEP, slack_s=0.0):
             self._perception_since = None
             return True
         self._perception_since = self._perception_since or wall_now

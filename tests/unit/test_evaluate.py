@@ -85,7 +85,7 @@ def in_thread(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def _evaluate(out: Path, resume: bool) -> dict:
     return evaluate([str(TINY)], planners="social,baseline", seeds=1, first_seed=4, jobs=1, out=out,
-                    executor_text="local", resume=resume, timeout_s=60.0, quiet=True, command="test")
+                    executor_text="local", resume=resume, timeout_s=60.0, quiet=True, command="test", mode="launch")
 
 
 def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread: None,
@@ -97,9 +97,9 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     monkeypatch.setattr(tools.evaluate_figures, "all_figures", lambda *a, **k: {})   # the system test draws them
     stopped = _evaluate(tmp_path, resume=False)
     assert stopped["interrupted"] and stopped["pending"] == 1 and stopped["launched"] == 1
-    assert first.calls[0]["social_navigation"] == ["seed=4", "planner=social"]
-    assert first.calls[0]["human_observer"] == ["seed=4"]
-    assert "busy_rate=0" in first.calls[0]["sim_robot"]
+    assert first.calls[0]["social_navigation"] == ["seed=4", "perception_lockstep=1", "planner=social"]
+    assert first.calls[0]["human_observer"] == ["seed=4", "perception_lockstep=1"]
+    assert {"busy_rate=0", "perception_lockstep=1"} <= set(first.calls[0]["sim_robot"])
 
     second = FakeLaunch()
     monkeypatch.setattr("tools.launch.run_system", second)
@@ -120,6 +120,7 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     (["--executor", "ray://host:1"], "use local or dask://HOST:PORT"),
     (["--executor", "dask://nohost"], "expected dask://HOST:PORT"),
     (["--seeds", "0"], "--seeds: give at least 1"),
+    (["--mode", "threads"], "--mode threads: use one of in-process, launch"),
 ])
 def test_bad_input_is_one_line_and_launches_nothing(args: list[str], words: str, tmp_path: Path) -> None:
     extra = [] if "--resume" in args else ["--out", str(tmp_path / "study")]
