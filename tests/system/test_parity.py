@@ -1,8 +1,8 @@
 """Issue 30 acceptance: `chronav evaluate --mode in-process` computes the runs a full launch computes.
 
-Both modes run the tiny test scene (a resident standing by a TV in use) and a walking-crowd scene
-(tests/data/crowd_eval.yaml: eight people walking their day, two missions) with the same planners
-and seed, through the command line a user types.  Every metric of every mission must be identical
+Both modes run the tiny test scene (a resident standing by a TV in use; social and baseline
+planners) and a walking-crowd scene (tests/data/crowd_eval.yaml: eight people walking their day, two
+missions; social planner) with one seed, through the command line a user types.  Every metric of every mission must be identical
 (no tolerance: the modes step the same agents through the same ticks, so they must give the same
 floats), and so must the run's outputs the metrics come from (trajectory.csv, people.csv).  The
 launches run two at a time on the 2-core machine, so their agents interleave as load decides; a
@@ -24,15 +24,18 @@ from tools.evaluate_table import read_table
 
 pytestmark = pytest.mark.slow
 
-SCENES = (REPO_ROOT / "tests" / "data" / "eval_tiny.yaml", REPO_ROOT / "tests" / "data" / "crowd_eval.yaml")
-PLANNERS = "social,baseline"
+TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
+CROWD = REPO_ROOT / "tests" / "data" / "crowd_eval.yaml"
+#: (scene, planners) of each sweep: on the crowd scene the social planner only (a launch of it takes
+#: ~2 wall minutes on the loaded 2-core machine; the baseline's, which waits behind people, ~5)
+STUDIES = {"tiny": (TINY, "social,baseline"), "crowd": (CROWD, "social")}
 #: columns that say where and how fast a run ran, not what it computed
 WHERE = {"run_dir", "rrd", "host", "run_wall_s", "trajectory_csv"}
 
 
-def _sweep(group: ProcessGroup, out: Path, *extra: str) -> subprocess.Popen[bytes]:
-    return group.spawn(["-m", "tools.cli", "evaluate", *map(str, SCENES), "--planners", PLANNERS, "--seeds", "1",
-                        "--first-seed", "4", "--out", str(out), "--timeout", "400", "--json", *extra],
+def _sweep(group: ProcessGroup, out: Path, scene: Path, planners: str, *extra: str) -> subprocess.Popen[bytes]:
+    return group.spawn(["-m", "tools.cli", "evaluate", str(scene), "--planners", planners, "--seeds", "1",
+                        "--first-seed", "4", "--out", str(out), "--timeout", "600", "--json", "--jobs", "1", *extra],
                        log_path=out.parent / f"{out.name}.log")
 
 
@@ -48,24 +51,34 @@ def _result(proc: subprocess.Popen[bytes], out: Path) -> dict[str, Any]:
     return {**json.loads(line), "returncode": proc.returncode}
 
 
+def _merged(results: list[dict[str, Any]]) -> dict[str, Any]:
+    return {"returncode": max(r["returncode"] for r in results), "runs": sum(r["runs"] for r in results),
+            "ok": sum(r["ok"] for r in results), "pending": sum(r["pending"] for r in results),
+            "modes": {r["mode"] for r in results}, "tables": [r["table"]["parquet"] for r in results]}
+
+
 @pytest.fixture(scope="module")
 def sweeps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
-    """The launch sweep (2 jobs) and, while it runs, two in-process sweeps one after the other."""
+    """The two launch sweeps at once (their agents interleave as load decides) and, meanwhile, the
+    same sweeps in-process twice."""
     base = tmp_path_factory.mktemp("parity")
     group = ProcessGroup()
     try:
-        launch = _sweep(group, base / "launch", "--mode", "launch", "--jobs", "2")
+        launches = {name: _sweep(group, base / f"launch_{name}", scene, planners, "--mode", "launch")
+                    for name, (scene, planners) in STUDIES.items()}
         found = {}
-        for name in ("in_process", "in_process_again"):
-            found[name] = _result(_sweep(group, base / name, "--mode", "in-process", "--jobs", "1"), base / name)
-        found["launch"] = _result(launch, base / "launch")
+        for run in ("in_process", "in_process_again"):
+            found[run] = _merged([_result(_sweep(group, base / f"{run}_{name}", scene, planners, "--mode", "in-process"),
+                                          base / f"{run}_{name}") for name, (scene, planners) in STUDIES.items()])
+        found["launch"] = _merged([_result(proc, base / f"launch_{name}") for name, proc in launches.items()])
         return found
     finally:
         group.close()
 
 
 def _rows(sweep: dict[str, Any]) -> dict[tuple[str, str, int, str], dict[str, Any]]:
-    return {(r["scene"], r["planner"], r["seed"], r["mission"]): r for r in read_table(Path(sweep["table"]["parquet"]))}
+    return {(r["scene"], r["planner"], r["seed"], r["mission"]): r
+            for table in sweep["tables"] for r in read_table(Path(table))}
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -75,8 +88,8 @@ def _same(a: Any, b: Any) -> bool:
 def test_every_run_completes_in_both_modes(sweeps: dict[str, dict[str, Any]]) -> None:
     for name, sweep in sweeps.items():
         assert sweep["returncode"] == 0, (name, sweep)
-        assert (sweep["runs"], sweep["ok"], sweep["pending"]) == (4, 4, 0), (name, sweep)
-        assert sweep["mode"] == ("launch" if name == "launch" else "in-process")
+        assert (sweep["runs"], sweep["ok"], sweep["pending"]) == (3, 3, 0), (name, sweep)
+        assert sweep["modes"] == {"launch" if name == "launch" else "in-process"}
     missions = {key[3] for key in _rows(sweeps["launch"])}
     assert missions == {"cross", "to_lounge", "to_therapy"}
 
