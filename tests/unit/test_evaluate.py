@@ -110,7 +110,13 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     assert sorted(r["planner"] for r in rows) == ["baseline", "social"]
     straight = next(r for r in rows if r["planner"] == "baseline")
     assert straight["distance_travelled_m"] == pytest.approx(4.4) and straight["seed"] == 4
-    assert Path(resumed["report"]).exists()
+    report = Path(resumed["report"]).read_text()
+    # The summary first, one table whatever the seeds; the per-mission tables and the runs folded.
+    assert report.index("<h2>Summary</h2>") < report.index("<details><summary><b>eval_tiny / cross</b>")
+    assert "<td>missions completed (runs x missions)</td><td>1 / 1</td><td>1 / 1</td>" in report
+    summary = report[report.index("<h2>Summary</h2>"):report.index("<h2>Per mission")]
+    assert "4.4" in summary and "<details>" not in summary and "full launch of the six agents" in report
+    assert "<summary>2 runs (click to show)</summary>" in report
 
 
 @pytest.mark.parametrize(("args", "words"), [
