@@ -140,3 +140,21 @@ def test_a_finished_sweep_is_not_overwritten(tmp_path: Path) -> None:
     (tmp_path / "runs.jsonl").write_text(json.dumps({"key": "x"}) + "\n")
     result = CliRunner().invoke(app, ["evaluate", str(TINY), "--out", str(tmp_path)])
     assert result.exit_code == 2 and "continue it with --resume" in " ".join(result.output.split())
+
+
+def test_progress_gives_each_planner_its_own_eta(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A planner whose runs take twice as long has twice the time left per run left."""
+    from tools import evaluate as evaluate_module
+    from tools.evaluate_sweep import RunSpec, plan_sweep
+
+    clock = [100.0]
+    monkeypatch.setattr(evaluate_module.time, "monotonic", lambda: clock[0])
+    specs = plan_sweep([TINY], ["social", "baseline"], [1, 2, 3])
+    progress = evaluate_module._Progress(specs, quiet=True)
+    for spec, wall in ((RunSpec(str(TINY), "social", 1), 2.0), (RunSpec(str(TINY), "baseline", 1), 1.0)):
+        clock[0] += wall
+        progress.advance({"spec": spec.to_dict(), "outcome": "ok", "wall_s": wall})
+    # 3 wall s for 2 runs: 1.5 s a run on average; social's runs cost 2/1.5 of that, baseline's 1/1.5.
+    assert progress.eta_s() == pytest.approx(1.5 * 4)
+    assert progress.eta_s("social") == pytest.approx(1.5 * (2.0 / 1.5) * 2)
+    assert progress.eta_s("baseline") == pytest.approx(1.5 * (1.0 / 1.5) * 2)
