@@ -35,6 +35,7 @@ def _worker_init(stop: Any) -> None:
     global _STOP
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STOP = stop
+    os.environ["RERUN"] = "on"   # always recorded, whatever the sweep's environment says: the report links each run
 
 
 def run_in_worker(spec_data: dict[str, Any], runs_dir: str, timeout_s: float) -> dict[str, Any]:
@@ -132,6 +133,7 @@ def dask_task(spec_data: dict[str, Any], runs_dir: str, timeout_s: float, mode: 
     check_worker(expected, spec.scene)
     if mode != "in-process":
         return run_isolated(spec_data, runs_dir, timeout_s)
+    os.environ["RERUN"] = "on"   # as in a launch's run (run_isolated): the report links each run's recording
     started = time.monotonic()
     result = execute_run(spec, Path(runs_dir), timeout_s, mode="in-process", stop=threading.Event())
     return {**result, "task_wall_s": time.monotonic() - started, "worker_pid": os.getpid()}

@@ -91,8 +91,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}-{threading.get_ident() % 10000}"
     run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     options = merged_options(agent_options, rate)
-    if os.environ.get("RERUN", "on") == "off":
-        record = False
+    record = record and os.environ.get("RERUN", "on") != "off"   # what the agents' Recorders honour too
     recording_id = run_id if record else None
     classes = agent_classes()
     started = time.monotonic()
