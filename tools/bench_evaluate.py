@@ -22,6 +22,7 @@ Run: ``.venv/bin/python tools/bench_evaluate.py [--jobs 2] [--seeds 8] [--launch
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import math
 import os
@@ -92,7 +93,7 @@ def tiny_variants(directory: Path, count: int = 10) -> list[Path]:
     data = yaml.safe_load(SCENE.read_text())
     paths = []
     for k in range(count):
-        variant = json.loads(json.dumps(data))
+        variant = copy.deepcopy(data)
         variant["name"] = f"eval_tiny_v{k}"
         variant["people"][0]["pose"] = [2.4 + 0.15 * k, 1.3 + 0.05 * (k % 4), -1.5708]
         variant["missions"][0]["goal"]["pose"] = [5.2, 1.0 + 0.2 * (k % 5), 0]
