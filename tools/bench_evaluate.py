@@ -6,7 +6,8 @@ compare figures of one run only; ``load_avg_1min_*`` says how busy it was):
 - ``evaluate_runs_per_min_in_process`` (also ``evaluate_runs_per_min``, the goal key: >= 60 on 2
   cores) and ``evaluate_runs_per_min_launch``: runs per wall minute of the sweep (the runs only;
   the table, figures and report after them are ``report_s_*``) on the tiny scene
-  (tests/data/eval_tiny.yaml) x 5 planners x seeds, ``--jobs`` at once; ``in_process_over_launch``
+  (tests/data/eval_tiny.yaml) x 5 planners x seeds, ``--jobs`` at once, every run recorded as
+  the report links it (``..._in_process_no_record``: with ``--no-record``); ``in_process_over_launch``
   their ratio; ``identical_metrics_tiny``: every metric of every run equal in both modes;
 - ``study_1000_runs_min_extrapolated`` (goal < 30): a 1,000-run study (5 planners x 20 seeds x 10
   variants of the tiny scene) extrapolated from a sweep of the 10 variants x 5 planners x
@@ -53,10 +54,10 @@ def _chronav(args: list[str], cwd: Path) -> tuple[float, dict[str, Any]]:
     return time.monotonic() - started, json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def _evaluate(scenes: list[Path], out: Path, mode: str, seeds: int, jobs: int, planners: str = PLANNERS
-              ) -> dict[str, Any]:
+def _evaluate(scenes: list[Path], out: Path, mode: str, seeds: int, jobs: int, planners: str = PLANNERS,
+              *extra: str) -> dict[str, Any]:
     total_s, result = _chronav(["evaluate", *map(str, scenes), "--planners", planners, "--seeds", str(seeds),
-                                "--jobs", str(jobs), "--mode", mode, "--out", str(out)], out.parent)
+                                "--jobs", str(jobs), "--mode", mode, "--out", str(out), *extra], out.parent)
     result["total_s"] = total_s
     return result
 
@@ -134,10 +135,13 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_evaluate_") as tmp:
         work = Path(tmp)
         inproc = _evaluate([SCENE], work / "tiny_in_process", "in-process", args.seeds, args.jobs)
+        bare = _evaluate([SCENE], work / "tiny_no_record", "in-process", args.seeds, args.jobs, PLANNERS,
+                         "--no-record")
         launch = _evaluate([SCENE], work / "tiny_launch", "launch", args.launch_seeds, args.jobs)
         out.update({
             "evaluate_runs_per_min": inproc["runs_per_min"],
             "evaluate_runs_per_min_in_process": inproc["runs_per_min"],
+            "evaluate_runs_per_min_in_process_no_record": bare["runs_per_min"],
             "evaluate_runs_per_min_launch": launch["runs_per_min"],
             "in_process_over_launch": round(inproc["runs_per_min"] / launch["runs_per_min"], 2),
             "runs_in_process": inproc["launched"], "runs_launch": launch["launched"],

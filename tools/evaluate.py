@@ -197,7 +197,7 @@ class _Progress:
 
 def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int | None,
              out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
-             mode: str = "in-process") -> dict[str, Any]:
+             mode: str = "in-process", record: bool = True) -> dict[str, Any]:
     """The whole study; returns what ``--json`` prints."""
     from tools.evaluate_figures import all_figures
     from tools.evaluate_report import provenance, write_report
@@ -218,11 +218,11 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     seed_list = list(range(first_seed, first_seed + seeds))
     specs = plan_sweep(scene_paths, chosen, seed_list)
     try:
-        executor = parse_executor(executor_text, jobs, mode)
+        executor = parse_executor(executor_text, jobs, mode, record)
     except ValueError as exc:
         raise EvaluateError(str(exc)) from None
     jobs = getattr(executor, "jobs", jobs)
-    prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode}
+    prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode, "record": record}
     (out_dir / SWEEP_FILE).write_text(json.dumps({**prov, "runs": [s.to_dict() for s in specs]}, indent=2))
     earlier = read_ledger(out_dir) if resume else {}
     todo = [s for s in specs if s.key not in earlier]
@@ -275,6 +275,8 @@ def register(app: typer.Typer) -> None:
             mode: str = typer.Option("in-process", "--mode",
                                      help="in-process: the agents in one process, in lockstep (fast); launch: each "
                                           "run a full launch of the agents as processes (the reference)"),
+            no_record: bool = typer.Option(False, "--no-record",
+                                           help="no Rerun recording per run (faster; the report then links none)"),
             out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
             executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
             resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
@@ -293,7 +295,7 @@ def register(app: typer.Typer) -> None:
         try:
             summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
                                executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                               command=command, mode=mode)
+                               command=command, mode=mode, record=not no_record)
         except EvaluateError as exc:
             err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
             raise typer.Exit(2) from None

@@ -35,16 +35,17 @@ def _worker_init(stop: Any) -> None:
     global _STOP
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STOP = stop
-    os.environ["RERUN"] = "on"   # always recorded, whatever the sweep's environment says: the report links each run
 
 
-def run_in_worker(spec_data: dict[str, Any], runs_dir: str, timeout_s: float) -> dict[str, Any]:
+def run_in_worker(spec_data: dict[str, Any], runs_dir: str, timeout_s: float, record: bool = True) -> dict[str, Any]:
     """One in-process run in this (long-lived) worker process."""
     global _RUNS
     spec = RunSpec.from_dict(spec_data)
+    # Recorded whatever the sweep's environment says (the report links each run), unless --no-record.
+    os.environ["RERUN"] = "on" if record else "off"
     started = time.monotonic()
     try:
-        result = execute_run(spec, Path(runs_dir), timeout_s, mode="in-process", stop=_STOP)
+        result = execute_run(spec, Path(runs_dir), timeout_s, mode="in-process", stop=_STOP, record=record)
     except Exception as exc:  # noqa: BLE001 - a run that could not run is a result, not a crash
         return failed_result(spec, f"{type(exc).__name__}: {exc}")
     _RUNS += 1
@@ -62,8 +63,8 @@ def default_jobs() -> int:
 class InProcessPool:
     """``jobs`` worker processes, each running in-process runs one after the other."""
 
-    def __init__(self, jobs: int) -> None:
-        self.jobs = jobs
+    def __init__(self, jobs: int, record: bool = True) -> None:
+        self.jobs, self.record = jobs, record
         context = multiprocessing.get_context("spawn")   # no fork of a process holding threads
         self._stop = context.Event()
         self._pool = ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=_worker_init,
@@ -71,7 +72,8 @@ class InProcessPool:
 
     def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
         futures: dict[Future[dict[str, Any]], RunSpec] = {
-            self._pool.submit(run_in_worker, spec.to_dict(), str(runs_dir), timeout_s): spec for spec in specs}
+            self._pool.submit(run_in_worker, spec.to_dict(), str(runs_dir), timeout_s, self.record): spec
+            for spec in specs}
         running = set(futures)
         while running:
             done, running = wait(running, return_when=FIRST_COMPLETED)
@@ -125,15 +127,16 @@ def check_worker(expected: dict[str, Any], scene: str) -> None:
 
 
 def dask_task(spec_data: dict[str, Any], runs_dir: str, timeout_s: float, mode: str,
-              expected: dict[str, Any]) -> dict[str, Any]:
+              expected: dict[str, Any], record: bool = True) -> dict[str, Any]:
     """One run on a Dask worker: checked, then in the worker itself (in-process) or as a launch."""
     from tools.evaluate_sweep import run_isolated
 
     spec = RunSpec.from_dict(spec_data)
     check_worker(expected, spec.scene)
     if mode != "in-process":
-        return run_isolated(spec_data, runs_dir, timeout_s)
-    os.environ["RERUN"] = "on"   # as in a launch's run (run_isolated): the report links each run's recording
+        return run_isolated(spec_data, runs_dir, timeout_s, record=record)
+    # As in a launch's run (run_isolated): recorded whatever the worker's environment says, unless --no-record.
+    os.environ["RERUN"] = "on" if record else "off"
     started = time.monotonic()
-    result = execute_run(spec, Path(runs_dir), timeout_s, mode="in-process", stop=threading.Event())
+    result = execute_run(spec, Path(runs_dir), timeout_s, mode="in-process", stop=threading.Event(), record=record)
     return {**result, "task_wall_s": time.monotonic() - started, "worker_pid": os.getpid()}

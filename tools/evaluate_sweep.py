@@ -109,20 +109,21 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
 # ---------------------------------------------------------------------------------------------
 
 def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float, mode: str = "launch",
-                stop: threading.Event | None = None) -> dict[str, Any]:
-    """Run the system for ``spec`` (headless, recorded) in ``mode`` and measure its missions."""
+                stop: threading.Event | None = None, record: bool = True) -> dict[str, Any]:
+    """Run the system for ``spec`` (headless; recorded unless ``record`` is False) in ``mode`` and
+    measure its missions."""
     from tools.console import outcome
     from tools.evaluate_table import mission_rows
 
     if mode == "in-process":
         from tools.inprocess import run_in_process
 
-        result = run_in_process(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=True,
+        result = run_in_process(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=record,
                                 agent_options=agent_options(spec), stop=stop)
     else:
         from tools.launch import run_system
 
-        result = run_system(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=True,
+        result = run_system(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=record,
                             agent_options=agent_options(spec), metrics_report=False)
     rrd = str(result.rrd_path) if result.rrd_path else None
     host = socket.gethostname()
@@ -148,7 +149,7 @@ def finished(result: dict[str, Any]) -> bool:
 
 
 def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
-                 live: set[subprocess.Popen[bytes]] | None = None) -> dict[str, Any]:
+                 live: set[subprocess.Popen[bytes]] | None = None, record: bool = True) -> dict[str, Any]:
     """One run in its own process (its own session), waited for; the task body of every executor.
 
     ``live`` (local executor) collects the running processes so that Ctrl-C can be passed on."""
@@ -158,11 +159,13 @@ def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
     stem = f"{spec.slug}-{uuid.uuid4().hex[:8]}"
     result_file, log_file = logs / f"{stem}.json", logs / f"{stem}.log"
     args = [sys.executable, "-m", "tools.evaluate_sweep", "--spec", json.dumps(spec.to_dict()),
-            "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file)]
+            "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file),
+            *([] if record else ["--no-record"])]
     with log_file.open("wb") as log:
-        # Always recorded (RERUN=on whatever the worker's environment says): the report links each run.
+        # Recorded (RERUN=on whatever the worker's environment says: the report links each run),
+        # unless the sweep said --no-record.
         proc = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                                env={**os.environ, "RERUN": "on"})
+                                env={**os.environ, "RERUN": "on" if record else "off"})
         if live is not None:
             live.add(proc)
         try:
@@ -210,8 +213,8 @@ class Executor(Protocol):
 class LocalExecutor:
     """``jobs`` runs at once on this machine."""
 
-    def __init__(self, jobs: int) -> None:
-        self.jobs = jobs
+    def __init__(self, jobs: int, record: bool = True) -> None:
+        self.jobs, self.record = jobs, record
         self._live: set[subprocess.Popen[bytes]] = set()
         self._stop = threading.Event()
 
@@ -223,7 +226,8 @@ class LocalExecutor:
                 while pending or running:
                     while pending and len(running) < self.jobs and not self._stop.is_set():
                         spec = pending.pop(0)
-                        running.add(pool.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, self._live))
+                        running.add(pool.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, self._live,
+                                                record=self.record))
                     if not running:
                         return
                     done, running = wait(running, return_when=FIRST_COMPLETED)
@@ -251,10 +255,10 @@ class DaskExecutor:
     installed, nothing shared.  Results stream back as tasks end.  A task that fails (its worker
     was lost mid-run, and the scheduler gave up on it) is submitted once more."""
 
-    def __init__(self, address: str, mode: str = DEFAULT_MODE) -> None:
+    def __init__(self, address: str, mode: str = DEFAULT_MODE, record: bool = True) -> None:
         from distributed import Client
 
-        self.address, self.mode = address, mode
+        self.address, self.mode, self.record = address, mode, record
         self.client = Client(address, timeout="20s")
         self._futures: list[Any] = []
         self.requeued: list[str] = []
@@ -270,7 +274,7 @@ class DaskExecutor:
 
         def submit(spec: RunSpec, index: int, attempt: int) -> Any:
             future = self.client.submit(dask_task, spec.to_dict(), str(runs_dir), timeout_s, self.mode,
-                                        fingerprints[spec.scene], pure=False,
+                                        fingerprints[spec.scene], self.record, pure=False,
                                         key=f"chronav-evaluate-{sweep}-{index}-{spec.slug}-a{attempt}")
             by_key[future.key] = (spec, attempt)
             self._futures.append(future)
@@ -298,7 +302,7 @@ class DaskExecutor:
         self.client.close()
 
 
-def parse_executor(text: str, jobs: int | None, mode: str = DEFAULT_MODE) -> Any:
+def parse_executor(text: str, jobs: int | None, mode: str = DEFAULT_MODE, record: bool = True) -> Any:
     """``local`` or ``dask://HOST:PORT``; ValueError in the user's words otherwise.  ``jobs`` None:
     every core."""
     if mode not in MODES:
@@ -307,14 +311,14 @@ def parse_executor(text: str, jobs: int | None, mode: str = DEFAULT_MODE) -> Any
         from tools.evaluate_pool import InProcessPool, default_jobs
 
         jobs = jobs or default_jobs()
-        return InProcessPool(jobs) if mode == "in-process" else LocalExecutor(jobs)
+        return InProcessPool(jobs, record) if mode == "in-process" else LocalExecutor(jobs, record)
     if text.startswith("dask://"):
         address = text.removeprefix("dask://")
         host, sep, port = address.rpartition(":")
         if not sep or not host or not port.isdigit():
             raise ValueError(f"--executor {text}: expected dask://HOST:PORT, the address of a Dask scheduler")
         try:
-            return DaskExecutor(f"tcp://{host}:{port}", mode)
+            return DaskExecutor(f"tcp://{host}:{port}", mode, record)
         except ImportError:
             raise ValueError("--executor dask://...: Dask is not installed; install chronav's `eval` extra "
                              "(pip install 'chronav[eval]')") from None
@@ -358,10 +362,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs-dir", required=True, type=Path)
     parser.add_argument("--timeout", required=True, type=float)
     parser.add_argument("--result", required=True, type=Path)
+    parser.add_argument("--no-record", action="store_true")
     args = parser.parse_args(argv)
     spec = RunSpec.from_dict(json.loads(args.spec))
     started = time.monotonic()
-    result = execute_run(spec, args.runs_dir, args.timeout)
+    result = execute_run(spec, args.runs_dir, args.timeout, record=not args.no_record)
     result["task_wall_s"] = time.monotonic() - started
     tmp = args.result.with_suffix(".tmp")
     tmp.write_text(json.dumps(result))

@@ -79,7 +79,7 @@ class FakeLaunch:
 @pytest.fixture()
 def in_thread(monkeypatch: pytest.MonkeyPatch) -> None:
     """Each run in the calling thread instead of its own process (the stand-in lives here)."""
-    monkeypatch.setattr(evaluate_sweep, "run_isolated", lambda spec, runs_dir, timeout_s, live=None:
+    monkeypatch.setattr(evaluate_sweep, "run_isolated", lambda spec, runs_dir, timeout_s, live=None, record=True:
                         evaluate_sweep.execute_run(evaluate_sweep.RunSpec.from_dict(spec), Path(runs_dir), timeout_s))
 
 
