@@ -37,7 +37,7 @@ def _status_table(status: dict[str, Any]) -> Table:
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
                       as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
                       startup_timeout_s: float | None = None, ros_domain: int | None = None,
-                      robot: str = "sim") -> int:
+                      robot: str = "sim", in_process: bool = False) -> int:
     """Run the system with a progress display; print the result (and the metrics report); exit code.
 
     Exit codes: 0 every mission done; 1 a mission not done, a timeout or an agent given up;
@@ -46,11 +46,15 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     from scenes.yamlio import SourceError
     from tools.launch import LaunchError, run_system
 
+    if in_process:   # every agent in this process, in lockstep (tools/inprocess.py): no supervision limits
+        from tools.inprocess import run_in_process as run_system  # type: ignore[assignment]  # noqa: F811
+
+        restart_limit = 0
     err = Console(stderr=True)
     interactive = sys.stderr.isatty() and not as_json
     last_print = {"t": 0.0}
     limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
-                                ("ros_domain", ros_domain), ("robot", robot)) if v is not None}
+                                ("ros_domain", ros_domain), ("robot", robot)) if v is not None and not in_process}
 
     def plain_tick(status: dict[str, Any]) -> None:
         if time.monotonic() - last_print["t"] >= 5.0:
@@ -65,11 +69,12 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         if interactive:
             with Live(_status_table({}), console=err, refresh_per_second=4) as live:
                 result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
-                                    restart_limit=restart_limit, on_tick=lambda s: live.update(_status_table(s)),
-                                    **limits)
+                                    on_tick=lambda s: live.update(_status_table(s)),
+                                    **limits, **_supervision(restart_limit, in_process))
         else:
             result = run_system(scene, rate=rate, timeout_s=timeout_s, record=record,
-                                restart_limit=restart_limit, on_tick=None if as_json else plain_tick, **limits)
+                                on_tick=None if as_json else plain_tick, **limits,
+                                **_supervision(restart_limit, in_process))
     except (SourceError, LaunchError, DSRError) as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         return 2
@@ -96,6 +101,11 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     if result.interrupted:
         return 130
     return 0 if result.ok else 1
+
+
+def _supervision(restart_limit: int, in_process: bool) -> dict[str, Any]:
+    """A launch supervises its processes (restarts); an in-process run has none to restart."""
+    return {} if in_process else {"restart_limit": restart_limit}
 
 
 def outcome(result: Any) -> str:

@@ -4,8 +4,10 @@ Why a command and not a script: researchers compare planners on the same scenes 
 the study must be one line to run again, give the same numbers (a seed fixes the simulated world,
 the clock runs in lockstep with the controller), and say what produced it.  The pieces:
 
-- tools/evaluate_sweep.py: scene x planner x seed runs, each a full isolated launch, on this machine
-  (``--jobs J``) or a Dask cluster (``--executor dask://HOST:PORT``), with a ledger for ``--resume``;
+- tools/evaluate_sweep.py: scene x planner x seed runs, each in-process in lockstep (``--mode
+  in-process``, the default; tools/inprocess.py, tools/evaluate_pool.py) or a full isolated launch
+  (``--mode launch``), on this machine (``--jobs J``, all cores by default) or a Dask cluster
+  (``--executor dask://HOST:PORT``), with a ledger for ``--resume``;
 - tools/evaluate_table.py: one row per mission with every metric of ``chronav metrics``;
 - tools/evaluate_stats.py, evaluate_figures.py, evaluate_report.py: tables, tests, plots, report.
 """
@@ -117,23 +119,34 @@ def run_sweep(specs: list[Any], executor: Any, out_dir: Path, timeout_s: float,
 
 
 class _Progress:
-    """A rich progress bar with ETA on a terminal; one plain line per finished run otherwise."""
+    """Progress per planner with its ETA (a rich bar per planner on a terminal; one plain line per
+    finished run otherwise).  Why per planner: planners differ in cost per run (a blocked social
+    planner waits, a baseline drives straight through), so one overall rate mispredicts the end."""
 
-    def __init__(self, total: int, quiet: bool) -> None:
+    def __init__(self, specs: list[Any], quiet: bool) -> None:
         from rich.console import Console
 
-        self.total, self.done, self.started = total, 0, time.monotonic()
+        self.started = time.monotonic()
+        self.total = len(specs)
+        self.done = 0
+        self.planned: dict[str, int] = {}
+        for spec in specs:
+            self.planned[spec.planner] = self.planned.get(spec.planner, 0) + 1
+        self.finished: dict[str, int] = dict.fromkeys(self.planned, 0)
+        self.busy_s: dict[str, float] = dict.fromkeys(self.planned, 0.0)
         self.console = Console(stderr=True)
         self.bar = None
+        self.quiet = quiet
         if not quiet and sys.stderr.isatty():
             from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,
                                        TimeRemainingColumn)
 
-            self.bar = Progress(TextColumn("[bold]evaluate[/bold] {task.description}"), BarColumn(),
+            self.bar = Progress(TextColumn("[bold]{task.fields[planner]:>10}[/bold]"), BarColumn(),
                                 MofNCompleteColumn(), TextColumn("elapsed"), TimeElapsedColumn(),
-                                TextColumn("ETA"), TimeRemainingColumn(), console=self.console)
-            self.task = self.bar.add_task("starting", total=total)
-        self.quiet = quiet
+                                TextColumn("ETA"), TimeRemainingColumn(), TextColumn("{task.description}"),
+                                console=self.console)
+            self.tasks = {planner: self.bar.add_task("", total=n, planner=planner)
+                          for planner, n in self.planned.items()}
 
     def __enter__(self) -> _Progress:
         if self.bar is not None:
@@ -144,28 +157,50 @@ class _Progress:
         if self.bar is not None:
             self.bar.stop()
 
+    def eta_s(self, planner: str | None = None) -> float:
+        """Seconds left: for one planner, from its own mean run time (the sweep's parallelism
+        included through the overall rate); for the sweep, from the overall rate."""
+        elapsed = time.monotonic() - self.started
+        if self.done == 0:
+            return math.nan
+        per_run = elapsed / self.done       # wall seconds per finished run, all planners, all jobs
+        if planner is None:
+            return per_run * (self.total - self.done)
+        mean_all = sum(self.busy_s.values()) / self.done
+        mean = self.busy_s[planner] / self.finished[planner] if self.finished[planner] else mean_all
+        scale = mean / mean_all if mean_all > 0 else 1.0
+        return per_run * scale * (self.planned[planner] - self.finished[planner])
+
     def advance(self, result: dict[str, Any]) -> None:
         from tools.evaluate_sweep import RunSpec
 
         self.done += 1
         spec = RunSpec.from_dict(result["spec"])
-        what = f"{spec.label}: {result.get('outcome')} ({float(result.get('wall_s', 0.0)):.0f} s)"
+        wall = float(result.get("wall_s", 0.0))
+        if spec.planner in self.finished:
+            self.finished[spec.planner] += 1
+            self.busy_s[spec.planner] += wall
+        what = f"{spec.label}: {result.get('outcome')} ({wall:.1f} s)"
         if self.bar is not None:
-            self.bar.update(self.task, advance=1, description=what)
+            if spec.planner in self.tasks:
+                self.bar.update(self.tasks[spec.planner], advance=1, description=what)
             return
         if self.quiet:
             return
         elapsed = time.monotonic() - self.started
-        eta = elapsed / self.done * (self.total - self.done)
-        self.console.print(f"[evaluate] {self.done}/{self.total} {what}; elapsed {elapsed / 60:.1f} min, "
-                           f"ETA {eta / 60:.1f} min", highlight=False, markup=False, soft_wrap=True)
+        planner_eta = self.eta_s(spec.planner) if spec.planner in self.planned else math.nan
+        self.console.print(f"[evaluate] {self.done}/{self.total} {what}; {spec.planner} "
+                           f"{self.finished.get(spec.planner, 0)}/{self.planned.get(spec.planner, 0)}, "
+                           f"ETA {planner_eta / 60:.1f} min; all: elapsed {elapsed / 60:.1f} min, "
+                           f"ETA {self.eta_s() / 60:.1f} min", highlight=False, markup=False, soft_wrap=True)
 
 
 MAX_SEEDS = 10_000   # seeds per scene and planner in one study (docs/limits.md)
 
 
-def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int, out: Path | None,
-             executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str) -> dict[str, Any]:
+def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int | None,
+             out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
+             mode: str = "in-process", record: bool = True) -> dict[str, Any]:
     """The whole study; returns what ``--json`` prints."""
     from tools.evaluate_figures import all_figures
     from tools.evaluate_report import provenance, write_report
@@ -188,16 +223,17 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     seed_list = list(range(first_seed, first_seed + seeds))
     specs = plan_sweep(scene_paths, chosen, seed_list)
     try:
-        executor = parse_executor(executor_text, jobs)
+        executor = parse_executor(executor_text, jobs, mode, record)
     except ValueError as exc:
         raise EvaluateError(str(exc)) from None
-    prov = provenance(scene_paths, chosen, seed_list, executor_text, jobs, command)
+    jobs = getattr(executor, "jobs", jobs)
+    prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode, "record": record}
     (out_dir / SWEEP_FILE).write_text(json.dumps({**prov, "runs": [s.to_dict() for s in specs]}, indent=2))
     earlier = read_ledger(out_dir) if resume else {}
     todo = [s for s in specs if s.key not in earlier]
     started = time.monotonic()
     try:
-        with _Progress(len(todo), quiet) as progress:
+        with _Progress(todo, quiet) as progress:
             new, interrupted = run_sweep(todo, executor, out_dir, timeout_s, on_result=progress.advance)
     finally:
         close = getattr(executor, "close", None)
@@ -226,6 +262,7 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
             "ok": sum(1 for r in ordered if r.get("ok")), "failed": failed, "pending": pending,
             "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
             "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
+            "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
             "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
 
 
@@ -238,15 +275,22 @@ def register(app: typer.Typer) -> None:
                                               "(default: all of them)"),
             seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
             first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
-            jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="runs at once on this machine (--executor local)"),
+            jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,
+                                     help="runs at once on this machine (--executor local; default: every core)"),
+            mode: str = typer.Option("in-process", "--mode",
+                                     help="in-process: the agents in one process, in lockstep (fast); launch: each "
+                                          "run a full launch of the agents as processes (the reference)"),
+            no_record: bool = typer.Option(False, "--no-record",
+                                           help="no Rerun recording per run (faster; the report then links none)"),
             out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
             executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
             resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
             timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
             as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """Run every SCENE x planner x seed as a full launch, then write the table and DIR/report.html.
+        """Run every SCENE x planner x seed, then write the table and DIR/report.html.
 
-        Each run is isolated (own router, credentials and run directory under DIR/runs). Exit 0 when
+        Each run is isolated (own graph and run directory under DIR/runs; in launch mode its own
+        router and credentials too); both modes compute the same runs. Exit 0 when
         every run completed every mission, 1 when some did not (the report says which), 2 on bad
         input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
         from rich.console import Console
@@ -256,7 +300,7 @@ def register(app: typer.Typer) -> None:
         try:
             summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
                                executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                               command=command)
+                               command=command, mode=mode, record=not no_record)
         except EvaluateError as exc:
             err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
             raise typer.Exit(2) from None

@@ -166,6 +166,31 @@ def _mission_table(summaries: Sequence[Summary], scene: str, mission: str, plann
     return f"<table><tr><th>metric (mean &plusmn; std over seeds)</th>{head}</tr>{''.join(body)}</table>"
 
 
+def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any]], planners: Sequence[str],
+                   metrics: Sequence[str]) -> str:
+    """One table for the whole study, whatever its number of seeds and missions: per planner, the
+    missions completed and, for each top-level metric (per-person and per-object ones are in the
+    per-mission tables), the mean over the missions of the seeds' means (each mission weighs one)."""
+    from tools.evaluate_figures import metric_label
+
+    head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
+    done = []
+    for planner in planners:
+        mine = [r for r in rows if r["planner"] == planner]
+        ok = sum(1 for r in mine if r.get("state") == "done")
+        done.append(f"<td>{ok} / {len(mine)}</td>")
+    body = [f"<tr><td>missions completed (runs x missions)</td>{''.join(done)}</tr>"]
+    for metric in metrics:
+        if "." in metric:
+            continue
+        cells = []
+        for planner in planners:
+            means = [s.mean for s in summaries if s.planner == planner and s.metric == metric and math.isfinite(s.mean)]
+            cells.append(f"<td>{format_value(sum(means) / len(means))}</td>" if means else "<td>-</td>")
+        body.append(f'<tr><td title="{html.escape(metric)}">{html.escape(metric_label(metric))}</td>{"".join(cells)}</tr>')
+    return f"<table><tr><th>metric (mean over missions)</th>{head}</tr>{''.join(body)}</table>"
+
+
 def _tests_table(tests: Sequence[PairedTest]) -> str:
     from tools.evaluate_figures import metric_label
 
@@ -240,7 +265,9 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                            f"<code>{f['sha256']}</code></td></tr>"
                            for name, files in prov["scenes"].items() for f in files)
                  + "</table>")
-    parts.append('<p class="note">Each run is a full launch of the six agents as processes; metrics are those of '
+    how = ("the six agents in one process, stepped in lockstep on one graph (metrics identical to a full launch's)"
+           if prov.get("mode") == "in-process" else "a full launch of the six agents as processes")
+    parts.append(f'<p class="note">Each run is {how}; metrics are those of '
                  "<code>chronav metrics SCENE TRAJ.csv</code> on each mission's stretch of the run's trajectory "
                  "(<code>missions/&lt;mission&gt;.csv</code> in the run directory), against the world at its "
                  "first sample. Table: <code>table.parquet</code> / <code>table.csv</code>; the numbers of the "
@@ -248,13 +275,15 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     main = main_figure(figures, rows)
     if main is not None:
         parts.append(f"<h2>Main figure</h2>{_img(main)}")
+    parts.append("<h2>Summary</h2>" + _summary_table(summaries, rows, planners, metrics))
     parts.append("<h2>Per mission: mean &plusmn; std over the seeds</h2>")
     for scene, mission in missions_of(rows):
         done = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission) and r.get("state") == "done")
         total = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission))
-        parts.append(f"<h3>{esc(scene)} / {esc(mission)} <span class='note'>({done} of {total} runs "
-                     "completed it)</span></h3>")
-        parts.append(_mission_table(summaries, scene, mission, planners, metrics))
+        # Folded: with many missions and metrics the details would bury the summary.
+        parts.append(f"<details><summary><b>{esc(scene)} / {esc(mission)}</b> <span class='note'>({done} of "
+                     f"{total} runs completed it)</span></summary>")
+        parts.append(_mission_table(summaries, scene, mission, planners, metrics) + "</details>")
     parts.append(f"<h2>Is {REFERENCE} different? Paired tests per metric</h2>"
                  "<p class='note'>Wilcoxon signed-rank test (two-sided, scipy.stats.wilcoxon, zero differences "
                  f"dropped), pairs = the same scene, mission and seed; green: p &lt; {SIGNIFICANCE}. With few "
@@ -267,7 +296,8 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     parts.append("<h2>Metrics by planner across seeds</h2><p class='note'>Every seed is a dot; box plots need at "
                  "least 5 seeds per planner, below that a bar marks the mean.</p>"
                  + "".join(_img(p) for p in figures.get("boxes", [])))
-    parts.append("<h2>Runs</h2><table><tr><th>scene</th><th>planner</th><th>seed</th><th>outcome</th>"
+    parts.append(f"<h2>Runs</h2><details><summary>{len(runs)} runs (click to show)</summary>"
+                 "<table><tr><th>scene</th><th>planner</th><th>seed</th><th>outcome</th>"
                  "<th>wall s</th><th>host</th><th>recording</th><th>run directory</th></tr>")
     for run in sorted(runs, key=lambda r: (r["spec"]["scene"], r["spec"]["planner"], r["spec"]["seed"])):
         spec = run["spec"]
@@ -278,7 +308,8 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                      f"<td>{spec['seed']}</td><td>{outcome}</td><td>{float(run.get('wall_s', 0.0)):.1f}</td>"
                      f"<td>{esc(str(run.get('host')))}</td><td>{_link(run.get('rrd'), out_dir)}</td>"
                      f"<td>{_link(run.get('run_dir'), out_dir)}</td></tr>")
-    parts.append("</table><p class='note'>Open a recording with <code>rerun FILE.rrd</code>.</p></body></html>")
+    parts.append("</table></details><p class='note'>Open a recording with <code>rerun FILE.rrd</code>.</p>"
+                 "</body></html>")
     path = out_dir / REPORT
     path.write_text("\n".join(parts), encoding="utf-8")
     return path

@@ -1,10 +1,16 @@
 """A sweep: every scene x planner x seed as one isolated run of the whole system, locally or on Dask.
 
-Why each run is its own ``python -m tools.evaluate_sweep`` process: a run is a full ``chronav
-launch`` (router on a free port, the run's own credentials and run directory, six agents as
-processes; tools/launch.run_system), and the launcher installs signal handlers, which Python
-allows only in a main thread.  The local pool and Dask both run tasks in threads, so each task
-starts one such process and waits for it; runs share nothing but the machine.
+Two modes run the same agents (``--mode``):
+
+- ``in-process`` (the default): the six agents in one process, stepped in lockstep on one graph
+  (tools/inprocess.py).  Runs go to a pool of worker processes (``--jobs``, all cores by default)
+  that each keep their imports and compiled numba kernels from one run to the next; on Dask, a
+  task runs in the worker itself.  A run of the tiny scene then takes a fraction of a second.
+- ``launch``: each run a full ``chronav launch`` (router on a free port, the run's own credentials
+  and run directory, six agents as processes; tools/launch.run_system), the reference the
+  in-process mode is checked against (tests/system/test_parity.py).  The launcher installs signal
+  handlers, which Python allows only in a main thread, and the pools run tasks in threads, so each
+  task starts one ``python -m tools.evaluate_sweep`` process and waits for it.
 
 The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/socialmap/planners.py).  The
 seed goes to every agent as ``-o seed=N``: each agent that draws random numbers (today the human
@@ -12,8 +18,11 @@ observer's sensor noise; the people simulation of issue 15 next) seeds its gener
 one seed is one simulated world.  The simulator gets ``-o busy_rate=0``: its clock waits while the
 executive and the navigation plan instead of running on in real time, and ``watchdog_s=30``: a
 command that comes late (a slow replan on a loaded machine) is waited for instead of braking after
-one wall second, so sim times (when the robot leaves, what R and the people are then) and the
-driven path do not depend on how loaded the machine is.
+one wall second; the simulator and the navigation get ``perception_lockstep=1``: the clock moves
+on only once the perceivers processed the tick, and the navigation answers a pose only then, so
+the observer detects people at every tick, in a launch as in-process.  Sim times (when the robot
+leaves, what R and the people are then) and the driven path then do not depend on how loaded the
+machine is.
 
 Finished runs are appended to ``DIR/runs.jsonl`` as they end (one JSON object per run with its
 table rows); ``--resume`` skips the runs found there, so an interrupted sweep continues where it
@@ -40,6 +49,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 LEDGER = "runs.jsonl"
+MODES = ("in-process", "launch")
+DEFAULT_MODE = "in-process"
 WORKER_LOGS = "worker-logs"
 #: wall seconds the simulator waits for a late velocity command before braking (default 1 s)
 LOCKSTEP_WATCHDOG_S = 30.0
@@ -82,13 +93,14 @@ def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[
 
 def agent_options(spec: RunSpec) -> dict[str, list[str]]:
     """``-o`` options of each agent for one run: the seed for all, the planner for the navigation."""
+    from tools.inprocess import LOCKSTEP_OPTIONS
     from tools.launch import AGENTS
 
-    options = {name: [f"seed={spec.seed}"] for name in AGENTS}
+    options = {name: [f"seed={spec.seed}", *LOCKSTEP_OPTIONS.get(name, [])] for name in AGENTS}
     options["social_navigation"].append(f"planner={spec.planner}")
-    # Lockstep without wall-clock escapes: sim time waits while the agents plan, and a late command
-    # (a slow replan on a loaded machine) is waited for instead of braking after 1 wall second.
-    options["sim_robot"] += ["busy_rate=0", f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]
+    # Lockstep without wall-clock escapes: sim time waits while the agents plan and perceive, and a
+    # late command (a slow replan on a loaded machine) is waited for instead of braking after 1 wall s.
+    options["sim_robot"] += [f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]
     return options
 
 
@@ -96,14 +108,23 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
 # One run (inside its own process).
 # ---------------------------------------------------------------------------------------------
 
-def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float) -> dict[str, Any]:
-    """Launch the system for ``spec`` (headless, recorded) and measure its missions."""
+def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float, mode: str = "launch",
+                stop: threading.Event | None = None, record: bool = True) -> dict[str, Any]:
+    """Run the system for ``spec`` (headless; recorded unless ``record`` is False) in ``mode`` and
+    measure its missions."""
     from tools.console import outcome
     from tools.evaluate_table import mission_rows
-    from tools.launch import run_system
 
-    result = run_system(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=True,
-                        agent_options=agent_options(spec), metrics_report=False)
+    if mode == "in-process":
+        from tools.inprocess import run_in_process
+
+        result = run_in_process(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=record,
+                                agent_options=agent_options(spec), stop=stop)
+    else:
+        from tools.launch import run_system
+
+        result = run_system(spec.scene, runs_dir=runs_dir, timeout_s=timeout_s, record=record,
+                            agent_options=agent_options(spec), metrics_report=False)
     rrd = str(result.rrd_path) if result.rrd_path else None
     host = socket.gethostname()
     (result.run_dir / "evaluate.json").write_text(json.dumps({**spec.to_dict(), "host": host}))
@@ -112,7 +133,7 @@ def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float) -> dict[str, An
         missions=result.missions, host=host, run_wall_s=result.wall_s)
     return {"key": spec.key, "spec": spec.to_dict(), "ok": result.ok, "outcome": outcome(result),
             "error": result.error, "interrupted": result.interrupted, "run_dir": str(result.run_dir), "rrd": rrd,
-            "host": host, "wall_s": result.wall_s, "rows": rows}
+            "host": host, "wall_s": result.wall_s, "mode": mode, "rows": rows}
 
 
 def failed_result(spec: RunSpec, message: str, *, interrupted: bool = False) -> dict[str, Any]:
@@ -128,7 +149,7 @@ def finished(result: dict[str, Any]) -> bool:
 
 
 def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
-                 live: set[subprocess.Popen[bytes]] | None = None) -> dict[str, Any]:
+                 live: set[subprocess.Popen[bytes]] | None = None, record: bool = True) -> dict[str, Any]:
     """One run in its own process (its own session), waited for; the task body of every executor.
 
     ``live`` (local executor) collects the running processes so that Ctrl-C can be passed on."""
@@ -138,11 +159,13 @@ def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
     stem = f"{spec.slug}-{uuid.uuid4().hex[:8]}"
     result_file, log_file = logs / f"{stem}.json", logs / f"{stem}.log"
     args = [sys.executable, "-m", "tools.evaluate_sweep", "--spec", json.dumps(spec.to_dict()),
-            "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file)]
+            "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file),
+            *([] if record else ["--no-record"])]
     with log_file.open("wb") as log:
-        # Always recorded (RERUN=on whatever the worker's environment says): the report links each run.
+        # Recorded (RERUN=on whatever the worker's environment says: the report links each run),
+        # unless the sweep said --no-record.
         proc = subprocess.Popen(args, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                                env={**os.environ, "RERUN": "on"})
+                                env={**os.environ, "RERUN": "on" if record else "off"})
         if live is not None:
             live.add(proc)
         try:
@@ -190,8 +213,8 @@ class Executor(Protocol):
 class LocalExecutor:
     """``jobs`` runs at once on this machine."""
 
-    def __init__(self, jobs: int) -> None:
-        self.jobs = jobs
+    def __init__(self, jobs: int, record: bool = True) -> None:
+        self.jobs, self.record = jobs, record
         self._live: set[subprocess.Popen[bytes]] = set()
         self._stop = threading.Event()
 
@@ -203,7 +226,8 @@ class LocalExecutor:
                 while pending or running:
                     while pending and len(running) < self.jobs and not self._stop.is_set():
                         spec = pending.pop(0)
-                        running.add(pool.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, self._live))
+                        running.add(pool.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, self._live,
+                                                record=self.record))
                     if not running:
                         return
                     done, running = wait(running, return_when=FIRST_COMPLETED)
@@ -225,51 +249,76 @@ class LocalExecutor:
 class DaskExecutor:
     """Each run a task on an existing Dask cluster (``dask://HOST:PORT``, the scheduler's address).
 
-    A task launches one run on its worker (under ``runs_dir`` on that machine) and returns the
-    run's table rows and recording path; workers need chronav installed, nothing shared."""
+    A task checks the worker's chronav and scene files (tools/evaluate_pool.dask_task), runs one
+    run on its worker (in the worker process itself in-process, else a launch; under ``runs_dir``
+    on that machine) and returns the run's table rows and recording path; workers need chronav
+    installed, nothing shared.  Results stream back as tasks end.  A task that fails (its worker
+    was lost mid-run, and the scheduler gave up on it) is submitted once more."""
 
-    def __init__(self, address: str) -> None:
+    def __init__(self, address: str, mode: str = DEFAULT_MODE, record: bool = True) -> None:
         from distributed import Client
 
-        self.address = address
+        self.address, self.mode, self.record = address, mode, record
         self.client = Client(address, timeout="20s")
         self._futures: list[Any] = []
+        self.requeued: list[str] = []
 
     def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
         from distributed import as_completed
 
+        from tools.evaluate_pool import WorkerMismatch, dask_task, sweep_fingerprint
+
         sweep = uuid.uuid4().hex[:8]
-        by_key = {}
-        for index, spec in enumerate(specs):
-            future = self.client.submit(run_isolated, spec.to_dict(), str(runs_dir), timeout_s, pure=False,
-                                        key=f"chronav-evaluate-{sweep}-{index}-{spec.slug}")
-            by_key[future.key] = spec
+        fingerprints = {scene: sweep_fingerprint(scene) for scene in sorted({s.scene for s in specs})}
+        by_key: dict[str, tuple[RunSpec, int]] = {}
+
+        def submit(spec: RunSpec, index: int, attempt: int) -> Any:
+            future = self.client.submit(dask_task, spec.to_dict(), str(runs_dir), timeout_s, self.mode,
+                                        fingerprints[spec.scene], self.record, pure=False,
+                                        key=f"chronav-evaluate-{sweep}-{index}-{spec.slug}-a{attempt}")
+            by_key[future.key] = (spec, attempt)
             self._futures.append(future)
-        for future in as_completed(self._futures):
-            spec = by_key[future.key]
+            return future
+
+        stream = as_completed([submit(spec, index, 1) for index, spec in enumerate(specs)])
+        for index, future in enumerate(stream):
+            spec, attempt = by_key[future.key]
             try:
                 yield future.result()
-            except Exception as exc:  # noqa: BLE001 - a worker lost or a task error: report, go on
-                yield failed_result(spec, f"the Dask task failed: {type(exc).__name__}: {exc}")
+            except WorkerMismatch as exc:
+                yield failed_result(spec, str(exc))
+            except Exception as exc:  # noqa: BLE001 - a worker lost or a task error: once more, then report
+                if attempt == 1:
+                    self.requeued.append(spec.label)
+                    stream.add(submit(spec, len(specs) + index, 2))
+                    continue
+                yield failed_result(spec, f"the Dask task failed twice: {type(exc).__name__}: {exc}")
 
     def interrupt(self) -> None:
+        """Queued runs are cancelled; a run already under way on a worker finishes there."""
         self.client.cancel(self._futures)
 
     def close(self) -> None:
         self.client.close()
 
 
-def parse_executor(text: str, jobs: int) -> LocalExecutor | DaskExecutor:
-    """``local`` or ``dask://HOST:PORT``; ValueError in the user's words otherwise."""
+def parse_executor(text: str, jobs: int | None, mode: str = DEFAULT_MODE, record: bool = True) -> Any:
+    """``local`` or ``dask://HOST:PORT``; ValueError in the user's words otherwise.  ``jobs`` None:
+    every core."""
+    if mode not in MODES:
+        raise ValueError(f"--mode {mode}: use one of {', '.join(MODES)}")
     if text == "local":
-        return LocalExecutor(jobs)
+        from tools.evaluate_pool import InProcessPool, default_jobs
+
+        jobs = jobs or default_jobs()
+        return InProcessPool(jobs, record) if mode == "in-process" else LocalExecutor(jobs, record)
     if text.startswith("dask://"):
         address = text.removeprefix("dask://")
         host, sep, port = address.rpartition(":")
         if not sep or not host or not port.isdigit():
             raise ValueError(f"--executor {text}: expected dask://HOST:PORT, the address of a Dask scheduler")
         try:
-            return DaskExecutor(f"tcp://{host}:{port}")
+            return DaskExecutor(f"tcp://{host}:{port}", mode, record)
         except ImportError:
             raise ValueError("--executor dask://...: Dask is not installed; install chronav's `eval` extra "
                              "(pip install 'chronav[eval]')") from None
@@ -313,10 +362,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs-dir", required=True, type=Path)
     parser.add_argument("--timeout", required=True, type=float)
     parser.add_argument("--result", required=True, type=Path)
+    parser.add_argument("--no-record", action="store_true")
     args = parser.parse_args(argv)
     spec = RunSpec.from_dict(json.loads(args.spec))
     started = time.monotonic()
-    result = execute_run(spec, args.runs_dir, args.timeout)
+    result = execute_run(spec, args.runs_dir, args.timeout, record=not args.no_record)
     result["task_wall_s"] = time.monotonic() - started
     tmp = args.result.with_suffix(".tmp")
     tmp.write_text(json.dumps(result))

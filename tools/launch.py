@@ -174,6 +174,18 @@ def _make_run_dir(directory: Path, run_id: str) -> Path:
     return run_dir
 
 
+def log_scene_static(recorder: Any, spec: Any) -> None:
+    """What a run's recording holds before any agent logs: the blueprint framed on the scene, the
+    world frame, the walls and the legend. One definition for a launch and an in-process run."""
+    from agents.runtime.drawing.layout import blueprint, log_legend, world_frame
+    from agents.runtime.drawing.social_map import log_walls
+
+    recorder.send_blueprint(blueprint(spec))
+    world_frame(recorder)
+    log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
+    log_legend(recorder, spec)
+
+
 def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path | None = None,
                timeout_s: float = 900.0, record: bool = True, restart_limit: int = 3,
                hang_timeout_s: float = DEFAULT_HANG_TIMEOUT_S,
@@ -193,8 +205,6 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
     from agents.world.scene_world import load_world
-    from agents.runtime.drawing.social_map import log_walls
-    from agents.runtime.drawing.layout import blueprint, log_legend, world_frame
     from agents.runtime.drawing.dsr_graph import GraphLogger
 
     check_rate(rate)
@@ -245,10 +255,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     recorder = Recorder("launcher", run_dir if record else None, run_id, day=spec.clock.date)
     rrd_path: Path | None = None
     try:
-        recorder.send_blueprint(blueprint(spec))
-        world_frame(recorder)
-        log_walls(recorder, [[list(p) for p in wall] for wall in spec.walls])
-        log_legend(recorder, spec)
+        log_scene_static(recorder, spec)
         supervisor.start("router")
         if not wait_for_port(port, 15, give_up=lambda: stop_requested["flag"] or not router.alive):
             if not stop_requested["flag"]:
@@ -403,13 +410,20 @@ def register(app: typer.Typer) -> None:
                                               help="ROS_DOMAIN_ID of --ros (default: $ROS_DOMAIN_ID or 0)"),
                robot: str = typer.Option("sim", "--robot", help="sim: the simulated robot; ros: a ROS 2 robot "
                                          "(its /odom and /scan in, /cmd_vel out; needs --ros)"),
+               in_process: bool = typer.Option(False, "--in-process",
+                                               help="every agent in this process, stepped in lockstep on one graph "
+                                                    "(no router, no restarts; as fast as the machine allows)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
-        The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
+        With --in-process the same agents run in this one process, stepped in lockstep (reproducible
+        run for run). The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
         from tools.console import run_with_progress
 
         domain = None
+        if in_process and (ros or ros_domain is not None or robot != "sim"):
+            raise typer.BadParameter("--in-process runs every agent on one graph without Zenoh, so the ROS 2 "
+                                     "bridge cannot join it: drop --in-process to use --ros or --robot ros")
         if ros or ros_domain is not None or robot == "ros":
             try:
                 domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
@@ -419,7 +433,7 @@ def register(app: typer.Typer) -> None:
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
-                                 robot=robot)
+                                 robot=robot, in_process=in_process)
         raise typer.Exit(code)
 
     @app.command("demo")

@@ -24,7 +24,7 @@ from agents.missions.planning import MissionPlanner, intention_end, remaining_ro
 from agents.missions.steps import PlanStep, Rule, StepFailed
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
-from agents.world.freshness import interactions_follow_activities, observed_up_to
+from agents.world.freshness import interactions_follow_activities, mark_observed, observed_up_to
 from agents.world.vocabulary import (ActivityView, ClockView, EdgeType, IntentionKind, IntentionState,
                                      IntentionView, MissionState, MissionView, NodeType, intention_name, intentions,
                                      mission_name, missions)
@@ -45,6 +45,7 @@ class ExecutiveAgent(Agent):
         self._steps: dict[str, list[PlanStep]] = {}
         self._replans: dict[str, Counter[str]] = {}
         self._written_missions = False
+        self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self._dirty = True
         self._world_changed = False
         for signal in ("node_added", "node_updated", "node_deleted", "edge_added", "edge_deleted"):
@@ -81,6 +82,19 @@ class ExecutiveAgent(Agent):
             self._write_missions()
         now_s = clock.now_s
         self.rec.set_time(now_s)
+        if self.perception_lockstep:
+            # In lockstep (chronav evaluate, in-process runs): act on a tick once the perceivers saw
+            # it, and say so, so the navigation and the clock wait for what this agent decides then.
+            if not observed_up_to(g, now_s, slack_s=0.0):
+                return
+            self._react(now_s)
+            mark_observed(g, self.config.name, now_s)
+            return
+        self._react(now_s)
+
+    def _react(self, now_s: float) -> None:
+        """Monitor the active mission, or start the first one due (when anything changed)."""
+        g = self.graph
         if not self._dirty:
             return
         self._dirty = False

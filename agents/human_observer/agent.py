@@ -26,7 +26,7 @@ from agents.runtime.recording import Recorder
 from agents.lib.socialmap.motion import MotionParams, predict
 from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import write_interactions, write_person
-from agents.world.freshness import mark_observed
+from agents.world.freshness import mark_observed, observed_up_to
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
 from scenes.geometry import angle_difference
@@ -50,6 +50,7 @@ class HumanObserverAgent(Agent):
         self.noise_xy = float(self.config.option("noise_xy", "0.02"))
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
         self.seed = int(self.config.option("seed", "7"))
+        self.lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
         self.tracker = Tracker(measurement_sigma=max(self.noise_xy, 0.01))
         self.roles: dict[str, str] = {}
@@ -79,6 +80,8 @@ class HumanObserverAgent(Agent):
         now_s, rows = truth
         if now_s == self._last_t:
             return
+        if self.lockstep and not observed_up_to(self.graph, now_s, ("agenda",), slack_s=0.0):
+            return   # in lockstep: the conversations and participants below read the agenda of this tick
         self._last_t = now_s
         self.rec.set_time(now_s)
         estimates: dict[str, tuple[float, float, float, float, float]] = {}

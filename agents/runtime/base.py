@@ -20,6 +20,7 @@ import sys
 import threading
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import ClassVar
 
 from agents.runtime.config import AgentConfig, parse_agent_args
@@ -38,6 +39,10 @@ class Agent(ABC):
     """One CORTEX agent: reacts to DSR signals and runs ``step`` every loop period."""
 
     kind: ClassVar[str]
+    #: the wall clock an agent paces itself by (rates, watchdogs).  Why a hook: run in-process
+    #: (agents/runtime/lockstep.py) the scheduler hands every agent its virtual wall clock, so a
+    #: run's pacing, and with it the simulated world, does not depend on how loaded the machine is.
+    wall_clock: Callable[[], float] = staticmethod(time.monotonic)
 
     def __init__(self, config: AgentConfig) -> None:
         self.config = config

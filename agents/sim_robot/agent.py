@@ -22,7 +22,6 @@ navigation's commands; this agent then only runs the clock at real time and the 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +34,7 @@ from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, pol
 from agents.lib.crowd.model import PersonTruth, RobotBody
 from agents.world.building import closed_door_walls, footprint_polygons, scene_occupancy
 from agents.world.dsr_readers import closed_doors
+from agents.world.freshness import LOCKSTEP, observed_up_to
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
@@ -79,6 +79,12 @@ class SimRobotAgent(Agent):
         self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
         self.external = self.config.option("robot", "sim") == "ros"   # a ROS 2 robot reports its own pose
+        # Perception in lockstep (-o perception_lockstep=1, chronav evaluate and in-process runs): the
+        # clock moves on only once every perceiver (and the executive after them) has processed the
+        # current time, so the observer detects people at every clock tick, not at whatever ticks its
+        # loop happens to see (agents/world/freshness.LOCKSTEP).
+        self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
+        self._perception_since: float | None = None
         # The bumper: a move that brings the body into contact is refused; moving away always works.
         self._contact_m = robot.radius * 0.9
         self._bumped = False
@@ -90,7 +96,7 @@ class SimRobotAgent(Agent):
         self.feed = WorldFeed(self.world)
         self._people: tuple[PersonTruth, ...] = ()
         self._people_file = self._open_people()
-        self._wall_anchor = time.monotonic()
+        self._wall_anchor = self.wall_clock()
         self._sim_anchor = self.now_s
         self._waiting_since: float | None = None
         self._agenda_hold: tuple[tuple[str, ...], float] | None = None
@@ -144,10 +150,12 @@ class SimRobotAgent(Agent):
             self._last_mode = mode
             self._reanchor()
             self._set_clock(mode=mode)
-        wall_now = time.monotonic()
+        wall_now = self.wall_clock()
         end_s = self.scene.clock.end_s
         if self.now_s >= end_s:
             self._set_clock(mode="finished", finished=True)
+            return
+        if not self._perceived(wall_now):
             return
         if self.external:
             self._follow_external(wall_now, mode)
@@ -231,6 +239,20 @@ class SimRobotAgent(Agent):
             s = self.state
             self._trajectory_file.write(f"{self.now_s:.3f},{s.x:.4f},{s.y:.4f},{s.theta:.5f}\n")
 
+    def _perceived(self, wall_now: float) -> bool:
+        """With perception in lockstep: have the perceivers processed the current clock value?  A
+        perceiver that does not answer within the watchdog (it died) no longer holds the clock."""
+        if not self.perception_lockstep or observed_up_to(self.graph, self.now_s, LOCKSTEP, slack_s=0.0):
+            self._perception_since = None
+            return True
+        self._perception_since = self._perception_since or wall_now
+        if wall_now - self._perception_since < self.watchdog_s:
+            return False
+        self.rec.event(f"perception did not answer t={self.now_s:.1f} s within {self.watchdog_s:g} s: "
+                       "the clock runs on", level="WARN")
+        self._perception_since = None
+        return True
+
     def _due_now(self) -> bool:
         """A pending mission's time has come (the executive is about to start it)."""
         return any(n.attrs.get("state") == "pending" and float(n.attrs.get("time_s", math.inf)) <= self.now_s
@@ -248,7 +270,7 @@ class SimRobotAgent(Agent):
         return (self.now_s + dt - self._sim_anchor) <= (wall_now - self._wall_anchor) * self.rate + dt
 
     def _reanchor(self) -> None:
-        self._wall_anchor = time.monotonic()
+        self._wall_anchor = self.wall_clock()
         self._sim_anchor = self.now_s
 
     def _mode(self) -> str:

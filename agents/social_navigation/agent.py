@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from agents.runtime.base import Agent
-from agents.world.freshness import observed_s, observed_up_to
+from agents.world.freshness import LOCKSTEP, observed_s, observed_up_to
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap import elastic_band as eb
 from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
@@ -137,6 +137,10 @@ class SocialNavigationAgent(Agent):
         self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
         self.cruise = self.maps.cruise_speed_mps
         self.control_dt = float(self.config.option("control_dt", "0.1"))
+        # -o perception_lockstep=1 (chronav evaluate, in-process runs): answer a pose only once the
+        # perceivers and the executive have processed its time, so plans read the people (and the
+        # intention) of that very tick.
+        self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.intention_id: int | None = None
         self.band: eb.ElasticBand | None = None
         self.blocked_since: float | None = None   # sim time since when no path exists (people in the way)
@@ -201,6 +205,8 @@ class SocialNavigationAgent(Agent):
         robot = self._robot()
         if now_s is None or robot is None:
             return
+        if self.perception_lockstep and not observed_up_to(self.graph, now_s, LOCKSTEP, slack_s=0.0):
+            return
         self.rec.set_time(now_s)
         intention = self._active_intention()
         if intention is None:
@@ -213,15 +219,27 @@ class SocialNavigationAgent(Agent):
                 self._start(intention, robot, now_s)
             return
         # Answer the pose first: the simulator integrates the next step while this agent replans.
+        # In lockstep the replan comes first: once answered, the simulator and the observer move on,
+        # and a replan after the answer would read the next tick's pose and people, or not, as the
+        # processes' timing decides (a run would not repeat itself).
         pose_stamp = RobotView.from_node(robot).pose_stamp
+        if self.perception_lockstep and self._replan_due(intention, now_s):
+            if self.band is None:
+                self._plan(self.graph.world_pose(robot.id), now_s, reason="the way cleared")
+            else:
+                self._replan(intention, robot, now_s)
         if self.band is None:   # people block the way: stand still and try again (_wait_for_way)
             self._wait_for_way(robot, now_s, pose_stamp)
             return
         if pose_stamp > self.last_answered:
             self._control(intention, robot, now_s, pose_stamp)
-        # (sim time advances in float steps of control_dt: 2 x 0.1 may sum to 0.19999...)
-        if self.intention_id == intention.node_id and now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S:
+        if self._replan_due(intention, now_s):
             self._replan(intention, robot, now_s)
+
+    def _replan_due(self, intention: IntentionView, now_s: float) -> bool:
+        """Every REPLAN_PERIOD_S of sim time (which advances in float steps of control_dt: 2 x 0.1
+        may sum to 0.19999...)."""
+        return self.intention_id == intention.node_id and now_s - self.last_replan_s >= REPLAN_PERIOD_S - TIME_EPS_S
 
     def _start(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         self.intention_id = intention.node_id

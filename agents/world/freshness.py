@@ -13,6 +13,9 @@ from typing import Any
 from agents.world.vocabulary import ActivityState, EdgeType, NodeType
 
 PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
+#: who stamps every tick in lockstep (-o perception_lockstep=1): the perceivers, then the executive,
+#: which acts on what they saw; the navigation and the simulator's clock wait for all of them
+LOCKSTEP: tuple[str, ...] = (*PERCEIVERS, "executive")
 
 
 def mark_observed(graph: Any, agent: str, now_s: float) -> None:

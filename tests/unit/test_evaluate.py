@@ -79,13 +79,13 @@ class FakeLaunch:
 @pytest.fixture()
 def in_thread(monkeypatch: pytest.MonkeyPatch) -> None:
     """Each run in the calling thread instead of its own process (the stand-in lives here)."""
-    monkeypatch.setattr(evaluate_sweep, "run_isolated", lambda spec, runs_dir, timeout_s, live=None:
+    monkeypatch.setattr(evaluate_sweep, "run_isolated", lambda spec, runs_dir, timeout_s, live=None, record=True:
                         evaluate_sweep.execute_run(evaluate_sweep.RunSpec.from_dict(spec), Path(runs_dir), timeout_s))
 
 
 def _evaluate(out: Path, resume: bool) -> dict:
     return evaluate([str(TINY)], planners="social,baseline", seeds=1, first_seed=4, jobs=1, out=out,
-                    executor_text="local", resume=resume, timeout_s=60.0, quiet=True, command="test")
+                    executor_text="local", resume=resume, timeout_s=60.0, quiet=True, command="test", mode="launch")
 
 
 def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread: None,
@@ -97,9 +97,9 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     monkeypatch.setattr(tools.evaluate_figures, "all_figures", lambda *a, **k: {})   # the system test draws them
     stopped = _evaluate(tmp_path, resume=False)
     assert stopped["interrupted"] and stopped["pending"] == 1 and stopped["launched"] == 1
-    assert first.calls[0]["social_navigation"] == ["seed=4", "planner=social"]
-    assert first.calls[0]["human_observer"] == ["seed=4"]
-    assert "busy_rate=0" in first.calls[0]["sim_robot"]
+    assert first.calls[0]["social_navigation"] == ["seed=4", "perception_lockstep=1", "planner=social"]
+    assert first.calls[0]["human_observer"] == ["seed=4", "perception_lockstep=1"]
+    assert {"busy_rate=0", "perception_lockstep=1"} <= set(first.calls[0]["sim_robot"])
 
     second = FakeLaunch()
     monkeypatch.setattr("tools.launch.run_system", second)
@@ -110,7 +110,13 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     assert sorted(r["planner"] for r in rows) == ["baseline", "social"]
     straight = next(r for r in rows if r["planner"] == "baseline")
     assert straight["distance_travelled_m"] == pytest.approx(4.4) and straight["seed"] == 4
-    assert Path(resumed["report"]).exists()
+    report = Path(resumed["report"]).read_text()
+    # The summary first, one table whatever the seeds; the per-mission tables and the runs folded.
+    assert report.index("<h2>Summary</h2>") < report.index("<details><summary><b>eval_tiny / cross</b>")
+    assert "<td>missions completed (runs x missions)</td><td>1 / 1</td><td>1 / 1</td>" in report
+    summary = report[report.index("<h2>Summary</h2>"):report.index("<h2>Per mission")]
+    assert "4.4" in summary and "<details>" not in summary and "full launch of the six agents" in report
+    assert "<summary>2 runs (click to show)</summary>" in report
 
 
 @pytest.mark.parametrize(("args", "words"), [
@@ -120,6 +126,7 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     (["--executor", "ray://host:1"], "use local or dask://HOST:PORT"),
     (["--executor", "dask://nohost"], "expected dask://HOST:PORT"),
     (["--seeds", "0"], "--seeds: give at least 1"),
+    (["--mode", "threads"], "--mode threads: use one of in-process, launch"),
 ])
 def test_bad_input_is_one_line_and_launches_nothing(args: list[str], words: str, tmp_path: Path) -> None:
     extra = [] if "--resume" in args else ["--out", str(tmp_path / "study")]
@@ -133,3 +140,21 @@ def test_a_finished_sweep_is_not_overwritten(tmp_path: Path) -> None:
     (tmp_path / "runs.jsonl").write_text(json.dumps({"key": "x"}) + "\n")
     result = CliRunner().invoke(app, ["evaluate", str(TINY), "--out", str(tmp_path)])
     assert result.exit_code == 2 and "continue it with --resume" in " ".join(result.output.split())
+
+
+def test_progress_gives_each_planner_its_own_eta(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A planner whose runs take twice as long has twice the time left per run left."""
+    from tools import evaluate as evaluate_module
+    from tools.evaluate_sweep import RunSpec, plan_sweep
+
+    clock = [100.0]
+    monkeypatch.setattr(evaluate_module.time, "monotonic", lambda: clock[0])
+    specs = plan_sweep([TINY], ["social", "baseline"], [1, 2, 3])
+    progress = evaluate_module._Progress(specs, quiet=True)
+    for spec, wall in ((RunSpec(str(TINY), "social", 1), 2.0), (RunSpec(str(TINY), "baseline", 1), 1.0)):
+        clock[0] += wall
+        progress.advance({"spec": spec.to_dict(), "outcome": "ok", "wall_s": wall})
+    # 3 wall s for 2 runs: 1.5 s a run on average; social's runs cost 2/1.5 of that, baseline's 1/1.5.
+    assert progress.eta_s() == pytest.approx(1.5 * 4)
+    assert progress.eta_s("social") == pytest.approx(1.5 * (2.0 / 1.5) * 2)
+    assert progress.eta_s("baseline") == pytest.approx(1.5 * (1.0 / 1.5) * 2)

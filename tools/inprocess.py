@@ -1,0 +1,156 @@
+"""`chronav launch SCENE --in-process`: the six agents in this process, in lockstep, on one graph.
+
+Why beside tools/launch.py and not inside it: a launch supervises processes, a router and their
+credentials; an in-process run has none of them, only the agents (the same classes, built from
+the same ``AgentConfig`` a process would parse) and the scheduler of agents/runtime/lockstep.py.
+What a run leaves behind is the same: ``<run>/trajectory.csv`` and ``people.csv`` (written by the
+simulator agent), ``result.json`` in the launch's format, and, when recorded, the merged Rerun
+recording ``<runs>/<run id>.rrd``.
+
+The agents get the options that take wall time out of a run (``busy_rate=0``: the clock waits
+while agents plan; ``perception_lockstep=1``: it moves on only once the perceivers saw the tick),
+which ``chronav evaluate --mode launch`` passes to its processes too: the two modes then compute
+the same run (tests/system/test_parity.py).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections.abc import Callable
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+from tools.launch import AGENTS, TERMINAL_STATES, LaunchError, RunResult, check_rate, check_timeout
+
+#: the order of a round: the clock first, then who perceives the tick, then who acts on it
+ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
+                                "social_navigation")
+#: options that make a run independent of wall time (also given to the processes of an evaluate launch)
+LOCKSTEP_OPTIONS: dict[str, list[str]] = {
+    "sim_robot": ["busy_rate=0", "perception_lockstep=1"],
+    "social_navigation": ["perception_lockstep=1"],
+    "executive": ["perception_lockstep=1"],
+    "human_observer": ["perception_lockstep=1"],
+}
+assert sorted(ROUND_ORDER) == sorted(AGENTS)
+
+
+def agent_classes() -> dict[str, type[Any]]:
+    """The agent classes by name (imported here: the tools layer may know the agent processes)."""
+    from agents.agenda.agent import AgendaAgent
+    from agents.executive.agent import ExecutiveAgent
+    from agents.human_observer.agent import HumanObserverAgent
+    from agents.object_recognition.agent import ObjectRecognitionAgent
+    from agents.sim_robot.agent import SimRobotAgent
+    from agents.social_navigation.agent import SocialNavigationAgent
+
+    return {cls.kind: cls for cls in (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent,
+                                      ExecutiveAgent, SocialNavigationAgent)}
+
+
+def merged_options(agent_options: dict[str, list[str]] | None, rate: float | None) -> dict[str, dict[str, str]]:
+    """Each agent's ``-o KEY=VALUE`` options as a dict: the lockstep ones, then the caller's."""
+    merged: dict[str, dict[str, str]] = {name: {} for name in AGENTS}
+    for source in (LOCKSTEP_OPTIONS, agent_options or {}):
+        for name, items in source.items():
+            for item in items:
+                key, sep, value = item.partition("=")
+                if not sep:
+                    raise LaunchError(f"agent option {item!r} of {name}: expected KEY=VALUE")
+                merged[name][key] = value
+    if rate is not None:
+        merged["sim_robot"]["rate"] = str(rate)
+    return merged
+
+
+def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Path | None = None,
+                   timeout_s: float = 900.0, record: bool = True,
+                   agent_options: dict[str, list[str]] | None = None,
+                   on_tick: Callable[[dict[str, object]], None] | None = None,
+                   stop: threading.Event | None = None) -> RunResult:
+    """Run one scene with every agent in this process; the same result a launch returns.
+
+    ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
+    from agents.runtime.config import AgentConfig
+    from agents.runtime.lockstep import AgentError, Lockstep
+    from agents.runtime.recording import Recorder
+    from agents.world.scene_world import load_world
+    from agents.world.write_policy import policy_from_env
+    from dsr import DSRGraph
+    from tools.launch import _make_run_dir, _write_result, log_scene_static, scene_missions
+    from tools.runs import runs_dir as default_runs_dir
+
+    check_rate(rate)
+    check_timeout(timeout_s)
+    loaded = load_world(scene)
+    spec = loaded.scene
+    scene_path = loaded.path.resolve()
+    run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}-{threading.get_ident() % 10000}"
+    run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
+    options = merged_options(agent_options, rate)
+    record = record and os.environ.get("RERUN", "on") != "off"   # what the agents' Recorders honour too
+    recording_id = run_id if record else None
+    classes = agent_classes()
+    started = time.monotonic()
+    graph = DSRGraph(agent="lockstep", graph=run_id.replace(".", "_"))
+    agents = [classes[name](AgentConfig(name=name, scene=scene_path, graph=graph.graph_name, run_dir=run_dir,
+                                        recording_id=recording_id, options=options[name]))
+              for name in ROUND_ORDER]
+    recorders = [Recorder(name, run_dir if record else None, recording_id, day=spec.clock.date)
+                 for name in ROUND_ORDER]
+    scheduler = Lockstep(graph, agents, recorders, policy=policy_from_env())
+    launcher = Recorder("launcher", run_dir if record else None, recording_id, day=spec.clock.date)
+    missions: dict[str, dict[str, object]] = {}
+    error: str | None = None
+    reason = "done"
+    try:
+        if record:
+            log_scene_static(launcher, spec)
+        scheduler.setup()
+
+        def status() -> dict[str, object]:
+            clock = graph.get_node_by_name("clock")
+            found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type("mission")}
+            return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
+                    "clock_mode": None if clock is None else clock.attrs.get("mode"),
+                    "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
+                    "missions": found, "agents": {name: ("up", 0) for name in AGENTS},
+                    "wall_s": time.monotonic() - started,
+                    "run": {"run_dir": str(run_dir), "endpoint": "in-process", "graph": graph.graph_name}}
+
+        def done() -> bool:
+            nonlocal missions
+            current = status()
+            missions = current["missions"]  # type: ignore[assignment]
+            if on_tick is not None and scheduler.rounds % 50 == 0:
+                on_tick(current)
+            return bool(current["clock_finished"]) or (
+                len(missions) == len(spec.missions) and bool(missions)
+                and all(m.get("state") in TERMINAL_STATES for m in missions.values()))
+
+        outcome = scheduler.run(done, timeout_s=timeout_s, stop=stop)
+        reason = outcome.reason
+        if reason == "stalled":
+            error = (f"the agents stopped making progress at round {outcome.rounds} (nothing changed in the graph "
+                     f"for {outcome.rounds} rounds); see {run_dir}")
+    except AgentError as exc:
+        error = str(exc)
+    finally:
+        scheduler.teardown()
+        launcher.close()
+    rrd_path = None
+    if record:
+        from tools.launch import merge_recordings
+
+        rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")), run_dir.parent / f"{run_id}.rrd")
+    result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path,
+                       missions={**scene_missions(spec), **missions}, events=[], restarts={name: 0 for name in AGENTS},
+                       wall_s=time.monotonic() - started, interrupted=reason == "interrupted",
+                       timed_out=reason == "timed_out", scene_path=loaded.path, error=error)
+    _write_result(result)
+    return result
+
+
