@@ -23,6 +23,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.chaos",         # chronav chaos (fault injection)
     "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
     "tools.evaluate",      # chronav evaluate (planner studies)
+    "tools.predict_cli",   # chronav predict evaluate (people prediction on real pedestrians)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -19,7 +19,7 @@ import zlib
 import numpy as np
 import shapely
 
-from agents.lib.perception.tracking import Detection, Tracker
+from agents.lib.perception.tracking import Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
@@ -38,7 +38,6 @@ PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
 PUBLISH_SPEED_MPS = 0.1
 TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing still
-STILL_DEADBAND_MPS = 0.15    # an estimated speed below this is sensor noise on a still person
 
 
 class HumanObserverAgent(Agent):
@@ -51,7 +50,7 @@ class HumanObserverAgent(Agent):
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
         self.seed = int(self.config.option("seed", "7"))
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
-        self.tracker = Tracker(measurement_sigma=max(self.noise_xy, 0.01))
+        self.tracker = observer_tracker(self.noise_xy)
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
@@ -93,11 +92,8 @@ class HumanObserverAgent(Agent):
                 rng = self._noise(name, now_s, (x, y, theta) if math.hypot(vx, vy) < TRUTH_STILL_MPS else None)
                 detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
                                             theta + rng.normal(0, self.noise_theta)))
-            for name, track in self.tracker.update(now_s, detections).items():
-                vx, vy = self.tracker.velocity(name, now_s)
-                if math.hypot(vx, vy) < STILL_DEADBAND_MPS:
-                    vx = vy = 0.0
-                estimates[name] = (*track.xy, track.theta, vx, vy)
+            for name in self.tracker.update(now_s, detections):
+                estimates[name] = self.tracker.estimate(name, now_s)
         for name, estimate in estimates.items():
             self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}

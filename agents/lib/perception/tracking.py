@@ -26,6 +26,16 @@ from scipy.optimize import linear_sum_assignment
 GATE_CHI2 = 9.21        # 2 degrees of freedom, 99 %
 MAX_GAP_S = 2.0
 LOST_S = 3.0            # a track not updated for this long reports no velocity
+STILL_MPS = 0.15        # an estimated speed below this is sensor noise on a still person
+MIN_SIGMA_M = 0.01      # the measurement noise the tracker assumes at least (a perfect sensor is never perfect)
+
+
+def observer_tracker(noise_xy: float) -> "Tracker":
+    """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise.
+
+    One definition: the observer and ``chronav predict evaluate`` build it here, so the benchmark
+    measures what runs."""
+    return Tracker(measurement_sigma=max(noise_xy, MIN_SIGMA_M))
 
 
 @dataclass(frozen=True)
@@ -126,3 +136,12 @@ class Tracker:
         if t_s - track.updated_s > LOST_S:
             return (0.0, 0.0)
         return track.velocity
+
+    def estimate(self, name: str, t_s: float) -> tuple[float, float, float, float, float]:
+        """What the observer publishes of a track: x, y, heading, vx, vy (a speed below
+        ``STILL_MPS`` is reported as standing still)."""
+        track = self.tracks[name]
+        vx, vy = self.velocity(name, t_s)
+        if math.hypot(vx, vy) < STILL_MPS:
+            vx = vy = 0.0
+        return (*track.xy, track.theta, vx, vy)
