@@ -48,10 +48,10 @@ class MotionParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    moving_mps: float = Field(0.2, ge=0, description="slower than this a person counts as standing")
+    moving_mps: float = Field(0.1, ge=0, description="slower than this a person counts as standing")
     front_gain_s: float = Field(2.0, ge=0, description="Kirby: front sigma = max(2 v, rest)")
-    horizon_s: float = Field(4.0, ge=0, description="how far ahead people are predicted")
-    step_s: float = Field(0.5, gt=0, description="time between predicted positions")
+    horizon_s: float = Field(4.8, ge=0, description="how far ahead people are predicted")
+    step_s: float = Field(0.4, gt=0, description="time between predicted positions")
     weight: float = Field(0.6, ge=0, lt=1, description="peak density of the first prediction (< intimate)")
 
 
