@@ -23,7 +23,7 @@ from agents.lib.perception.tracking import Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
-from agents.lib.socialmap.motion import MotionParams, predict
+from agents.lib.socialmap.motion import MotionParams, predict_many
 from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
@@ -116,8 +116,8 @@ class HumanObserverAgent(Agent):
                 trail.append((now_s, x, y))
             while trail and (trail[0][0] < now_s - TRAIL_S or trail[0][0] > now_s):
                 trail.pop(0)
-        predictions = [found for person in dsr_people(self.graph)
-                       if (found := predict(person, self._motion, self._walls)) is not None]
+        predictions = [found for found in predict_many(dsr_people(self.graph), self._motion, self._walls)
+                       if found is not None]
         log_people(self.rec, {name: e[:3] for name, e in estimates.items()},
                    {name: e[3:] for name, e in estimates.items()},
                    {name: [(x, y) for _, x, y in trail] for name, trail in self.trails.items()}, predictions)

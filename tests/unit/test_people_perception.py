@@ -97,7 +97,7 @@ def test_predictions_follow_the_velocity_or_the_activity_and_never_forbid() -> N
     assert found is not None
     assert found.points[:, 0] == pytest.approx(2.0 + found.times)
     assert np.all(np.diff(found.weights) < 0) and found.weights.max() < 0.8
-    going = Person("p", 2.0, 3.0, 0.0, vx=1.0, vy=0.0, destination=(2.0, 5.5 + 1.8))
+    going = Person("p", 2.0, 3.0, 0.0, vx=0.6, vy=0.8, destination=(2.0, 5.5 + 1.8))   # 37 degrees off it
     toward = predict(going, params, None)
     assert np.all(toward.points[:, 0] == pytest.approx(2.0)) and toward.points[-1, 1] > 3.5, "toward the activity"
     near_wall = predict(Person("p", 11.0, 3.0, 0.0, vx=1.0, vy=0.0), params, None)

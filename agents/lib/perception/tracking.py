@@ -38,7 +38,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
 GATE_CHI2 = 9.21            # 2 degrees of freedom, 99 %
@@ -67,22 +66,32 @@ class Detection:
     theta: float
 
 
-@dataclass
+@dataclass(slots=True)
 class Track:
+    """One person's track: position and velocity (from the fit), the Kalman covariance that sizes
+    its gate, its heading and its latest detections.  The constant-velocity model's two axes are
+    independent with the same noises, so one (position, velocity) covariance ``p00, p01, p11``
+    serves both: plain float arithmetic, no 4 x 4 matrices, per track and cycle."""
+
     name: str
-    state: NDArray[np.float64]        # x, y, vx, vy
-    cov: NDArray[np.float64]          # 4 x 4
+    x: float
+    y: float
+    vx: float
+    vy: float
+    p00: float
+    p01: float
+    p11: float
     theta: float
     updated_s: float
     history: list[tuple[float, float, float]] = field(default_factory=list)   # (t, x, y) of its detections
 
     @property
     def xy(self) -> tuple[float, float]:
-        return float(self.state[0]), float(self.state[1])
+        return self.x, self.y
 
     @property
     def velocity(self) -> tuple[float, float]:
-        return float(self.state[2]), float(self.state[3])
+        return self.vx, self.vy
 
 
 @dataclass
@@ -109,29 +118,30 @@ class Tracker:
             self.tracks = {d.name: self._new(d, t_s) for d in detections}
             return self.tracks
         names = sorted(self.tracks)
-        for name in names:
-            self._predict(self.tracks[name], gap)
+        tracks = [self.tracks[n] for n in names]
+        for track in tracks:
+            self._predict(track, gap)
         unmatched = list(range(len(detections)))
         matched: set[str] = set()
-        if names and detections:
-            # Squared Mahalanobis distance of every detection to every predicted track, at once.
-            predicted = np.array([self.tracks[n].state[:2] for n in names])                   # (T, 2)
-            inv = np.linalg.inv(np.array([self.tracks[n].cov[:2, :2] for n in names])
-                                + np.eye(2) * self.measurement_sigma ** 2)                      # (T, 2, 2)
-            measured = np.array([[d.x, d.y] for d in detections])                              # (D, 2)
-            innovation = measured[None, :, :] - predicted[:, None, :]                          # (T, D, 2)
-            d2 = np.einsum("tdi,tij,tdj->td", innovation, inv, innovation)
+        if tracks and detections:
+            # Squared Mahalanobis distance of every detection to every predicted track, at once
+            # (isotropic: both axes share the covariance).
+            r = self.measurement_sigma ** 2
+            predicted = np.array([(t.x, t.y) for t in tracks])                                 # (T, 2)
+            spread = np.array([t.p00 + r for t in tracks])                                      # (T,)
+            measured = np.array([(d.x, d.y) for d in detections])                              # (D, 2)
+            d2 = ((measured[None, :, :] - predicted[:, None, :]) ** 2).sum(axis=2) / spread[:, None]
             other = np.array([[d.name != n for d in detections] for n in names], dtype=np.float64)
             cost = np.where(d2 <= GATE_CHI2, d2 + NAME_MISMATCH_CHI2 * other, 1e6)
             rows, cols = linear_sum_assignment(cost)
-            for r, c in zip(rows, cols, strict=True):
-                if cost[r, c] >= 1e6:
+            for row, col in zip(rows.tolist(), cols.tolist(), strict=True):
+                if cost[row, col] >= 1e6:
                     continue
-                self._correct(self.tracks[names[r]], detections[c], t_s)
-                matched.add(names[r])
-                unmatched.remove(c)
-        for c in unmatched:
-            det = detections[c]
+                self._correct(tracks[row], detections[col], t_s)
+                matched.add(names[row])
+                unmatched.remove(col)
+        for col in unmatched:
+            det = detections[col]
             old = self.tracks.get(det.name)
             if old is not None and det.name not in matched and t_s - old.updated_s <= LOST_S:
                 self._reacquire(old, det, t_s)
@@ -141,33 +151,36 @@ class Tracker:
         return self.tracks
 
     def _new(self, det: Detection, t_s: float) -> Track:
-        cov = np.diag([self.measurement_sigma ** 2, self.measurement_sigma ** 2,
-                       self.initial_speed_sigma ** 2, self.initial_speed_sigma ** 2])
-        return Track(det.name, np.array([det.x, det.y, 0.0, 0.0]), cov, det.theta, t_s, [(t_s, det.x, det.y)])
+        return Track(det.name, det.x, det.y, 0.0, 0.0, self.measurement_sigma ** 2, 0.0,
+                     self.initial_speed_sigma ** 2, det.theta, t_s, [(t_s, det.x, det.y)])
 
     def _predict(self, track: Track, dt: float) -> None:
-        f = np.eye(4)
-        f[0, 2] = f[1, 3] = dt
-        q = self.accel_sigma ** 2 * np.array([[dt**4 / 4, 0, dt**3 / 2, 0], [0, dt**4 / 4, 0, dt**3 / 2],
-                                              [dt**3 / 2, 0, dt**2, 0], [0, dt**3 / 2, 0, dt**2]])
-        track.state = f @ track.state
-        track.cov = f @ track.cov @ f.T + q
+        """x += v dt; P = F P F' + Q with Q the white-noise acceleration's (Bar-Shalom and Li)."""
+        q = self.accel_sigma ** 2
+        track.x += track.vx * dt
+        track.y += track.vy * dt
+        track.p00 += dt * (2.0 * track.p01 + dt * track.p11) + q * dt ** 4 / 4.0
+        track.p01 += dt * track.p11 + q * dt ** 3 / 2.0
+        track.p11 += q * dt ** 2
 
     def _correct(self, track: Track, det: Detection, t_s: float) -> None:
-        h = np.zeros((2, 4))
-        h[0, 0] = h[1, 1] = 1.0
-        s = h @ track.cov @ h.T + np.eye(2) * self.measurement_sigma ** 2
-        gain = track.cov @ h.T @ np.linalg.inv(s)
-        track.state = track.state + gain @ (np.array([det.x, det.y]) - h @ track.state)
-        track.cov = (np.eye(4) - gain @ h) @ track.cov
+        s = track.p00 + self.measurement_sigma ** 2
+        k0, k1 = track.p00 / s, track.p01 / s
+        ix, iy = det.x - track.x, det.y - track.y
+        track.x += k0 * ix
+        track.y += k0 * iy
+        track.vx += k1 * ix
+        track.vy += k1 * iy
+        track.p11 -= k1 * track.p01
+        track.p00 *= 1.0 - k0
+        track.p01 *= 1.0 - k0
         self._smooth(track, det, t_s)
 
     def _reacquire(self, track: Track, det: Detection, t_s: float) -> None:
         """Jump to the detection; the velocity comes from the fit over the kept detections (or stays
         what it was), never from zero; its uncertainty grows so that the gate opens."""
-        track.state = np.array([det.x, det.y, track.state[2], track.state[3]])
-        track.cov = np.diag([self.measurement_sigma ** 2, self.measurement_sigma ** 2,
-                             self.initial_speed_sigma ** 2 / 4, self.initial_speed_sigma ** 2 / 4])
+        track.x, track.y = det.x, det.y
+        track.p00, track.p01, track.p11 = self.measurement_sigma ** 2, 0.0, self.initial_speed_sigma ** 2 / 4
         self._smooth(track, det, t_s)
 
     def _smooth(self, track: Track, det: Detection, t_s: float) -> None:
@@ -179,7 +192,7 @@ class Tracker:
             history.pop(0)
         fit = line_fit(latest_enough(history, self.measurement_sigma, self.velocity_sigma), t_s)
         if fit is not None:
-            track.state = np.array(fit)
+            track.x, track.y, track.vx, track.vy = fit
         turn = (det.theta - track.theta + math.pi) % (2 * math.pi) - math.pi
         track.theta = (track.theta + self.heading_smoothing * turn + math.pi) % (2 * math.pi) - math.pi
         track.updated_s = t_s
@@ -197,7 +210,7 @@ class Tracker:
         vx, vy = self.velocity(name, t_s)
         if math.hypot(vx, vy) < STILL_MPS:
             vx = vy = 0.0
-        return (*track.xy, track.theta, vx, vy)
+        return track.x, track.y, track.theta, vx, vy
 
 
 def latest_enough(samples: Sequence[tuple[float, float, float]], sigma: float,
@@ -205,11 +218,14 @@ def latest_enough(samples: Sequence[tuple[float, float, float]], sigma: float,
     """The fewest latest (t, x, y) samples, at least two, whose fitted slope has a standard deviation
     of at most ``velocity_sigma`` for position noise ``sigma``; all of them if none do.  Fewer
     samples follow turns and stops sooner; more average the noise away."""
-    for k in range(2, len(samples) + 1):
-        times = [s[0] for s in samples[-k:]]
-        mean = sum(times) / k
-        spread = sum((t - mean) ** 2 for t in times)
-        if spread > 0 and sigma * sigma <= velocity_sigma * velocity_sigma * spread:
+    need = (sigma / velocity_sigma) ** 2 if velocity_sigma > 0 else math.inf
+    total = total_sq = 0.0
+    t0 = samples[-1][0] if samples else 0.0
+    for k in range(1, len(samples) + 1):
+        t = samples[-k][0] - t0               # relative times: no cancellation in the spread
+        total += t
+        total_sq += t * t
+        if k >= 2 and total_sq - total * total / k >= need:
             return samples[-k:]
     return samples
 
