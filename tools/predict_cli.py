@@ -36,17 +36,31 @@ def register(app: typer.Typer) -> None:
         noise: float = typer.Option(0.0, "--noise", help="detection noise, m (standard deviation per axis); "
                                                          "the observer's default is 0.02"),
         seed: int = typer.Option(0, "--seed", help="seed of the detection noise"),
+        scene: str | None = typer.Option(None, "--scene", help="for a run's people.csv: the run's scene, so the "
+                                                              "prediction knows its walls, doors and agenda"),
+        agenda: bool = typer.Option(True, "--agenda/--no-agenda", help="with --scene: use the agenda (where people "
+                                                                       "whose activity is near are going)"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
         baseline on the true positions (same windows, same run) and the ratio (< 1: better)."""
-        from tools.prediction_eval import PedestrianFileError, evaluate_files, summary
+        from tools.prediction_eval import PedestrianFileError, SceneContext, evaluate_files, summary
 
         _positive(dt, "--dt")
         if not (math.isfinite(noise) and 0 <= noise <= 1.0):
             raise typer.BadParameter("must be between 0 and 1 m", param_hint="--noise")
+        context = None
+        if scene is not None:
+            from scenes.loader import resolve_scene_path
+            from scenes.yamlio import SourceError
+
+            try:
+                context = SceneContext(resolve_scene_path(scene), agenda=agenda)
+            except (SourceError, OSError) as exc:
+                typer.echo(f"error: {exc}", err=True)
+                raise typer.Exit(2) from None
         try:
-            results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed)
+            results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context)
         except PedestrianFileError as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
@@ -54,7 +68,8 @@ def register(app: typer.Typer) -> None:
         if as_json:
             typer.echo(json.dumps(report))
             return
-        typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, detection noise {noise:g} m (seed {seed})")
+        known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
+        typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
                    f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
         for name, r in results.items():

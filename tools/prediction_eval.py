@@ -31,9 +31,10 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+from shapely.geometry.base import BaseGeometry
 
 from agents.lib.perception.tracking import Detection, observer_tracker
-from agents.lib.socialmap.motion import MotionParams, predict
+from agents.lib.socialmap.motion import MotionParams, Prediction, predict_many
 from agents.lib.socialmap.types import Person
 from scenes.limits import TRAJECTORY_SAMPLES
 
@@ -44,12 +45,17 @@ class PedestrianFileError(ValueError):
 
 @dataclass(frozen=True)
 class Annotations:
-    """One ETH/UCY file: ``frames`` (distinct frame numbers, ascending) and, per frame index,
-    the people present and their true positions."""
+    """One file: ``frames`` (distinct frame numbers, ascending) and, per frame index, the people
+    present and their true positions.  ``times`` (clock seconds of each frame) and ``roles`` only
+    for a simulator's people.csv, whose frames are a time grid with gaps (the simulator records
+    while the robot drives): a window never spans a gap there."""
 
     name: str
     frames: NDArray[np.float64]
     people: list[dict[int, tuple[float, float]]]     # frame index -> {person id: (x, y)}
+    times: NDArray[np.float64] | None = None
+    ids: tuple[str, ...] = ()                        # person id -> name (people.csv)
+    roles: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -66,10 +72,14 @@ class FileResult:
                 "cv_fde": round(self.cv_fde, 4), "tracks": self.tracks}
 
 
-def read_annotations(path: Path) -> Annotations:
-    """Read ``frame  id  x  y`` lines (tabs or spaces; blank lines skipped).  Errors name the file
-    and the line, in the user's words."""
+def read_annotations(path: Path, dt: float = 0.4) -> Annotations:
+    """Read ``frame  id  x  y`` lines (tabs or spaces; blank lines skipped), or a simulator's
+    ``people.csv`` (header ``t,name,role,...``) resampled every ``dt`` s.  Errors name the file and
+    the line, in the user's words."""
     try:
+        with path.open("rb") as handle:
+            if handle.read(7) == b"t,name,":
+                return read_people_csv_frames(path, dt)
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise PedestrianFileError(f"{path}: no such file") from None
@@ -109,12 +119,37 @@ def read_annotations(path: Path) -> Annotations:
     return Annotations(path.name, frames, people)
 
 
+def read_people_csv_frames(path: Path, dt: float) -> Annotations:
+    """A run's people.csv (read by chronav metrics' reader, same checks) on a grid of ``dt`` s from
+    its first sample: frame k holds the samples within dt/4 of t0 + k dt."""
+    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv
+
+    try:
+        tracks = read_people_csv(path)
+    except TrajectoryFormatError as exc:
+        raise PedestrianFileError(str(exc)) from None
+    if len(tracks.times) == 0:
+        raise PedestrianFileError(f"{path}: no samples")
+    grid = (tracks.times - tracks.times[0]) / dt
+    k = np.round(grid)
+    on_grid = np.flatnonzero(np.abs(grid - k) < 0.25)
+    frames, first = np.unique(k[on_grid], return_index=True)
+    rows = on_grid[first]
+    people = [{pid: (float(tracks.x[r, pid]), float(tracks.y[r, pid])) for pid in range(len(tracks.names))
+               if np.isfinite(tracks.x[r, pid])} for r in rows.tolist()]
+    return Annotations(path.name, frames, people, tracks.times[rows], tuple(tracks.names),
+                       tuple(tracks.roles) or ("resident",) * len(tracks.names))
+
+
 def windows(data: Annotations, length: int) -> list[tuple[int, int]]:
     """(start frame index, person id) of every run of ``length`` consecutive frames in which the
-    person is present in all of them (the standard loader's windows)."""
+    person is present in all of them (the standard loader's windows; on a people.csv's time grid
+    consecutive means one ``dt`` apart)."""
     out = []
     present: dict[int, int] = {}    # person id -> consecutive frames present, ending at the current one
     for i, frame in enumerate(data.people):
+        if data.times is not None and i > 0 and data.frames[i] != data.frames[i - 1] + 1:
+            present = {}
         present = {pid: present.get(pid, 0) + 1 for pid in frame}
         out.extend((i - length + 1, pid) for pid, run in present.items() if run >= length)
     return sorted(out)
@@ -126,11 +161,10 @@ def constant_velocity(observed: NDArray[np.float64], steps: int) -> NDArray[np.f
     return observed[-1] + step[None, :] * np.arange(1, steps + 1)[:, None]
 
 
-def predicted_positions(person: Person, motion: MotionParams, times: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The social map's prediction at ``times`` (s ahead): where ``predict`` says nothing (a standing
-    person) or stops short (a wall, an arrival) the person stays at their last predicted place."""
+def interpolated(person: Person, found: Prediction | None, times: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A prediction at ``times`` (s ahead): where it says nothing (a standing person) or stops short
+    (a wall, an arrival) the person stays at their last predicted place."""
     here = np.array([[person.x, person.y]])
-    found = predict(person, motion, None)
     if found is None or len(found.times) == 0:
         return np.repeat(here, len(times), axis=0)
     known_t = np.concatenate([[0.0], found.times])
@@ -138,17 +172,58 @@ def predicted_positions(person: Person, motion: MotionParams, times: NDArray[np.
     return np.stack([np.interp(times, known_t, known[:, 0]), np.interp(times, known_t, known[:, 1])], axis=1)
 
 
+@dataclass
+class SceneContext:
+    """What chronav knows beyond the tracks, for a simulator's people.csv: the scene's walls (and
+    closed doors) and, with ``agenda``, the activities: the people are written into a DSR graph at
+    the window's time with the building, objects and agenda, and read back as the social map reads
+    them (``dsr_people``: destinations included), then predicted against the map's walls."""
+
+    scene_path: Path
+    agenda: bool = True
+
+    def __post_init__(self) -> None:
+        from agents.world.navigation import NavigationMaps
+        from agents.world.scene_world import load_world
+
+        self.world = load_world(self.scene_path)
+        self.nav = NavigationMaps.for_scene(self.world.scene)
+
+    def people_and_walls(self, t_s: float, people: list[Person]) -> tuple[list[Person], BaseGeometry | None]:
+        from agents.world.dsr_readers import closed_doors, dsr_people
+        from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_object,
+                                              write_person)
+        from agents.world.timeline import agenda_at, doors_at
+        from dsr import DSRGraph
+
+        scene = self.world.scene
+        graph = DSRGraph(agent="predict_evaluate")
+        write_building(graph, scene, doors_at(scene, t_s))
+        write_clock(graph, scene, t_s, scene.clock.rate)
+        for obj in scene.objects:
+            write_object(graph, obj, scene.room_at(obj.pose.x, obj.pose.y))
+        for p in people:
+            write_person(graph, p.name, p.role, (p.x, p.y, p.theta), scene.room_at(p.x, p.y), t_s, (p.vx, p.vy))
+        if self.agenda:
+            write_activities(graph, agenda_at(self.world, t_s))
+        read = {p.name: p for p in dsr_people(graph)}
+        return [read.get(p.name, p) for p in people], self.nav.static((), closed_doors(graph)).walls
+
+
 def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, noise: float = 0.0,
-             seed: int = 0, motion: MotionParams | None = None) -> FileResult:
+             seed: int = 0, motion: MotionParams | None = None, context: SceneContext | None = None) -> FileResult:
     """ADE/FDE of the deployed tracker + predictor on every window of ``data``, and of the
     constant-velocity baseline on the true positions (module doc)."""
     started = time.perf_counter()
     motion = (motion or MotionParams()).model_copy(update={"horizon_s": pred * dt, "step_s": dt})
+    if context is not None and data.times is None:
+        raise PedestrianFileError(f"{data.name}: --scene needs a simulator's people.csv (its clock times)")
     rng = np.random.default_rng(seed)
     noisy = [{pid: (x + e[0], y + e[1]) for (pid, (x, y)), e in
               zip(sorted(frame.items()), rng.normal(0.0, noise, (len(frame), 2)) if noise > 0
                   else np.zeros((len(frame), 2)), strict=True)}
              for frame in data.people]
+    names = data.ids or None
     times = np.arange(1, pred + 1) * dt
     by_start: dict[int, list[int]] = {}
     for start, pid in windows(data, obs + pred):
@@ -157,14 +232,21 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
     for start, pids in by_start.items():
         tracker = observer_tracker(noise)
         for k in range(start, start + obs):
-            tracker.update(k * dt, [Detection(str(pid), x, y, 0.0) for pid, (x, y) in sorted(noisy[k].items())])
+            tracker.update(k * dt, [Detection(names[pid] if names else str(pid), x, y, 0.0)
+                                    for pid, (x, y) in sorted(noisy[k].items())])
         now = (start + obs - 1) * dt
+        people = []
         for pid in pids:
+            name = names[pid] if names else str(pid)
+            x, y, theta, vx, vy = tracker.estimate(name, now)
+            people.append(Person(name, x, y, theta, role=data.roles[pid] if data.roles else "resident", vx=vx, vy=vy))
+        walls = None
+        if context is not None:
+            people, walls = context.people_and_walls(float(data.times[start + obs - 1]), people)
+        for pid, person, found in zip(pids, people, predict_many(people, motion, walls), strict=True):
             truth = np.array([data.people[k][pid] for k in range(start, start + obs + pred)])
             future = truth[obs:]
-            x, y, theta, vx, vy = tracker.estimate(str(pid), now)
-            guess = predicted_positions(Person(str(pid), x, y, theta, vx=vx, vy=vy), motion, times)
-            errors.append(np.linalg.norm(guess - future, axis=1))
+            errors.append(np.linalg.norm(interpolated(person, found, times) - future, axis=1))
             cv_errors.append(np.linalg.norm(constant_velocity(truth[:obs], pred) - future, axis=1))
     if not errors:
         raise PedestrianFileError(f"{data.name}: no person is present in {obs + pred} consecutive frames "
@@ -186,11 +268,11 @@ def summary(results: dict[str, FileResult]) -> dict[str, object]:
             "fde_over_cv": round(float(fde / cv_fde), 4) if cv_fde > 0 else None}
 
 
-def evaluate_files(paths: Sequence[Path], **options: float | int) -> dict[str, FileResult]:
+def evaluate_files(paths: Sequence[Path], dt: float = 0.4, **options: object) -> dict[str, FileResult]:
     """Every file, read and evaluated; a bad file raises PedestrianFileError before any work."""
-    datasets = [read_annotations(path) for path in paths]
+    datasets = [read_annotations(path, dt) for path in paths]
     names = [d.name for d in datasets]
     if len(set(names)) != len(names):
         duplicate = next(n for n in names if names.count(n) > 1)
         raise PedestrianFileError(f"{duplicate}: given twice (the report keys files by name)")
-    return {d.name: evaluate(d, **options) for d in datasets}   # type: ignore[arg-type]
+    return {d.name: evaluate(d, dt=dt, **options) for d in datasets}   # type: ignore[arg-type]

@@ -112,7 +112,7 @@ def predict_many(people: Sequence[Person], params: MotionParams,
     reach = speeds[walking, None] * times[None, :]                                   # (W, T)
     for row, i in enumerate(walking.tolist()):
         heading = heading_for(people[i], direction[row], params)
-        if heading is not None:
+        if heading is not None and not _blocked(people[i], heading, walls):
             direction[row], limit = heading
             reach[row] = np.minimum(reach[row], limit)
     points = xy[walking, None, :] + reach[:, :, None] * direction[:, None, :]         # (W, T, 2)
@@ -133,11 +133,24 @@ def predict_many(people: Sequence[Person], params: MotionParams,
     return out
 
 
+def _blocked(person: Person, heading: tuple[NDArray[np.float64], float], walls: BaseGeometry | None) -> bool:
+    """Whether a wall stands between the person and where the line to their destination ends:
+    then they walk round it through a door, which their own heading shows better than the line."""
+    if walls is None or walls.is_empty:
+        return False
+    toward, limit = heading
+    end = (person.x + toward[0] * limit, person.y + toward[1] * limit)
+    return bool(shapely.intersects(shapely.LineString([(person.x, person.y), end]), walls))
+
+
 def heading_for(person: Person, direction: NDArray[np.float64],
                 params: MotionParams) -> tuple[NDArray[np.float64], float] | None:
     """The straight line to the person's destination (the DSR's activity object) and how far along
     it they go (to its interaction range), or None to keep their own velocity: when they have none,
     have arrived, or walk elsewhere - more than ``destination_cone_deg`` off the line to it.
+
+    A wall on that line (the object is in another room) keeps their own heading too (``_blocked``):
+    they are on their way to a door.
 
     Why the cone: the DSR names an activity's object as soon as it is upcoming (45 minutes ahead);
     a resident wandering in the meantime is not walking there yet, and bending her prediction
