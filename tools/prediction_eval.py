@@ -121,7 +121,8 @@ def read_annotations(path: Path, dt: float = 0.4) -> Annotations:
 
 def read_people_csv_frames(path: Path, dt: float) -> Annotations:
     """A run's people.csv (read by chronav metrics' reader, same checks) on a grid of ``dt`` s from
-    its first sample: frame k holds the samples within dt/4 of t0 + k dt."""
+    its first sample: frame k holds the first sample within dt/5 of t0 + k dt (the simulator samples
+    every 0.1 s: a quarter of 0.4 s off the grid is another sample, not this one)."""
     from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv
 
     try:
@@ -132,7 +133,7 @@ def read_people_csv_frames(path: Path, dt: float) -> Annotations:
         raise PedestrianFileError(f"{path}: no samples")
     grid = (tracks.times - tracks.times[0]) / dt
     k = np.round(grid)
-    on_grid = np.flatnonzero(np.abs(grid - k) < 0.25)
+    on_grid = np.flatnonzero(np.abs(grid - k) < 0.2)
     frames, first = np.unique(k[on_grid], return_index=True)
     rows = on_grid[first]
     people = [{pid: (float(tracks.x[r, pid]), float(tracks.y[r, pid])) for pid in range(len(tracks.names))

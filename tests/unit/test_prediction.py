@@ -142,3 +142,30 @@ def test_a_wandering_resident_is_predicted_where_she_walks_not_toward_a_later_ac
     steps = prediction.points - np.array(here)
     assert np.all(steps @ np.array(velocity) > 0), "every predicted position lies ahead of her"
     assert prediction.points[0][0] < here[0], "the first one west of her"
+
+
+def test_a_runs_people_csv_is_evaluated_with_the_scenes_walls(tmp_path: Path) -> None:
+    """A simulator's people.csv (0.1 s samples, clock seconds) on crowd_small: ann walks east along
+    the corridor at 1 m/s and stops 0.5 m before its end wall.  Constant velocity, and the
+    prediction without the scene, run her through the wall; with ``--scene`` the prediction knows
+    the wall and stops before it, so its errors are smaller.  A recording gap splits the windows."""
+    rows = ["t,name,role,x,y,theta,vx,vy,group"]
+    t0 = parse_clock("09:10")
+    for k in range(160):
+        t = k * 0.1
+        if 14.0 <= t < 15.0:
+            continue                                   # the robot stopped driving: nothing recorded
+        x = min(6.0 + t, 17.5)
+        rows.append(f"{t0 + t:.3f},ann,resident,{x:.4f},1.2000,0.00000,{1.0 if x < 17.5 else 0.0:.4f},0.0000,")
+        rows.append(f"{t0 + t:.3f},bob,staff,3.0000,1.0000,0.00000,0.0000,0.0000,")
+    data = tmp_path / "people.csv"
+    data.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    bare = _evaluate(str(data))["files"]["people.csv"]
+    assert bare["tracks"] == 2 * (35 - 20 + 1), "14 s of 0.4 s frames before the gap, 1.6 s after: no window"
+    known = _evaluate(str(data), "--scene", str(REPO_ROOT / "tests" / "data" / "crowd_small.yaml"))["files"]["people.csv"]
+    assert known["cv_ade"] == bare["cv_ade"] and known["tracks"] == bare["tracks"]
+    assert known["fde"] < bare["fde"] - 0.1 and known["ade"] < bare["ade"], "the wall stops the prediction"
+    eth = tmp_path / "eth.txt"
+    _write_walkers(eth)
+    result = runner.invoke(app, ["predict", "evaluate", str(eth), "--scene", "tests/data/crowd_small.yaml"])
+    assert result.exit_code == 2 and "--scene needs a simulator's people.csv" in result.stderr
