@@ -53,6 +53,8 @@ class MotionParams(BaseModel):
     horizon_s: float = Field(4.8, ge=0, description="how far ahead people are predicted")
     step_s: float = Field(0.4, gt=0, description="time between predicted positions")
     weight: float = Field(0.6, ge=0, lt=1, description="peak density of the first prediction (< intimate)")
+    slowing_mps: float = Field(0.5, ge=0, description="walkers slower than this are coming to a stop")
+    slowing_tau_s: float = Field(4.0, ge=0, description="time constant of their speed's decay")
     destination_cone_deg: float = Field(60.0, ge=0, le=180,
                                         description="follow the activity's object only when walking within this of it")
 
@@ -110,6 +112,11 @@ def predict_many(people: Sequence[Person], params: MotionParams,
         return out
     direction = velocity[walking] / speeds[walking, None]
     reach = speeds[walking, None] * times[None, :]                                   # (W, T)
+    slow = speeds[walking] < params.slowing_mps
+    if slow.any() and params.slowing_tau_s > 0:
+        # Slow walkers come to a stop: speed v exp(-t / tau), so they cover v tau (1 - exp(-t / tau)).
+        tau = params.slowing_tau_s
+        reach[slow] = speeds[walking][slow, None] * tau * (1.0 - np.exp(-times[None, :] / tau))
     for row, i in enumerate(walking.tolist()):
         heading = heading_for(people[i], direction[row], params)
         if heading is not None and not _blocked(people[i], heading, walls):
