@@ -40,6 +40,8 @@ def register(app: typer.Typer) -> None:
                                                               "prediction knows its walls, doors and agenda"),
         agenda: bool = typer.Option(True, "--agenda/--no-agenda", help="with --scene: use the agenda (where people "
                                                                        "whose activity is near are going)"),
+        min_speed: float = typer.Option(0.0, "--min-speed", help="only windows whose person walked at least this "
+                                                                 "fast (m/s, observed steps, true positions)"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
@@ -49,6 +51,8 @@ def register(app: typer.Typer) -> None:
         _positive(dt, "--dt")
         if not (math.isfinite(noise) and 0 <= noise <= 1.0):
             raise typer.BadParameter("must be between 0 and 1 m", param_hint="--noise")
+        if not (math.isfinite(min_speed) and min_speed >= 0):
+            raise typer.BadParameter("must be a speed of 0 m/s or more", param_hint="--min-speed")
         context = None
         if scene is not None:
             from scenes.loader import resolve_scene_path
@@ -60,7 +64,8 @@ def register(app: typer.Typer) -> None:
                 typer.echo(f"error: {exc}", err=True)
                 raise typer.Exit(2) from None
         try:
-            results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context)
+            results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context,
+                                     min_speed=min_speed)
         except PedestrianFileError as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
@@ -69,6 +74,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(json.dumps(report))
             return
         known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
+        known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
                    f"{'ADE/CV':>7s} {'FDE/CV':>7s}")

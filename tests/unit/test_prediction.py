@@ -165,6 +165,8 @@ def test_a_runs_people_csv_is_evaluated_with_the_scenes_walls(tmp_path: Path) ->
     known = _evaluate(str(data), "--scene", str(REPO_ROOT / "tests" / "data" / "crowd_small.yaml"))["files"]["people.csv"]
     assert known["cv_ade"] == bare["cv_ade"] and known["tracks"] == bare["tracks"]
     assert known["fde"] < bare["fde"] - 0.1 and known["ade"] < bare["ade"], "the wall stops the prediction"
+    walking = _evaluate(str(data), "--min-speed", "0.5")["files"]["people.csv"]
+    assert walking["tracks"] == 35 - 20 + 1, "ann walks in every observed stretch, bob in none"
     eth = tmp_path / "eth.txt"
     _write_walkers(eth)
     result = runner.invoke(app, ["predict", "evaluate", str(eth), "--scene", "tests/data/crowd_small.yaml"])
