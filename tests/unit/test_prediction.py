@@ -119,29 +119,51 @@ def test_a_track_that_misses_its_gate_keeps_its_velocity() -> None:
     assert tracks["bob"].xy == pytest.approx((2.4, 3.0), abs=0.05)
 
 
-def test_a_wandering_resident_is_predicted_where_she_walks_not_toward_a_later_activity() -> None:
-    """Regression (center_day, 09:30:06): res_dora walks west-north-west (-0.75, +0.27) m/s in the
-    therapy room while her 09:50 memory workshop at the therapy table, east of her, is upcoming;
-    the social map the navigation builds from the DSR predicted her running east, behind her,
-    straight to the table.  She is not going there yet: her predicted positions follow her walk."""
+def _dora_map(clock: str, here: tuple[float, float], velocity: tuple[float, float]):  # noqa: ANN202
+    """The navigation's social map of center_day at ``clock`` with res_dora walking as given."""
     world = load_world(REPO_ROOT / "scenes" / "center_day.yaml")
-    scene, t = world.scene, parse_clock("09:30:06")
+    scene, t = world.scene, parse_clock(clock)
     graph = DSRGraph(agent="test")
     write_building(graph, scene, doors_at(scene, t))
     write_clock(graph, scene, t, scene.clock.rate)
     for obj in scene.objects:
         write_object(graph, obj, scene.room_at(obj.pose.x, obj.pose.y))
-    here, velocity = (9.4, 5.3), (-0.75, 0.27)
     write_person(graph, "res_dora", "resident", (*here, math.atan2(velocity[1], velocity[0])),
                  scene.room_at(*here), t, velocity)
     write_activities(graph, agenda_at(world, t))
     smap = NavigationMaps.for_scene(scene).build(graph, t)
-    dora = next(p for p in smap.people if p.name == "res_dora")
-    assert dora.destination is not None and dora.destination[0] > here[0] + 1.0, "the table is east, behind her"
-    prediction = next(p for p in smap.predictions if p.name == "res_dora")
-    steps = prediction.points - np.array(here)
-    assert np.all(steps @ np.array(velocity) > 0), "every predicted position lies ahead of her"
-    assert prediction.points[0][0] < here[0], "the first one west of her"
+    return next(p for p in smap.people if p.name == "res_dora"), next(p for p in smap.predictions
+                                                                      if p.name == "res_dora")
+
+
+def test_a_wandering_resident_is_predicted_where_she_walks_not_toward_a_later_activity() -> None:
+    """Regression (center_day, 09:30:06): res_dora walks west-north-west (-0.75, +0.27) m/s in the
+    therapy room while her 09:50 memory workshop at the therapy table, east of her, is upcoming;
+    the social map the navigation builds from the DSR predicted her running east, behind her,
+    straight to the table.  Two causes, each fixed: an activity 20 minutes away made the table her
+    destination (now only an activity due within 6 minutes does), and a destination overrode her
+    own walk (now only when she walks within 60 degrees of it): at 09:44:30 the workshop is due,
+    yet walking away from the table she is still predicted where she walks."""
+    here, velocity = (9.4, 5.3), (-0.75, 0.27)
+    for clock, due in (("09:30:06", False), ("09:44:30", True)):
+        dora, prediction = _dora_map(clock, here, velocity)
+        assert (dora.destination is not None) == due, clock
+        if due:
+            assert dora.destination[0] > here[0] + 1.0, "the table is east, behind her"
+        steps = prediction.points - np.array(here)
+        assert np.all(steps @ np.array(velocity) > 0), f"{clock}: every predicted position lies ahead of her"
+        assert prediction.points[0][0] < here[0], clock
+
+
+def test_a_participant_on_her_way_is_predicted_through_the_door() -> None:
+    """At 09:46 res_dora, due at the therapy table (11, 7) at 09:50, walks from the activity room
+    toward the door to the therapy room (8, 5): her prediction goes through that door and turns
+    toward the table, where constant velocity would run into the wall beside the door."""
+    here, velocity = (6.0, 5.6), (0.95, -0.3)
+    dora, prediction = _dora_map("09:46:00", here, velocity)
+    assert dora.via == ((8.0, 5.0),) and dora.destination == (11.0, 7.0)
+    assert prediction.points[-1][0] > 9.0, "past the door, in the therapy room"
+    assert prediction.points[-1][1] > 5.0, "turned toward the table"
 
 
 def test_a_runs_people_csv_is_evaluated_with_the_scenes_walls(tmp_path: Path) -> None:

@@ -117,15 +117,25 @@ def predict_many(people: Sequence[Person], params: MotionParams,
         # Slow walkers come to a stop: speed v exp(-t / tau), so they cover v tau (1 - exp(-t / tau)).
         tau = params.slowing_tau_s
         reach[slow] = speeds[walking][slow, None] * tau * (1.0 - np.exp(-times[None, :] / tau))
+    routes: dict[int, NDArray[np.float64]] = {}
     for row, i in enumerate(walking.tolist()):
+        route = route_for(people[i], direction[row], params)
+        if route is not None:
+            routes[row], limit = route
+            reach[row] = np.minimum(reach[row], limit)
+            continue
         heading = heading_for(people[i], direction[row], params)
         if heading is not None and not _blocked(people[i], heading, walls):
             direction[row], limit = heading
             reach[row] = np.minimum(reach[row], limit)
     points = xy[walking, None, :] + reach[:, :, None] * direction[:, None, :]         # (W, T, 2)
+    for row, route in routes.items():
+        points[row] = along(route, reach[row])
     keep = np.ones(reach.shape, dtype=bool)
     if walls is not None and not walls.is_empty:
         paths = shapely.linestrings(np.stack([xy[walking], points[:, -1]], axis=1))
+        for row, route in routes.items():
+            paths[row] = shapely.LineString(route)
         for row in np.flatnonzero(shapely.intersects(paths, walls)).tolist():
             path = paths[row]
             hit = path.intersection(walls)
@@ -138,6 +148,35 @@ def predict_many(people: Sequence[Person], params: MotionParams,
             mask = keep[row]
             out[i] = Prediction(people[i].name, times[mask], points[row][mask], weights[mask])
     return out
+
+
+def route_for(person: Person, direction: NDArray[np.float64],
+              params: MotionParams) -> tuple[NDArray[np.float64], float] | None:
+    """The polyline through the doors ``via`` to the person's destination, and how far along it they
+    go (to the object's interaction range), when they walk within ``destination_cone_deg`` of its
+    next leg (a door they are passing, within 0.5 m, counts as passed); else None."""
+    if person.destination is None or not person.via:
+        return None
+    here = np.array([person.x, person.y])
+    vertices = np.array([here, *person.via, person.destination], dtype=np.float64)
+    legs = np.diff(vertices, axis=0)
+    lengths = np.hypot(legs[:, 0], legs[:, 1])
+    total = float(lengths.sum())
+    if total <= ARRIVED_RANGE_M:
+        return None
+    first = 1 if lengths[0] < 0.5 and len(legs) > 1 else 0
+    if lengths[first] <= 0 or float(legs[first] @ direction) < lengths[first] * math.cos(
+            math.radians(params.destination_cone_deg)):
+        return None
+    return vertices, total - ARRIVED_RANGE_M + 0.5
+
+
+def along(vertices: NDArray[np.float64], distances: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Points at arc lengths ``distances`` along a polyline (its end beyond its length)."""
+    legs = np.diff(vertices, axis=0)
+    cumulative = np.concatenate([[0.0], np.cumsum(np.hypot(legs[:, 0], legs[:, 1]))])
+    return np.stack([np.interp(distances, cumulative, vertices[:, 0]),
+                     np.interp(distances, cumulative, vertices[:, 1])], axis=1)
 
 
 def _blocked(person: Person, heading: tuple[NDArray[np.float64], float], walls: BaseGeometry | None) -> bool:
