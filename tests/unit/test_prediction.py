@@ -4,6 +4,7 @@ found on center_day (regression)."""
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from pathlib import Path
@@ -15,7 +16,7 @@ from typer.testing import CliRunner
 from agents.lib.perception.tracking import Detection, observer_tracker
 from agents.world.dsr_writers import write_activities, write_building, write_clock, write_object, write_person
 from agents.world.navigation import NavigationMaps
-from agents.world.scene_world import load_world
+from agents.world.scene_world import SceneWorld, load_world
 from agents.world.timeline import agenda_at, doors_at
 from dsr import DSRGraph
 from scenes.clock import parse_clock
@@ -119,9 +120,15 @@ def test_a_track_that_misses_its_gate_keeps_its_velocity() -> None:
     assert tracks["bob"].xy == pytest.approx((2.4, 3.0), abs=0.05)
 
 
+@functools.cache
+def _center_day() -> tuple[SceneWorld, NavigationMaps]:
+    world = load_world(REPO_ROOT / "scenes" / "center_day.yaml")
+    return world, NavigationMaps.for_scene(world.scene)
+
+
 def _dora_map(clock: str, here: tuple[float, float], velocity: tuple[float, float]):  # noqa: ANN202
     """The navigation's social map of center_day at ``clock`` with res_dora walking as given."""
-    world = load_world(REPO_ROOT / "scenes" / "center_day.yaml")
+    world, nav = _center_day()
     scene, t = world.scene, parse_clock(clock)
     graph = DSRGraph(agent="test")
     write_building(graph, scene, doors_at(scene, t))
@@ -131,7 +138,7 @@ def _dora_map(clock: str, here: tuple[float, float], velocity: tuple[float, floa
     write_person(graph, "res_dora", "resident", (*here, math.atan2(velocity[1], velocity[0])),
                  scene.room_at(*here), t, velocity)
     write_activities(graph, agenda_at(world, t))
-    smap = NavigationMaps.for_scene(scene).build(graph, t)
+    smap = nav.build(graph, t)
     return next(p for p in smap.people if p.name == "res_dora"), next(p for p in smap.predictions
                                                                       if p.name == "res_dora")
 
