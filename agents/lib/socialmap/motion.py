@@ -12,15 +12,18 @@ intimate level, wider than the centre's 2.4 m corridors, so the robot could neve
 there; passing beside a walker is what people do too.  The front uses the role's scale like the
 rest of the space: ``front = max(rest front, FRONT_GAIN_S x speed x scale)``.
 
-**Prediction.**  A walking person is predicted every ``step_s`` up to ``horizon_s`` (the seconds in
-which the robot's next metres are driven): at constant velocity, or - when the DSR says they take
-part in an activity whose object they are not at yet - along the straight line to that object at
-their current speed, stopping at its interaction range.  A prediction never passes a wall (it
-stops there).  Each predicted position adds the person's resting Gaussian scaled by a weight that
-falls linearly with the prediction time, from ``weight`` at ``step_s`` to 0 past the horizon.
-``weight`` stays below the intimate level, so predictions make the robot prefer to pass behind a
-walker (personal and social costs) but never forbid a cell: the robot is not blocked by a future
-that may not happen.
+**Prediction.**  A walking person (``moving_mps`` or faster) is predicted every ``step_s`` up to
+``horizon_s`` (0.4 s and 4.8 s: the trajectory-prediction benchmark's question, docs/prediction.md):
+at constant velocity, walkers slower than ``slowing_mps`` slowing to a stop (speed decaying with
+``slowing_tau_s``); or - when the DSR says they are on their way to an activity's object
+(``Person.destination``, through the doors ``Person.via``) and they walk within
+``destination_cone_deg`` of the way there - along that way at their current speed, stopping at the
+object's interaction range.  A prediction never passes a wall (it stops there).  Measured on real
+pedestrians and simulated days with ``chronav predict evaluate`` (docs/prediction.md).  Each
+predicted position adds the person's resting Gaussian scaled by a weight that falls linearly with
+the prediction time, from ``weight`` at ``step_s`` to 0 past the horizon.  ``weight`` stays below
+the intimate level, so predictions make the robot prefer to pass behind a walker (personal and
+social costs) but never forbid a cell: the robot is not blocked by a future that may not happen.
 """
 
 from __future__ import annotations
