@@ -44,6 +44,7 @@ from agents.lib.socialmap.types import Person
 from agents.lib.socialmap.zones import ZoneParams
 
 ARRIVED_RANGE_M = 1.8     # a participant this close to the activity's object has arrived (interactions.py)
+WALL_CLEARANCE_M = 0.45   # a prediction stops this short of a wall: people keep about this much (crowd/routes.py)
 
 
 class MotionParams(BaseModel):
@@ -144,7 +145,7 @@ def predict_many(people: Sequence[Person], params: MotionParams,
             hit = path.intersection(walls)
             crossings = [shapely.Point(c) for part in getattr(hit, "geoms", [hit]) for c in part.coords]
             blocked = min(path.project(point) for point in crossings)
-            keep[row] = reach[row] < max(0.0, blocked - 0.3)
+            keep[row] = reach[row] < max(0.0, blocked - WALL_CLEARANCE_M)
     weights = params.weight * (1.0 - times / (params.horizon_s + params.step_s))
     for row, i in enumerate(walking.tolist()):
         if keep[row].any():
