@@ -1,11 +1,12 @@
-"""How well chronav predicts people, measured on real pedestrians (ETH/UCY text files).
+"""How well chronav predicts people, measured on real pedestrians (ETH/UCY text files) and on
+simulated days (a run's people.csv, optionally with the scene's walls and agenda).
 
 Why in the project: the social map plans around where people will be, so the prediction is the
 navigation's view of the future; this module asks the standard question of the trajectory
 prediction literature (observe 8 steps = 3.2 s, predict 12 steps = 4.8 s at 0.4 s, ADE/FDE in
 metres, one deterministic prediction) of the *deployed* pipeline: the observer's tracker
 (``agents/lib/perception/tracking.observer_tracker``, the observer's settings) fed noisy
-detections, then the social map's ``motion.predict`` with its deployed parameters.  Only the
+detections, then the social map's ``motion.predict_many`` with its deployed parameters.  Only the
 horizon and step are set to the question's (``--pred`` x ``--dt``, ``--dt``): the defaults are the
 deployed ones.  The constant-velocity baseline (Schöller et al. 2020, "What the constant velocity
 model can teach us about pedestrian motion prediction": the last observed step repeated) is
