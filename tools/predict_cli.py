@@ -42,6 +42,9 @@ def register(app: typer.Typer) -> None:
                                                                        "whose activity is near are going)"),
         min_speed: float = typer.Option(0.0, "--min-speed", help="only windows whose person walked at least this "
                                                                  "fast (m/s, observed steps, true positions)"),
+        detect_every: int = typer.Option(1, "--detect-every", min=1, max=100,
+                                         help="detections per frame (interpolated between frames): 4 on "
+                                              "0.4 s frames is the observer's 10 Hz"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
@@ -65,7 +68,7 @@ def register(app: typer.Typer) -> None:
                 raise typer.Exit(2) from None
         try:
             results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context,
-                                     min_speed=min_speed)
+                                     min_speed=min_speed, detect_every=detect_every)
         except PedestrianFileError as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
@@ -75,6 +78,7 @@ def register(app: typer.Typer) -> None:
             return
         known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
         known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
+        known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
                    f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
