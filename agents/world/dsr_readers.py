@@ -100,11 +100,23 @@ def destinations(graph: Any) -> dict[int, tuple[float, float]]:
 class DoorGraph:
     """The building's rooms and open doors as the DSR holds them, to route a person to a place:
     the doors on the shortest way (door to door in straight lines through the rooms between), so
-    a prediction follows doors instead of running into a wall (motion.py)."""
+    a prediction follows doors instead of running into a wall (motion.py).  The ways between doors
+    are computed once per graph read (networkx Dijkstra); a person's query only joins her start
+    and goal to the doors of their rooms."""
 
     def __init__(self, rooms: dict[str, Any], doors: dict[str, tuple[float, float, tuple[str, ...]]]) -> None:
+        import networkx as nx
+
         self.rooms = rooms          # name -> shapely polygon
         self.doors = doors          # name -> (x, y, the two rooms)
+        g = nx.Graph()
+        g.add_nodes_from(doors)
+        for name, (x, y, between) in doors.items():
+            for other, (ox, oy, other_between) in doors.items():
+                if other != name and set(between) & set(other_between):
+                    g.add_edge(name, other, weight=math.dist((x, y), (ox, oy)))
+        self.ways = {a: paths for a, (_, paths) in nx.all_pairs_dijkstra(g, weight="weight")}
+        self.lengths = {a: lengths for a, (lengths, _) in nx.all_pairs_dijkstra(g, weight="weight")}
 
     @classmethod
     def of(cls, graph: Any) -> DoorGraph:
@@ -135,25 +147,20 @@ class DoorGraph:
     def via(self, start: tuple[float, float], goal: tuple[float, float]) -> tuple[tuple[float, float], ...]:
         """Door positions from ``start`` to ``goal``, in order; () in the same room, or when no
         way is known (the prediction then goes straight, and stops at a wall)."""
-        import networkx as nx
-
         here, there = self.room_at(*start), self.room_at(*goal)
         if here is None or there is None or here == there:
             return ()
-        g = nx.Graph()
-        for name, (x, y, between) in self.doors.items():
-            if here in between:
-                g.add_edge("start", name, weight=math.dist(start, (x, y)))
-            if there in between:
-                g.add_edge(name, "goal", weight=math.dist((x, y), goal))
-            for other, (ox, oy, other_between) in self.doors.items():
-                if other != name and set(between) & set(other_between):
-                    g.add_edge(name, other, weight=math.dist((x, y), (ox, oy)))
-        try:
-            path = nx.shortest_path(g, "start", "goal", weight="weight")
-        except (nx.NetworkXNoPath, nx.NodeNotFound):
-            return ()
-        return tuple(self.doors[name][:2] for name in path[1:-1])
+        best: tuple[float, list[str]] | None = None
+        for a, (ax, ay, a_rooms) in self.doors.items():
+            if here not in a_rooms:
+                continue
+            for b, (bx, by, b_rooms) in self.doors.items():
+                if there not in b_rooms or b not in self.lengths.get(a, {}):
+                    continue
+                cost = math.dist(start, (ax, ay)) + self.lengths[a][b] + math.dist((bx, by), goal)
+                if best is None or cost < best[0]:
+                    best = (cost, self.ways[a][b])
+        return () if best is None else tuple(self.doors[name][:2] for name in best[1])
 
 
 def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
