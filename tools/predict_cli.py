@@ -28,7 +28,8 @@ def register(app: typer.Typer) -> None:
 
     @predict_app.command("evaluate")
     def evaluate_cmd(
-        files: list[Path] = typer.Argument(..., help="ETH/UCY text files: one 'frame id x y' a line, frames 0.4 s apart",
+        files: list[Path] = typer.Argument(..., help="ETH/UCY text files ('frame id x y' a line, frames 0.4 s "
+                                                     "apart) or a run's people.csv",
                                            show_default=False),
         obs: int = typer.Option(8, "--obs", min=2, max=1000, help="observed steps (the tracker sees these)"),
         pred: int = typer.Option(12, "--pred", min=1, max=1000, help="predicted steps"),
@@ -79,7 +80,8 @@ def register(app: typer.Typer) -> None:
         known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
         known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
         known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
-        typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, detection noise {noise:g} m (seed {seed}){known}")
+        typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
+                   f"detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
                    f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
         for name, r in results.items():

@@ -7,8 +7,8 @@ nothing.  The simulator publishes the people as they truly are (``ground_truth/p
 with the clock); this agent detects them with position and heading noise, tracks them
 (agents/lib/perception/tracking.py, ``observer_tracker``: identities kept by the tracks, velocities
 from a line fitted to each track's latest detections), and publishes a person when they moved,
-turned or changed speed enough.  With zero noise it is a perfect sensor: it reports the truth, velocity included, which is
-what the offline commands assume (agents/world/offline.py).
+turned or changed speed enough.  With zero noise it is a perfect sensor: it reports the truth,
+velocity included, which is what the offline commands assume (agents/world/offline.py).
 """
 
 from __future__ import annotations

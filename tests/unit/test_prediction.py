@@ -193,7 +193,8 @@ def test_a_runs_people_csv_is_evaluated_with_the_scenes_walls(tmp_path: Path) ->
     data.write_text("\n".join(rows) + "\n", encoding="utf-8")
     bare = _evaluate(str(data))["files"]["people.csv"]
     assert bare["tracks"] == 2 * (35 - 20 + 1), "14 s of 0.4 s frames before the gap, 1.6 s after: no window"
-    known = _evaluate(str(data), "--scene", str(REPO_ROOT / "tests" / "data" / "crowd_small.yaml"))["files"]["people.csv"]
+    scene = str(REPO_ROOT / "tests" / "data" / "crowd_small.yaml")
+    known = _evaluate(str(data), "--scene", scene)["files"]["people.csv"]
     assert known["cv_ade"] == bare["cv_ade"] and known["tracks"] == bare["tracks"]
     assert known["fde"] < bare["fde"] - 0.1 and known["ade"] < bare["ade"], "the wall stops the prediction"
     walking = _evaluate(str(data), "--min-speed", "0.5")["files"]["people.csv"]
