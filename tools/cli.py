@@ -25,6 +25,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.evaluate",      # chronav evaluate (planner studies)
     "tools.export_cli",    # chronav export (a run as rosbag2 MCAP)
     "tools.ros_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
+    "tools.predict_cli",   # chronav predict evaluate (people prediction on real pedestrians)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

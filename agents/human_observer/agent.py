@@ -4,11 +4,11 @@ Why noise and a tracker in a simulator: the social map must be robust to jittery
 needs each walking person's velocity, which a real detector does not give; an observer that
 republished every sensor jitter would also flood the graph and make the navigation replan for
 nothing.  The simulator publishes the people as they truly are (``ground_truth/people``, one delta
-with the clock); this agent detects them with position and heading noise, tracks them with a
-constant-velocity Kalman filter per person (agents/lib/perception/tracking.py: identities kept by
-the tracks, velocities estimated), and publishes a person when they moved, turned or changed speed
-enough.  With zero noise it is a perfect sensor: it reports the truth, velocity included, which is
-what the offline commands assume (agents/world/offline.py).
+with the clock); this agent detects them with position and heading noise, tracks them
+(agents/lib/perception/tracking.py, ``observer_tracker``: identities kept by the tracks, velocities
+from a line fitted to each track's latest detections), and publishes a person when they moved,
+turned or changed speed enough.  With zero noise it is a perfect sensor: it reports the truth,
+velocity included, which is what the offline commands assume (agents/world/offline.py).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import zlib
 import numpy as np
 import shapely
 
-from agents.lib.perception.tracking import Detection, Tracker
+from agents.lib.perception.tracking import Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
-from agents.lib.socialmap.motion import MotionParams, predict
+from agents.lib.socialmap.motion import MotionParams, predict_many
 from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed, observed_up_to
@@ -38,7 +38,6 @@ PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
 PUBLISH_SPEED_MPS = 0.1
 TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing still
-STILL_DEADBAND_MPS = 0.15    # an estimated speed below this is sensor noise on a still person
 
 
 class HumanObserverAgent(Agent):
@@ -52,7 +51,7 @@ class HumanObserverAgent(Agent):
         self.seed = int(self.config.option("seed", "7"))
         self.lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
-        self.tracker = Tracker(measurement_sigma=max(self.noise_xy, 0.01))
+        self.tracker = observer_tracker(self.noise_xy)
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
@@ -96,11 +95,8 @@ class HumanObserverAgent(Agent):
                 rng = self._noise(name, now_s, (x, y, theta) if math.hypot(vx, vy) < TRUTH_STILL_MPS else None)
                 detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
                                             theta + rng.normal(0, self.noise_theta)))
-            for name, track in self.tracker.update(now_s, detections).items():
-                vx, vy = self.tracker.velocity(name, now_s)
-                if math.hypot(vx, vy) < STILL_DEADBAND_MPS:
-                    vx = vy = 0.0
-                estimates[name] = (*track.xy, track.theta, vx, vy)
+            for name in self.tracker.update(now_s, detections):
+                estimates[name] = self.tracker.estimate(name, now_s)
         for name, estimate in estimates.items():
             self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}
@@ -123,8 +119,8 @@ class HumanObserverAgent(Agent):
                 trail.append((now_s, x, y))
             while trail and (trail[0][0] < now_s - TRAIL_S or trail[0][0] > now_s):
                 trail.pop(0)
-        predictions = [found for person in dsr_people(self.graph)
-                       if (found := predict(person, self._motion, self._walls)) is not None]
+        predictions = [found for found in predict_many(dsr_people(self.graph), self._motion, self._walls)
+                       if found is not None]
         log_people(self.rec, {name: e[:3] for name, e in estimates.items()},
                    {name: e[3:] for name, e in estimates.items()},
                    {name: [(x, y) for _, x, y in trail] for name, trail in self.trails.items()}, predictions)

@@ -8,11 +8,12 @@ node) are skipped rather than crashing the reader.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 from agents.lib.agenda.model import ActivityWindow, AgendaError
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
-from agents.world.vocabulary import EdgeType, NodeType
+from agents.world.vocabulary import CLOCK, EdgeType, NodeType
 from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
 
 if TYPE_CHECKING:  # networkx (0.1 s) loads with DSRGraph.to_networkx, only when a symbolic view is asked for
@@ -42,6 +43,9 @@ def dsr_objects(graph: Any) -> list[SocialObject]:
     return out
 
 
+DUE_BEFORE_S = 360.0   # an activity's participants are on their way this long before it starts
+
+
 def dsr_people(graph: Any) -> list[Person]:
     """People with their poses and the people they interact with (``interacting`` edges)."""
     out: list[Person] = []
@@ -51,27 +55,35 @@ def dsr_people(graph: Any) -> list[Person]:
         if other is not None and other.type == NodeType.PERSON:
             interacting.setdefault(edge.src, []).append(other.name)
     heading_to = destinations(graph)
+    doors = DoorGraph.of(graph) if heading_to else None
     for node in graph.nodes_of_type(NodeType.PERSON):
         try:
             x, y, theta = graph.world_pose(node.id)
+            goal = heading_to.get(node.id)
             out.append(Person(name=node.name, x=x, y=y, theta=theta, role=str(node.attrs.get("role", "resident")),
                               interacting_with=tuple(sorted(interacting.get(node.id, ()))),
                               vx=float(node.attrs.get("vx", 0.0)), vy=float(node.attrs.get("vy", 0.0)),
-                              destination=heading_to.get(node.id)))
+                              destination=goal,
+                              via=doors.via((x, y), goal) if doors is not None and goal is not None else ()))
         except (SocialMapInputError, KeyError, LookupError, ValueError, TypeError):
             continue
     return out
 
 
 def destinations(graph: Any) -> dict[int, tuple[float, float]]:
-    """Where the agenda says people are going: a participant of an upcoming or running activity is
-    walking to its object (the prediction of a walker's path follows it, motion.py).  The earliest
-    such activity wins."""
+    """Where the agenda says people are going: a participant of a running activity, or of one due
+    within ``DUE_BEFORE_S`` (the simulated participants leave to arrive 2.5 min early, always
+    within the 5 min before it), is walking to its object (the prediction of a walker's path
+    follows it, motion.py).  The earliest such activity wins."""
     out: dict[int, tuple[float, float, float]] = {}
+    clock = graph.get_node_by_name(CLOCK)
+    now_s = clock.attrs.get("now_s") if clock is not None else None
     for edge in graph.edges_of_type(EdgeType.PARTICIPANT):
         activity = graph.get_node(edge.dst)
         if activity is None or activity.attrs.get("state") not in ("upcoming", "running"):
             continue
+        if isinstance(now_s, (int, float)) and float(activity.attrs.get("start_s", 0.0)) - now_s > DUE_BEFORE_S:
+            continue   # not due yet: the participant is not on the way (motion.py)
         obj = graph.get_node_by_name(str(activity.attrs.get("object", "")))
         if obj is None:
             continue
@@ -83,6 +95,94 @@ def destinations(graph: Any) -> dict[int, tuple[float, float]]:
         if edge.src not in out or start < out[edge.src][2]:
             out[edge.src] = (x, y, start)
     return {person: (x, y) for person, (x, y, _) in out.items()}
+
+
+class DoorGraph:
+    """The building's rooms and open doors as the DSR holds them, to route a person to a place:
+    the doors on the shortest way (door to door in straight lines through the rooms between), so
+    a prediction follows doors instead of running into a wall (motion.py).  The ways between doors
+    are computed once per graph read (Floyd-Warshall over the few doors, in numpy: `chronav path`
+    loads neither networkx nor scipy.sparse for it); a person's query only joins her start and goal
+    to the doors of their rooms."""
+
+    def __init__(self, rooms: dict[str, Any], doors: dict[str, tuple[float, float, tuple[str, ...]]]) -> None:
+        import numpy as np
+
+        self.rooms = rooms          # name -> shapely polygon
+        self.doors = doors          # name -> (x, y, the two rooms)
+        self._names = list(doors)
+        self._index = {name: i for i, name in enumerate(self._names)}
+        n = len(doors)
+        lengths = np.full((n, n), math.inf)
+        np.fill_diagonal(lengths, 0.0)
+        for i, (x, y, between) in enumerate(doors.values()):
+            for j, (ox, oy, other_between) in enumerate(doors.values()):
+                if i != j and set(between) & set(other_between):
+                    lengths[i, j] = math.dist((x, y), (ox, oy))
+        following = np.tile(np.arange(n), (n, 1))   # following[i, j]: the next door from i toward j
+        for k in range(n):
+            through = lengths[:, k, None] + lengths[None, k, :]
+            shorter = through < lengths
+            lengths = np.where(shorter, through, lengths)
+            following = np.where(shorter, following[:, k, None], following)
+        self._lengths, self._following = lengths, following
+
+    def length(self, a: str, b: str) -> float:
+        """The shortest way from door ``a`` to door ``b`` through the rooms (inf: none)."""
+        return float(self._lengths[self._index[a], self._index[b]])
+
+    def way(self, a: str, b: str) -> list[str]:
+        """The doors from ``a`` to ``b`` on the shortest way, both included."""
+        i, j = self._index[a], self._index[b]
+        doors = [self._names[i]]
+        while i != j:
+            i = int(self._following[i, j])
+            doors.append(self._names[i])
+        return doors
+
+    @classmethod
+    def of(cls, graph: Any) -> DoorGraph:
+        import shapely
+
+        rooms = {}
+        for node in graph.nodes_of_type(NodeType.ROOM):
+            xs, ys = node.attrs.get("polygon_x"), node.attrs.get("polygon_y")
+            if xs and ys and len(xs) == len(ys) and len(xs) >= 3:
+                rooms[node.name] = shapely.Polygon(list(zip(xs, ys, strict=True)))
+        doors = {}
+        for node in graph.nodes_of_type(NodeType.DOOR):
+            a = node.attrs
+            if a.get("open") is False:
+                continue
+            try:
+                doors[node.name] = (float(a["x"]), float(a["y"]), tuple(str(r) for r in a["rooms"]))
+            except (KeyError, TypeError, ValueError):
+                continue
+        return cls(rooms, doors)
+
+    def room_at(self, x: float, y: float) -> str | None:
+        import shapely
+
+        point = shapely.Point(x, y)
+        return next((name for name, poly in self.rooms.items() if poly.covers(point)), None)
+
+    def via(self, start: tuple[float, float], goal: tuple[float, float]) -> tuple[tuple[float, float], ...]:
+        """Door positions from ``start`` to ``goal``, in order; () in the same room, or when no
+        way is known (the prediction then goes straight, and stops at a wall)."""
+        here, there = self.room_at(*start), self.room_at(*goal)
+        if here is None or there is None or here == there:
+            return ()
+        best: tuple[float, list[str]] | None = None
+        for a, (ax, ay, a_rooms) in self.doors.items():
+            if here not in a_rooms:
+                continue
+            for b, (bx, by, b_rooms) in self.doors.items():
+                if there not in b_rooms or math.isinf(self.length(a, b)):
+                    continue
+                cost = math.dist(start, (ax, ay)) + self.length(a, b) + math.dist((bx, by), goal)
+                if best is None or cost < best[0]:
+                    best = (cost, (a, b))
+        return () if best is None else tuple(self.doors[name][:2] for name in self.way(*best[1]))
 
 
 def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:

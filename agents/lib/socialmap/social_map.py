@@ -97,7 +97,7 @@ from agents.lib.socialmap.layers import (
     interaction_masks,
     interaction_patches,
 )
-from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, predict, prediction_patches, stretched
+from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, predict_many, prediction_patches, stretched
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
@@ -411,8 +411,9 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     obstacles = (*footprint_patches(spec, objects, geometries, inflate),
                  *body_patches(spec, people, grid_params.person_radius_m + grid_params.robot_radius_m))
     zone_costs = band_patches(windows, params.zones, grid_params.social_cost, grid_params.personal_cost)
-    predicted = [(found, space, p.theta) for p, space in zip(people, rest_spaces, strict=True)
-                 if (found := predict(p, params.motion, static.walls)) is not None]
+    predicted = [(found, space, p.theta) for p, space, found in
+                 zip(people, rest_spaces, predict_many(people, params.motion, static.walls), strict=True)
+                 if found is not None]
     ahead = prediction_patches(spec, predicted, params.zones, grid_params.social_cost, grid_params.personal_cost)
     return SocialMap(spec=spec, params=params, t_s=float(t_s), people=people, objects=objects,
                      activities=matched, unmatched_activities=unmatched,

@@ -37,7 +37,7 @@ class Person:
     ``interacting_with`` names other people this one is known to interact with (the DSR's
     ``interacting`` edges); such pairs are grouped even when the Omega rule would not group them.
     ``vx``/``vy`` stretch a walker's space and predict where they go (motion.py), toward
-    ``destination`` when the agenda says where that is.
+    ``destination`` when the agenda says where that is, through the doors ``via``.
     """
 
     name: str
@@ -49,12 +49,15 @@ class Person:
     vx: float = 0.0                                  # velocity (m/s, world frame), as the observer estimates it
     vy: float = 0.0
     destination: tuple[float, float] | None = None   # where the agenda says they are walking to
+    via: tuple[tuple[float, float], ...] = ()        # the doors on their way there (motion.py)
 
     def __post_init__(self) -> None:
         owner = f"person {self.name!r}"
         for attr in ("x", "y", "theta", "vx", "vy"):
             object.__setattr__(self, attr, _finite(owner, attr, getattr(self, attr)))
         object.__setattr__(self, "interacting_with", tuple(self.interacting_with))
+        object.__setattr__(self, "via", tuple((_finite(owner, "via x", p[0]), _finite(owner, "via y", p[1]))
+                                              for p in self.via))
         if self.destination is not None:
             object.__setattr__(self, "destination", (_finite(owner, "destination x", self.destination[0]),
                                                       _finite(owner, "destination y", self.destination[1])))

@@ -1,0 +1,92 @@
+"""``chronav predict evaluate FILE...``: the deployed people prediction measured on real pedestrians.
+
+Why a command: the social map's prediction is the navigation's view of the future, and the only
+honest way to know it is good is the trajectory-prediction literature's own benchmark, run on the
+code that is deployed (tools/prediction_eval.py says how), with the constant-velocity baseline
+computed in the same run.  docs/prediction.md gives the figures and how to read them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import typer
+
+
+def _positive(value: float, option: str) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise typer.BadParameter("must be a positive number", param_hint=option)
+    return value
+
+
+def register(app: typer.Typer) -> None:
+    predict_app = typer.Typer(help="Measure how well chronav predicts where people will be.",
+                              no_args_is_help=True)
+    app.add_typer(predict_app, name="predict")
+
+    @predict_app.command("evaluate")
+    def evaluate_cmd(
+        files: list[Path] = typer.Argument(..., help="ETH/UCY text files ('frame id x y' a line, frames 0.4 s "
+                                                     "apart) or a run's people.csv",
+                                           show_default=False),
+        obs: int = typer.Option(8, "--obs", min=2, max=1000, help="observed steps (the tracker sees these)"),
+        pred: int = typer.Option(12, "--pred", min=1, max=1000, help="predicted steps"),
+        dt: float = typer.Option(0.4, "--dt", help="seconds between frames"),
+        noise: float = typer.Option(0.0, "--noise", help="detection noise, m (standard deviation per axis); "
+                                                         "the observer's default is 0.02"),
+        seed: int = typer.Option(0, "--seed", help="seed of the detection noise"),
+        scene: str | None = typer.Option(None, "--scene", help="for a run's people.csv: the run's scene, so the "
+                                                              "prediction knows its walls, doors and agenda"),
+        agenda: bool = typer.Option(True, "--agenda/--no-agenda", help="with --scene: use the agenda (where people "
+                                                                       "whose activity is near are going)"),
+        min_speed: float = typer.Option(0.0, "--min-speed", help="only windows whose person walked at least this "
+                                                                 "fast (m/s, observed steps, true positions)"),
+        detect_every: int = typer.Option(1, "--detect-every", min=1, max=100,
+                                         help="detections per frame (interpolated between frames): 4 on "
+                                              "0.4 s frames is the observer's 10 Hz"),
+        as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    ) -> None:
+        """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
+        baseline on the true positions (same windows, same run) and the ratio (< 1: better)."""
+        from tools.prediction_eval import PedestrianFileError, SceneContext, evaluate_files, summary
+
+        _positive(dt, "--dt")
+        if not (math.isfinite(noise) and 0 <= noise <= 1.0):
+            raise typer.BadParameter("must be between 0 and 1 m", param_hint="--noise")
+        if not (math.isfinite(min_speed) and min_speed >= 0):
+            raise typer.BadParameter("must be a speed of 0 m/s or more", param_hint="--min-speed")
+        context = None
+        if scene is not None:
+            from scenes.loader import resolve_scene_path
+            from scenes.yamlio import SourceError
+
+            try:
+                context = SceneContext(resolve_scene_path(scene), agenda=agenda)
+            except (SourceError, OSError) as exc:
+                typer.echo(f"error: {exc}", err=True)
+                raise typer.Exit(2) from None
+        try:
+            results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context,
+                                     min_speed=min_speed, detect_every=detect_every)
+        except PedestrianFileError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(2) from None
+        report = summary(results)
+        if as_json:
+            typer.echo(json.dumps(report))
+            return
+        known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
+        known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
+        known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
+        typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
+                   f"detection noise {noise:g} m (seed {seed}){known}")
+        typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
+                   f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
+        for name, r in results.items():
+            typer.echo(f"{name:28s} {r.tracks:8d} {r.ade:7.3f} {r.fde:7.3f} {r.cv_ade:7.3f} {r.cv_fde:7.3f} "
+                       f"{r.ade / r.cv_ade if r.cv_ade else math.nan:7.3f} "
+                       f"{r.fde / r.cv_fde if r.cv_fde else math.nan:7.3f}")
+        typer.echo(f"average over the files: ADE/CV {report['ade_over_cv']}, FDE/CV {report['fde_over_cv']} "
+                   "(CV: constant velocity from the last true step)")
