@@ -129,7 +129,7 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
     assert beam[len(beam) // 2] == pytest.approx(0.8, abs=0.06), "the laser sees the closed leaf"
 
     def corridor_to_ot() -> float:
-        return plan(nav._build_map(sim.now_s), (7.2, 14.0), (10.0, 14.0), baseline=True).length_m
+        return plan(nav._build_map(sim.now_s), (7.2, 14.0), (10.0, 14.0), planner="baseline").length_m
 
     shut = corridor_to_ot()
     graph.update_node(door.id, attrs={"open": True})
