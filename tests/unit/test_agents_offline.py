@@ -295,11 +295,10 @@ def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) 
 
 def test_a_stand_in_stays_in_the_goal_s_room() -> None:
     """The nearest free cell behind a wall is not a stand-in: the room predicate decides."""
-    from types import SimpleNamespace
-
+    from agents.lib.socialmap.grid import GridSpec
     from agents.social_navigation.agent import stand_in_goal
 
-    spec = SimpleNamespace(x0=0.0, y0=0.0, resolution=0.1)
+    spec = GridSpec(x0=0.0, y0=0.0, resolution=0.1, rows=40, cols=40)
     grid = np.ones((40, 40))
     grid[:, 18:22] = np.inf                       # a wall at x = 1.8-2.2 m
     grid[15:25, 22:27] = np.inf                   # people right of the goal at (2.4, 2.0)
