@@ -184,22 +184,6 @@ def posed_polygon(shape: Shape, x: float, y: float, theta: float) -> Polygon:
     return Polygon(world)
 
 
-# ----------------------------------------------------------------------------------- angles
-def wrap_angle(angle: float) -> float:
-    """Map an angle to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def angle_difference(a: float, b: float) -> float:
-    """``a - b`` wrapped to [-pi, pi): how far to turn from ``b`` to reach ``a``."""
-    return wrap_angle(a - b)
-
-
-def lerp_angle(a: float, b: float, fraction: float) -> float:
-    """The heading ``fraction`` of the way from ``a`` to ``b`` along the shorter turn."""
-    return wrap_angle(a + fraction * angle_difference(b, a))
-
-
 # ----------------------------------------------------------------------------------- segments
 @dataclass(frozen=True)
 class SegmentProjection:

@@ -40,6 +40,7 @@ from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, Navigati
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
+from scenes.angles import wrap_angle
 
 REPLAN_PERIOD_S = 0.2   # sim seconds between map rebuilds and searches (>= 5 Hz, issue 15)
 TIME_EPS_S = 1e-6       # sim-time comparisons tolerate float rounding
@@ -390,7 +391,7 @@ class SocialNavigationAgent(Agent):
         if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
             return 1.0, False
         heading = math.atan2(vy, vx)
-        ahead = np.abs(np.arctan2(np.sin(angles - heading), np.cos(angles - heading))) < math.radians(60)
+        ahead = np.abs(wrap_angle(angles - heading)) < math.radians(60)
         if not np.any(ahead):
             return 1.0, False
         free = float(np.min(ranges[ahead])) - self.scene.robot.radius

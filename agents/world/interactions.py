@@ -14,6 +14,7 @@ import math
 from collections.abc import Iterable, Mapping
 
 from scenes.model import Scene
+from scenes.angles import wrap_angle
 
 INTERACTION_RANGE_M = 1.8   # a participant farther than this from the activity's object is not (yet) in it
 CONVERSATION_RANGE_M = 1.6  # two people talking stand at most this far apart (Hall's personal distance + a bit)
@@ -57,11 +58,8 @@ def observed_conversations(people: Mapping[str, tuple[float, float, float, float
             if math.hypot(dx, dy) > CONVERSATION_RANGE_M:
                 continue
             bearing = math.atan2(dy, dx)
-            if abs(_wrap(bearing - ath)) <= CONVERSATION_FACING_RAD and \
-                    abs(_wrap(bearing + math.pi - bth)) <= CONVERSATION_FACING_RAD:
+            if abs(wrap_angle(bearing - ath)) <= CONVERSATION_FACING_RAD and \
+                    abs(wrap_angle(bearing + math.pi - bth)) <= CONVERSATION_FACING_RAD:
                 pairs += [(a, b), (b, a)]
     return pairs
 
-
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2 * math.pi) - math.pi

@@ -49,6 +49,7 @@ from agents.lib.crowd.formations import CHAT_RADIUS_M, chat_place, join_circle, 
 from agents.lib.crowd.model import Agenda, Appointment, Building, PersonTruth, RobotBody, Walker
 from agents.lib.crowd.orca import PARKED, Orca
 from agents.lib.crowd.routes import NoRoute, Router
+from scenes.angles import wrap_angle
 
 STEP_S = 0.25              # people's decisions and ORCA steps: 4 Hz of sim time
 ARRIVE_EARLY_S = 150.0      # aim to be at an activity this long before it starts (within 5 min)
@@ -234,8 +235,8 @@ class Crowd:
                 continue
             x = float(p0[i, 0] + f * (self.pos[i, 0] - p0[i, 0]))
             y = float(p0[i, 1] + f * (self.pos[i, 1] - p0[i, 1]))
-            dth = (self.theta[i] - th0[i] + math.pi) % (2 * math.pi) - math.pi
-            theta = (th0[i] + f * dth + math.pi) % (2 * math.pi) - math.pi
+            dth = wrap_angle(self.theta[i] - th0[i])
+            theta = wrap_angle(th0[i] + f * dth)
             out.append(PersonTruth(w.name, w.role, x, y, float(theta), float(self.vel[i, 0]), float(self.vel[i, 1]),
                                    self._group_of(person), person.task.activity or person.escorted_to))
         return tuple(out)
@@ -453,7 +454,7 @@ class Crowd:
         standing = [p for p in self._dynamic if p.task.kind == "stand"]
         want = np.array([p.task.target[2] for p in standing])
         have = self.theta[[p.index for p in standing]] if standing else np.zeros(0)
-        off = np.abs((want - have + math.pi) % (2 * math.pi) - math.pi) > 1e-6
+        off = np.abs(wrap_angle(want - have)) > 1e-6
         turning = [p for p, o in zip(standing, off, strict=True) if o] if off.any() else []
         if not walking and not scripted_moving and not turning and (robot is None or not robot.driving):
             self._quiet_jump(t, agenda, until_s)
@@ -496,7 +497,7 @@ class Crowd:
         for person in turning:
             i = person.index
             want = person.task.target[2]
-            diff = (want - self.theta[i] + math.pi) % (2 * math.pi) - math.pi
+            diff = wrap_angle(want - self.theta[i])
             limit = TURN_RATE_RADPS * self.step_s
             self.theta[i] = want if abs(diff) <= limit else self.theta[i] + math.copysign(limit, diff)
             self.vel[i] = (0.0, 0.0)
@@ -802,7 +803,7 @@ class Crowd:
     def _settled(self, person: Person) -> bool:
         """Standing at their place and turned to face where they should."""
         task = person.task
-        turn = (task.target[2] - self.theta[person.index] + math.pi) % (2 * math.pi) - math.pi
+        turn = wrap_angle(task.target[2] - self.theta[person.index])
         return task.kind == "stand" and abs(turn) < 0.3
 
     def _group_of(self, person: Person) -> str:

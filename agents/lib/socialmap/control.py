@@ -31,7 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from scenes.geometry import project_on_segments, wrap_angle
+from scenes.angles import wrap_angle
+from scenes.geometry import project_on_segments
 
 FloatArray = NDArray[np.float64]
 Drive = Literal["differential", "omni"]

@@ -34,6 +34,7 @@ from agents.lib.socialmap.motion import MotionParams, oriented, stretched
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams, asymmetric_gaussian
 from agents.lib.socialmap.roles import RoleParams
 from agents.lib.socialmap.types import Person
+from scenes.angles import wrap_angle
 
 PERSON_RADIUS_M = 0.25
 BANDS: tuple[tuple[str, float, float], ...] = (("intimate", -math.inf, 0.45), ("personal", 0.45, 1.2),
@@ -78,7 +79,7 @@ class PeopleTracks:
 
         unwrapped = np.unwrap(self.theta, axis=0) if len(self.times) else self.theta
         return PeopleTracks(np.asarray(times, dtype=float), self.names, lerp(self.x), lerp(self.y),
-                            (lerp(unwrapped) + math.pi) % (2 * math.pi) - math.pi, lerp(self.vx), lerp(self.vy),
+                            wrap_angle(lerp(unwrapped)), lerp(self.vx), lerp(self.vy),
                             self.groups[idx], self.roles)
 
 
@@ -175,7 +176,7 @@ class _Robot:
         velocity, omega = np.zeros((n, 2)), np.zeros(n)
         if n > 1:
             safe = np.where(dt > 0, dt, 1.0)
-            turn = (np.diff(theta) + math.pi) % (2 * math.pi) - math.pi
+            turn = wrap_angle(np.diff(theta))
             velocity[:-1] = np.where(dt[:, None] > 0, np.diff(xy, axis=0) / safe[:, None], 0.0)
             omega[:-1] = np.where(dt > 0, turn / safe, 0.0)
             velocity[-1], omega[-1] = velocity[-2], omega[-2]
@@ -241,7 +242,7 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
     still = np.zeros(0, dtype=bool)
     if len(robot.dt):
         step = np.hypot(*np.diff(xy, axis=0).T)
-        turn = np.abs((np.diff(robot.theta) + math.pi) % (2 * math.pi) - math.pi)
+        turn = np.abs(wrap_angle(np.diff(robot.theta)))
         with np.errstate(divide="ignore", invalid="ignore"):
             speed = np.where(robot.dt > 0, step / robot.dt, 0.0)
             omega = np.where(robot.dt > 0, turn / robot.dt, 0.0)
@@ -355,8 +356,8 @@ def hunav_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, *,
         "time_to_reach_goal": total,
         "path_length": float(np.hypot(*np.diff(xy, axis=0).T).sum()) if n > 1 else 0.0,
         # normalize_angle(yaw[i] - yaw[i+1]) to (-pi, pi]: the same magnitude as chronav's wrap
-        "cumulative_heading_changes": float(np.abs((robot.theta[:-1] - robot.theta[1:] + math.pi)
-                                                   % (2 * math.pi) - math.pi).sum()) if n > 1 else 0.0,
+        "cumulative_heading_changes": float(np.abs(wrap_angle(robot.theta[:-1] - robot.theta[1:])).sum())
+        if n > 1 else 0.0,
         # quirk: abs(angular_vel < 0.02) - a clockwise turn (w < 0) counts as not moving; step = total / N
         "time_not_moving": total / n * float(np.sum((v < 0.01) & (w < 0.02))),
         "avg_robot_linear_speed": float(v.mean()),

@@ -48,6 +48,7 @@ from agents.lib.socialmap.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetric
 from agents.lib.socialmap.metric_catalog import CATALOG, column_label
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
+from scenes.angles import wrap_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -230,7 +231,7 @@ def cumulative_heading_change(traj: FloatArray) -> float:
     if len(traj) < 2:
         return 0.0
     dtheta = np.diff(traj[:, 3])
-    wrapped = (dtheta + math.pi) % (2.0 * math.pi) - math.pi
+    wrapped = wrap_angle(dtheta)
     return float(np.abs(wrapped).sum())
 
 
