@@ -31,6 +31,17 @@ def test_densify_keeps_the_vertices_and_spaces_points_at_most_one_step() -> None
     assert np.array_equal(densify(points[:1], 0.1), points[:1])
 
 
+def test_densify_splits_each_gap_into_ceil_length_over_step_parts() -> None:
+    """No rounding forgiveness (unlike elastic_band.resample): path costs the agent compares keep
+    the sampling they had when densify lived in the agent."""
+    rng = np.random.default_rng(7)
+    cells = np.cumsum(rng.integers(-1, 2, (60, 2)), axis=0) + 15
+    points = SPEC.centres(cells)                   # a grid path: steps of one resolution or sqrt(2)
+    gaps = np.hypot(*np.diff(points, axis=0).T)
+    expected = sum(max(1, math.ceil(g / 0.05)) for g in gaps)
+    assert len(densify(points, 0.05)) == 1 + expected
+
+
 def test_the_kernel_and_step_cost_price_a_planned_path_alike() -> None:
     """step_cost is the planner's rule: summed along the cells A* returns, it gives Path.cost."""
     rng = np.random.default_rng(3)

@@ -3,7 +3,7 @@
 Why here and not in the navigation agent: the agent judges its current path against a new one
 (``path_cost``) and moves a blocked start or goal to free floor (``nearest_free``); both must mean
 what the planner means by cost and by a cell, so they are written once, on the planner's own
-step rule (search.step_cost), its polyline sampling (elastic_band.resample) and its cells
+step rule (search.step_cost), the band's polyline splitting (elastic_band.split_gaps) and its cells
 (GridSpec.cell_of / GridSpec.centres).
 """
 
@@ -15,15 +15,21 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.lib.socialmap.elastic_band import resample
+from agents.lib.socialmap.elastic_band import split_gaps
 from agents.lib.socialmap.grid import GridSpec
 from agents.lib.socialmap.search import StartOccupied, step_cost
 
 
 def densify(points: NDArray[np.float64], step_m: float) -> NDArray[np.float64]:
-    """The polyline's vertices and evenly spaced points in between, at most ``step_m`` apart
-    (elastic_band.resample without dropping close points)."""
-    return resample(points, step_m, 0.0)
+    """The polyline's vertices and evenly spaced points in between, at most ``step_m`` apart:
+    each gap split into ceil(length / step_m) parts.  Why not elastic_band.resample: that one
+    forgives 1e-9 of rounding (a cell-to-cell step of exactly one resolution is two half cells
+    there, three here when its float length rounds up), and the navigation agent's replan
+    decisions compare path_cost values taken with this count; both share the splitting (split_gaps)."""
+    if len(points) < 2:
+        return points
+    gaps = np.hypot(*np.diff(points, axis=0).T)
+    return split_gaps(points, np.maximum(np.ceil(gaps / step_m), 1).astype(np.int64))
 
 
 def path_cost(grid: NDArray[np.floating], spec: GridSpec, points: NDArray[np.float64]) -> float:
