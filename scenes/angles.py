@@ -1,33 +1,37 @@
-"""Angles: the one place headings are wrapped, differenced and interpolated.
+"""Angles in one convention: headings and turns wrapped to [-pi, pi).
 
-Convention: a wrapped angle lies in [-pi, pi) (``(a + pi) mod 2 pi - pi``), for a float or
-element-wise for a numpy array.  Why here: scenes is the lowest layer that handles headings
-(poses in scene files), and everything above it (crowd, perception, socialmap, world, agents,
-tools) imports downward to it.  The one other wrap is ``dsr.poses.normalize_angle`` (RT edges,
-(-pi, pi]): the DSR imports nothing of chronav, so it keeps its own.
+Why one module: chronav had three wrap functions with two conventions and a dozen inline copies
+of ``(a + pi) % (2 * pi) - pi`` across the agents; a copy that wraps to (-pi, pi] instead of
+[-pi, pi) disagrees with the others exactly at a half turn. Every library and agent wraps here.
+It lives in ``scenes`` because that is the lowest layer the agents' libraries import (the DSR,
+below it, imports nothing of chronav and keeps its own ``dsr.poses.normalize_angle``, which wraps
+to (-pi, pi] for RT edges).
+
+The functions take a float or a numpy array (the crowd and the metrics wrap whole columns) and
+compute exactly the expression they replace, so results are bit-for-bit those of the copies.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:
+    import numpy as np
 
-#: a heading or an array of headings (radians); the functions return the same kind
-Angle = TypeVar("Angle", float, NDArray[np.floating])
+A = TypeVar("A", float, "np.ndarray")
 
-
-def wrap_angle(angle: Angle) -> Angle:
-    """``angle`` mapped to [-pi, pi) (element-wise for an array).  A value a hair below -pi may
-    round to pi, as with any float modulo."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi  # type: ignore[return-value]
+FULL_TURN = 2.0 * math.pi
 
 
-def angle_difference(a: Angle, b: Angle | float) -> Angle:
+def wrap_angle(angle: A) -> A:
+    """Map an angle (radians) to [-pi, pi): ``pi`` becomes ``-pi``."""
+    return (angle + math.pi) % FULL_TURN - math.pi
+
+
+def angle_difference(a: A, b: A) -> A:
     """``a - b`` wrapped to [-pi, pi): how far to turn from ``b`` to reach ``a``."""
-    return wrap_angle(a - b)  # type: ignore[operator]
+    return wrap_angle(a - b)
 
 
 def lerp_angle(a: float, b: float, fraction: float) -> float:

@@ -23,6 +23,8 @@ import shapely
 from numpy.typing import ArrayLike, NDArray
 from shapely.geometry import Polygon
 
+from scenes.angles import angle_difference, lerp_angle, wrap_angle  # noqa: F401  (re-exported for existing callers)
+
 CIRCLE_QUAD_SEGMENTS = 16   # 64-gon: area within 0.2 % of pi r^2
 
 
@@ -182,6 +184,8 @@ def posed_polygon(shape: Shape, x: float, y: float, theta: float) -> Polygon:
     world = np.column_stack([x + local[:, 0] * cos_t - local[:, 1] * sin_t,
                              y + local[:, 0] * sin_t + local[:, 1] * cos_t])
     return Polygon(world)
+
+
 
 
 # ----------------------------------------------------------------------------------- segments

@@ -29,7 +29,7 @@ from agents.world.dsr_writers import write_interactions, write_person
 from agents.world.freshness import mark_observed
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
-from scenes.angles import angle_difference
+from scenes.geometry import angle_difference
 
 TRAIL_S = 20.0               # the recording shows each person's last 20 s of track (a crowd stays legible)
 TRAIL_SPACING_S = 0.5

@@ -21,8 +21,7 @@ from agents.missions.goals import (SOCIAL_DISTANCE_M, FreeSpace, GoalError, Goal
                                    pose_facing_person, pose_in_room, pose_near_object, pose_past_door)
 from agents.world.dsr_readers import dsr_objects, dsr_people
 from agents.world.vocabulary import ActivityView, EdgeType, IntentionKind, NodeType, activities, activity_id_of
-from scenes.angles import angle_difference
-from scenes.geometry import posed_polygon
+from scenes.geometry import angle_difference, posed_polygon
 from scenes.model import Scene
 
 PERSON_MOVED_REPLAN_M = 1.0   # the approached person (or a group's centre) moved this far: plan again

@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 
-from scenes.model import Scene
 from scenes.angles import wrap_angle
+from scenes.model import Scene
 
 INTERACTION_RANGE_M = 1.8   # a participant farther than this from the activity's object is not (yet) in it
 CONVERSATION_RANGE_M = 1.6  # two people talking stand at most this far apart (Hall's personal distance + a bit)

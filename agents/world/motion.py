@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from scenes.clock import parse_clock
-from scenes.angles import lerp_angle
+from scenes.geometry import lerp_angle
 from scenes.model import PersonSpec
 
 

@@ -31,8 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from scenes.angles import wrap_angle
-from scenes.geometry import project_on_segments
+from scenes.geometry import project_on_segments, wrap_angle
 
 FloatArray = NDArray[np.float64]
 Drive = Literal["differential", "omni"]

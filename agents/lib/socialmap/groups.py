@@ -34,7 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from agents.lib.socialmap.personal_space import PersonalSpace, asymmetric_gaussian
 from agents.lib.socialmap.types import Person
-from scenes.angles import wrap_angle
+from scenes.geometry import wrap_angle
 
 
 class GroupParams(BaseModel):

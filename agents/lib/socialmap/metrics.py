@@ -46,9 +46,9 @@ from shapely.geometry.base import BaseGeometry
 from agents.lib.socialmap.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetrics, PeopleTracks, dynamic_metrics,
                                                   tracks_from_rows)
 from agents.lib.socialmap.metric_catalog import CATALOG, column_label
+from scenes.angles import wrap_angle
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file
-from scenes.angles import wrap_angle
 
 FloatArray = NDArray[np.float64]
 
