@@ -23,8 +23,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
-from scenes.angles import wrap_angle
-
 GATE_CHI2 = 9.21        # 2 degrees of freedom, 99 %
 MAX_GAP_S = 2.0
 LOST_S = 3.0            # a track not updated for this long reports no velocity
@@ -119,8 +117,8 @@ class Tracker:
         gain = track.cov @ h.T @ np.linalg.inv(s)
         track.state = track.state + gain @ (np.array([det.x, det.y]) - h @ track.state)
         track.cov = (np.eye(4) - gain @ h) @ track.cov
-        turn = wrap_angle(det.theta - track.theta)
-        track.theta = wrap_angle(track.theta + self.heading_smoothing * turn)
+        turn = (det.theta - track.theta + math.pi) % (2 * math.pi) - math.pi
+        track.theta = (track.theta + self.heading_smoothing * turn + math.pi) % (2 * math.pi) - math.pi
         track.updated_s = t_s
 
     def velocity(self, name: str, t_s: float) -> tuple[float, float]:
