@@ -188,9 +188,9 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
     plan_ms, path = median_ms_after(fresh, lambda m: plan(m, start, goal, workspace=ws), repeats)
     cold_ms, _ = median_ms_after(fresh, lambda m: plan(m, start, goal), max(1, repeats // 2))
     smap.cost  # noqa: B018  (compose the departure-time grid outside the timing)
-    departure_ms, departure = median_ms(lambda: plan(smap, start, goal, arrival_time=False, workspace=ws), repeats)
+    departure_ms, departure = median_ms(lambda: plan(smap, start, goal, planner="departure", workspace=ws), repeats)
     both_ms, _ = median_ms(lambda: plan(build_social_map(*args, static=static), start, goal, workspace=ws), repeats)
-    dijkstra_ms, _ = median_ms(lambda: plan(smap, start, goal, arrival_time=False, method="dijkstra", workspace=ws),
+    dijkstra_ms, _ = median_ms(lambda: plan(smap, start, goal, planner="departure", method="dijkstra", workspace=ws),
                                max(1, repeats // 2))
     ref_repeats = max(1, min(3, repeats))
     csr_ms, graph = median_ms(lambda: grid_graph(smap.cost), ref_repeats)
@@ -200,7 +200,7 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
                              ref_repeats)
     weights = smap.cost.astype(np.float32)
     pyastar_ms, _ = median_ms(lambda: pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True), repeats)
-    ours_ms = lambda: median_ms(lambda: plan(smap, start, goal, arrival_time=False, workspace=ws), 1)[0]  # noqa: E731
+    ours_ms = lambda: median_ms(lambda: plan(smap, start, goal, planner="departure", workspace=ws), 1)[0]  # noqa: E731
     theirs_ms = lambda: median_ms(lambda: pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True), 1)[0]  # noqa: E731
     ratio = statistics.median(ours_ms() / theirs_ms() for _ in range(max(3, repeats)))
     n = n_cells

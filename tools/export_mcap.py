@@ -36,6 +36,7 @@ from agents.ros_bridge.types import serialize, typestore
 from agents.world.offline import graph_at
 from agents.world.scene_world import load_world
 from agents.world.vocabulary import activities
+from scenes.angles import wrap_angle
 
 #: a gap longer than this between trajectory samples starts a new drive (the simulator writes
 #: samples every 0.1 s of sim time while the robot drives)
@@ -152,7 +153,7 @@ def _robot(traj: np.ndarray, epoch: float, fr: Any, write: Any) -> None:
             dx, dy = traj[i, 1] - traj[i - 1, 1], traj[i, 2] - traj[i - 1, 2]
             v = (dx * math.cos(theta) + dy * math.sin(theta)) / dt
             vy = (-dx * math.sin(theta) + dy * math.cos(theta)) / dt
-            omega = math.remainder(float(traj[i, 3] - traj[i - 1, 3]), math.tau) / dt
+            omega = wrap_angle(float(traj[i, 3] - traj[i - 1, 3])) / dt
         else:
             v = vy = omega = 0.0
         stamp = msgs.ros_time(float(t), epoch)

@@ -39,15 +39,20 @@ def _clock(text: str | None, option: str) -> float | None:
 
 def _planner(name: str | None, baseline: bool, departure_time: bool) -> str:
     """--planner NAME, or its older spellings --baseline / --departure-time (not both kinds at once)."""
-    from agents.lib.socialmap.planners import UnknownPlannerError, resolve_planner
+    from agents.lib.socialmap.planners import DEFAULT_PLANNER, UnknownPlannerError, check_planner
 
     if baseline and departure_time:
         raise typer.BadParameter("give one of --baseline and --departure-time (or --planner NAME)",
                                  param_hint="--baseline")
+    alias = "baseline" if baseline else "departure" if departure_time else None
     try:
-        return resolve_planner(name, baseline=baseline, arrival_time=False if departure_time else None)
+        chosen = check_planner(name if name is not None else alias or DEFAULT_PLANNER)
     except UnknownPlannerError as exc:
         raise typer.BadParameter(str(exc), param_hint="--planner") from None
+    if alias is not None and alias != chosen:
+        flag = "--baseline" if baseline else "--departure-time"
+        raise typer.BadParameter(f"--planner {chosen} contradicts {flag} (the {alias} planner)", param_hint=flag)
+    return chosen
 
 
 def _fail(message: str, code: int = 2) -> None:

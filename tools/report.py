@@ -60,7 +60,7 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
                                                         goal_missing=why).model_dump()}
         smap = maps.at(started)
         try:
-            base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), baseline=True)
+            base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), planner="baseline")
             baseline_traj = path_as_trajectory(base.points_m, started, maps.cruise_speed)
             entry["baseline"] = maps.measure(baseline_traj, started).model_dump()
         except PlanningError as exc:

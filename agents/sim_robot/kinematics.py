@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from scenes.angles import wrap_angle
+
 
 @dataclass(frozen=True)
 class Velocity:
@@ -58,5 +60,5 @@ def integrate(x: float, y: float, theta: float, vel: Velocity, dt: float) -> tup
         s, c = math.sin(vel.omega * dt), math.cos(vel.omega * dt)
         dx_body = (vel.vx * s - vel.vy * (1 - c)) / vel.omega
         dy_body = (vel.vx * (1 - c) + vel.vy * s) / vel.omega
-    new_theta = math.atan2(math.sin(theta + vel.omega * dt), math.cos(theta + vel.omega * dt))
+    new_theta = wrap_angle(theta + vel.omega * dt)
     return (x + cos_t * dx_body - sin_t * dy_body, y + sin_t * dx_body + cos_t * dy_body, new_theta)

@@ -30,6 +30,7 @@ from agents.runtime.recording import Recorder
 from agents.lib.socialmap import elastic_band as eb
 from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
 from agents.lib.socialmap.grid import blocked_core
+from agents.lib.socialmap.paths import densify, nearest_free, nearest_free_where, path_cost
 from agents.lib.socialmap import arrival, replan
 from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupied
@@ -39,6 +40,7 @@ from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, Navigati
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
+from scenes.angles import wrap_angle
 
 REPLAN_PERIOD_S = 0.2   # sim seconds between map rebuilds and searches (>= 5 Hz, issue 15)
 TIME_EPS_S = 1e-6       # sim-time comparisons tolerate float rounding
@@ -56,59 +58,6 @@ STALL_TIMEOUT_S = 60.0
 BLOCKED_WAIT_S = 30.0   # sim seconds an intention waits for people to clear a blocked way before failing
 STAND_IN_AFTER_S = 10.0  # sim seconds a goal occupied by people is waited for before a stand-in is taken
 STAND_IN_MAX_M = 1.5     # how far from an occupied goal the stand-in may be (in the goal's room)
-
-
-def densify(points: np.ndarray, step_m: float) -> np.ndarray:
-    """The polyline's vertices and points in between, at most ``step_m`` apart."""
-    seg = np.diff(points, axis=0)
-    lengths = np.hypot(seg[:, 0], seg[:, 1])
-    samples = [points[:1]]
-    for start, delta, length in zip(points[:-1], seg, lengths, strict=True):
-        n = max(1, int(math.ceil(length / step_m)))
-        samples.append(start + delta * (np.arange(1, n + 1)[:, None] / n))
-    return np.vstack(samples)
-
-
-def path_cost(grid: np.ndarray, spec: Any, points: np.ndarray) -> float:
-    """Cost of a polyline on a grid with the planner's semantics (L * mean of the two cells)."""
-    if len(points) < 2:
-        return 0.0
-    dense = densify(points, spec.resolution / 2)
-    costs = grid[spec.clipped_cells(dense)]
-    if not np.all(np.isfinite(costs)):
-        return math.inf
-    step = np.hypot(*np.diff(dense, axis=0).T)
-    return float(np.sum(step * (costs[:-1] + costs[1:]) / 2))
-
-
-def nearest_free(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: float = 1.0) -> tuple[float, float]:
-    """The centre of the nearest traversable cell: the way out when someone stepped up to the robot
-    (its start lies in their intimate zone) or the robot was pushed against an inflated wall."""
-    found = nearest_free_where(grid, spec, xy, max_m, lambda x, y: True)
-    if found is None:
-        raise StartOccupied(f"no free cell within {max_m} m of ({xy[0]:.2f}, {xy[1]:.2f})")
-    return found
-
-
-def nearest_free_where(grid: np.ndarray, spec: Any, xy: tuple[float, float], max_m: float,
-                       inside: Any) -> tuple[float, float] | None:
-    """The centre of the traversable cell nearest to ``xy`` within ``max_m`` for which
-    ``inside(x, y)`` holds, or None."""
-    col = int((xy[0] - spec.x0) / spec.resolution)
-    row = int((xy[1] - spec.y0) / spec.resolution)
-    reach = int(max_m / spec.resolution)
-    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
-    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
-    rows, cols = np.nonzero(np.isfinite(grid[r0:r1, c0:c1]))
-    squared = (rows + r0 - row) ** 2 + (cols + c0 - col) ** 2
-    for k in np.argsort(squared, kind="stable"):
-        if squared[k] > reach * reach:
-            break
-        x = spec.x0 + (cols[k] + c0 + 0.5) * spec.resolution
-        y = spec.y0 + (rows[k] + r0 + 0.5) * spec.resolution
-        if inside(x, y):
-            return float(x), float(y)
-    return None
 
 
 def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: Any,
@@ -460,7 +409,7 @@ class SocialNavigationAgent(Agent):
         if len(ranges) == 0 or len(ranges) != len(angles) or math.hypot(vx, vy) < 1e-6:
             return 1.0, False
         heading = math.atan2(vy, vx)
-        ahead = np.abs(np.arctan2(np.sin(angles - heading), np.cos(angles - heading))) < math.radians(60)
+        ahead = np.abs(wrap_angle(angles - heading)) < math.radians(60)
         if not np.any(ahead):
             return 1.0, False
         free = float(np.min(ranges[ahead])) - self.scene.robot.radius

@@ -129,7 +129,7 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
     assert beam[len(beam) // 2] == pytest.approx(0.8, abs=0.06), "the laser sees the closed leaf"
 
     def corridor_to_ot() -> float:
-        return plan(nav._build_map(sim.now_s), (7.2, 14.0), (10.0, 14.0), baseline=True).length_m
+        return plan(nav._build_map(sim.now_s), (7.2, 14.0), (10.0, 14.0), planner="baseline").length_m
 
     shut = corridor_to_ot()
     graph.update_node(door.id, attrs={"open": True})
@@ -295,11 +295,10 @@ def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) 
 
 def test_a_stand_in_stays_in_the_goal_s_room() -> None:
     """The nearest free cell behind a wall is not a stand-in: the room predicate decides."""
-    from types import SimpleNamespace
-
+    from agents.lib.socialmap.grid import GridSpec
     from agents.social_navigation.agent import stand_in_goal
 
-    spec = SimpleNamespace(x0=0.0, y0=0.0, resolution=0.1)
+    spec = GridSpec(x0=0.0, y0=0.0, resolution=0.1, rows=40, cols=40)
     grid = np.ones((40, 40))
     grid[:, 18:22] = np.inf                       # a wall at x = 1.8-2.2 m
     grid[15:25, 22:27] = np.inf                   # people right of the goal at (2.4, 2.0)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, planning_grid, resolve_planner
+from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, check_planner, planning_grid
 from agents.lib.socialmap.social_map import plan
 from agents.world.offline import SceneMaps
 from tests.support import REPO_ROOT
@@ -63,14 +63,16 @@ def test_every_planner_plans_and_the_baseline_is_shortest(game_map) -> None:  # 
     assert lengths["social"] > lengths["static"] > lengths["baseline"]   # the game makes the TV's space dear
 
 
-def test_older_spellings_and_conflicts() -> None:
-    assert resolve_planner(None, baseline=True) == "baseline"
-    assert resolve_planner(None, arrival_time=False) == "departure"
-    assert resolve_planner(None) == "social"
-    with pytest.raises(UnknownPlannerError, match="contradicts"):
-        resolve_planner("static", baseline=True)
+def test_plan_takes_one_planner_name(game_map) -> None:  # noqa: ANN001
+    """plan() has one way to choose: ``planner`` (or the map's default); an unknown name is refused."""
+    assert check_planner("social") == "social"
+    assert game_map.params.planner.default_planner == "social"
+    default = plan(game_map, (0.8, 1.2), (5.2, 1.2))
+    assert default.cost == plan(game_map, (0.8, 1.2), (5.2, 1.2), planner="social").cost
     with pytest.raises(UnknownPlannerError, match="social, departure, static, baseline, inflation"):
-        resolve_planner("nav2")
+        plan(game_map, (0.8, 1.2), (5.2, 1.2), planner="nav2")
+    with pytest.raises(TypeError):
+        plan(game_map, (0.8, 1.2), (5.2, 1.2), baseline=True)  # type: ignore[call-arg]
 
 
 def _path(*extra: str) -> dict:
@@ -89,3 +91,6 @@ def test_path_planner_option_and_its_aliases() -> None:
                                    "--planner", "nav2"])
     words = " ".join(re.sub("[│╭╮╰╯─]", " ", bad.output).split())     # typer boxes and wraps the message
     assert bad.exit_code == 2 and "choose one of social, departure, static, baseline, inflation" in words
+    both = CliRunner().invoke(app, ["path", str(TINY), "--at", "10:01", "--from", "0.8,1.2", "--to", "5.2,1.2",
+                                    "--planner", "static", "--baseline"])
+    assert both.exit_code == 2 and "contradicts" in " ".join(re.sub("[│╭╮╰╯─]", " ", both.output).split())

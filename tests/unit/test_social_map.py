@@ -48,7 +48,7 @@ def test_social_path_never_enters_an_intimate_zone_while_the_baseline_does() -> 
     ann = Person("ann", 5.0, 0.6, math.pi / 2)
     smap = build_social_map((0, 0, 10, 4), box(10, 4), [ann], [], [], 0.0)
     social = plan(smap, (1.0, 0.8), (9.0, 0.8))
-    baseline = plan(smap, (1.0, 0.8), (9.0, 0.8), baseline=True)
+    baseline = plan(smap, (1.0, 0.8), (9.0, 0.8), planner="baseline")
     assert "intimate" not in path_zones(smap, social)
     assert "intimate" in path_zones(smap, baseline)
     dist = lambda p: float(np.hypot(p.points_m[:, 0] - 5.0, p.points_m[:, 1] - 0.6).min())  # noqa: E731
@@ -83,7 +83,7 @@ def test_tv_space_is_crossed_with_nothing_scheduled_and_avoided_during_the_activ
     forbidden = tv_room(11.5 * H, forbidden=True)
     assert math.isinf(forbidden.cost[forbidden.spec.cell_of(6.0, 3.0)])
     with pytest.raises(GoalOccupied):
-        plan(forbidden, (1.0, 3.0), (6.0, 3.0), arrival_time=False)
+        plan(forbidden, (1.0, 3.0), (6.0, 3.0), planner="departure")
     assert plan(tv_room(12.5 * H, forbidden=True), (1.0, 3.0), (6.0, 3.0)).cost > 0
 
 
@@ -107,29 +107,29 @@ def test_arrival_time_chronemics_differs_from_departure_time() -> None:
     smap = two_corridors(t0, ActivityWindow("tv", 11 * H, 12 * H))
     start, goal = (1.0, 2.0), (29.0, 2.0)
     tv_space = smap.object_spaces[0].interaction
-    departure = plan(smap, start, goal, arrival_time=False)
-    arrival = plan(smap, start, goal, arrival_time=True)
+    departure = plan(smap, start, goal, planner="departure")
+    arrival = plan(smap, start, goal, planner="social")
     assert smap.object_spaces[0].r == 1.5 and not smap.object_spaces[0].active
     assert cells_inside(tv_space, departure) > 20                  # the seeds' planner crosses
     assert cells_inside(tv_space, arrival) == 0                    # ours goes round, by the top
     assert float(arrival.points_m[:, 1].max()) > 4.0
     assert arrival.cost > departure.cost
     # A robot fast enough to pass before the start (2 m/s: 14 s for the whole trip) crosses too.
-    sprint = plan(smap, start, goal, arrival_time=True, cruise_speed_mps=2.0)
+    sprint = plan(smap, start, goal, planner="social", cruise_speed_mps=2.0)
     assert cells_inside(tv_space, sprint) > 20
     assert sprint.cost == pytest.approx(departure.cost, rel=1e-6)
     # The mirror case: the therapy ends 30 s after departure; departure pricing goes round.
     ending = two_corridors(11 * H - 30.0, ActivityWindow("tv", 10 * H, 11 * H))
     assert ending.object_spaces[0].forbidden
-    assert cells_inside(tv_space, plan(ending, start, goal, arrival_time=False)) == 0
-    assert cells_inside(tv_space, plan(ending, start, goal, arrival_time=True)) > 20
+    assert cells_inside(tv_space, plan(ending, start, goal, planner="departure")) == 0
+    assert cells_inside(tv_space, plan(ending, start, goal, planner="social")) > 20
 
 
 def test_arrival_time_equals_departure_time_when_nothing_changes() -> None:
     smap = tv_room(11.5 * H)          # mid-therapy: R = 3.5 throughout any short trip
-    a = plan(smap, (1.0, 3.0), (11.0, 3.0), arrival_time=True)
-    d = plan(smap, (1.0, 3.0), (11.0, 3.0), arrival_time=False)
-    dj = plan(smap, (1.0, 3.0), (11.0, 3.0), arrival_time=True, method="dijkstra")
+    a = plan(smap, (1.0, 3.0), (11.0, 3.0), planner="social")
+    d = plan(smap, (1.0, 3.0), (11.0, 3.0), planner="departure")
+    dj = plan(smap, (1.0, 3.0), (11.0, 3.0), planner="social", method="dijkstra")
     assert a.cost == pytest.approx(d.cost, rel=1e-6)
     assert dj.cost == pytest.approx(d.cost, rel=1e-6)
 
@@ -186,4 +186,4 @@ def test_planner_params_defaults_are_used() -> None:
     slow = SocialMapParams(planner=PlannerParams(arrival_time=False))
     smap = tv_room(9 * H, slow)
     assert plan(smap, (1.0, 3.0), (11.0, 3.0)).cost == pytest.approx(
-        plan(smap, (1.0, 3.0), (11.0, 3.0), arrival_time=False).cost)
+        plan(smap, (1.0, 3.0), (11.0, 3.0), planner="departure").cost)

@@ -231,7 +231,7 @@ def test_social_map_replans_through_plan() -> None:
     therapy = [ActivityWindow("tv", 11 * 3600.0 + 600.0, 12 * 3600.0)]
     static = build_static_map((0, 0, 16, 8), walls)
     goal = (15.0, 1.0)
-    for arrival_time in (True, False):
+    for planner in ("social", "departure"):
         replanner = Replanner()
         robot = (1.0, 1.0)
         works = []
@@ -239,8 +239,8 @@ def test_social_map_replans_through_plan() -> None:
             t_s = 11 * 3600.0 + 0.2 * step
             people = [Person("ann", 4.0 + 0.2 * step, 4.0, 0.0), Person("bob", 11.0, 6.0 - 0.2 * step, math.pi)]
             smap = build_social_map((0, 0, 16, 8), walls, people, [tv], therapy, t_s, static=static)
-            replanned = plan(smap, robot, goal, replanner=replanner, arrival_time=arrival_time)
-            fresh = plan(smap, robot, goal, arrival_time=arrival_time)
+            replanned = plan(smap, robot, goal, replanner=replanner, planner=planner)
+            fresh = plan(smap, robot, goal, planner=planner)
             assert replanned.cost == pytest.approx(fresh.cost, rel=1e-7)
             assert replanner.last is not None
             works.append(replanner.last.expanded + replanner.last.backward_expanded)

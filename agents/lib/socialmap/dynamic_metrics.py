@@ -356,8 +356,8 @@ def hunav_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, *,
         "time_to_reach_goal": total,
         "path_length": float(np.hypot(*np.diff(xy, axis=0).T).sum()) if n > 1 else 0.0,
         # normalize_angle(yaw[i] - yaw[i+1]) to (-pi, pi]: the same magnitude as chronav's wrap
-        "cumulative_heading_changes": float(np.abs((robot.theta[:-1] - robot.theta[1:] + math.pi)
-                                                   % (2 * math.pi) - math.pi).sum()) if n > 1 else 0.0,
+        "cumulative_heading_changes": float(np.abs(wrap_angle(robot.theta[:-1] - robot.theta[1:])).sum())
+        if n > 1 else 0.0,
         # quirk: abs(angular_vel < 0.02) - a clockwise turn (w < 0) counts as not moving; step = total / N
         "time_not_moving": total / n * float(np.sum((v < 0.01) & (w < 0.02))),
         "avg_robot_linear_speed": float(v.mean()),

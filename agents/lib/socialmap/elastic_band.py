@@ -284,10 +284,15 @@ def resample(points: FloatArray, spacing_m: float, min_spacing_m: float) -> Floa
     if len(points) > 2 and np.any(gaps < min_spacing_m):
         points = _drop_close_points(points, min_spacing_m)
         gaps = np.hypot(*np.diff(points, axis=0).T)
-    pieces = np.maximum(np.ceil(gaps / spacing_m - 1e-9), 1).astype(np.int64)
+    return split_gaps(points, np.maximum(np.ceil(gaps / spacing_m - 1e-9), 1).astype(np.int64))
+
+
+def split_gaps(points: FloatArray, pieces: NDArray[np.int64]) -> FloatArray:
+    """The polyline with gap i split evenly into ``pieces[i]`` (>= 1) parts; the vertices stay.
+    (Shared by ``resample`` and paths.densify, which count the pieces their own way.)"""
     if np.all(pieces == 1):
         return points
-    segment = np.repeat(np.arange(len(gaps)), pieces)
+    segment = np.repeat(np.arange(len(pieces)), pieces)
     first = np.repeat(np.cumsum(pieces) - pieces, pieces)
     frac = (np.arange(len(segment)) - first) / np.repeat(pieces, pieces)
     inner = points[segment] + frac[:, None] * (points[segment + 1] - points[segment])

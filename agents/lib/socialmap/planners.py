@@ -85,21 +85,6 @@ def check_planner(name: str) -> PlannerName:
     return name  # type: ignore[return-value]
 
 
-def resolve_planner(planner: str | None, *, baseline: bool = False, arrival_time: bool | None = None,
-                    default: str = DEFAULT_PLANNER) -> PlannerName:
-    """The planner a call asks for.  ``baseline=True`` and ``arrival_time=False`` are the older
-    spellings of ``baseline`` and ``departure``; mixing them with another ``planner`` is an error."""
-    legacy = "baseline" if baseline else "departure" if arrival_time is False else \
-        "social" if arrival_time is True else None
-    if planner is not None:
-        name = check_planner(planner)
-        if legacy is not None and legacy != name:
-            raise UnknownPlannerError(f"planner {name!r} contradicts "
-                                      f"{'baseline=True' if baseline else f'arrival_time={arrival_time}'}")
-        return name
-    return check_planner(legacy or default)
-
-
 def inflation_patches(spec: GridSpec, people: Sequence[Person], grid: GridParams,
                       params: InflationParams) -> list[CostPatch]:
     """Nav2's exponential decay around each person's body, on chronav's cost scale (module doc)."""
@@ -132,8 +117,8 @@ def planning_grid(smap: SocialMap, planner: str) -> CostArray:
         return smap.cost
     if name == "baseline":
         return smap.physical
-    key = ("planning_grid", name)
-    if key not in smap._cache:
+
+    def compose_grid() -> CostArray:
         if name == "static":
             fixed = [smap.params.chronemics.r_min] * len(smap.interaction_cells)
             layers = (*smap.obstacle_patches, *smap.zone_patches,
@@ -141,8 +126,9 @@ def planning_grid(smap: SocialMap, planner: str) -> CostArray:
         else:
             layers = (*smap.obstacle_patches,
                       *inflation_patches(smap.spec, smap.people, smap.params.grid, smap.params.planner.inflation))
-        smap._cache[key] = compose(smap.static, layers)
-    return smap._cache[key]
+        return compose(smap.static, layers)
+
+    return smap.cached(("planning_grid", name), compose_grid)
 
 
 def cheapest_cell(smap: SocialMap, planner: str) -> float:

@@ -33,12 +33,20 @@ from typing import Protocol
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from agents.lib.socialmap.grid import GridSpec
 
 SQRT2 = math.sqrt(2.0)
 _TIE_BREAK = 1e-9   # A* key g + (1 + 1e-9) c_min h: among equal f, the larger g (closer to the goal) first
+
+
+def step_cost(length: ArrayLike, c_a: ArrayLike, c_b: ArrayLike) -> NDArray[np.float64] | float:
+    """The planner's price of a step of ``length`` from a cell of cost ``c_a`` to one of cost
+    ``c_b``: ``length * (c_a + c_b) / 2`` (module doc).  The kernel below inlines this rule
+    (``half[k] * (c_a + c_b)``); paths.path_cost prices any polyline with it, and
+    tests/unit/test_social_paths.py checks both agree on a planned path."""
+    return length * (np.asarray(c_a) + c_b) / 2  # type: ignore[operator]
 
 
 class PlanningError(RuntimeError):

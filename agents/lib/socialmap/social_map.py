@@ -3,7 +3,7 @@ and the tests.
 
     static = build_static_map(bounds, walls, rooms, params)          # once per building
     smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
-    path = plan(smap, start_xy, goal_xy)                               # social, arrival-time R
+    path = plan(smap, start_xy, goal_xy)                               # the map's planner (social)
     base = plan(smap, start_xy, goal_xy, planner="baseline")           # non-social baseline
                                      # (planners.py: social, departure, static, baseline, inflation)
     path = plan(smap, robot_xy, goal_xy, replanner=replanner)          # again, reusing earlier searches
@@ -13,7 +13,7 @@ Layers (Nav2 style, composed by cell-wise maximum, grid.py):
   + bodies (person radius + robot radius) and object footprints           -> ``physical`` (baseline)
   + people's zones: social 2, personal 4, intimate forbidden              -> ``people_cost``
   + interaction spaces at R(t_s) (or forbidden while active)              -> ``cost`` (departure-time)
-With ``arrival_time=True`` the planner replaces the last layer by R at each cell's arrival time.
+The ``social`` planner replaces the last layer by R at each cell's arrival time.
 
 Default parameters and where they come from ("seed" = time-dependent-social-navigation-framework,
 "affordance" = time-dependent-affordance-spaces, "adaptive" = adaptive-personal-space):
@@ -61,9 +61,9 @@ search: 8-connected, step L (c_a + c_b) / 2    -           /work/shared/notes/pl
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import shapely
@@ -101,8 +101,8 @@ from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, pred
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
-from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, cheapest_cell,
-                                           planning_grid, resolve_planner)
+from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, check_planner,
+                                           cheapest_cell, planning_grid)
 from agents.lib.socialmap.roles import RoleParams, role_scale
 from agents.lib.socialmap.replan import Replanner
 from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
@@ -119,6 +119,9 @@ from agents.lib.socialmap.zones import (
 )
 
 
+T = TypeVar("T")
+
+
 class PlannerParams(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -128,6 +131,12 @@ class PlannerParams(BaseModel):
     horizon_factor: float = Field(3.0, gt=0, description="table covers trips up to this x (width + height)")
     mode: PlannerName = Field(DEFAULT_PLANNER, description="which planner plan() uses by default (planners.py)")
     inflation: InflationParams = InflationParams()
+
+    @property
+    def default_planner(self) -> PlannerName:
+        """The planner plan() uses when the call names none: ``mode``, except that ``arrival_time``
+        False turns the ``social`` mode into ``departure`` (the seeds' setting)."""
+        return self.mode if self.arrival_time or self.mode != "social" else "departure"
 
 
 class SocialMapParams(BaseModel):
@@ -238,6 +247,14 @@ class SocialMap:
         """The grid of this map's planner (``params.planner.mode``) at ``t_s``: what a current path
         is judged on (for ``social`` the departure-time grid, as ``cost``)."""
         return planning_grid(self, self.params.planner.mode)
+
+    def cached(self, key: Hashable, build: Callable[[], T]) -> T:
+        """The value derived from this map under ``key``, built by ``build()`` on first use.
+        Why public: the planners (planners.py) derive further grids from a map and keep them with
+        it, as the properties above do, without writing the map's private cache."""
+        if key not in self._cache:
+            self._cache[key] = build()
+        return self._cache[key]
 
     def zones(self) -> list[GroupZones]:
         """Zone polygons per group (contoured on first use, then cached)."""
@@ -427,23 +444,20 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
 
 
 def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,
-         method: str = "astar", planner: str | None = None, baseline: bool = False,
-         arrival_time: bool | None = None, cruise_speed_mps: float | None = None,
+         method: str = "astar", planner: str | None = None, cruise_speed_mps: float | None = None,
          workspace: SearchWorkspace | None = None, replanner: Replanner | None = None) -> Path:
     """Plan on the social map (A* or Dijkstra) with one of the planners of planners.py.
 
-    ``planner`` defaults to ``params.planner.mode`` (``departure`` when ``params.planner.arrival_time``
-    is False).  ``baseline=True`` (the physical grid: walls, bodies, footprints) and
-    ``arrival_time=False`` (R at the map's time, the seeds) are the older spellings of the
-    ``baseline`` and ``departure`` planners.  ``social`` prices each interaction space at the time
-    the robot would reach it at ``cruise_speed_mps``.
+    ``planner`` (one of planners.PLANNERS) defaults to the map's ``params.planner.default_planner``.
+    ``social`` prices each interaction space at the time the robot would reach it at
+    ``cruise_speed_mps``; ``departure`` at the map's time (the seeds); ``baseline`` plans on the
+    physical grid (walls, bodies, footprints).
     Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py), or the
     same ``replanner`` to repeated A* plans to one goal on successive maps to reuse what the earlier
     searches learned (replan.py: same optimal costs, far fewer cells expanded; keep one replanner
     per planner)."""
     params = social_map.params.planner
-    default = params.mode if params.arrival_time or params.mode != "social" else "departure"
-    name = resolve_planner(planner, baseline=baseline, arrival_time=arrival_time, default=default)
+    name = check_planner(params.default_planner if planner is None else planner)
     speed = params.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
     if not speed > 0.0:
         raise ValueError(f"cruise speed must be > 0, got {speed}")
