@@ -14,18 +14,18 @@ import sys
 import typer
 
 COMMAND_MODULES: tuple[str, ...] = (
-    "tools.dsr_dump",      # chronav dsr dump
-    "tools.scene_cli",     # chronav scene check
-    "tools.nav_cli",       # chronav path / chronav metrics
-    "tools.grammar_cli",   # chronav grammar check / chronav plan
-    "tools.agenda",        # chronav agenda ...
-    "tools.launch",        # chronav launch / chronav demo
-    "tools.chaos",         # chronav chaos (fault injection)
-    "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
-    "tools.evaluate",      # chronav evaluate (planner studies)
-    "tools.export_cli",    # chronav export (a run as rosbag2 MCAP)
-    "tools.ros_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
-    "tools.predict_cli",   # chronav predict evaluate (people prediction on real pedestrians)
+    "tools.system.dsr_dump",      # chronav dsr dump
+    "tools.scene.scene_cli",      # chronav scene check
+    "tools.plan.nav_cli",         # chronav path / chronav metrics
+    "tools.plan.grammar_cli",     # chronav grammar check / chronav plan
+    "tools.agenda",               # chronav agenda ...
+    "tools.launch",               # chronav launch / chronav demo
+    "tools.chaos.command",        # chronav chaos (fault injection)
+    "tools.scene.map_cli",        # chronav map export / chronav scene from-map (after tools.scene.scene_cli)
+    "tools.evaluate.command",     # chronav evaluate (planner studies)
+    "tools.ros.export_cli",       # chronav export (a run as rosbag2 MCAP)
+    "tools.ros.bridge_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
+    "tools.predict_cli",          # chronav predict evaluate (people prediction on real pedestrians)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -26,8 +26,8 @@ from typer.testing import CliRunner
 from agents.lib.socialmap.metrics import read_trajectory_csv
 from tests.support import REPO_ROOT, ProcessGroup
 from tools.cli import app
-from tools.evaluate_report import format_value
-from tools.evaluate_table import META_COLUMNS, flatten_metrics, read_table
+from tools.evaluate.report import format_value
+from tools.evaluate.table import META_COLUMNS, flatten_metrics, read_table
 
 pytestmark = pytest.mark.slow
 

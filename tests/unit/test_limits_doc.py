@@ -39,7 +39,8 @@ def test_round_two_fixed_bounds_in_the_doc_are_the_codes() -> None:
     from agents.missions import kinds
     from grammar import agm_world, files, parser, planner
     from scenes import from_map, occupancy
-    from tools import chaos_schedule, evaluate
+    from tools.chaos import schedule as chaos_schedule
+    from tools.evaluate import command as evaluate
 
     rows = {line.split("|")[1].strip(): line for line in DOC.splitlines() if line.startswith("| ")}
 

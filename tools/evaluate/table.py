@@ -42,7 +42,7 @@ def flatten_metrics(metrics: Mapping[str, Any], prefix: str = "") -> dict[str, f
 
 def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_s: float, path: Path) -> int:
     """The mission's samples of the run's trajectory as a ``t,x,y,theta`` CSV; returns how many."""
-    from tools.report import _mission_rows
+    from tools.system.report import _mission_rows
 
     rows = _mission_rows(trajectory, started_s, finished_s)
     path.parent.mkdir(parents=True, exist_ok=True)

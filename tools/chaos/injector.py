@@ -18,8 +18,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.chaos_checks import describe_divergence, probe_replicas
-from tools.chaos_schedule import Fault, clock_text
+from tools.chaos.checks import describe_divergence, probe_replicas
+from tools.chaos.schedule import Fault, clock_text
 from tools.launch import AGENTS, TERMINAL_STATES
 
 CHAOS_AGENT = "agenda_tool-chaos"
@@ -116,8 +116,8 @@ class ChaosRun:
     def _main(self) -> None:
         from dsr import DSRGraph
         from dsr.transport import Replica
-        from tools.connection import Target, settings_for
-        from tools.runs import read_connect_file
+        from tools.system.connection import Target, settings_for
+        from tools.system.runs import read_connect_file
 
         run = self.status["run"]
         info = read_connect_file(Path(run["run_dir"]))   # the run's tool identity: writes as agenda_tool-*
@@ -253,7 +253,7 @@ class ChaosRun:
 
     def _trust(self) -> dict[str, Any]:
         """The trust counters at the end of the run (tools/chaos_checks.trust_summary)."""
-        from tools.chaos_checks import member_stats, trust_summary
+        from tools.chaos.checks import member_stats, trust_summary
         session = None if self._replica is None else self._replica.session
         if session is None:
             return {}

@@ -4,7 +4,7 @@ Why shared: `chronav agenda` and `chronav dsr dump` take the same ``--run``/``--
 ``--graph`` options and must fail the same way, in a user's words: which option is malformed,
 whether anything listens at the endpoint, whether it refused us for lack of the run's
 credentials, which graphs and runs do exist.  First match wins: ``--connect``/``--graph``;
-``--run DIR|ID|latest`` (the run's connect file, with its credentials, tools/runs.py); the
+``--run DIR|ID|latest`` (the run's connect file, with its credentials, tools/system/runs.py); the
 environment the agents use (``CHRONAV_ZENOH_*``, ``CHRONAV_GRAPH``); the user's newest live run;
 the default router.
 """
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
+from tools.system.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
 
 # The help of the options every command that reaches a running system takes (one wording: they
 # resolve alike, resolve_target below).

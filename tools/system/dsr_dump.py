@@ -19,7 +19,7 @@ from typing import Any
 
 import typer
 
-from tools.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
+from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
 
 dsr_app = typer.Typer(help="Inspect the replicated DSR graph.", no_args_is_help=True)
 
@@ -126,7 +126,7 @@ def dump(
 
     from dsr import SIGNALS
     from dsr.process import exit_on_sigterm
-    from tools.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
+    from tools.system.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
                                   resolve_target)
 
     try:
@@ -180,7 +180,7 @@ def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
 
     from dsr import wire
     from dsr.transport import STATS_FORMAT
-    from tools.connection import ConnectionProblem, settings_for, unreachable_message
+    from tools.system.connection import ConnectionProblem, settings_for, unreachable_message
 
     settings = settings_for(target, open_timeout_s=timeout)
     try:
@@ -239,7 +239,7 @@ def stats(
     deferred relayed writes, digests, tombstones held and compacted."""
     import orjson
 
-    from tools.connection import ConnectionProblem, check_timeout, resolve_target
+    from tools.system.connection import ConnectionProblem, check_timeout, resolve_target
 
     try:
         check_timeout(timeout)

@@ -38,9 +38,9 @@ from typing import Any
 
 import typer
 
-from tools.chaos_checks import describe_divergence, lost_writes, probe_replicas
-from tools.chaos_injector import CHAOS_AGENT, ChaosRun, FaultOutcome
-from tools.chaos_schedule import (ACTIONS, PROCESSES, ChaosError, Fault, clock_text, load_schedule,
+from tools.chaos.checks import describe_divergence, lost_writes, probe_replicas
+from tools.chaos.injector import CHAOS_AGENT, ChaosRun, FaultOutcome
+from tools.chaos.schedule import (ACTIONS, PROCESSES, ChaosError, Fault, clock_text, load_schedule,
                                   random_agenda_change, random_schedule)
 
 __all__ = ["ACTIONS", "CHAOS_AGENT", "PROCESSES", "ChaosError", "ChaosReport", "ChaosRun", "Fault", "FaultOutcome",
