@@ -15,19 +15,21 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from agents.lib.socialmap.metrics import flatten
 from tests.support import REPO_ROOT
-from tools.evaluate import sweep as evaluate_sweep
 from tools.cli import app
+from tools.evaluate import sweep as evaluate_sweep
 from tools.evaluate.command import evaluate
 from tools.evaluate.stats import paired_tests, summarise
-from tools.evaluate.table import flatten_metrics, read_table
+from tools.evaluate.table import read_table
 
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 
 
 def test_flatten_metrics_takes_every_number_and_names_nested_ones() -> None:
-    flat = flatten_metrics({"d_t": 2, "d_min_person_m": {"ann": 1.5}, "psi": {"zone": {"intimate": 0.0}},
-                            "psi_basis": "path_length", "moved": True})
+    # the study's columns: every number of a metrics report, nested names joined with a dot
+    flat = flatten({"d_t": 2, "d_min_person_m": {"ann": 1.5}, "psi": {"zone": {"intimate": 0.0}},
+                   "psi_basis": "path_length", "moved": True})
     assert flat == {"d_t": 2.0, "d_min_person_m.ann": 1.5, "psi.zone.intimate": 0.0, "moved": 1.0}
 
 

@@ -13,7 +13,7 @@ one the tool measures:
   stops writing (the clock ticks), so this is a sampled measure: the first sample where all
   digests agree.
 
-"Trust" (``chaos_checks.trust_summary``): at the end, every member's refusal counters must be 0 (faults
+"Trust" (``tools.chaos.checks.trust_summary``): at the end, every member's refusal counters must be 0 (faults
 are not attacks: no honest state refused after a restart), no member may serve a writer claim about
 another that the other does not make, and the state fetches each member made (and held back) are
 reported, with the router's ACL denials.  "Writes lost" must be 0: every mission seen ``done`` is still done at the end, every agenda change

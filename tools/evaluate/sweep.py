@@ -249,7 +249,7 @@ class LocalExecutor:
 class DaskExecutor:
     """Each run a task on an existing Dask cluster (``dask://HOST:PORT``, the scheduler's address).
 
-    A task checks the worker's chronav and scene files (tools/evaluate_pool.dask_task), runs one
+    A task checks the worker's chronav and scene files (tools/evaluate/pool.py dask_task), runs one
     run on its worker (in the worker process itself in-process, else a launch; under ``runs_dir``
     on that machine) and returns the run's table rows and recording path; workers need chronav
     installed, nothing shared.  Results stream back as tasks end.  A task that fails (its worker
