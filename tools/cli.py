@@ -51,8 +51,8 @@ def main() -> None:
 
     Why: an offline command such as `chronav path` imports numba, scipy.linalg and our modules,
     some 150,000 objects that live until the process ends.  With Python's thresholds the cyclic
-    collector rescans them some 340 times while they load (0.1-0.2 s of a 1 s command), and again
-    at interpreter shutdown (0.15-0.4 s).  So a collection waits for 250,000 new objects (such a
+    collector rescans them hundreds of times while they load, and again at interpreter shutdown
+    (a large share of a 1 s command: docs/performance.md).  So a collection waits for 250,000 new objects (such a
     command then runs none), and at the end everything is frozen (``gc.freeze``): shutdown still
     runs the atexit handlers and frees every module, but no longer walks those objects for cycles.
     Long-running commands (launch, demo, chaos) still collect, in larger steps; only cyclic garbage
