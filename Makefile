@@ -4,12 +4,17 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo test bench lock clean
+
+# CI installs the exact versions of requirements-ci.lock (.ci/run sets PIP_CONSTRAINTS); elsewhere the
+# lower bounds of pyproject.toml apply.  A constraints file pins versions, it never adds packages.
+PIP_CONSTRAINTS ?=
+CONSTRAINTS := $(if $(PIP_CONSTRAINTS),-c $(PIP_CONSTRAINTS))
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test,eval]'
+	$(BIN)/python -m pip install --quiet --upgrade pip $(CONSTRAINTS)
+	$(BIN)/python -m pip install --quiet -e '.[test,eval]' $(CONSTRAINTS)
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -32,6 +37,15 @@ bench: $(STAMP)
 	$(BIN)/python tools/bench_planner_symbolic.py
 	$(BIN)/python tools/bench_day.py
 	$(BIN)/python tools/bench_evaluate.py
+
+# After a dependency change: requirements-ci.lock again, from a fresh venv of .[test,eval].
+lock:
+	rm -rf .lock-venv && $(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/python -m pip install --quiet --upgrade pip
+	.lock-venv/bin/python -m pip install --quiet '.[test,eval]'
+	{ echo "# CI constraints (make lock): pip freeze of a fresh venv of .[test,eval], $$(.lock-venv/bin/python -V)"; \
+	  .lock-venv/bin/python -m pip freeze --all --exclude chronav --exclude setuptools; } > requirements-ci.lock
+	rm -rf .lock-venv build
 
 clean:
 	rm -rf $(VENV) recordings/*.rrd

@@ -4,12 +4,9 @@ Why a policy at all: a replica is ~10^5-10^6 small containers (element states, r
 attribute dicts) that live as long as the agent and hold no reference cycles, and every remote
 delta allocates more of them.  CPython's default collector (a young-generation collection every
 700 net allocations, full ones every 100 young ones) walks that heap again and again for no
-garbage.  Measured on this project's 2-core machines, 1,000-update batches merged in one
-process: 7-15 us per update with the default, 3.3-5 us with the thresholds below (about the
-same as with the collector off), whether the graph holds 1,000 or 11,000 nodes; between two
-processes (tools/bench_dsr.py, A/B in one sequence) updates_per_s went from 113-138k to
-170-221k.  Reference counting still frees everything that is not a
-cycle; cycles (rare: exceptions kept with their tracebacks, closures) are still collected,
+garbage: with the thresholds below a merged update costs about what it costs with the
+collector off, half or less of the default's (docs/performance.md).  Reference counting still
+frees everything that is not a cycle; cycles (rare: exceptions kept with their tracebacks, closures) are still collected,
 only later.
 """
 

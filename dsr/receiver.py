@@ -4,10 +4,9 @@ thread while it polls in dispatch().
 Why not a Zenoh callback: Zenoh runs a subscriber's Python callback on a thread of its own.
 Each delta then cost two thread hand-overs before the agent's callback could run: Zenoh's
 network thread woke the callback thread, and the callback thread and the agent's polling
-thread passed the GIL between them, each time waking a thread that slept waiting for it.
-Timestamps on bench_dsr's ping-pong put those at 20-30 us per delta, and a bare Zenoh
-ping-pong whose poller takes samples from a channel (`try_recv`) instead of a callback ran
-50-60 us faster per round trip.  So deltas arrive in a Zenoh FIFO channel, which the network
+thread passed the GIL between them, each time waking a thread that slept waiting for it, and
+a bare Zenoh ping-pong whose poller takes samples from a channel (`try_recv`) instead of a
+callback ran faster per round trip (docs/performance.md).  So deltas arrive in a Zenoh FIFO channel, which the network
 thread fills without the GIL, and are taken from it by:
 
 - the agent's thread while it polls in dispatch() (dsr/signals.py): it takes each sample

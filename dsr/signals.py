@@ -10,10 +10,9 @@ not accumulate memory.
 Why dispatch() polls a little before it sleeps (SpinPolicy): a thread that sleeps between two
 messages is woken by the kernel tens of microseconds later, and on a virtual machine the idle
 core it runs on must be woken too.  In a request/answer exchange between agents that wake-up,
-twice per round trip, cost more than decoding and merging the delta: bench_dsr measured the DSR
-round trip at a median 1.8x bare Zenoh without polling and 1.54x with it (22 runs, 1.34-1.90),
-and 1.28x (14 runs, 13 of them under 1.5) once the polling thread also took the
-deltas off the replica's channel itself (below).
+twice per round trip, cost more than decoding and merging the delta, and polling brings the
+DSR round trip closer to bare Zenoh's, more so once the polling thread also takes the deltas
+off the replica's channel itself (below; the numbers: docs/performance.md).
 Polling only starts when changes arrive densely (the previous one came within the window),
 yields the core to any other runnable thread while it waits, and its CPU time is capped
 (`max_share_pct` of one core), so an agent that hears a few changes a second never polls and
@@ -23,9 +22,8 @@ battery-powered host that prefers idle cores to latency).
 Why the polling thread receives: even a polling dispatch() paid for hand-overs.  Zenoh's
 callback thread decoded, checked and merged a delta (holding the GIL all along), posted the
 event, finished its bookkeeping and returned; only then could the polling thread, asleep on
-the GIL by that time, be woken to run the callback.  Timestamps on the live path of
-bench_dsr's ping-pong put that at a median 35-45 us per delta, more than the decode and
-merge.  So while dispatch() polls, it takes the received deltas itself from a poll source
+the GIL by that time, be woken to run the callback, which cost more than the decode and merge
+(docs/performance.md).  So while dispatch() polls, it takes the received deltas itself from a poll source
 (`receive_from`; dsr/receiver.py: the replica's Zenoh channel), decodes, checks and merges
 them, in arrival order, and goes straight on to the callbacks.  Whoever handles a delta runs
 the same code (dsr/transport.py), so nothing but the thread changes; when nobody polls (an

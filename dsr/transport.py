@@ -620,12 +620,8 @@ class Replica:
 
         Why: deltas arrive through one wildcard subscription (`delta/*`: writers come and go),
         and Zenoh delivers a sample faster when the receiving session has declared its exact
-        key.  Measured with bare Zenoh on this project's 2-core machines (10 runs, interleaved):
-        a round trip through wildcard subscriptions took 8-21 us more than through exact ones,
-        and declaring the peer's key (Session.declare_keyexpr) brought it back to the exact
-        subscriptions' time.  tools/bench_dsr.py, 4 A/B pairs in one sequence:
-        dsr_over_zenoh_p50 1.73-1.81 with the keys declared, 1.81-1.89 without.  Only an
-        optimisation: the wildcard subscription delivers every delta either way."""
+        key (Session.declare_keyexpr; measured: docs/performance.md).  Only an optimisation:
+        the wildcard subscription delivers every delta either way."""
         with self._writer_keys_lock:
             session = self.session
             declared = self._writer_keys.get(agent)

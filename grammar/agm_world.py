@@ -41,8 +41,8 @@ import networkx as nx
 from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import DefusedXMLParser, ParseError
 
+from boundedio import read_bounded
 from grammar.errors import GrammarError, shorten
-from grammar.files import read_bounded
 
 RESERVED = ("name", "type")
 PREFIX = "agm:"
@@ -219,7 +219,7 @@ def parse_agm_world(text: str, file: str = "<string>") -> AgmWorld:
 def load_agm_world(path: str | os.PathLike[str]) -> AgmWorld:
     file = str(path)
     try:   # a regular file of at most MAX_WORLD_BYTES: never /dev/zero, a FIFO or a directory
-        data = read_bounded(path, MAX_WORLD_BYTES, "world")
+        data = read_bounded(path, max_bytes=MAX_WORLD_BYTES, what="world file")
     except FileNotFoundError:
         raise WorldFileError("world file not found", file) from None
     except ValueError as exc:
@@ -320,7 +320,7 @@ def load_world(path: str | os.PathLike[str]) -> nx.MultiDiGraph:
         raise WorldFileError(f"unknown world file type {shorten(suffix or '(none)')!r}: use an AGM world "
                              "(.xml) or a node-link graph (.json)", file)
     try:
-        text = read_bounded(path, MAX_WORLD_BYTES, "world").decode("utf-8-sig")
+        text = read_bounded(path, max_bytes=MAX_WORLD_BYTES, what="world file").decode("utf-8-sig")
     except FileNotFoundError:
         raise WorldFileError("world file not found", file) from None
     except UnicodeDecodeError as exc:

@@ -21,8 +21,8 @@ from typing import Any
 from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
+from boundedio import read_bounded, regular_file_problem
 from grammar.errors import MAX_PATH_CHARS, GrammarError, GrammarWarning, SourcePos, shorten
-from grammar.files import MAX_GRAMMAR_BYTES, read_bounded, regular_file_problem
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder
 from grammar.validate import check_grammar, check_rule, check_target
@@ -30,6 +30,8 @@ from grammar.validate import check_grammar, check_rule, check_target
 GRAMMAR_DIR = Path(__file__).resolve().parent
 LARK_FILE = GRAMMAR_DIR / "aggl.lark"
 
+MAX_GRAMMAR_BYTES = 16 * 1024 * 1024
+"""Largest grammar or target file read (AGM's biggest real grammars are some 100 KB)."""
 MAX_INCLUDES = 200
 """Includes read in all while loading one grammar (docs/limits.md): 24 files each including the
 next twice asked for 2^24 reads; real grammars include a handful of files once each."""
@@ -300,7 +302,7 @@ def parse_grammar(text: str, file: str = "<string>", *, dialect: str | None = No
 def _read(path: str | os.PathLike[str], what: str) -> str:
     """A grammar or target file's text (UTF-8, an initial byte-order mark allowed)."""
     try:   # a regular file of at most MAX_GRAMMAR_BYTES: never /dev/zero, a FIFO or a directory
-        data = read_bounded(path, MAX_GRAMMAR_BYTES, what)
+        data = read_bounded(path, max_bytes=MAX_GRAMMAR_BYTES, what=f"{what} file")
     except FileNotFoundError:
         raise GrammarError(f"{what} file not found", str(path)) from None
     except ValueError as exc:

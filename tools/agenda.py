@@ -7,7 +7,7 @@ insert ``agenda_request/<uuid>`` with ``change`` (JSON, agents/agenda/changes.py
 ``state="pending"``; the agenda agent applies the whole change or nothing and sets ``state`` to
 ``accepted``/``refused`` with a ``message``; the tool prints it and deletes the request node.
 
-Finding the system, first match wins (tools/connection.py): ``--connect``/``--graph``;
+Finding the system, first match wins (tools/system/connection.py): ``--connect``/``--graph``;
 ``--run DIR|ID|latest`` (the ``connect.json`` that `chronav launch` writes in its run directory,
 with the run's credentials: changes are sent as the run's tool identity, which may write only as
 an ``agenda_tool-*`` agent; ``list`` and ``watch`` join as its read-only reader); the environment
@@ -35,9 +35,9 @@ from typing import Any, TextIO
 
 import typer
 
-from tools.connection import (CONNECT_HELP, GRAPH_HELP, RUN_HELP, ConnectionProblem, Target, open_replica,
+from tools.system.connection import (CONNECT_HELP, GRAPH_HELP, RUN_HELP, ConnectionProblem, Target, open_replica,
                               require_system, resolve_target)
-from tools.runs import TOOL_AGENT_PREFIX, Role
+from tools.system.runs import TOOL_AGENT_PREFIX, Role
 
 AGENDA_AGENT = "agenda"
 REQUEST_TYPE = "agenda_request"
@@ -202,7 +202,7 @@ def requested_by() -> str:
 
 
 def find_system(connect: list[str] | None, graph: str | None, run: str | None, role: Role) -> Target:
-    """Where the system is (see tools/connection.py); problems exit 2."""
+    """Where the system is (see tools/system/connection.py); problems exit 2."""
     try:
         return resolve_target(connect, graph, run, role=role)
     except ConnectionProblem as exc:

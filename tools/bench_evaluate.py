@@ -65,7 +65,7 @@ def _evaluate(scenes: list[Path], out: Path, mode: str, seeds: int, jobs: int, p
 
 
 def _table(result: dict[str, Any]) -> dict[tuple[Any, ...], dict[str, Any]]:
-    from tools.evaluate_table import read_table
+    from tools.evaluate.table import read_table
 
     return {(r["scene"], r["planner"], r["seed"], r["mission"]): r for r in read_table(Path(result["table"]["parquet"]))}
 

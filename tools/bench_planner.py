@@ -314,7 +314,7 @@ def map_scene(folder: Path) -> tuple[Path, tuple[float, float], tuple[float, flo
 
     from scenes.from_map import layout_from_map
     from scenes.occupancy import load_occupancy
-    from tools.building_maps import large_floor
+    from tools.scene.building_maps import large_floor
 
     large_floor().write(folder / "floor.yaml")
     layout = layout_from_map(load_occupancy(folder / "floor.yaml"))

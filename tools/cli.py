@@ -14,18 +14,18 @@ import sys
 import typer
 
 COMMAND_MODULES: tuple[str, ...] = (
-    "tools.dsr_dump",      # chronav dsr dump
-    "tools.scene_cli",     # chronav scene check
-    "tools.nav_cli",       # chronav path / chronav metrics
-    "tools.grammar_cli",   # chronav grammar check / chronav plan
-    "tools.agenda",        # chronav agenda ...
-    "tools.launch",        # chronav launch / chronav demo
-    "tools.chaos",         # chronav chaos (fault injection)
-    "tools.map_cli",       # chronav map export / chronav scene from-map (after tools.scene_cli)
-    "tools.evaluate",      # chronav evaluate (planner studies)
-    "tools.export_cli",    # chronav export (a run as rosbag2 MCAP)
-    "tools.ros_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
-    "tools.predict_cli",   # chronav predict evaluate (people prediction on real pedestrians)
+    "tools.system.dsr_dump",      # chronav dsr dump
+    "tools.scene.scene_cli",      # chronav scene check
+    "tools.plan.nav_cli",         # chronav path / chronav metrics
+    "tools.plan.grammar_cli",     # chronav grammar check / chronav plan
+    "tools.agenda",               # chronav agenda ...
+    "tools.launch",               # chronav launch / chronav demo
+    "tools.chaos.command",        # chronav chaos (fault injection)
+    "tools.scene.map_cli",        # chronav map export / chronav scene from-map (after tools.scene.scene_cli)
+    "tools.evaluate.command",     # chronav evaluate (planner studies)
+    "tools.ros.export_cli",       # chronav export (a run as rosbag2 MCAP)
+    "tools.ros.bridge_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
+    "tools.predict_cli",          # chronav predict evaluate (people prediction on real pedestrians)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",
@@ -51,8 +51,8 @@ def main() -> None:
 
     Why: an offline command such as `chronav path` imports numba, scipy.linalg and our modules,
     some 150,000 objects that live until the process ends.  With Python's thresholds the cyclic
-    collector rescans them some 340 times while they load (0.1-0.2 s of a 1 s command), and again
-    at interpreter shutdown (0.15-0.4 s).  So a collection waits for 250,000 new objects (such a
+    collector rescans them hundreds of times while they load, and again at interpreter shutdown
+    (a large share of a 1 s command: docs/performance.md).  So a collection waits for 250,000 new objects (such a
     command then runs none), and at the end everything is frozen (``gc.freeze``): shutdown still
     runs the atexit handlers and frees every module, but no longer walks those objects for cycles.
     Long-running commands (launch, demo, chaos) still collect, in larger steps; only cyclic garbage

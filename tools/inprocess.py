@@ -81,7 +81,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     from agents.world.write_policy import policy_from_env
     from dsr import DSRGraph
     from tools.launch import _make_run_dir, _write_result, log_scene_static, scene_missions
-    from tools.runs import runs_dir as default_runs_dir
+    from tools.system.runs import runs_dir as default_runs_dir
 
     check_rate(rate)
     check_timeout(timeout_s)

@@ -4,7 +4,7 @@ Order matters (see shared notes): the Zenoh router first (agents in client mode 
 no router listens), then the agents; the launcher joins the graph itself only to watch missions,
 clock and health.  At the end the per-agent recordings are merged into ONE ``.rrd``.
 
-A run belongs to the user who started it (tools/runs.py): its directory goes under
+A run belongs to the user who started it (tools/system/runs.py): its directory goes under
 ``./recordings`` of the current directory (or ``$CHRONAV_RUNS``), its router requires the run's
 own credentials (one Zenoh user per agent, an ACL giving each agent's key space to that user
 alone), and ``connect.json`` (mode 0600) tells the owner's tools how to join.
@@ -32,8 +32,8 @@ from typing import Any
 
 import typer
 
-from tools.runs import prepare_run_security, runs_dir as default_runs_dir, write_connect_file
-from tools.supervisor import ProgressWatch, Supervisor
+from tools.system.runs import prepare_run_security, runs_dir as default_runs_dir, write_connect_file
+from tools.system.supervisor import ProgressWatch, Supervisor
 
 AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
                            "executive")
@@ -346,7 +346,7 @@ def _restart_stuck(graph: Any, supervisor: Supervisor, watch: ProgressWatch,
 def _report(scene_path: Path, run_dir: Path, missions: dict[str, dict[str, object]], recorder: Any
             ) -> dict[str, object]:
     """Metrics of the day (social vs baseline) as scalars in this same recording."""
-    from tools.report import build_report, log_report
+    from tools.system.report import build_report, log_report
 
     metrics = build_report(scene_path, run_dir, missions)
     log_report(recorder, metrics, missions)
@@ -372,7 +372,7 @@ def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:
         "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
         "missions": missions,
         "agents": {name: ("up" if m.alive else "down", m.restarts) for name, m in supervisor.processes.items()},
-        "pids": {name: m.pid for name, m in supervisor.processes.items()},  # fault injection (tools/chaos.py)
+        "pids": {name: m.pid for name, m in supervisor.processes.items()},  # fault injection (tools/chaos/command.py)
         "wall_s": time.monotonic() - started,
     }
 
@@ -418,7 +418,7 @@ def register(app: typer.Typer) -> None:
 
         With --in-process the same agents run in this one process, stepped in lockstep (reproducible
         run for run). The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
-        from tools.console import run_with_progress
+        from tools.system.console import run_with_progress
 
         domain = None
         if in_process and (ros or ros_domain is not None or robot != "sim"):
@@ -440,7 +440,7 @@ def register(app: typer.Typer) -> None:
     def demo(scene: str = typer.Argument(DEFAULT_SCENE, help="scene file or name"),
              as_json: bool = typer.Option(False, "--json")) -> None:
         """The main job: launch the default scene, then print the social vs non-social metrics table."""
-        from tools.console import run_with_progress
+        from tools.system.console import run_with_progress
 
         raise typer.Exit(run_with_progress(scene, rate=None, timeout_s=600, record=True, restart_limit=3,
                                            as_json=as_json, with_report=True))

@@ -10,7 +10,8 @@ adopted for it), the robot's closest approach to a person during it (from the re
 ``<mission>-1-start-HHMMSS.png`` ...; the instants come from the executive's events and the
 world layer of the recording itself, so the tour needs nothing but the .rrd.
 
-Needs a Vulkan software driver on headless Linux (Debian: mesa-vulkan-drivers).
+Needs a Vulkan software driver on headless Linux (Debian: mesa-vulkan-drivers), and Rerun's
+DataFusion reader (``rerun-sdk[catalog]``, in the test extra that `make demo` and `make test` install).
 
 Why the settle adapts: the viewer loads the file, then renders on the CPU (llvmpipe); a big
 recording on a busy machine is not ready after a fixed 4 s and the viewer then answers the

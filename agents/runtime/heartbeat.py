@@ -5,7 +5,7 @@ Zenoh threads still answer, its liveliness token stays) while its loop is stuck,
 endless computation; only a stamp written by the loop itself shows that it still makes
 progress.  ``heartbeat/<agent>`` carries ``beat`` (a counter), ``pid`` (which incarnation wrote
 it: a restarted agent's first stamps must not be mistaken for its predecessor's) and
-``wall_s``.  The launcher (tools/supervisor.py) restarts an agent whose stamp stops changing.
+``wall_s``.  The launcher (tools/system/supervisor.py) restarts an agent whose stamp stops changing.
 """
 
 from __future__ import annotations

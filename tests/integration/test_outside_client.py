@@ -56,8 +56,8 @@ def dump(run: Path) -> dict:
 
 
 def start_run(procs, tmp_path: Path) -> tuple[Path, object]:  # noqa: ANN001
-    """A run as `chronav launch` secures it: per-run users, ACL, connect.json (tools/runs.py)."""
-    from tools.runs import prepare_run_security, write_connect_file
+    """A run as `chronav launch` secures it: per-run users, ACL, connect.json (tools/system/runs.py)."""
+    from tools.system.runs import prepare_run_security, write_connect_file
     run = tmp_path / "run"
     run.mkdir()
     security = prepare_run_security(run, "chronav", AGENTS)

@@ -1,6 +1,6 @@
 """A run's router admits only the run's users, and each user writes only under its own agent name.
 
-The router is started exactly as `chronav launch` starts it (tools/runs.py: per-run users and
+The router is started exactly as `chronav launch` starts it (tools/system/runs.py: per-run users and
 passwords, usrpwd dictionary, generated ACL); the writers are real Zenoh sessions on 127.0.0.1.
 The observer accepts every write (no DSR write policy), so what it does not receive was dropped
 by the router: on loopback too, a process without an agent's password cannot publish as it.
@@ -19,7 +19,7 @@ import pytest
 from dsr import AllowAll, ZenohSettings, join
 from dsr.transport import TransportError
 from tests.support import ProcessGroup, free_port, wait_until
-from tools.runs import Identity, prepare_run_security
+from tools.system.runs import Identity, prepare_run_security
 
 pytestmark = pytest.mark.slow
 

@@ -32,7 +32,7 @@ from dsr import ZenohSettings, join
 from scenes.loader import load_scene
 from scenes.clock import format_clock
 from tests.support import REPO_ROOT, ProcessGroup, wait_until
-from tools.runs import read_connect_file
+from tools.system.runs import read_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 RATE = 1.0                      # sim s per wall s while driving: the mission takes ~20 s wall

@@ -23,11 +23,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.lib.socialmap.metrics import flatten, read_trajectory_csv
 from tests.support import REPO_ROOT, ProcessGroup
 from tools.cli import app
-from tools.evaluate_report import format_value
-from tools.evaluate_table import META_COLUMNS, flatten_metrics, read_table
+from tools.evaluate.report import format_value
+from tools.evaluate.table import META_COLUMNS, read_table
 
 pytestmark = pytest.mark.slow
 
@@ -105,7 +105,7 @@ def test_table_and_report_are_chronav_metrics_of_the_runs(sweeps: dict[str, dict
         np.savetxt(own, trajectory[inside], delimiter=",", header="t,x,y,theta", comments="", fmt="%.17g")
         result = CliRunner().invoke(app, ["metrics", str(TINY), str(own), "--json"])
         assert result.exit_code == 0, result.output
-        expected = flatten_metrics(json.loads(result.stdout)["metrics"])
+        expected = flatten(json.loads(result.stdout)["metrics"])
         measured = {k: v for k, v in row.items() if k not in META_COLUMNS}
         assert set(measured) == set(expected)
         for metric, value in expected.items():

@@ -4,7 +4,7 @@ One run of icra_usecase (four missions) through `chronav chaos --schedule`, two 
 plus an agenda change: the launcher restarts each process, the restarted replica resumes from
 the replicated state, the missions complete, nothing acknowledged is lost, and the recording of
 every process (killed ones included) reads back with Rerun's own API.  A second, shorter run
-drives the randomized schedule of `chronav chaos`.  The pure parts of tools/chaos.py (schedules,
+drives the randomized schedule of `chronav chaos`.  The pure parts of tools/chaos/command.py (schedules,
 the lost-write check) are tested first, offline.
 """
 
@@ -24,7 +24,7 @@ from agents.world.scene_world import load_world
 from scenes.loader import load_scene
 from scenes.clock import parse_clock
 from tests.system.launch_helpers import run_json
-from tools.chaos import ChaosError, Fault, load_schedule, lost_writes, random_schedule
+from tools.chaos.command import ChaosError, Fault, load_schedule, lost_writes, random_schedule
 from tools.launch import AGENTS
 
 MISSIONS = ("m0930", "m1045", "m1115", "m1315")

@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from tests.support import REPO_ROOT, ProcessGroup
-from tools.evaluate_table import read_table
+from tools.evaluate.table import read_table
 
 pytestmark = pytest.mark.slow
 

@@ -35,7 +35,7 @@ from scenes.loader import load_scene
 from tests.support import REPO_ROOT, free_port, wait_until
 from tools import agenda as tool
 from tools.cli import app
-from tools.runs import RunSecurity, prepare_run_security, write_connect_file
+from tools.system.runs import RunSecurity, prepare_run_security, write_connect_file
 
 SCENE = REPO_ROOT / "tests" / "data" / "agenda_live.yaml"
 NOW_S = 9 * 3600 + 5 * 60.0          # 09:05 on the sim clock

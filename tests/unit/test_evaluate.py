@@ -15,19 +15,21 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from agents.lib.socialmap.metrics import flatten
 from tests.support import REPO_ROOT
-from tools import evaluate_sweep
 from tools.cli import app
-from tools.evaluate import evaluate
-from tools.evaluate_stats import paired_tests, summarise
-from tools.evaluate_table import flatten_metrics, read_table
+from tools.evaluate import sweep as evaluate_sweep
+from tools.evaluate.command import evaluate
+from tools.evaluate.stats import paired_tests, summarise
+from tools.evaluate.table import read_table
 
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 
 
 def test_flatten_metrics_takes_every_number_and_names_nested_ones() -> None:
-    flat = flatten_metrics({"d_t": 2, "d_min_person_m": {"ann": 1.5}, "psi": {"zone": {"intimate": 0.0}},
-                            "psi_basis": "path_length", "moved": True})
+    # the study's columns: every number of a metrics report, nested names joined with a dot
+    flat = flatten({"d_t": 2, "d_min_person_m": {"ann": 1.5}, "psi": {"zone": {"intimate": 0.0}},
+                   "psi_basis": "path_length", "moved": True})
     assert flat == {"d_t": 2.0, "d_min_person_m.ann": 1.5, "psi.zone.intimate": 0.0, "moved": 1.0}
 
 
@@ -90,11 +92,11 @@ def _evaluate(out: Path, resume: bool) -> dict:
 
 def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread: None,
                                                         monkeypatch: pytest.MonkeyPatch) -> None:
-    import tools.evaluate_figures
+    import tools.evaluate.figures
 
     first = FakeLaunch(interrupt_planner="baseline")
     monkeypatch.setattr("tools.launch.run_system", first)
-    monkeypatch.setattr(tools.evaluate_figures, "all_figures", lambda *a, **k: {})   # the system test draws them
+    monkeypatch.setattr(tools.evaluate.figures, "all_figures", lambda *a, **k: {})   # the system test draws them
     stopped = _evaluate(tmp_path, resume=False)
     assert stopped["interrupted"] and stopped["pending"] == 1 and stopped["launched"] == 1
     assert first.calls[0]["social_navigation"] == ["seed=4", "perception_lockstep=1", "planner=social"]
@@ -144,8 +146,8 @@ def test_a_finished_sweep_is_not_overwritten(tmp_path: Path) -> None:
 
 def test_progress_gives_each_planner_its_own_eta(monkeypatch: pytest.MonkeyPatch) -> None:
     """A planner whose runs take twice as long has twice the time left per run left."""
-    from tools import evaluate as evaluate_module
-    from tools.evaluate_sweep import RunSpec, plan_sweep
+    from tools.evaluate import command as evaluate_module
+    from tools.evaluate.sweep import RunSpec, plan_sweep
 
     clock = [100.0]
     monkeypatch.setattr(evaluate_module.time, "monotonic", lambda: clock[0])

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tools import evaluate_figures
-from tools.evaluate_figures import METADATA_COLUMNS, box_plot, clock_ticks, metric_label, study_metrics
-from tools.evaluate_report import write_report
+from tools.evaluate import figures as evaluate_figures
+from tools.evaluate.figures import METADATA_COLUMNS, box_plot, clock_ticks, metric_label, study_metrics
+from tools.evaluate.report import write_report
 
 
 def _rows(seeds: int) -> list[dict]:

@@ -37,9 +37,10 @@ def test_fixed_bounds_in_the_doc_are_the_codes() -> None:
 def test_round_two_fixed_bounds_in_the_doc_are_the_codes() -> None:
     """Issue 31's bounds: each row names its constant and states its value."""
     from agents.missions import kinds
-    from grammar import agm_world, files, parser, planner
+    from grammar import agm_world, parser, planner
     from scenes import from_map, occupancy
-    from tools import chaos_schedule, evaluate
+    from tools.chaos import schedule as chaos_schedule
+    from tools.evaluate import command as evaluate
 
     rows = {line.split("|")[1].strip(): line for line in DOC.splitlines() if line.startswith("| ")}
 
@@ -53,7 +54,7 @@ def test_round_two_fixed_bounds_in_the_doc_are_the_codes() -> None:
     assert f"within {occupancy.MAX_MAP_ORIGIN_M:,.0f} m" in row("map origin")
     assert f"{occupancy.MAX_MAP_CELLS:,} pixels, {occupancy.MAX_MAP_IMAGE_BYTES} bytes" in row("map image")
     assert f"at most {from_map.MAX_DOOR_WIDTH_M} m" in row("scene from-map `--door-width`")
-    assert f"{files.MAX_GRAMMAR_BYTES} bytes" in row("grammar or target file")
+    assert f"{parser.MAX_GRAMMAR_BYTES} bytes" in row("grammar or target file")
     assert f"{agm_world.MAX_WORLD_BYTES} bytes" in row("AGM world file")
     assert f"{parser.MAX_INCLUDES} include reads" in row("grammar includes")
     assert (f"{planner.MATCH_TRIES_PER_EXPANSION} candidate nodes per allowed expansion, at least "

@@ -24,7 +24,7 @@ from agents.world.freshness import LOCKSTEP, mark_observed
 from dsr import DSRGraph
 from tests.support import REPO_ROOT
 from tools.cli import app
-from tools.evaluate_pool import WorkerMismatch, check_worker, sweep_fingerprint
+from tools.evaluate.pool import WorkerMismatch, check_worker, sweep_fingerprint
 from tools.inprocess import merged_options
 
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"

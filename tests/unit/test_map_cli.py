@@ -92,7 +92,7 @@ def test_scene_from_map_passes_the_check_and_plans_between_rooms(tmp_path: Path)
 def test_scene_from_map_of_rooms_inside_a_corridor_loop_passes_the_check(tmp_path: Path) -> None:
     """Regression: a corridor that runs round a block of rooms is one room whose outline is the
     building's; the doors on its inner walls were refused as 'not on the outline of room'."""
-    from tools.building_maps import large_floor
+    from tools.scene.building_maps import large_floor
 
     large_floor(60.0, 40.0, 0.1).write(tmp_path / "floor_map.yaml")
     out = tmp_path / "floor.yaml"

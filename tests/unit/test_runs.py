@@ -1,6 +1,6 @@
 """Runs belong to the user who started them: where they go, which `--run latest` picks, who may join.
 
-The run directories here are made with the launcher's own functions (tools/runs.py); the
+The run directories here are made with the launcher's own functions (tools/system/runs.py); the
 launcher "process" of a live run is this test process (alive, with its real start time).
 Commands are run through the CLI, as a user types them; they fail before any network access.
 """
@@ -17,9 +17,9 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from tools import runs
+from tools.system import runs
 from tools.cli import app
-from tools.connection import ConnectionProblem, resolve_target
+from tools.system.connection import ConnectionProblem, resolve_target
 
 runner = CliRunner()
 NOBODY = 65534

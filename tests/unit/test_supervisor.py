@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from tests.support import wait_until
-from tools.supervisor import ProgressWatch, Supervisor
+from tools.system.supervisor import ProgressWatch, Supervisor
 
 
 def test_crashing_process_is_restarted_until_the_limit(tmp_path: Path) -> None:

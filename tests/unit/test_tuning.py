@@ -124,7 +124,7 @@ def test_evaluate_gains_validates_the_gains() -> None:
 def test_tune_gains_tool_prints_one_json_object_and_reports_bad_options() -> None:
     from typer.testing import CliRunner
 
-    from tools.tune_gains import app
+    from tools.plan.tune_gains import app
 
     runner = CliRunner()
     ok = runner.invoke(app, ["--max-evaluations", "1", "--json"])

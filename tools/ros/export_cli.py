@@ -1,4 +1,4 @@
-"""`chronav export RUN --format mcap --out FILE.mcap`: a finished run for ROS 2 tools (tools/export_mcap.py)."""
+"""`chronav export RUN --format mcap --out FILE.mcap`: a finished run for ROS 2 tools (tools/ros/export_mcap.py)."""
 
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ def register(app: typer.Typer) -> None:
         """Write a finished run's topics (odom, tf, people, clock, map, social costmap, agenda) as a ROS 2 bag,
         stamped in the scene's clock."""
         from scenes.yamlio import SourceError
-        from tools.export_mcap import ExportError, export_mcap, find_run
-        from tools.runs import runs_dir
+        from tools.ros.export_mcap import ExportError, export_mcap, find_run
+        from tools.system.runs import runs_dir
 
         if fmt not in FORMATS:
             sys.stderr.write(f"error: --format {fmt!r}: the formats are {', '.join(FORMATS)}\n")

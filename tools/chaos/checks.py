@@ -46,36 +46,6 @@ def unproven_claims(copies: dict[str, Any]) -> list[str]:
     return found
 
 
-def member_stats(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, Any]:
-    """Every member's counters (`?stats`) and the router's ACL denials, as `chronav dsr stats`
-    gathers them: {"members": {agent: report}, "router": report or None}."""
-    import orjson
-    import zenoh
-
-    from dsr import wire
-    from dsr.acl_denials import FORMAT as ROUTER_FORMAT, stats_key
-    from dsr.transport import STATS_FORMAT
-
-    members: dict[str, Any] = {}
-    router = None
-    for key, wanted in ((wire.state_key(graph_name, "*") + "?stats", STATS_FORMAT),
-                        (stats_key(graph_name) + "?stats", ROUTER_FORMAT)):
-        for reply in session.get(key, target=zenoh.QueryTarget.ALL,
-                                 consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout_s):
-            if reply.ok is None:
-                continue
-            try:
-                report = orjson.loads(reply.ok.payload.to_bytes())
-            except orjson.JSONDecodeError:
-                continue
-            if isinstance(report, dict) and report.get("format") == wanted:
-                if wanted == STATS_FORMAT:
-                    members[str(report.get("agent"))] = report
-                else:
-                    router = report
-    return {"members": members, "router": router}
-
-
 def trust_summary(stats: dict[str, Any], copies: dict[str, Any]) -> dict[str, Any]:
     """The trust counters of a run: refusals per member and reason (0 in a run without
     hostile input, restarts included), state fetches, unproven claims served, ACL denials."""

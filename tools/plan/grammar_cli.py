@@ -103,7 +103,7 @@ def _parse_time(text: str | None) -> float | None:
 
 def _load_world(path: Path) -> Any:
     """A world file: ``.json`` networkx node-link graph or ``.xml`` AGM world (a scene goes through
-    tools/mission_plan.py: the executive's own planning on the agents' DSR at ``--at``)."""
+    tools/plan/mission_plan.py: the executive's own planning on the agents' DSR at ``--at``)."""
     from grammar.agm_world import load_world
 
     return load_world(path)
@@ -192,7 +192,7 @@ def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, 
     elif scene is None or mission is None:
         _fail("give SCENE --mission M, or --world W.xml --target T.aggt [--grammar G.aggl]")
     elif scene.suffix.lower() not in (".json", ".xml"):  # a scene: the executive's own planning at --at
-        from tools.mission_plan import plan_scene
+        from tools.plan.mission_plan import plan_scene
 
         plan_scene(scene, mission, _parse_time(at), grammar_file, robot, max_expansions, as_json)
         return

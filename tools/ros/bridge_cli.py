@@ -36,7 +36,7 @@ def bridge(scene: str = typer.Argument(..., help="the running system's scene fil
     /goal_pose becomes a pose mission.  Runs until Ctrl-C."""
     from agents.ros_bridge.agent import RosBridgeAgent
     from agents.runtime.base import run_agent
-    from tools.connection import ConnectionProblem, resolve_target
+    from tools.system.connection import ConnectionProblem, resolve_target
 
     try:
         target = resolve_target(None, None, run, role="reader")

@@ -4,7 +4,8 @@ Why the metrics come from ``metrics_offline`` on a per-mission trajectory file: 
 ``chronav evaluate`` is that its numbers are what ``chronav metrics SCENE TRAJ.csv`` prints for the
 same stretch of the run.  So each mission's rows of the run's ``trajectory.csv`` are written to
 ``<run>/missions/<mission>.csv`` and measured by the command's own library function, and *every*
-number it returns becomes a column (nested names joined with a dot: ``d_min_person_m.senior_1``).
+number it returns becomes a column (nested names joined with a dot by the metrics library's ``flatten``:
+``d_min_person_m.senior_1``).
 A metric added to ``chronav metrics`` later (the dynamic ones of issue 15) becomes a column, a box
 plot and a line of the report's tables without a change here.
 """
@@ -27,22 +28,9 @@ MISSIONS_DIR = "missions"
 TABLE_STEM = "table"
 
 
-def flatten_metrics(metrics: Mapping[str, Any], prefix: str = "") -> dict[str, float]:
-    """Every number of a metrics report as one flat ``name -> float`` dict (texts are skipped:
-    they describe how a metric is measured, e.g. ``psi_basis``)."""
-    out: dict[str, float] = {}
-    for key, value in metrics.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, Mapping):
-            out.update(flatten_metrics(value, f"{name}."))
-        elif isinstance(value, bool | int | float):
-            out[name] = float(value)
-    return out
-
-
 def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_s: float, path: Path) -> int:
     """The mission's samples of the run's trajectory as a ``t,x,y,theta`` CSV; returns how many."""
-    from tools.report import _mission_rows
+    from tools.system.report import _mission_rows
 
     rows = _mission_rows(trajectory, started_s, finished_s)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -58,10 +46,11 @@ def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dic
 
     The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
     too (issue 15's ``people.csv``), pass the mission's slice of them here."""
+    from agents.lib.socialmap.metrics import flatten
     from agents.world.offline import metrics_offline
 
     report = metrics_offline(scene, trajectory_csv, None)
-    return float(report["at_s"]), flatten_metrics(report["metrics"])
+    return float(report["at_s"]), flatten(report["metrics"])
 
 
 def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, rrd: str | None,

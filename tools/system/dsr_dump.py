@@ -19,7 +19,7 @@ from typing import Any
 
 import typer
 
-from tools.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
+from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
 
 dsr_app = typer.Typer(help="Inspect the replicated DSR graph.", no_args_is_help=True)
 
@@ -126,7 +126,7 @@ def dump(
 
     from dsr import SIGNALS
     from dsr.process import exit_on_sigterm
-    from tools.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
+    from tools.system.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
                                   resolve_target)
 
     try:
@@ -174,56 +174,21 @@ def dump(
 
 
 def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
-    """Every member's counters, by agent (members answer `chronav/<g>/state/<agent>?stats`)."""
-    import orjson
+    """Every member's counters, by agent, and the router's ACL denials (tools/system/connection.py)."""
     import zenoh
 
-    from dsr import wire
-    from dsr.transport import STATS_FORMAT
-    from tools.connection import ConnectionProblem, settings_for, unreachable_message
+    from tools.system.connection import ConnectionProblem, graph_stats, settings_for, unreachable_message
 
     settings = settings_for(target, open_timeout_s=timeout)
     try:
         session = zenoh.open(settings.to_zenoh_config())
     except zenoh.ZError:
         raise ConnectionProblem(unreachable_message(target)) from None
-    members: dict[str, Any] = {}
-    router: dict[str, Any] | None = None
     try:
-        router = _router_stats(session, target.graph, timeout)
-        replies = session.get(wire.state_key(target.graph, "*") + "?stats",
-                              target=zenoh.QueryTarget.ALL,
-                              consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout)
-        for reply in replies:
-            if reply.ok is None:
-                continue
-            try:
-                report = orjson.loads(reply.ok.payload.to_bytes())
-            except orjson.JSONDecodeError:
-                continue
-            if isinstance(report, dict) and report.get("format") == STATS_FORMAT:
-                members[str(report.get("agent"))] = report
+        stats = graph_stats(session, target.graph, timeout)
     finally:
         session.close()
-    return {"graph": target.graph, "members": dict(sorted(members.items())), "router": router}
-
-
-def _router_stats(session: Any, graph: str, timeout: float) -> dict[str, Any] | None:
-    """The router's ACL denials (dsr/acl_denials.py), or None (a router without an ACL, or
-    one that is not chronav's dsr.router)."""
-    import orjson
-
-    from dsr.acl_denials import FORMAT, stats_key
-    for reply in session.get(stats_key(graph) + "?stats", timeout=timeout):
-        if reply.ok is None:
-            continue
-        try:
-            report = orjson.loads(reply.ok.payload.to_bytes())
-        except orjson.JSONDecodeError:
-            continue
-        if isinstance(report, dict) and report.get("format") == FORMAT:
-            return report
-    return None
+    return {"graph": target.graph, **stats}
 
 
 @dsr_app.command("stats")
@@ -239,7 +204,7 @@ def stats(
     deferred relayed writes, digests, tombstones held and compacted."""
     import orjson
 
-    from tools.connection import ConnectionProblem, check_timeout, resolve_target
+    from tools.system.connection import ConnectionProblem, check_timeout, resolve_target
 
     try:
         check_timeout(timeout)

@@ -18,7 +18,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from tools.evaluate_stats import REFERENCE, PairedTest, Summary, missions_of, paired_tests, planners_of, summarise
+from tools.evaluate.stats import REFERENCE, PairedTest, Summary, missions_of, paired_tests, planners_of, summarise
 
 REPORT = "report.html"
 SUMMARY = "summary.csv"
@@ -57,7 +57,7 @@ def chronav_version() -> str:
         text = version("chronav")
     except PackageNotFoundError:
         text = "unknown"
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     try:
         commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, timeout=10, check=False).stdout.strip()
@@ -147,11 +147,11 @@ def _link(target: str | None, out_dir: Path) -> str:
 
 def _mission_table(summaries: Sequence[Summary], scene: str, mission: str, planners: Sequence[str],
                    metrics: Sequence[str]) -> str:
-    from tools.evaluate_figures import metric_label
+    from tools.evaluate.figures import metric_label
 
     cells = {(s.planner, s.metric): s for s in summaries if s.scene == scene and s.mission == mission}
     head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
-    from tools.evaluate_figures import METADATA_COLUMNS
+    from tools.evaluate.figures import METADATA_COLUMNS
 
     body, meta = [], []
     for metric in metrics:
@@ -171,7 +171,7 @@ def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any
     """One table for the whole study, whatever its number of seeds and missions: per planner, the
     missions completed and, for each top-level metric (per-person and per-object ones are in the
     per-mission tables), the mean over the missions of the seeds' means (each mission weighs one)."""
-    from tools.evaluate_figures import metric_label
+    from tools.evaluate.figures import metric_label
 
     head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
     done = []
@@ -192,7 +192,7 @@ def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any
 
 
 def _tests_table(tests: Sequence[PairedTest]) -> str:
-    from tools.evaluate_figures import metric_label
+    from tools.evaluate.figures import metric_label
 
     if not tests:
         return '<p class="note">No paired test: the study needs the social planner and another one on the same ' \
@@ -213,7 +213,7 @@ def main_figure(figures: Mapping[str, Sequence[Path]], rows: Sequence[Mapping[st
     paths = list(figures.get("paths", []))
     if not paths:
         return None
-    from tools.evaluate_figures import slug
+    from tools.evaluate.figures import slug
 
     best, spread = paths[0], -1.0
     for scene, mission in missions_of(rows):
@@ -235,9 +235,9 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                  pending: int = 0) -> Path:
     """The report, ``summary.csv`` and ``tests.csv`` under ``out_dir``; returns the report's path."""
     from agents.lib.socialmap.planners import PLANNER_HELP
-    from tools.evaluate_table import metric_columns
+    from tools.evaluate.table import metric_columns
 
-    from tools.evaluate_figures import METADATA_COLUMNS
+    from tools.evaluate.figures import METADATA_COLUMNS
 
     summaries = summarise(rows)
     # Run metadata (the trajectory's sample count...) describes a run; testing it would claim a finding.

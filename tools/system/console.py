@@ -84,7 +84,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
 
     report: dict[str, Any] | None = None
     if with_report and not result.interrupted:
-        from tools.report import build_report, render_report
+        from tools.system.report import build_report, render_report
 
         report = result.metrics or build_report(result.scene_path or result.scene, result.run_dir, result.missions)
         if not as_json:

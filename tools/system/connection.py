@@ -4,7 +4,7 @@ Why shared: `chronav agenda` and `chronav dsr dump` take the same ``--run``/``--
 ``--graph`` options and must fail the same way, in a user's words: which option is malformed,
 whether anything listens at the endpoint, whether it refused us for lack of the run's
 credentials, which graphs and runs do exist.  First match wins: ``--connect``/``--graph``;
-``--run DIR|ID|latest`` (the run's connect file, with its credentials, tools/runs.py); the
+``--run DIR|ID|latest`` (the run's connect file, with its credentials, tools/system/runs.py); the
 environment the agents use (``CHRONAV_ZENOH_*``, ``CHRONAV_GRAPH``); the user's newest live run;
 the default router.
 """
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
+from tools.system.runs import HOW_TO_START, Identity, Role, RunError, list_runs, open_run, run_is_alive, runs_dir
 
 # The help of the options every command that reaches a running system takes (one wording: they
 # resolve alike, resolve_target below).
@@ -243,3 +243,41 @@ def require_system(graph: Any, target: Target) -> list[str]:
     hint = "; ".join(hints) if hints else HOW_TO_FIND
     raise ConnectionProblem(f"joined {target.describe()} but nobody is there: no chronav system uses the "
                             f"graph name {target.graph!r} (it is the run id, see the run's connect.json); {hint}")
+
+
+def stats_reports(session: Any, key: str, wanted_format: str, timeout_s: float) -> Iterator[dict[str, Any]]:
+    """The JSON reports that answer ``KEY?stats`` (every queryable asked, no reply merged) and
+    carry ``"format": wanted_format``.
+
+    Why a filter and not an error: anything may answer on a key (a member of another version, a
+    foreign queryable); a reply that is an error, not JSON or of another format is skipped."""
+    import orjson
+    import zenoh
+
+    for reply in session.get(key + "?stats", target=zenoh.QueryTarget.ALL,
+                             consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout_s):
+        if reply.ok is None:
+            continue
+        try:
+            report = orjson.loads(reply.ok.payload.to_bytes())
+        except orjson.JSONDecodeError:
+            continue
+        if isinstance(report, dict) and report.get("format") == wanted_format:
+            yield report
+
+
+def graph_stats(session: Any, graph_name: str, timeout_s: float) -> dict[str, Any]:
+    """Every member's counters (members answer ``chronav/<g>/state/<agent>?stats``) and the
+    router's ACL denials (dsr/acl_denials.py; None from a router without an ACL, or one that is
+    not chronav's dsr.router): ``{"members": {agent: report}, "router": report or None}``.
+
+    Why here: `chronav dsr stats` prints this and `chronav chaos` sums its trust counters; one
+    query, so both read the same numbers."""
+    from dsr import wire
+    from dsr.acl_denials import FORMAT as ROUTER_FORMAT, stats_key
+    from dsr.transport import STATS_FORMAT
+
+    router = next(stats_reports(session, stats_key(graph_name), ROUTER_FORMAT, timeout_s), None)
+    members = {str(report.get("agent")): report
+               for report in stats_reports(session, wire.state_key(graph_name, "*"), STATS_FORMAT, timeout_s)}
+    return {"members": dict(sorted(members.items())), "router": router}

@@ -4,7 +4,7 @@ Why synthetic: the shipped scene needs a map that can be committed (a 0.2 MB PGM
 benchmark a 100 m x 60 m floor at 5 cm; both are drawn here the way map_saver writes a SLAM map
 (walls black, floor 254, unexplored 205, a ``# CREATOR`` comment in the PGM header) so the reader
 meets what it meets in the field.  ``scenes/maps/ward.pgm`` was written by ``python -m
-tools.building_maps ward scenes/maps/ward.yaml``.
+tools.scene.building_maps ward scenes/maps/ward.yaml``.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class Floor:
         """``<name>.pgm`` (binary, with a map_saver-like comment) and the map_server yaml."""
         yaml_path = Path(yaml_path)
         rows, cols = self.pixels.shape
-        header = f"P5\n# CREATOR: chronav tools/building_maps.py {self.resolution:.3f} m/pix\n{cols} {rows}\n255\n"
+        header = f"P5\n# CREATOR: chronav tools/scene/building_maps.py {self.resolution:.3f} m/pix\n{cols} {rows}\n255\n"
         yaml_path.with_suffix(".pgm").write_bytes(header.encode("ascii") + self.pixels.tobytes())
         yaml_path.write_text(f"image: {yaml_path.with_suffix('.pgm').name}\nmode: trinary\n"
                              f"resolution: {self.resolution}\norigin: [{origin[0]}, {origin[1]}, 0.0]\n"

@@ -4,12 +4,12 @@ Why a command and not a script: researchers compare planners on the same scenes 
 the study must be one line to run again, give the same numbers (a seed fixes the simulated world,
 the clock runs in lockstep with the controller), and say what produced it.  The pieces:
 
-- tools/evaluate_sweep.py: scene x planner x seed runs, each in-process in lockstep (``--mode
-  in-process``, the default; tools/inprocess.py, tools/evaluate_pool.py) or a full isolated launch
+- tools/evaluate/sweep.py: scene x planner x seed runs, each in-process in lockstep (``--mode
+  in-process``, the default; tools/inprocess.py, tools/evaluate/pool.py) or a full isolated launch
   (``--mode launch``), on this machine (``--jobs J``, all cores by default) or a Dask cluster
   (``--executor dask://HOST:PORT``), with a ledger for ``--resume``;
-- tools/evaluate_table.py: one row per mission with every metric of ``chronav metrics``;
-- tools/evaluate_stats.py, evaluate_figures.py, evaluate_report.py: tables, tests, plots, report.
+- tools/evaluate/table.py: one row per mission with every metric of ``chronav metrics``;
+- tools/evaluate/stats.py, figures.py, report.py: tables, tests, plots, report.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def resolve_scenes(names: list[str]) -> list[Path]:
 
 
 def prepare_out_dir(out: Path | None, resume: bool) -> Path:
-    from tools.evaluate_sweep import LEDGER
+    from tools.evaluate.sweep import LEDGER
 
     if out is None:
         if resume:
@@ -100,7 +100,7 @@ def run_sweep(specs: list[Any], executor: Any, out_dir: Path, timeout_s: float,
               on_result: Any = None) -> tuple[list[dict[str, Any]], bool]:
     """Run ``specs`` on ``executor``; each result goes to the ledger as it arrives.  Returns the
     results and whether the sweep was interrupted (Ctrl-C: the runs under way are stopped)."""
-    from tools.evaluate_sweep import append_ledger
+    from tools.evaluate.sweep import append_ledger
 
     results: list[dict[str, Any]] = []
     stream = executor.results(specs, out_dir / "runs", timeout_s)
@@ -172,7 +172,7 @@ class _Progress:
         return per_run * scale * (self.planned[planner] - self.finished[planner])
 
     def advance(self, result: dict[str, Any]) -> None:
-        from tools.evaluate_sweep import RunSpec
+        from tools.evaluate.sweep import RunSpec
 
         self.done += 1
         spec = RunSpec.from_dict(result["spec"])
@@ -202,10 +202,10 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
              out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
              mode: str = "in-process", record: bool = True) -> dict[str, Any]:
     """The whole study; returns what ``--json`` prints."""
-    from tools.evaluate_figures import all_figures
-    from tools.evaluate_report import provenance, write_report
-    from tools.evaluate_sweep import RunSpec, finished, parse_executor, plan_sweep, read_ledger
-    from tools.evaluate_table import write_table
+    from tools.evaluate.figures import all_figures
+    from tools.evaluate.report import provenance, write_report
+    from tools.evaluate.sweep import RunSpec, finished, parse_executor, plan_sweep, read_ledger
+    from tools.evaluate.table import write_table
     from tools.launch import check_timeout, LaunchError
 
     _check_extras()

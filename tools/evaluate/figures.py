@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from tools.evaluate_stats import MissionKey, done_rows, missions_of, planners_of
+from tools.evaluate.stats import MissionKey, done_rows, missions_of, planners_of
 
 #: one colour per planner, the same in every figure (colour-blind safe: Okabe-Ito)
 PLANNER_COLOURS = {"social": "#0072B2", "departure": "#56B4E9", "static": "#009E73", "baseline": "#D55E00",
@@ -289,7 +289,7 @@ def _hhmm(t_s: float) -> str:
 
 def study_metrics(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """The table's metric columns that measure something (METADATA_COLUMNS left out)."""
-    from tools.evaluate_table import metric_columns
+    from tools.evaluate.table import metric_columns
 
     return [m for m in metric_columns(rows) if m not in METADATA_COLUMNS]
 

@@ -1,6 +1,6 @@
 """Tune the elastic band gains k_c, k_r by coordinate descent on G = aH + bD + cQ + dP (seed 5.4).
 
-Usage (from the repo root):  python tools/tune_gains.py [--samples 5] [--rounds 4] [--json]
+Usage (from the repo root):  python tools/plan/tune_gains.py [--samples 5] [--rounds 4] [--json]
 Prints a table (start vs found gains, G, the terms per scenario) and then one JSON object with
 the gains found; with --json only the JSON object. Deterministic: same options, same answer.
 """
@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from agents.lib.socialmap.tuning import TuningResult
 
 if __package__ in (None, ""):  # run as a script: make the repo root importable
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 app = typer.Typer(add_completion=False, help=__doc__)
 

@@ -13,7 +13,7 @@ one the tool measures:
   stops writing (the clock ticks), so this is a sampled measure: the first sample where all
   digests agree.
 
-"Trust" (``chaos_checks.trust_summary``): at the end, every member's refusal counters must be 0 (faults
+"Trust" (``tools.chaos.checks.trust_summary``): at the end, every member's refusal counters must be 0 (faults
 are not attacks: no honest state refused after a restart), no member may serve a writer claim about
 another that the other does not make, and the state fetches each member made (and held back) are
 reported, with the router's ACL denials.  "Writes lost" must be 0: every mission seen ``done`` is still done at the end, every agenda change
@@ -38,9 +38,9 @@ from typing import Any
 
 import typer
 
-from tools.chaos_checks import describe_divergence, lost_writes, probe_replicas
-from tools.chaos_injector import CHAOS_AGENT, ChaosRun, FaultOutcome
-from tools.chaos_schedule import (ACTIONS, PROCESSES, ChaosError, Fault, clock_text, load_schedule,
+from tools.chaos.checks import describe_divergence, lost_writes, probe_replicas
+from tools.chaos.injector import CHAOS_AGENT, ChaosRun, FaultOutcome
+from tools.chaos.schedule import (ACTIONS, PROCESSES, ChaosError, Fault, clock_text, load_schedule,
                                   random_agenda_change, random_schedule)
 
 __all__ = ["ACTIONS", "CHAOS_AGENT", "PROCESSES", "ChaosError", "ChaosReport", "ChaosRun", "Fault", "FaultOutcome",

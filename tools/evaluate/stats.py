@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from tools.evaluate_table import metric_columns
+from tools.evaluate.table import metric_columns
 
 REFERENCE = "social"
 MissionKey = tuple[str, str]         # (scene, mission)

@@ -152,7 +152,7 @@ def register(app: typer.Typer) -> None:
 
     scene_group = next((g.typer_instance for g in app.registered_groups if g.name == "scene"), None)
     if scene_group is None:
-        raise RuntimeError("tools.map_cli must be registered after tools.scene_cli (COMMAND_MODULES)")
+        raise RuntimeError("tools.scene.map_cli must be registered after tools.scene.scene_cli (COMMAND_MODULES)")
 
     @scene_group.command("from-map")
     def from_map(map_file: Path = typer.Argument(..., help="map_server .yaml (naming a .pgm/.png image)"),

@@ -10,7 +10,7 @@ Two modes run the same agents (``--mode``):
   and run directory, six agents as processes; tools/launch.run_system), the reference the
   in-process mode is checked against (tests/system/test_parity.py).  The launcher installs signal
   handlers, which Python allows only in a main thread, and the pools run tasks in threads, so each
-  task starts one ``python -m tools.evaluate_sweep`` process and waits for it.
+  task starts one ``python -m tools.evaluate.sweep`` process and waits for it.
 
 The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/socialmap/planners.py).  The
 seed goes to every agent as ``-o seed=N``: each agent that draws random numbers (today the human
@@ -112,8 +112,8 @@ def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float, mode: str = "la
                 stop: threading.Event | None = None, record: bool = True) -> dict[str, Any]:
     """Run the system for ``spec`` (headless; recorded unless ``record`` is False) in ``mode`` and
     measure its missions."""
-    from tools.console import outcome
-    from tools.evaluate_table import mission_rows
+    from tools.system.console import outcome
+    from tools.evaluate.table import mission_rows
 
     if mode == "in-process":
         from tools.inprocess import run_in_process
@@ -158,7 +158,7 @@ def run_isolated(spec_data: dict[str, Any], runs_dir: str, timeout_s: float,
     logs.mkdir(parents=True, exist_ok=True)
     stem = f"{spec.slug}-{uuid.uuid4().hex[:8]}"
     result_file, log_file = logs / f"{stem}.json", logs / f"{stem}.log"
-    args = [sys.executable, "-m", "tools.evaluate_sweep", "--spec", json.dumps(spec.to_dict()),
+    args = [sys.executable, "-m", "tools.evaluate.sweep", "--spec", json.dumps(spec.to_dict()),
             "--runs-dir", str(runs_dir), "--timeout", str(timeout_s), "--result", str(result_file),
             *([] if record else ["--no-record"])]
     with log_file.open("wb") as log:
@@ -249,7 +249,7 @@ class LocalExecutor:
 class DaskExecutor:
     """Each run a task on an existing Dask cluster (``dask://HOST:PORT``, the scheduler's address).
 
-    A task checks the worker's chronav and scene files (tools/evaluate_pool.dask_task), runs one
+    A task checks the worker's chronav and scene files (tools/evaluate/pool.py dask_task), runs one
     run on its worker (in the worker process itself in-process, else a launch; under ``runs_dir``
     on that machine) and returns the run's table rows and recording path; workers need chronav
     installed, nothing shared.  Results stream back as tasks end.  A task that fails (its worker
@@ -266,7 +266,7 @@ class DaskExecutor:
     def results(self, specs: Sequence[RunSpec], runs_dir: Path, timeout_s: float) -> Iterator[dict[str, Any]]:
         from distributed import as_completed
 
-        from tools.evaluate_pool import WorkerMismatch, dask_task, sweep_fingerprint
+        from tools.evaluate.pool import WorkerMismatch, dask_task, sweep_fingerprint
 
         sweep = uuid.uuid4().hex[:8]
         fingerprints = {scene: sweep_fingerprint(scene) for scene in sorted({s.scene for s in specs})}
@@ -308,7 +308,7 @@ def parse_executor(text: str, jobs: int | None, mode: str = DEFAULT_MODE, record
     if mode not in MODES:
         raise ValueError(f"--mode {mode}: use one of {', '.join(MODES)}")
     if text == "local":
-        from tools.evaluate_pool import InProcessPool, default_jobs
+        from tools.evaluate.pool import InProcessPool, default_jobs
 
         jobs = jobs or default_jobs()
         return InProcessPool(jobs, record) if mode == "in-process" else LocalExecutor(jobs, record)
@@ -356,8 +356,8 @@ def append_ledger(out_dir: Path, result: dict[str, Any]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m tools.evaluate_sweep --spec JSON ...``: one run, its result as a JSON file."""
-    parser = argparse.ArgumentParser(prog="python -m tools.evaluate_sweep")
+    """``python -m tools.evaluate.sweep --spec JSON ...``: one run, its result as a JSON file."""
+    parser = argparse.ArgumentParser(prog="python -m tools.evaluate.sweep")
     parser.add_argument("--spec", required=True)
     parser.add_argument("--runs-dir", required=True, type=Path)
     parser.add_argument("--timeout", required=True, type=float)

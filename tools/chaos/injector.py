@@ -18,8 +18,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from tools.chaos_checks import describe_divergence, probe_replicas
-from tools.chaos_schedule import Fault, clock_text
+from tools.chaos.checks import describe_divergence, probe_replicas
+from tools.chaos.schedule import Fault, clock_text
 from tools.launch import AGENTS, TERMINAL_STATES
 
 CHAOS_AGENT = "agenda_tool-chaos"
@@ -71,7 +71,7 @@ class ChaosRun:
         self.final_divergence = ""
         self._last_copies: dict[str, Any] = {}
         self._unsettled: tuple[FaultOutcome, float] | None = None
-        #: refusals, fetches, unproven claims and ACL denials at the end (chaos_checks)
+        #: refusals, fetches, unproven claims and ACL denials at the end (tools/chaos/checks.py)
         self.trust: dict[str, Any] = {}
 
     # --------------------------------------------------------------- launcher thread
@@ -116,8 +116,8 @@ class ChaosRun:
     def _main(self) -> None:
         from dsr import DSRGraph
         from dsr.transport import Replica
-        from tools.connection import Target, settings_for
-        from tools.runs import read_connect_file
+        from tools.system.connection import Target, settings_for
+        from tools.system.runs import read_connect_file
 
         run = self.status["run"]
         info = read_connect_file(Path(run["run_dir"]))   # the run's tool identity: writes as agenda_tool-*
@@ -252,13 +252,14 @@ class ChaosRun:
         return {agent: copy.digest() for agent, copy in copies.items()}
 
     def _trust(self) -> dict[str, Any]:
-        """The trust counters at the end of the run (tools/chaos_checks.trust_summary)."""
-        from tools.chaos_checks import member_stats, trust_summary
+        """The trust counters at the end of the run (tools/chaos/checks.py trust_summary)."""
+        from tools.chaos.checks import trust_summary
+        from tools.system.connection import graph_stats
         session = None if self._replica is None else self._replica.session
         if session is None:
             return {}
         try:
-            return trust_summary(member_stats(session, self.graph.graph_name), self._last_copies)
+            return trust_summary(graph_stats(session, self.graph.graph_name, 2.0), self._last_copies)
         except Exception as exc:  # noqa: BLE001 - a report, not a reason to fail the run
             self.log(f"trust counters unavailable: {type(exc).__name__}: {exc}")
             return {}

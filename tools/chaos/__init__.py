@@ -1,0 +1,1 @@
+"""`chronav chaos`: the whole system under a fault schedule (schedule, injector, what survived)."""

@@ -1,0 +1,1 @@
+"""Offline planning questions, no processes: `chronav path`, `chronav metrics`, `chronav grammar check`, `chronav plan`, the gain tuner."""
