@@ -41,7 +41,7 @@ import networkx as nx
 from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import DefusedXMLParser, ParseError
 
-from boundedio import read_bounded
+from scenes.reading import read_bounded
 from grammar.errors import GrammarError, shorten
 
 RESERVED = ("name", "type")

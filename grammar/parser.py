@@ -21,7 +21,7 @@ from typing import Any
 from lark import Lark, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
-from boundedio import read_bounded, regular_file_problem
+from scenes.reading import read_bounded, regular_file_problem
 from grammar.errors import MAX_PATH_CHARS, GrammarError, GrammarWarning, SourcePos, shorten
 from grammar.model import ComboRule, Grammar, Rule, Target, TypeTable
 from grammar.transform import ModelBuilder

@@ -3,7 +3,7 @@ chronav reads a file a person gave it (scene and agenda YAML, .ics calendars, tr
 images, chaos schedules).
 
 Why a wrapper: the reading rules (regular files only, the bound checked before a byte is read,
-never more than the bound + 1 read) are ``boundedio``'s, shared with ``grammar/``; here every
+never more than the bound + 1 read) are ``scenes.reading``'s, shared with ``grammar/``; here every
 refusal becomes a :class:`SourceError` naming the file and saying what it is, so "not found" is
 only ever said of a path that does not exist, and a file that is not UTF-8 names the line.
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from boundedio import read_bounded as _read_bounded
+from scenes.reading import read_bounded as _read_bounded
 from scenes.errors import SourceError
 
 

@@ -2,11 +2,11 @@
 every file a person gives chronav (scenes, agendas, calendars, trajectories, maps, schedules,
 grammars, targets, AGM worlds).
 
-Why a package of its own, below every other: ``scenes`` and ``grammar`` are independent
-foundation layers (neither may import the other, pyproject.toml's import contracts), yet both read
-files a person named, and both must refuse the same things the same way.  Each wraps
-:func:`read_bounded` in its own located error (scenes.files: ``SourceError``; grammar: its
-``GrammarError``); this package imports nothing of chronav.
+Why a module with no chronav imports, in ``scenes``: the layout's top folders are fixed, and
+``grammar`` (one layer above ``scenes``, pyproject.toml's import contracts) reads files a person
+named too, and must refuse the same things the same way.  Each caller wraps :func:`read_bounded`
+in its own located error (scenes.files: ``SourceError``; grammar: its ``GrammarError``); this
+module imports nothing of chronav, so the rules cannot drift with either.
 
 Why each step: a path on the command line or in a scene may name anything, and the naive
 ``path.read_bytes()`` trusts it.  ``/dev/zero`` reads until memory runs out; a FIFO (named pipe)
