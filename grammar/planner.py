@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Union, cast
+from typing import cast
 
 import networkx as nx
 
@@ -126,7 +126,7 @@ class NoPlan:
     found: bool = field(default=False, init=False)
 
 
-PlanResult = Union[Plan, NoPlan]
+PlanResult = Plan | NoPlan
 
 
 @dataclass

@@ -235,7 +235,7 @@ def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
     on one spot, or a robot started on a resident, is a typing mistake (``path`` then says the
     robot's start is blocked), not a scene."""
     robot = scene.robot
-    for i, person in enumerate(scene.people):
+    for person in scene.people:
         gap = math.hypot(person.pose.x - robot.pose.x, person.pose.y - robot.pose.y)
         if gap < robot.radius + PERSON_BODY_RADIUS_M:
             raise located.error(("robot", "pose"), f"robot at ({robot.pose.x:g}, {robot.pose.y:g}) starts on person "
@@ -243,7 +243,7 @@ def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
                                 f"than the robot's radius plus a person's body ({robot.radius + PERSON_BODY_RADIUS_M:g} m); "
                                 "move one of them")
     for i, person in enumerate(scene.people):
-        for j, other in enumerate(scene.people[:i]):
+        for other in scene.people[:i]:
             gap = math.hypot(person.pose.x - other.pose.x, person.pose.y - other.pose.y)
             if gap < 2 * PERSON_BODY_RADIUS_M:
                 raise located.error(("people", i, "pose"), f"person {person.name!r} at ({person.pose.x:g}, "

@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tokenize
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -160,7 +161,7 @@ def duplicate_pairs(root: Path) -> tuple[int | None, str]:
     return int(m.group(1)), note or first
 
 
-def import_cycles(root: Path, packages: list[str]) -> tuple[list[list[str]] | None, str]:
+def import_cycles(root: Path, packages: Sequence[str]) -> tuple[list[list[str]] | None, str]:
     """Groups of modules that import each other at run time (grimp graph, networkx SCCs)."""
     try:
         import grimp
@@ -185,7 +186,7 @@ def import_cycles(root: Path, packages: list[str]) -> tuple[list[list[str]] | No
     return sorted(cycles), ""
 
 
-def measure(root: Path, packages: list[str] = list(PACKAGES), *, with_duplicates: bool = True,
+def measure(root: Path, packages: Sequence[str] = PACKAGES, *, with_duplicates: bool = True,
             with_cycles: bool = True) -> Health:
     """All the numbers of one tree."""
     root = root.resolve()

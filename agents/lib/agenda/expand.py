@@ -23,7 +23,7 @@ from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, Ac
 from agents.lib.agenda.validate import validate_activities
 
 AgendaSource = ActivitySpec | IcsAgenda
-UTC = dt.timezone.utc
+UTC = dt.UTC
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ from scenes.yamlio import SourceError
 if TYPE_CHECKING:
     import icalendar
 
-UTC = dt.timezone.utc
+UTC = dt.UTC
 _UNESCAPED_COMMA = re.compile(r"(?<!\\),")
 
 Moment = dt.date | dt.datetime  # DATE, floating (naive) or zoned (aware) date-time

@@ -16,7 +16,6 @@ from __future__ import annotations
 import datetime as dt
 import enum
 import math
-import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Annotated
@@ -165,7 +164,7 @@ class ActivityState(enum.StrEnum):
 
 def _time_text(value: object) -> object:
     """Accept datetime/time objects from Python callers; refuse numbers (YAML reads 11:00 as 660)."""
-    if isinstance(value, bool) or isinstance(value, (int, float)):
+    if isinstance(value, (bool, int, float)):
         raise ValueError(f"got the number {value!r}; write the time in quotes, e.g. \"11:00\" "
                          "(unquoted, YAML 1.1 reads 11:00 as the number 660)")
     if isinstance(value, dt.datetime):
