@@ -13,6 +13,7 @@ negative or beyond 86400.  See docs/agenda.md for how DST days are handled.
 
 from __future__ import annotations
 
+import builtins
 import datetime as dt
 import enum
 import math
@@ -196,7 +197,7 @@ class ActivitySpec(BaseModel):
 
     @field_validator("start", "end", mode="before")
     @classmethod
-    def _coerce_time(cls, value: object) -> object:
+    def _coerce_time(cls, value: builtins.object) -> builtins.object:
         return _time_text(value)
 
     @field_validator("start")
@@ -223,7 +224,7 @@ class ActivitySpec(BaseModel):
 
     @field_validator("participants", mode="before")
     @classmethod
-    def _participants_list(cls, value: object) -> object:
+    def _participants_list(cls, value: builtins.object) -> builtins.object:
         if isinstance(value, str):
             raise ValueError("participants must be a list, e.g. [ana, luis]")
         return value
