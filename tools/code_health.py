@@ -16,7 +16,7 @@ import graph):
 - ``noqa`` / ``type_ignore``: comments holding ``noqa`` / ``type: ignore``, in all files (tests
   included), with the split per top-level folder.
 - ``any_in_signatures``: parameters and return annotations that mention ``Any`` (packages only);
-  ``graph_any``: those of them that are a parameter named ``graph``, ``g`` or ``*_graph``, the DSR
+  ``graph_any``: parameters named ``graph``, ``g`` or ``*_graph`` annotated ``Any`` itself, the DSR
   graph typed as ``Any`` (``dsr.protocols.GraphReader``/``GraphWriter`` replace it).
 - ``import_cycles``: strongly connected groups of modules of the packages importing each other at
   run time (grimp's graph, ``if TYPE_CHECKING`` imports left out), each as a sorted list.
@@ -99,6 +99,12 @@ def _mentions_any(node: ast.expr | None) -> bool:
     return False
 
 
+def _is_any(node: ast.expr | None) -> bool:
+    """The annotation is ``Any`` itself (``Any``, ``typing.Any`` or the string ``"Any"``)."""
+    return ((isinstance(node, ast.Name) and node.id == "Any") or (isinstance(node, ast.Attribute) and node.attr == "Any")
+            or (isinstance(node, ast.Constant) and node.value == "Any"))
+
+
 class _Scan(ast.NodeVisitor):
     """One pass over a module: function lengths, methods per class, `Any` in signatures."""
 
@@ -129,7 +135,7 @@ class _Scan(ast.NodeVisitor):
         for p in params:
             if _mentions_any(p.annotation):
                 self.any_count += 1
-                if GRAPH_PARAM.match(p.arg):
+                if GRAPH_PARAM.match(p.arg) and _is_any(p.annotation):
                     self.graph_any += 1
         if _mentions_any(node.returns):
             self.any_count += 1
