@@ -328,19 +328,19 @@ class StateEditor:
         e = (s, d, label)
         if e in self.removed:
             self._own_links()
-            self.removed.discard(e)  # type: ignore[union-attr]
+            self.removed.discard(e)  # type: ignore[union-attr]  # _own_links() made it a set
         elif e not in self.added and not self._base_has(e):
             self._own_links()
-            self.added.add(e)  # type: ignore[union-attr]
+            self.added.add(e)  # type: ignore[union-attr]  # _own_links() made it a set
 
     def remove_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.added:
             self._own_links()
-            self.added.discard(e)  # type: ignore[union-attr]
+            self.added.discard(e)  # type: ignore[union-attr]  # _own_links() made it a set
         elif e not in self.removed and self._base_has(e):
             self._own_links()
-            self.removed.add(e)  # type: ignore[union-attr]
+            self.removed.add(e)  # type: ignore[union-attr]  # _own_links() made it a set
 
     def create_node(self, node_type: str, name_hint: str) -> int:
         i = self.next_id

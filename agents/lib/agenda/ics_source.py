@@ -577,9 +577,9 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
     if not calendars:
         raise AgendaSourceError([problem(source, None, "no complete VCALENDAR found: is this an .ics "
                                                "file, and does it end with END:VCALENDAR?")])
-    lines = _vevent_lines(text)
+    lines: list[int | None] = list(_vevent_lines(text))
     if len(lines) != len(vevents):
-        lines = [None] * len(vevents)  # type: ignore[list-item]
+        lines = [None] * len(vevents)
     events: list[IcsEvent] = []
     problems: list[SourceError] = []
     for vevent, line in zip(vevents, lines, strict=True):

@@ -218,7 +218,7 @@ class ActivitySpec(BaseModel):
         comparable = (isinstance(start, float) and isinstance(end, float)) or (
             isinstance(start, dt.datetime) and isinstance(end, dt.datetime)
             and (start.tzinfo is None) == (end.tzinfo is None))
-        if comparable and end <= start:  # type: ignore[operator]
+        if comparable and end <= start:  # type: ignore[operator]  # `comparable`: both floats or both datetimes
             raise ValueError(f"end {value!r} is not after start {start_text!r}")
         return value
 
