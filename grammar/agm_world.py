@@ -201,7 +201,8 @@ def parse_agm_world(text: str, file: str = "<string>") -> AgmWorld:
     builder.parser = parser
     try:
         parser.feed(text.removeprefix("\ufeff"))
-        return parser.close()
+        parser.close()   # returns the target's close(), typed as an Element by the stubs
+        return builder.world
     except WorldFileError:
         raise
     except ParseError as exc:

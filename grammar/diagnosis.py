@@ -228,9 +228,8 @@ def _achievers(goal: _Goal, rules: Iterable[Rule]) -> list[tuple[Rule, dict[str,
                 tie = {ties[0].src: link.src, ties[0].dst: link.dst}
                 out.append((rule, tie if len(tie) == 2 or link.src == link.dst else {}))
                 continue
-            if goal.kind == "link" and link.label in _effect_adds(rule.effect):
-                out.append((rule, {}))
-            elif goal.kind == "absent" and _effect_removes(rule.effect, link.label):
+            adds = goal.kind == "link" and link.label in _effect_adds(rule.effect)
+            if adds or (goal.kind == "absent" and _effect_removes(rule.effect, link.label)):
                 out.append((rule, {}))
         else:
             assert goal.node is not None

@@ -295,8 +295,9 @@ def _guard_links(body: Formula, var: str) -> list[tuple[FLink, bool]] | None:
         return None
     condition = body.condition
     if isinstance(condition, FOr):
-        links = [_link_of(atom, var) for atom in condition.items]
-        return None if any(link is None for link in links) else links  # type: ignore[return-value]
+        found = [_link_of(atom, var) for atom in condition.items]
+        links = [link for link in found if link is not None]
+        return links if len(links) == len(found) else None
     atoms = condition.items if isinstance(condition, FAnd) else (condition,)
     for atom in atoms:
         link = _link_of(atom, var)

@@ -302,11 +302,11 @@ class Matcher:
             placed_links.add(i)
             if not link.conditions:  # links with conditions are checked with them (see conds)
                 step.links.append(_LinkCheck(link))
-        for i, (expr, link, needs) in enumerate(conds):
+        for i, (expr, cond_link, needs) in enumerate(conds):
             if i in placed_conds or not needs <= done:
                 continue
             placed_conds.add(i)
-            step.conds.append(_CondCheck(expr, link))
+            step.conds.append(_CondCheck(expr, cond_link))
 
     @staticmethod
     def _link_source(var: str, links: Iterable[PatternLink], bound: set[str]) -> tuple[Any, ...] | None:

@@ -16,12 +16,12 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Union, assert_never
+from typing import assert_never
 
 from grammar.agm_order import agm_creation_order
 from grammar.errors import GrammarWarning, SourcePos
 
-Value = Union[bool, int, float, str, None, tuple]
+Value = bool | int | float | str | None | tuple
 
 ANY_TYPE = "auto"
 """Pattern type that matches a world node of any type (AGM targets use it on constants)."""
@@ -88,7 +88,7 @@ class Exists:
     pos: SourcePos | None = field(default=None, compare=False)
 
 
-Expr = Union[Literal, ListLit, AttrRef, VarRef, Compare, Not, And, Or, Exists]
+Expr = Literal | ListLit | AttrRef | VarRef | Compare | Not | And | Or | Exists
 """In a boolean place any expression counts by Python truthiness (``[open]``, ``where a.busy``)."""
 
 
@@ -172,7 +172,7 @@ class FRetype:
     pos: SourcePos | None = field(default=None, compare=False)
 
 
-Formula = Union[FNot, FAnd, FOr, FLink, FSame, FExists, FForall, FWhen, FCreate, FDelete, FRetype]
+Formula = FNot | FAnd | FOr | FLink | FSame | FExists | FForall | FWhen | FCreate | FDelete | FRetype
 
 
 def formula_children(f: Formula) -> tuple[Formula, ...]:

@@ -120,7 +120,8 @@ def _lark_error(exc: UnexpectedInput, text: str, file: str) -> GrammarError:
         line, column = _end_position(text.rstrip())
         return GrammarError(f"unexpected end of file{_expected(exc.expected)}", file, line, column)
     if isinstance(exc, UnexpectedCharacters):
-        char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
+        pos = exc.pos_in_stream or 0   # lark types it Optional; a character error always has one
+        char = text[pos] if pos < len(text) else ""
         return GrammarError(f"unexpected character {char!r}{_expected(exc.allowed or ())}", file,
                             exc.line, exc.column)
     return GrammarError(str(exc), file, getattr(exc, "line", 0), getattr(exc, "column", 0))

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Union, cast
+from typing import TypeGuard, cast
 
 import networkx as nx
 
@@ -126,7 +126,7 @@ class NoPlan:
     found: bool = field(default=False, init=False)
 
 
-PlanResult = Union[Plan, NoPlan]
+PlanResult = Plan | NoPlan
 
 
 @dataclass
@@ -410,7 +410,7 @@ class _AgmIds:
         return {var: self._of(n) for var, n in b.items()}
 
 
-def _is_int(key: object) -> bool:
+def _is_int(key: object) -> TypeGuard[int | str]:
     return isinstance(key, int) and not isinstance(key, bool) or (isinstance(key, str) and key.isdigit())
 
 

@@ -51,17 +51,17 @@ def apply_rule(rule: Rule, state: State, lhs_bindings: Bindings, matcher: Matche
     for s, d, label in changes.remove_edges:
         editor.remove_edge(s, d, label)
     deleted = set(changes.delete_nodes)
-    for node in changes.delete_nodes:
-        editor.delete_node(node, state)
-    for node, node_type in changes.retype:
-        if node not in deleted:
-            editor.retype(node, node_type)
+    for node_id in changes.delete_nodes:
+        editor.delete_node(node_id, state)
+    for node_id, node_type in changes.retype:
+        if node_id not in deleted:
+            editor.retype(node_id, node_type)
     for s, d, label in changes.add_edges:
         if s not in deleted and d not in deleted:
             editor.add_edge(s, d, label)
-    for node, key, value in values:
-        if node not in deleted:
-            editor.set_attr(node, key, value)
+    for node_id, key, value in values:
+        if node_id not in deleted:
+            editor.set_attr(node_id, key, value)
     if rule.dormant or rule.activates:
         editor.activate(rule.activates)
     return Application(rule, b, editor.freeze())

@@ -379,7 +379,7 @@ class ModelBuilder(Transformer):
                          self._tpos(name))
 
     def agm_file(self, meta: Any, c: list[Any]) -> dict[str, Any]:
-        props = dict(x for x in c if isinstance(x, tuple))
+        props: dict[str, Any] = dict(x for x in c if isinstance(x, tuple))
         types = next((x for x in c if isinstance(x, _Types)), None)
         items = [x for x in c if isinstance(x, (Rule, ComboRule, _Include))]
         return {"dialect": "agm", "properties": props, "name": props.get("name"),

@@ -127,14 +127,14 @@ class State:
             for i in sorted(self._types):
                 self._by_type_new.setdefault(self._types[i], []).append(i)
         else:
-            self._types = self._names = _EMPTY_MAP  # type: ignore[assignment]
-            self._by_type_new = _EMPTY_MAP  # type: ignore[assignment]
+            self._types = self._names = _EMPTY_MAP
+            self._by_type_new = _EMPTY_MAP
         if ov.attrs:
             self._attrs: dict[int, dict[str, Value]] = {}
             for i, key, value in ov.attrs:
                 self._attrs.setdefault(i, {})[key] = value
         else:
-            self._attrs = _EMPTY_MAP  # type: ignore[assignment]
+            self._attrs = _EMPTY_MAP
         self._hash = hash(ov)
         self._views: dict[Hashable, tuple[object, ...]] | None = None
 
@@ -328,19 +328,19 @@ class StateEditor:
         e = (s, d, label)
         if e in self.removed:
             self._own_links()
-            self.removed.discard(e)  # type: ignore[union-attr]
+            self.removed.discard(e)  # type: ignore[union-attr]  # _own_links() made it a set
         elif e not in self.added and not self._base_has(e):
             self._own_links()
-            self.added.add(e)  # type: ignore[union-attr]
+            self.added.add(e)  # type: ignore[union-attr]  # _own_links() made it a set
 
     def remove_edge(self, s: int, d: int, label: str) -> None:
         e = (s, d, label)
         if e in self.added:
             self._own_links()
-            self.added.discard(e)  # type: ignore[union-attr]
+            self.added.discard(e)  # type: ignore[union-attr]  # _own_links() made it a set
         elif e not in self.removed and self._base_has(e):
             self._own_links()
-            self.removed.add(e)  # type: ignore[union-attr]
+            self.removed.add(e)  # type: ignore[union-attr]  # _own_links() made it a set
 
     def create_node(self, node_type: str, name_hint: str) -> int:
         i = self.next_id
@@ -406,7 +406,7 @@ def graph_from_mapping(nodes: Mapping[str, Mapping[str, Any]],
         graph.add_node(name, name=name, **dict(data))
     for edge in edges:
         src, dst, label = edge[0], edge[1], edge[2]
-        attrs = dict(edge[3]) if len(edge) > 3 else {}  # type: ignore[misc]
+        attrs = dict(edge[3]) if len(edge) > 3 else {}
         for end in (src, dst):
             if end not in graph:
                 raise PlanningError(f"edge {src}->{dst}({label}) uses unknown node {end!r}")

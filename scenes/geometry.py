@@ -23,7 +23,10 @@ import shapely
 from numpy.typing import ArrayLike, NDArray
 from shapely.geometry import Polygon
 
-from scenes.angles import angle_difference, lerp_angle, wrap_angle  # noqa: F401  (re-exported for existing callers)
+# re-exported for existing callers (the `x as x` form marks a re-export for ruff and mypy)
+from scenes.angles import angle_difference as angle_difference
+from scenes.angles import lerp_angle as lerp_angle
+from scenes.angles import wrap_angle as wrap_angle
 
 CIRCLE_QUAD_SEGMENTS = 16   # 64-gon: area within 0.2 % of pi r^2
 

@@ -8,8 +8,10 @@ point at the line of the offending key.
 from __future__ import annotations
 
 import difflib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import math
 
@@ -63,15 +65,24 @@ PERSON_BODY_RADIUS_M = 0.25
 DOOR_ON_WALL_TOLERANCE_M = 0.1
 
 
+class _Named(Protocol):
+    """Any named item of a scene (room, object, person, door)."""
+
+    @property
+    def name(self) -> str: ...
+
+
 def _check_references(scene: Scene, located: LocatedYaml) -> None:
     """Names unique, references resolved: located at the key that is wrong, not at the file's start."""
-    for kind, key, items in (("room", "rooms", scene.rooms), ("object", "objects", scene.objects),
-                             ("person", "people", scene.people), ("door", "doors", scene.doors)):
+    named: tuple[tuple[str, str, Sequence[_Named]], ...] = (
+        ("room", "rooms", scene.rooms), ("object", "objects", scene.objects),
+        ("person", "people", scene.people), ("door", "doors", scene.doors))
+    for kind, section, items in named:
         seen: dict[str, int] = {}
         for index, item in enumerate(items):
             if item.name in seen:
-                line, _ = located.where((key, seen[item.name], "name"))
-                raise located.error((key, index, "name"), f"duplicate {kind} name {item.name!r} (first on line "
+                line, _ = located.where((section, seen[item.name], "name"))
+                raise located.error((section, index, "name"), f"duplicate {kind} name {item.name!r} (first on line "
                                     f"{line}); give each {kind} its own name")
             seen[item.name] = index
     rooms = {r.name for r in scene.rooms}
@@ -112,7 +123,7 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
             if person.visits not in people:
                 raise located.error(("people", i, "visits"), unknown("person", person.visits, people))
         for j, other in enumerate(person.interacting_with):
-            key = ("people", i, "interacting_with", j)
+            key: KeyPath = ("people", i, "interacting_with", j)
             if other in objects:
                 raise located.error(key, f"{other!r} is an object; links to objects come from the agenda: add "
                                     f"an activity on it with {person.name!r} among its participants")
@@ -193,7 +204,7 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
         clear(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}",
               PERSON_BODY_RADIUS_M, "a person's body")
         for j, waypoint in enumerate(person.waypoints):
-            key = ("people", i, "waypoints", j, "pose")
+            key: KeyPath = ("people", i, "waypoints", j, "pose")
             inside(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}")
             clear(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}", PERSON_BODY_RADIUS_M,
                   "a person's body")
@@ -210,11 +221,11 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
         key = ("doors", i, "position")
         inside(key, x, y, f"door {door.name!r}")
         point = shapely.Point(x, y)
-        for room in door.between:
-            gap = areas[room].boundary.distance(point)
+        for room_name in door.between:
+            gap = areas[room_name].boundary.distance(point)
             if gap > DOOR_ON_WALL_TOLERANCE_M:
                 raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is not on the outline of room "
-                                    f"{room!r} ({gap:.2f} m from it); a door sits on the wall between its two "
+                                    f"{room_name!r} ({gap:.2f} m from it); a door sits on the wall between its two "
                                     f"rooms {door.between[0]!r} and {door.between[1]!r}")
         clearance = min(door.width / 2, robot.radius) - 0.01
         if not walls.is_empty and walls.distance(point) < clearance:
@@ -235,7 +246,7 @@ def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
     on one spot, or a robot started on a resident, is a typing mistake (``path`` then says the
     robot's start is blocked), not a scene."""
     robot = scene.robot
-    for i, person in enumerate(scene.people):
+    for person in scene.people:
         gap = math.hypot(person.pose.x - robot.pose.x, person.pose.y - robot.pose.y)
         if gap < robot.radius + PERSON_BODY_RADIUS_M:
             raise located.error(("robot", "pose"), f"robot at ({robot.pose.x:g}, {robot.pose.y:g}) starts on person "
@@ -243,7 +254,7 @@ def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
                                 f"than the robot's radius plus a person's body ({robot.radius + PERSON_BODY_RADIUS_M:g} m); "
                                 "move one of them")
     for i, person in enumerate(scene.people):
-        for j, other in enumerate(scene.people[:i]):
+        for other in scene.people[:i]:
             gap = math.hypot(person.pose.x - other.pose.x, person.pose.y - other.pose.y)
             if gap < 2 * PERSON_BODY_RADIUS_M:
                 raise located.error(("people", i, "pose"), f"person {person.name!r} at ({person.pose.x:g}, "

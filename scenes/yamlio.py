@@ -26,7 +26,7 @@ import difflib
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import yaml
 from pydantic import BaseModel, ValidationError
@@ -101,14 +101,13 @@ for _tag, _pattern in ((_INT, r"""^(?:[-+]?0b[0-1_]+
     _Loader.add_implicit_resolver(_tag, re.compile(_pattern, re.X), list("-+0123456789."))
 
 
-_CSafeLoader = getattr(yaml, "CSafeLoader", None)
-if _CSafeLoader is not None:
-    class _FastLoader(_CSafeLoader):  # type: ignore[misc,valid-type]
+_FastLoader: type[yaml.CSafeLoader] | None = None   # stays None where PyYAML was built without libyaml
+if getattr(yaml, "CSafeLoader", None) is not None:
+    class _LibyamlLoader(yaml.CSafeLoader):
         """libyaml's parser and composer (30x faster) with the same resolvers as ``_Loader``."""
 
-    _FastLoader.yaml_implicit_resolvers = _Loader.yaml_implicit_resolvers
-else:  # pragma: no cover - PyYAML built without libyaml
-    _FastLoader = None
+    _LibyamlLoader.yaml_implicit_resolvers = _Loader.yaml_implicit_resolvers
+    _FastLoader = _LibyamlLoader
 
 
 def _compose(text: str, max_depth: int) -> yaml.Node | None:
@@ -116,12 +115,12 @@ def _compose(text: str, max_depth: int) -> yaml.Node | None:
     (composers recurse once per level).  libyaml when PyYAML has it: a first pass over the events
     (a flat loop) measures the depth, then libyaml composes."""
     if _FastLoader is None:
-        loader = _Loader(text)
-        loader.max_depth = max_depth
+        slow = _Loader(text)
+        slow.max_depth = max_depth
         try:
-            return loader.get_single_node()
+            return slow.get_single_node()
         finally:
-            loader.dispose()
+            slow.dispose()
     events = _FastLoader(text)
     try:
         depth = 0
@@ -241,7 +240,7 @@ class _Builder:
             return self.mapping(node, path)
         if isinstance(node, yaml.SequenceNode):
             return [self.build(item, (*path, index)) for index, item in enumerate(node.value)]
-        return self.scalar(node, path)
+        return self.scalar(cast(yaml.ScalarNode, node), path)   # the third and last kind of node
 
     def mapping(self, node: yaml.MappingNode, path: KeyPath) -> dict[Any, Any]:
         data: dict[Any, Any] = {}

@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 import unicodedata
 from dataclasses import dataclass
-from typing import Any
 
 from agents.world.vocabulary import ACTIVITY_PREFIX, NodeType, activity_id_of, activity_name
+from dsr.protocols import GraphReader
 from scenes.names import shown
 
 ROOM, OBJECT, PERSON, GROUP, WAIT, POSE = "room", "object", "person", "group", "wait", "pose"
@@ -114,7 +114,7 @@ def _listing(names: list[str]) -> str:
     return ", ".join(listed) + (f" and {more} more" if more > 0 else "") if listed else "none"
 
 
-def check_names(request: MissionRequest, graph: Any) -> str | None:
+def check_names(request: MissionRequest, graph: GraphReader) -> str | None:
     """Why the mission's names are not in the DSR ``graph``, in the user's words (listing what
     exists), or None."""
     node_type = request.node_type

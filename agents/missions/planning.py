@@ -24,6 +24,7 @@ from agents.missions.kinds import (ECHO_CHARS, GROUP, POSE, ROOM, MissionRequest
                                    parse_mission)
 from agents.missions.steps import PlanStep, Rule, StepFailed, Var
 from agents.world.dsr_readers import symbolic_view
+from dsr.protocols import GraphReader
 from scenes.model import Scene
 from scenes.names import shown
 
@@ -65,7 +66,7 @@ class MissionPlanner:
         self.grammar = load_grammar(self.grammar_file)
         self.max_expansions = max_expansions
 
-    def plan(self, graph: Any, goal_text: str) -> MissionPlan:
+    def plan(self, graph: GraphReader, goal_text: str) -> MissionPlan:
         """Plan ``goal_text`` on ``graph`` (a DSR replica). MissionStringError for a malformed
         mission; NoMissionPlan (a StepFailed) when the world offers no plan."""
         from grammar import MissionError, plan_mission

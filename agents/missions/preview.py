@@ -15,6 +15,7 @@ from typing import Any
 from agents.missions.goals import GoalPose
 from agents.missions.planning import MissionPlan, MissionPlanner, intention_end, route_rooms
 from agents.missions.steps import PlanStep, StepFailed
+from dsr.protocols import GraphReader
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,7 @@ class StepPreview:
         return out
 
 
-def preview_mission(planner: MissionPlanner, graph: Any, goal_text: str) -> tuple[MissionPlan, list[StepPreview]]:
+def preview_mission(planner: MissionPlanner, graph: GraphReader, goal_text: str) -> tuple[MissionPlan, list[StepPreview]]:
     """Plan ``goal_text`` on ``graph`` exactly as the executive would, and resolve each intention."""
     plan = planner.plan(graph, goal_text)
     steps = plan.steps

@@ -21,6 +21,7 @@ from agents.missions.goals import (SOCIAL_DISTANCE_M, FreeSpace, GoalError, Goal
                                    pose_facing_person, pose_in_room, pose_near_object, pose_past_door)
 from agents.world.dsr_readers import dsr_objects, dsr_people
 from agents.world.vocabulary import ActivityView, EdgeType, IntentionKind, NodeType, activities, activity_id_of
+from dsr.protocols import GraphReader
 from scenes.geometry import angle_difference, posed_polygon
 from scenes.model import Scene
 
@@ -114,17 +115,17 @@ class PlanStep:
         return ""
 
     # ------------------------------------------------------------------------------------ waits
-    def awaited(self, graph: Any) -> ActivityView | None:
+    def awaited(self, graph: GraphReader) -> ActivityView | None:
         """The activity a wait step waits for, as the DSR holds it now (None: gone from the agenda)."""
         return ActivityView.named(graph, self.bindings.get(Var.ACTIVITY, ""))
 
-    def wait_over(self, graph: Any) -> bool:
+    def wait_over(self, graph: GraphReader) -> bool:
         """A wait ends when its activity has finished or was cancelled (or left the agenda)."""
         activity = self.awaited(graph)
         return activity is None or activity.ended
 
     # ------------------------------------------------------------------ resolution against the DSR
-    def intention_attrs(self, graph: Any, scene: Scene, robot_xy: tuple[float, float] | None = None) -> dict[str, Any]:
+    def intention_attrs(self, graph: GraphReader, scene: Scene, robot_xy: tuple[float, float] | None = None) -> dict[str, Any]:
         """The intention's attributes: a wait until the activity's end, or a goal pose resolved on
         the DSR now (``robot_xy``: where the robot will be, when not where the DSR has it)."""
         if not self.navigates:
@@ -136,7 +137,7 @@ class PlanStep:
         return {"kind": IntentionKind.NAVIGATE, **goal.as_attrs(), "target": self.subject,
                 "pass_through": self.rule == Rule.CHANGE_ROOM}
 
-    def resolve(self, graph: Any, scene: Scene, robot_xy: tuple[float, float] | None = None) -> GoalPose:
+    def resolve(self, graph: GraphReader, scene: Scene, robot_xy: tuple[float, float] | None = None) -> GoalPose:
         """The goal pose of a navigating step on the DSR as it is now; remembers it (and where the
         approached person or group stood) to tell divergence later."""
         if robot_xy is None:
@@ -186,13 +187,13 @@ class PlanStep:
         self.issued_goal = goal
         return goal
 
-    def group(self, graph: Any) -> set[str]:
+    def group(self, graph: GraphReader) -> set[str]:
         """The people a takeTheAttention step faces: its members (or p and q) and everyone linked
         to them by ``interacting`` edges, transitively (the F-formation they stand in)."""
         seeds = set(self.members) or {self.bindings[Var.PERSON], self.bindings[Var.OTHER_PERSON]}
         return interacting_closure(graph, seeds)
 
-    def diverged(self, graph: Any) -> bool:
+    def diverged(self, graph: GraphReader) -> bool:
         """Has the world changed under this issued step enough that its goal pose is no longer right?"""
         if self.issued_goal is None:
             return False
@@ -222,7 +223,7 @@ class PlanStep:
         return False
 
 
-def _still(graph: Any, name: str) -> bool:
+def _still(graph: GraphReader, name: str) -> bool:
     """Is the person standing (the observer's velocity estimate below PERSON_STILL_MPS)?"""
     node = graph.get_node_by_name(name)
     if node is None:
@@ -237,7 +238,7 @@ def _centre(points: list[tuple[float, float]]) -> tuple[float, float]:
     return (sum(p[0] for p in points) / len(points), sum(p[1] for p in points) / len(points))
 
 
-def _positions(graph: Any) -> dict[str, tuple[float, float]]:
+def _positions(graph: GraphReader) -> dict[str, tuple[float, float]]:
     out = {}
     for node in graph.nodes_of_type(NodeType.PERSON):
         try:
@@ -248,7 +249,7 @@ def _positions(graph: Any) -> dict[str, tuple[float, float]]:
     return out
 
 
-def interacting_closure(graph: Any, seeds: set[str]) -> set[str]:
+def interacting_closure(graph: GraphReader, seeds: set[str]) -> set[str]:
     """The seeds plus everyone linked to them by person-person ``interacting`` edges (transitively)."""
     names = set(seeds)
     changed = True
@@ -264,7 +265,7 @@ def interacting_closure(graph: Any, seeds: set[str]) -> set[str]:
     return names
 
 
-def busy_spaces(graph: Any, objects: list) -> list[shapely.Geometry]:
+def busy_spaces(graph: GraphReader, objects: list) -> list[shapely.Geometry]:
     """Interaction spaces of objects with a running activity: no goal pose inside them."""
     running = {a.object for a in activities(graph) if a.running}
     return [posed_polygon(o.interaction, o.x, o.y, o.theta) for o in objects if o.name in running]

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import os
 import time
-from typing import Any
 
 from agents.world.vocabulary import NodeType, heartbeat_name
+from dsr.protocols import GraphReader, GraphWriter
 
 #: wall seconds between two stamps: 6 agents -> 6 small deltas a second
 HEARTBEAT_PERIOD_S = 1.0
@@ -23,7 +23,7 @@ HEARTBEAT_PERIOD_S = 1.0
 class Heartbeat:
     """Stamps ``heartbeat/<agent>`` at most every ``period_s`` wall seconds."""
 
-    def __init__(self, graph: Any, agent: str, period_s: float = HEARTBEAT_PERIOD_S) -> None:
+    def __init__(self, graph: GraphWriter, agent: str, period_s: float = HEARTBEAT_PERIOD_S) -> None:
         self.graph, self.agent, self.period_s = graph, agent, period_s
         self.beat = 0
         self._last = -float("inf")
@@ -42,7 +42,7 @@ class Heartbeat:
             self.graph.update_node(node.id, attrs=attrs)
 
 
-def read_stamp(graph: Any, agent: str) -> tuple[int, int] | None:
+def read_stamp(graph: GraphReader, agent: str) -> tuple[int, int] | None:
     """(pid, beat) of the agent's last stamp, None before its first one."""
     node = graph.get_node_by_name(heartbeat_name(agent))
     if node is None:

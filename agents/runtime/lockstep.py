@@ -27,10 +27,13 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
+
+if TYPE_CHECKING:   # the scheduler drives the concrete graph: its dispatch loop and local write policy
+    from dsr import DSRGraph
 
 #: virtual wall seconds per round: the period every agent process loops at
 ROUND_PERIOD_S = 0.02
@@ -71,7 +74,7 @@ class LockstepOutcome:
 class Lockstep:
     """The scheduler: ``setup`` the agents on ``graph``, then ``run`` rounds until ``done()``."""
 
-    def __init__(self, graph: Any, agents: Sequence[Agent], recorders: Sequence[Recorder], *,
+    def __init__(self, graph: DSRGraph, agents: Sequence[Agent], recorders: Sequence[Recorder], *,
                  period_s: float = ROUND_PERIOD_S, policy: Any = None) -> None:
         """``policy``: the write policy a launch's replicas enforce (agents/world/write_policy.py);
         each agent's writes are then checked under its own name, as its replica would check them."""

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from agents.lib.agenda.model import ActivityWindow, AgendaError
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
 from agents.world.vocabulary import CLOCK, EdgeType, NodeType
+from dsr.protocols import GraphReader
 from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
 
 if TYPE_CHECKING:  # networkx (0.1 s) loads with DSRGraph.to_networkx, only when a symbolic view is asked for
@@ -28,7 +29,7 @@ def shape_from_attrs(prefix: str, attrs: dict[str, Any], where: str) -> Shape:
     return shape_from_spec({"shape": kind, **dict(zip(shape_keys(kind), dims, strict=True))}, where)
 
 
-def dsr_objects(graph: Any) -> list[SocialObject]:
+def dsr_objects(graph: GraphReader) -> list[SocialObject]:
     """Objects as the DSR holds them."""
     out: list[SocialObject] = []
     for node in graph.nodes_of_type(NodeType.OBJECT):
@@ -46,7 +47,7 @@ def dsr_objects(graph: Any) -> list[SocialObject]:
 DUE_BEFORE_S = 360.0   # an activity's participants are on their way this long before it starts
 
 
-def dsr_people(graph: Any) -> list[Person]:
+def dsr_people(graph: GraphReader) -> list[Person]:
     """People with their poses and the people they interact with (``interacting`` edges)."""
     out: list[Person] = []
     interacting: dict[int, list[str]] = {}
@@ -70,7 +71,7 @@ def dsr_people(graph: Any) -> list[Person]:
     return out
 
 
-def destinations(graph: Any) -> dict[int, tuple[float, float]]:
+def destinations(graph: GraphReader) -> dict[int, tuple[float, float]]:
     """Where the agenda says people are going: a participant of a running activity, or of one due
     within ``DUE_BEFORE_S`` (the simulated participants leave to arrive 2.5 min early, always
     within the 5 min before it), is walking to its object (the prediction of a walker's path
@@ -141,7 +142,7 @@ class DoorGraph:
         return doors
 
     @classmethod
-    def of(cls, graph: Any) -> DoorGraph:
+    def of(cls, graph: GraphReader) -> DoorGraph:
         import shapely
 
         rooms = {}
@@ -185,7 +186,7 @@ class DoorGraph:
         return () if best is None else tuple(self.doors[name][:2] for name in self.way(*best[1]))
 
 
-def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
+def dsr_activity_windows(graph: GraphReader) -> list[ActivityWindow]:
     out: list[ActivityWindow] = []
     for node in graph.nodes_of_type(NodeType.ACTIVITY):
         attrs = node.attrs
@@ -197,7 +198,7 @@ def dsr_activity_windows(graph: Any) -> list[ActivityWindow]:
     return out
 
 
-def closed_doors(graph: Any) -> list[str]:
+def closed_doors(graph: GraphReader) -> list[str]:
     """Names of the doors the DSR says are closed."""
     return sorted(node.name for node in graph.nodes_of_type(NodeType.DOOR) if node.attrs.get("open") is False)
 
@@ -206,7 +207,7 @@ SYMBOLIC_TYPES = frozenset({NodeType.ROOM, NodeType.DOOR, NodeType.ROBOT, NodeTy
                             NodeType.ACTIVITY})
 
 
-def symbolic_view(graph: Any) -> nx.MultiDiGraph:
+def symbolic_view(graph: GraphReader) -> nx.MultiDiGraph:
     """The part of the DSR the grammar reasons about (no clock, missions, intentions, requests):
     nodes keyed by id with ``type``, ``name`` and their attributes; edges keyed by their type."""
     full = graph.to_networkx()
@@ -214,7 +215,7 @@ def symbolic_view(graph: Any) -> nx.MultiDiGraph:
     return full.subgraph(keep).copy()
 
 
-def running_activities(graph: Any) -> list[tuple[str, tuple[float, float], tuple[str, ...]]]:
+def running_activities(graph: GraphReader) -> list[tuple[str, tuple[float, float], tuple[str, ...]]]:
     """(object, object position, participants) of every activity the DSR says is running."""
     out = []
     for node in graph.nodes_of_type(NodeType.ACTIVITY):

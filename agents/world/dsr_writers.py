@@ -15,6 +15,8 @@ from typing import Any
 from agents.lib.agenda import Activity, AgendaDay
 from agents.lib.agenda.chronemics import ChronemicsParams, r_band, r_of_t
 from agents.world.vocabulary import (AGENDA, CLOCK, GROUND_TRUTH_PEOPLE, WORLD, EdgeType, NodeType, activity_name)
+from dsr.model import Node
+from dsr.protocols import GraphWriter
 from scenes.geometry import Shape, shape_keys
 from scenes.model import RobotSpec, Scene, SceneObject
 
@@ -27,11 +29,11 @@ def shape_attrs(prefix: str, shape: Shape) -> dict[str, Any]:
     return {f"{prefix}_shape": shape.shape, f"{prefix}_dims": [float(getattr(shape, k)) for k in shape_keys(shape.shape)]}
 
 
-def _world(graph: Any) -> Any:
+def _world(graph: GraphWriter) -> Node:
     return graph.get_node_by_name(WORLD) or graph.insert_node(type=NodeType.WORLD, name=WORLD, attrs={})
 
 
-def _set_in_room(graph: Any, node_id: int, room_name: str | None) -> None:
+def _set_in_room(graph: GraphWriter, node_id: int, room_name: str | None) -> None:
     """Exactly one ``in`` edge from the node, to ``room_name`` (none when it is in no room)."""
     room = graph.get_node_by_name(room_name) if room_name else None
     for edge in graph.edges_from(node_id, EdgeType.IN):
@@ -41,14 +43,14 @@ def _set_in_room(graph: Any, node_id: int, room_name: str | None) -> None:
         graph.insert_or_assign_edge(node_id, room.id, EdgeType.IN, attrs={})
 
 
-def _set_pose(graph: Any, parent_id: int, node_id: int, pose: Mapping[str, float]) -> None:
+def _set_pose(graph: GraphWriter, parent_id: int, node_id: int, pose: Mapping[str, float]) -> None:
     edge = graph.get_edge(parent_id, node_id, EdgeType.RT)
     if edge is None or any(edge.attrs.get(k) != v for k, v in pose.items()):
         graph.insert_or_assign_edge(parent_id, node_id, EdgeType.RT, attrs=dict(pose))
 
 
 # ----------------------------------------------------------------------------- simulator: building, clock, robot
-def write_building(graph: Any, scene: Scene, doors_open: Mapping[str, bool]) -> None:
+def write_building(graph: GraphWriter, scene: Scene, doors_open: Mapping[str, bool]) -> None:
     """World root, rooms (polygons), doors (with their open state) and the ``connected`` edges."""
     with graph.transaction():
         world = _world(graph)
@@ -73,7 +75,7 @@ def write_building(graph: Any, scene: Scene, doors_open: Mapping[str, bool]) -> 
         set_doors(graph, doors_open)
 
 
-def set_doors(graph: Any, doors_open: Mapping[str, bool]) -> list[tuple[str, bool]]:
+def set_doors(graph: GraphWriter, doors_open: Mapping[str, bool]) -> list[tuple[str, bool]]:
     """Bring each door's ``open`` attribute to ``doors_open``; the doors that changed."""
     changed = []
     for name, is_open in sorted(doors_open.items()):
@@ -84,7 +86,7 @@ def set_doors(graph: Any, doors_open: Mapping[str, bool]) -> list[tuple[str, boo
     return changed
 
 
-def write_clock(graph: Any, scene: Scene, now_s: float, rate: float) -> Any:
+def write_clock(graph: GraphWriter, scene: Scene, now_s: float, rate: float) -> Node:
     node = graph.get_node_by_name(CLOCK)
     if node is None:
         node = graph.insert_node(type=NodeType.CLOCK, name=CLOCK,
@@ -95,7 +97,7 @@ def write_clock(graph: Any, scene: Scene, now_s: float, rate: float) -> Any:
     return node
 
 
-def write_robot(graph: Any, spec: RobotSpec, pose: tuple[float, float, float], room: str | None,
+def write_robot(graph: GraphWriter, spec: RobotSpec, pose: tuple[float, float, float], room: str | None,
                 laser_angles: list[float]) -> Any:
     """The robot node, its pose (RT world -> robot) and its room."""
     with graph.transaction():
@@ -111,7 +113,7 @@ def write_robot(graph: Any, spec: RobotSpec, pose: tuple[float, float, float], r
     return node
 
 
-def write_ground_truth(graph: Any, people: Sequence[Any], now_s: float) -> None:
+def write_ground_truth(graph: GraphWriter, people: Sequence[Any], now_s: float) -> None:
     """The simulated world's people as they truly are (``ground_truth/people``): what the simulated
     sensors - the human observer - perceive, with their own noise.  Written with the pose and the
     clock in one delta; never read by planners, which see people only through the observer."""
@@ -135,7 +137,7 @@ def object_attrs(obj: SceneObject) -> dict[str, Any]:
             **shape_attrs("footprint", obj.footprint), **shape_attrs("interaction", obj.interaction)}
 
 
-def write_object(graph: Any, obj: SceneObject, room: str | None) -> bool:
+def write_object(graph: GraphWriter, obj: SceneObject, room: str | None) -> bool:
     """One object with its shapes, pose and room; True when it was new."""
     attrs = object_attrs(obj)
     pose = {"x": obj.pose.x, "y": obj.pose.y, "theta": obj.pose.theta}
@@ -153,7 +155,7 @@ def write_object(graph: Any, obj: SceneObject, room: str | None) -> bool:
 
 
 # ----------------------------------------------------------------------------- human observer
-def write_person(graph: Any, name: str, role: str, pose: tuple[float, float, float], room: str | None,
+def write_person(graph: GraphWriter, name: str, role: str, pose: tuple[float, float, float], room: str | None,
                  seen_s: float, velocity: tuple[float, float] = (0.0, 0.0)) -> None:
     """A person as perceived: pose (RT world -> person), velocity (m/s, world frame), room, and
     when they were seen."""
@@ -167,7 +169,7 @@ def write_person(graph: Any, name: str, role: str, pose: tuple[float, float, flo
         _set_in_room(graph, node.id, room)
 
 
-def write_interactions(graph: Any, pairs: Iterable[tuple[str, str]]) -> bool:
+def write_interactions(graph: GraphWriter, pairs: Iterable[tuple[str, str]]) -> bool:
     """Exactly these ``interacting`` edges (person -> person | object), by name; True if any changed."""
     wanted: set[tuple[int, int]] = set()
     for src_name, dst_name in pairs:
@@ -193,7 +195,7 @@ def activity_attrs(activity: Activity) -> dict[str, Any]:
             "participants": list(activity.participants), "state": activity.state.value, "source": activity.source}
 
 
-def write_activities(graph: Any, day_now: AgendaDay) -> bool:
+def write_activities(graph: GraphWriter, day_now: AgendaDay) -> bool:
     """``activity/<id>`` nodes for the day (states as given), their ``has`` and ``participant``
     edges; activities no longer in the day are deleted.  False while an edge could not be written
     yet (its object or person is not in the graph): call again later."""
@@ -232,7 +234,7 @@ def object_r(day: AgendaDay, object_name: str, now_s: float, params: ChronemicsP
     return r, r_band(r, params), any(w.running_at(now_s) for w in own)
 
 
-def write_object_r(graph: Any, day: AgendaDay, now_s: float, params: ChronemicsParams) -> dict[str, float]:
+def write_object_r(graph: GraphWriter, day: AgendaDay, now_s: float, params: ChronemicsParams) -> dict[str, float]:
     """Each object's R(t), band and activity flag (written when they changed); R per object."""
     values: dict[str, float] = {}
     with graph.transaction():
@@ -245,7 +247,7 @@ def write_object_r(graph: Any, day: AgendaDay, now_s: float, params: ChronemicsP
     return values
 
 
-def agenda_log(graph: Any) -> Any:
+def agenda_log(graph: GraphWriter) -> Node:
     """The ``agenda`` node: the replayable log of accepted changes and applied scripted ones."""
     node = graph.get_node_by_name(AGENDA)
     if node is None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from agents.world.vocabulary import ActivityState, EdgeType, NodeType
+from dsr.protocols import GraphReader, GraphWriter
 
 PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
 #: who stamps every tick in lockstep (-o perception_lockstep=1): the perceivers, then the executive,
@@ -18,7 +19,7 @@ PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
 LOCKSTEP: tuple[str, ...] = (*PERCEIVERS, "executive")
 
 
-def mark_observed(graph: Any, agent: str, now_s: float) -> None:
+def mark_observed(graph: GraphWriter, agent: str, now_s: float) -> None:
     name = f"sensor/{agent}"
     node = graph.get_node_by_name(name)
     if node is None:
@@ -27,7 +28,7 @@ def mark_observed(graph: Any, agent: str, now_s: float) -> None:
         graph.update_node(node.id, attrs={"observed_s": now_s})
 
 
-def observed_s(graph: Any, agent: str) -> float | None:
+def observed_s(graph: GraphReader, agent: str) -> float | None:
     """The sim time ``agent`` last stamped, or None before its first stamp."""
     node = graph.get_node_by_name(f"sensor/{agent}")
     if node is None:
@@ -38,7 +39,7 @@ def observed_s(graph: Any, agent: str) -> float | None:
         return None
 
 
-def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
+def observed_up_to(graph: GraphReader, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
     """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
     for agent in agents:
         node = graph.get_node_by_name(f"sensor/{agent}")
@@ -47,7 +48,7 @@ def observed_up_to(graph: Any, now_s: float, agents: tuple[str, ...] = PERCEIVER
     return True
 
 
-def interactions_follow_activities(graph: Any) -> bool:
+def interactions_follow_activities(graph: GraphReader) -> bool:
     """False while a person -> object ``interacting`` link remains for an object no running activity
     has: the human observer has not yet seen that the activity ended (it recomputes its links on its
     next look).  A planner must not read such an object as in use."""

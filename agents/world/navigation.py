@@ -19,6 +19,7 @@ from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMap
                                              build_static_map)
 from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_occupancy, scene_rooms, scene_walls
 from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
+from dsr.protocols import GraphReader
 from scenes.model import Scene
 
 # PLANNING_MARGIN_M (building.py, where the scene check reads it without importing the planner).
@@ -64,7 +65,7 @@ class NavigationMaps:
                                                   occupancy=self._occupancy)
         return self._statics[key]
 
-    def build(self, graph: Any, now_s: float, route_rooms: Sequence[str] = ()) -> SocialMap:
+    def build(self, graph: GraphReader, now_s: float, route_rooms: Sequence[str] = ()) -> SocialMap:
         """The social map at ``now_s`` from the DSR: people, objects, activities and closed doors
         (a closed door is a wall).  With ``route_rooms`` (the symbolic plan's rooms) other rooms are
         walls, so the metric planner picks doors and way but never crosses a room the plan avoided."""

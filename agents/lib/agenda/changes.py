@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator
 
-from agents.lib.agenda.expand import AgendaSource, assign_ids, drafts_for_day, resolve_spec
+from agents.lib.agenda.expand import AgendaSource, assign_ids, drafts_for_day, resolve_spec, with_ids
 from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, ActivityState, AgendaDay,
                                  AgendaError, AgendaSourceError, format_clock, parse_when,
                                  wall_seconds)
@@ -49,7 +49,7 @@ def add_activity(day: AgendaDay, spec: ActivitySpec, *, known_objects: Collectio
         raise AgendaChangeError(f"refused: id {spec.id!r} is already used by "
                                 f"{day.get(spec.id).source}; choose another id or leave it out")
     (draft,) = assign_ids([draft], taken=day.ids())
-    _refuse(validate_activities([draft], known_objects, known_rooms, known_people))
+    _refuse(validate_activities(with_ids([draft]), known_objects, known_rooms, known_people))
     return day.with_activities([*day.activities, draft.to_activity()])
 
 
@@ -123,7 +123,7 @@ def load_activities(day: AgendaDay, sources: Iterable[AgendaSource], *, mode: Lo
     if mode not in ("replace", "merge"):
         raise AgendaChangeError(f"refused: load mode must be 'replace' or 'merge', not {mode!r}")
     drafts = assign_ids(drafts_for_day(sources, day.date, day.zone))
-    _refuse(validate_activities(drafts, known_objects, known_rooms, known_people))
+    _refuse(validate_activities(with_ids(drafts), known_objects, known_rooms, known_people))
     loaded = [d.to_activity() for d in drafts]
     if mode == "replace":
         return day.with_activities(loaded)

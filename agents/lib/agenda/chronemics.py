@@ -16,12 +16,15 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from agents.lib.agenda.model import ActivityWindow
+
+_Scalar = TypeVar("_Scalar", bound=np.generic)
 
 BAND_NAMES: tuple[str, ...] = ("yellow", "dark_yellow", "orange", "dark_orange")
 BAND_COLOURS_RGB: tuple[tuple[int, int, int], ...] = ((255, 235, 59), (251, 192, 45), (255, 152, 0), (230, 81, 0))
@@ -123,7 +126,7 @@ class _Windows:
                         ends=np.array([w.end_s for w in flat], dtype=np.float64).reshape(shape),
                         owners=owners, first=first, single=len(flat) == len(owners))
 
-    def per_owner(self, values: NDArray[np.generic], reduce: np.ufunc) -> NDArray[np.generic]:
+    def per_owner(self, values: NDArray[_Scalar], reduce: np.ufunc) -> NDArray[_Scalar]:
         """``values`` (one row per window) reduced to one row per owner."""
         return values if self.single else reduce.reduceat(values, self.first, axis=0)
 

@@ -15,15 +15,16 @@ import datetime as dt
 import re
 from collections.abc import Collection, Iterable
 from dataclasses import dataclass
+from typing import cast
 from zoneinfo import ZoneInfo
 
 from agents.lib.agenda.ics_source import IcsAgenda, IcsOccurrence
 from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, ActivityState, AgendaDay,
                                  AgendaError, load_zone, parse_when, wall_seconds)
-from agents.lib.agenda.validate import validate_activities
+from agents.lib.agenda.validate import ActivityLike, validate_activities
 
 AgendaSource = ActivitySpec | IcsAgenda
-UTC = dt.timezone.utc
+UTC = dt.UTC
 
 
 @dataclass(frozen=True)
@@ -113,6 +114,14 @@ def derive_id(object_name: str, start_s: float, taken: Collection[str]) -> str:
     return candidate
 
 
+def with_ids(drafts: list[Draft]) -> list[ActivityLike]:
+    """``drafts`` as validation reads them, once ``assign_ids`` has given each its id (checked)."""
+    missing = [d.source for d in drafts if d.id is None]
+    if missing:
+        raise ValueError(f"drafts without an id (call assign_ids first): {missing}")
+    return cast("list[ActivityLike]", drafts)
+
+
 def assign_ids(drafts: Iterable[Draft], taken: Collection[str] = ()) -> list[Draft]:
     """Give every draft without an id a derived one, in a deterministic order."""
     items = list(drafts)
@@ -166,5 +175,5 @@ def expand_day(sources: Iterable[AgendaSource], day: dt.date, tz: str | ZoneInfo
     name = zone_name(tz)
     zone = load_zone(name)
     drafts = assign_ids(drafts_for_day(sources, day, zone))
-    validate_activities(drafts, known_objects, known_rooms, known_people).raise_if_errors()
+    validate_activities(with_ids(drafts), known_objects, known_rooms, known_people).raise_if_errors()
     return AgendaDay(date=day, tz=name, activities=tuple(d.to_activity() for d in drafts))

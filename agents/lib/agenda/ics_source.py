@@ -30,7 +30,7 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from agents.lib.agenda.model import AgendaSourceError, local_midnight, problem
 from scenes.limits import ICS_BYTES, RECURRENCE_DATES, RECURRENCE_STEPS
@@ -40,7 +40,7 @@ from scenes.yamlio import SourceError
 if TYPE_CHECKING:
     import icalendar
 
-UTC = dt.timezone.utc
+UTC = dt.UTC
 _UNESCAPED_COMMA = re.compile(r"(?<!\\),")
 
 Moment = dt.date | dt.datetime  # DATE, floating (naive) or zoned (aware) date-time
@@ -158,7 +158,8 @@ class IcsAgenda:
                 if event is None:
                     continue
                 frame = _frame(event, centre)
-                naive_start = _to_frame(component["DTSTART"].dt, frame)
+                # DTSTART is a DATE or DATE-TIME (RFC 5545 3.8.2.4); icalendar types every property kind at once
+                naive_start = _to_frame(component["DTSTART"].dt, frame)  # type: ignore[union-attr,arg-type]
                 if override is None and (event.uid, frame) not in periods:
                     periods[(event.uid, frame)] = dict(_rdate_periods(event, frame))
                 own_end = None if override is not None else periods[(event.uid, frame)].get(naive_start)
@@ -456,7 +457,7 @@ def _duration(event: icalendar.Event, start: Moment, problems: list[str]) -> dt.
                 return None
             if start.tzinfo is not None:
                 return end.astimezone(UTC) - start.astimezone(UTC)
-        return end - start  # type: ignore[operator]
+        return end - start
     if length is not None:
         if not isinstance(length.dt, dt.timedelta):
             problems.append(f"DURATION: {length.to_ical().decode()!r} is not a duration such as PT1H30M")
@@ -477,8 +478,8 @@ def _parse_event(event: icalendar.Event, file: str, line: int | None) -> tuple[I
 
     problems: list[str] = [f"{prop}: {message}" for prop, message in event.errors]
     # icalendar hands a repeated property over as a list; RFC 5545 allows these once per event.
-    problems += [f"{name} appears {len(event[name])} times; an event has at most one"
-                 for name in _SINGLE_VALUED if isinstance(event.get(name), list)]
+    problems += [f"{name} appears {len(repeated)} times; an event has at most one"
+                 for name in _SINGLE_VALUED if isinstance(repeated := event.get(name), list)]
     if problems:
         return None, problems
     start_prop = event.get("DTSTART")
@@ -571,13 +572,14 @@ def parse_ics(data: bytes | str, source: str) -> IcsAgenda:
         raise AgendaSourceError([problem(source, None, "not a valid iCalendar file (the parser failed: "
                                                f"{type(exc).__name__}: {exc}); check VTIMEZONE and "
                                                "repeated properties")]) from None
-    vevents = [event for calendar in calendars for event in calendar.walk("VEVENT")]
+    # walk("VEVENT") yields icalendar.Event objects (its component factory); typed as Component
+    vevents = cast("list[icalendar.Event]", [event for calendar in calendars for event in calendar.walk("VEVENT")])
     if not calendars:
         raise AgendaSourceError([problem(source, None, "no complete VCALENDAR found: is this an .ics "
                                                "file, and does it end with END:VCALENDAR?")])
-    lines = _vevent_lines(text)
+    lines: list[int | None] = list(_vevent_lines(text))
     if len(lines) != len(vevents):
-        lines = [None] * len(vevents)  # type: ignore[list-item]
+        lines = [None] * len(vevents)
     events: list[IcsEvent] = []
     problems: list[SourceError] = []
     for vevent, line in zip(vevents, lines, strict=True):

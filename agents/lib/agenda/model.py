@@ -13,10 +13,10 @@ negative or beyond 86400.  See docs/agenda.md for how DST days are handled.
 
 from __future__ import annotations
 
+import builtins
 import datetime as dt
 import enum
 import math
-import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Annotated
@@ -165,7 +165,7 @@ class ActivityState(enum.StrEnum):
 
 def _time_text(value: object) -> object:
     """Accept datetime/time objects from Python callers; refuse numbers (YAML reads 11:00 as 660)."""
-    if isinstance(value, bool) or isinstance(value, (int, float)):
+    if isinstance(value, (bool, int, float)):
         raise ValueError(f"got the number {value!r}; write the time in quotes, e.g. \"11:00\" "
                          "(unquoted, YAML 1.1 reads 11:00 as the number 660)")
     if isinstance(value, dt.datetime):
@@ -197,7 +197,7 @@ class ActivitySpec(BaseModel):
 
     @field_validator("start", "end", mode="before")
     @classmethod
-    def _coerce_time(cls, value: object) -> object:
+    def _coerce_time(cls, value: builtins.object) -> builtins.object:
         return _time_text(value)
 
     @field_validator("start")
@@ -218,13 +218,13 @@ class ActivitySpec(BaseModel):
         comparable = (isinstance(start, float) and isinstance(end, float)) or (
             isinstance(start, dt.datetime) and isinstance(end, dt.datetime)
             and (start.tzinfo is None) == (end.tzinfo is None))
-        if comparable and end <= start:  # type: ignore[operator]
+        if comparable and end <= start:  # type: ignore[operator]  # `comparable`: both floats or both datetimes
             raise ValueError(f"end {value!r} is not after start {start_text!r}")
         return value
 
     @field_validator("participants", mode="before")
     @classmethod
-    def _participants_list(cls, value: object) -> object:
+    def _participants_list(cls, value: builtins.object) -> builtins.object:
         if isinstance(value, str):
             raise ValueError("participants must be a list, e.g. [ana, luis]")
         return value

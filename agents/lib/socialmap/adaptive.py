@@ -95,6 +95,7 @@ def adapt_space(space: PersonalSpace, distances: Sequence[float], level: float,
             continue
         space = space.with_side(side, sigma_for_contour(d_s, level))
         adapted.append(side)
+    # one distance per side (front, rear, left, right): a 4-tuple that mypy sees as tuple[float, ...]
     return Adaptation(space=space, wall_distance_m=tuple(float(d) for d in distances),  # type: ignore[arg-type]
                       adapted=tuple(adapted))
 

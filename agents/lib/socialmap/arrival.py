@@ -33,7 +33,7 @@ _MAX_DISTINCT = 64   # distinct static costs inside one space handled by the com
 
 
 @numba.njit(cache=True, nogil=True)
-def _distinct_values(view, mask, out):  # type: ignore[no-untyped-def]
+def _distinct_values(view, mask, out):
     """The distinct finite values of ``view`` where ``mask``, into ``out``; -1 if more than fit."""
     count = 0
     for r in range(view.shape[0]):
@@ -57,7 +57,7 @@ def _distinct_values(view, mask, out):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _replace_values(view, mask, distinct, codes, count):  # type: ignore[no-untyped-def]
+def _replace_values(view, mask, distinct, codes, count):
     """Set each finite ``view`` cell in ``mask`` holding ``distinct[i]`` to ``codes[i]``."""
     for r in range(view.shape[0]):
         for c in range(view.shape[1]):
@@ -126,7 +126,7 @@ def cost_table(labels: Sequence[tuple[frozenset[int], float]], profiles: CostPro
     """The table of ``time_costs`` for ``labels`` (from encode_spaces): row k is label k's cost
     per time bin, the dearest of its static cost and of the spaces covering it."""
     bins = max(1, math.ceil(horizon_m / cruise_speed_mps / time_step_s) + 1)
-    times = t0_s + (np.arange(bins) + 0.5) * time_step_s
+    times = t0_s + (np.arange(bins, dtype=np.float64) + 0.5) * time_step_s
     times[0] = t0_s
     if not labels:
         return np.ones((1, bins))

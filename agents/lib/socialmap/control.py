@@ -25,13 +25,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from scenes.geometry import project_on_segments, wrap_angle
+
+if TYPE_CHECKING:   # a band is given as its points or as the ElasticBand itself (`_band`)
+    from agents.lib.socialmap.elastic_band import ElasticBand
 
 FloatArray = NDArray[np.float64]
 Drive = Literal["differential", "omni"]
@@ -87,7 +90,7 @@ class ControlOutput:
     distance_to_goal_m: float
 
 
-def carrot(pose: ArrayLike, band: ArrayLike, lookahead_m: float) -> tuple[FloatArray, float]:
+def carrot(pose: ArrayLike, band: ArrayLike | ElasticBand, lookahead_m: float) -> tuple[FloatArray, float]:
     """The point ``lookahead_m`` along the band past the robot's projection on it, and the band
     length left from that projection to the goal (m)."""
     xy = _pose(pose)[:2]
@@ -108,7 +111,7 @@ def carrot(pose: ArrayLike, band: ArrayLike, lookahead_m: float) -> tuple[FloatA
     return pts[j] + frac * seg[j], remaining
 
 
-def differential_command(pose: ArrayLike, band: ArrayLike, params: ControlParams = DEFAULT_CONTROL,
+def differential_command(pose: ArrayLike, band: ArrayLike | ElasticBand, params: ControlParams = DEFAULT_CONTROL,
                          goal_theta: float | None = None) -> ControlOutput:
     """(v, omega) that follows the band, within the speed limits (acceleration: `BandFollower`)."""
     x, y, theta = _pose(pose)
@@ -127,7 +130,7 @@ def differential_command(pose: ArrayLike, band: ArrayLike, params: ControlParams
     return ControlOutput(DiffCommand(v, omega), False, distance)
 
 
-def omni_command(pose: ArrayLike, band: ArrayLike, params: ControlParams = DEFAULT_CONTROL,
+def omni_command(pose: ArrayLike, band: ArrayLike | ElasticBand, params: ControlParams = DEFAULT_CONTROL,
                  goal_theta: float | None = None) -> ControlOutput:
     """(vx, vy, omega) in the robot frame that follows the band, within the speed limits."""
     x, y, theta = _pose(pose)
@@ -188,7 +191,7 @@ class BandFollower:
         """Forget the previous command (e.g. after an emergency stop): assume ``command`` or rest."""
         self._last = command if command is not None else self._stopped()
 
-    def command(self, pose: ArrayLike, band: ArrayLike, dt_s: float,
+    def command(self, pose: ArrayLike, band: ArrayLike | ElasticBand, dt_s: float,
                 goal_theta: float | None = None) -> ControlOutput:
         law = differential_command if self.drive == "differential" else omni_command
         out = law(pose, band, self.params, goal_theta)
@@ -246,7 +249,7 @@ def _pose(pose: ArrayLike) -> tuple[float, float, float]:
     return float(arr[0]), float(arr[1]), float(arr[2])
 
 
-def _band(band: ArrayLike) -> FloatArray:
+def _band(band: ArrayLike | ElasticBand) -> FloatArray:
     pts = np.asarray(getattr(band, "points", band), dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 1 or not np.all(np.isfinite(pts)):
         raise ControlInputError(f"band: expected finite points of shape (N >= 1, 2), got {pts.shape}")

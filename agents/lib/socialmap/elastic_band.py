@@ -191,7 +191,7 @@ def obstacle_field(obstacles: Obstacles, params: ElasticBandParams = DEFAULT_PAR
     """Wrap raw laser points (M, 2) in an ObstacleField (returned unchanged if it already is one)."""
     if isinstance(obstacles, ObstacleField):
         return obstacles
-    return ObstacleField(obstacles, params.max_radius_m)
+    return ObstacleField(_as_xy(obstacles, "obstacles_xy", allow_empty=True), params.max_radius_m)
 
 
 def band_from_path(path_xy: ArrayLike, obstacles: Obstacles = (),

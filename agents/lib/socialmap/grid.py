@@ -118,11 +118,11 @@ class GridSpec:
     def xs(self, cols: slice = slice(None)) -> NDArray[np.float64]:
         """x of the cell centres of ``cols``."""
         start, stop, _ = cols.indices(self.cols)
-        return self.x0 + (np.arange(start, stop) + 0.5) * self.resolution
+        return self.x0 + (np.arange(start, stop, dtype=np.float64) + 0.5) * self.resolution
 
     def ys(self, rows: slice = slice(None)) -> NDArray[np.float64]:
         start, stop, _ = rows.indices(self.rows)
-        return self.y0 + (np.arange(start, stop) + 0.5) * self.resolution
+        return self.y0 + (np.arange(start, stop, dtype=np.float64) + 0.5) * self.resolution
 
     def contains_xy(self, x: float, y: float) -> bool:
         xmin, ymin, xmax, ymax = self.bounds

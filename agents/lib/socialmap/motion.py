@@ -133,13 +133,13 @@ def predict_many(people: Sequence[Person], params: MotionParams,
             direction[row], limit = heading
             reach[row] = np.minimum(reach[row], limit)
     points = xy[walking, None, :] + reach[:, :, None] * direction[:, None, :]         # (W, T, 2)
-    for row, route in routes.items():
-        points[row] = along(route, reach[row])
+    for row, polyline in routes.items():
+        points[row] = along(polyline, reach[row])
     keep = np.ones(reach.shape, dtype=bool)
     if walls is not None and not walls.is_empty:
         paths = shapely.linestrings(np.stack([xy[walking], points[:, -1]], axis=1))
-        for row, route in routes.items():
-            paths[row] = shapely.LineString(route)
+        for row, polyline in routes.items():
+            paths[row] = shapely.LineString(polyline)
         for row in np.flatnonzero(shapely.intersects(paths, walls)).tolist():
             path = paths[row]
             hit = path.intersection(walls)

@@ -5,11 +5,9 @@ The shapes themselves (and ``posed_polygon``) are the scene's, ``scenes/geometry
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 from shapely.geometry import Polygon
 

@@ -67,7 +67,7 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from agents.lib.socialmap.incremental import IncrementalTimeCosts
 from agents.lib.socialmap.search import (
@@ -93,7 +93,7 @@ _SIGN = np.uint32(0x80000000)
 _MAX_STAMP = int(np.iinfo(np.uint32).max) - 1
 
 
-def truncate_down(values: NDArray[np.floating]) -> NDArray[np.float32]:
+def truncate_down(values: ArrayLike) -> NDArray[np.float32]:
     """float32 values <= ``values`` with 6 significant bits (inf stays inf; values >= 0)."""
     values = np.asarray(values, dtype=np.float64)
     single = values.astype(np.float32)
@@ -102,7 +102,7 @@ def truncate_down(values: NDArray[np.floating]) -> NDArray[np.float32]:
 
 
 @numba.njit(cache=True, nogil=True)
-def _update_bounds(flat, bits, row_min_bits, bounds, seeds, collect, windows, cols):  # type: ignore[no-untyped-def]
+def _update_bounds(flat, bits, row_min_bits, bounds, seeds, collect, windows, cols):
     """Write each cell's truncated lower-bound cost (its cost, or its table row's minimum for an
     arrival-time cell) into ``bounds`` (as bits), over the cells of ``windows`` (n, 4: r0, r1,
     c0, c1; overlaps allowed). With ``collect``, return how many fell, their indices first in
@@ -126,7 +126,7 @@ def _update_bounds(flat, bits, row_min_bits, bounds, seeds, collect, windows, co
 
 
 @numba.njit(cache=True, nogil=True)
-def _bound(h_mark, h_stamp, h_g, radius, scale, target_row, target_col, cols, index):  # type: ignore[no-untyped-def]
+def _bound(h_mark, h_stamp, h_g, radius, scale, target_row, target_col, cols, index):
     """X(index): the stored value, or the radius bound."""
     if h_mark[U(index)] == h_stamp:
         return h_g[U(index)]
@@ -137,7 +137,7 @@ def _bound(h_mark, h_stamp, h_g, radius, scale, target_row, target_col, cols, in
 
 
 @numba.njit(cache=True, nogil=True)
-def _repair(bounds, rows, cols, goal, seeds, count, h_mark, h_stamp, h_g, radius, scale,  # type: ignore[no-untyped-def]
+def _repair(bounds, rows, cols, goal, seeds, count, h_mark, h_stamp, h_g, radius, scale,
             target, seen, seen_stamp):
     """Restore X's consistency on ``bounds`` after the cells ``seeds[:count]`` became cheaper:
     lower X where a cheaper step allows, then propagate the decreases in increasing X. Lowered

@@ -46,7 +46,7 @@ def step_cost(length: ArrayLike, c_a: ArrayLike, c_b: ArrayLike) -> NDArray[np.f
     ``c_b``: ``length * (c_a + c_b) / 2`` (module doc).  The kernel below inlines this rule
     (``half[k] * (c_a + c_b)``); paths.path_cost prices any polyline with it, and
     tests/unit/test_social_paths.py checks both agree on a planned path."""
-    return length * (np.asarray(c_a) + c_b) / 2  # type: ignore[operator]
+    return np.multiply(length, np.asarray(c_a) + c_b) / 2  # what `length * (...)` calls, typed
 
 
 class PlanningError(RuntimeError):
@@ -102,7 +102,7 @@ U = np.uint64
 
 
 @numba.njit(cache=True, nogil=True)
-def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependent,  # type: ignore[no-untyped-def]
+def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependent,
             table, cells_per_bin, use_learned, h_mark, h_stamp, h_g, h_radius, h_scale, h_target, beyond, mark,
             stamp, g, parent, pos, length, keys, nodes, order):
     # mark[cell] == stamp: open (g, parent, pos, length valid); stamp + 1: closed; anything else:
@@ -231,7 +231,7 @@ def _search(static, rows, cols, start, goal, c_min, use_heuristic, time_dependen
                 i = size
                 size += 1
             elif new_g < g[ub]:
-                i = np.int64(pos[ub])
+                i = np.int64(pos[ub])  # type: ignore[assignment]  # numba kernel: numba types it, not mypy
             else:
                 continue
             g[ub] = new_g

@@ -337,7 +337,7 @@ def tune_gains(scenarios: Sequence[Scenario] | None = None,
             raise TuningError(f"{argument}: unknown gain(s) {sorted(unknown)}; "
                               f"tunable gains are {list(GAINS)}")
 
-    terms_seen: dict[tuple[float, ...], dict[str, CostTerms]] = {}
+    terms_seen: dict[tuple[tuple[str, float], ...], dict[str, CostTerms]] = {}
 
     def g(gains: dict[str, float]) -> float:
         cost, terms = evaluate_gains({**start, **gains}, scenarios, weights, band_params, control, sim)

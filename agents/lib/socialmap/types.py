@@ -12,11 +12,10 @@ seconds since local midnight.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from scenes.geometry import Circle, GeometryError, Rectangle, Shape, Trapezoid, finite, shape_from_spec
+from scenes.geometry import GeometryError, Shape, finite, shape_from_spec
 
 
 class SocialMapInputError(GeometryError):

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import contourpy
 import numpy as np
@@ -128,7 +129,9 @@ def _filled_polygons(xs: NDArray[np.float64], ys: NDArray[np.float64], z: NDArra
     if z.size == 0 or float(z.max()) < level or len(xs) < 2 or len(ys) < 2:
         return MultiPolygon()
     generator = contourpy.contour_generator(xs, ys, z, fill_type=contourpy.FillType.OuterOffset)
-    points_list, offsets_list = generator.filled(level, math.inf)
+    # OuterOffset fills come back as (points, offsets); the stubs type every fill type's tuple at once
+    points_list, offsets_list = cast("tuple[list[NDArray[np.float64]], list[NDArray[np.uint32]]]",
+                                     generator.filled(level, math.inf))
     polygons = []
     for points, offsets in zip(points_list, offsets_list, strict=True):
         rings = [points[offsets[i]:offsets[i + 1]] for i in range(len(offsets) - 1)]

@@ -22,6 +22,7 @@ from __future__ import annotations
 from typing import Any
 
 from agents.runtime.drawing.labels import short_id
+from dsr.protocols import GraphReader
 
 TYPE_COLOURS: dict[str, tuple[int, int, int]] = {
     "room": (90, 160, 90), "person": (240, 160, 40), "object": (160, 90, 200), "robot": (0, 230, 90),
@@ -44,7 +45,7 @@ class GraphLogger:
         self._last_signature: tuple[Any, ...] | None = None
         self._last_time: float | None = None
 
-    def maybe_log(self, graph: Any, now_s: float | None, force: bool = False) -> None:
+    def maybe_log(self, graph: GraphReader, now_s: float | None, force: bool = False) -> None:
         if not self.rec.enabled or now_s is None:
             return
         shown = [n for n in _all_nodes(graph) if n.type in SHOWN_TYPES
@@ -76,7 +77,7 @@ def label(node_type: str, name: str, state: str) -> str:
     return f"{text} [{state}]" if state and node_type in ("activity", "mission") else text
 
 
-def _room_of(graph: Any, node: Any, rooms: dict[int, int]) -> int | None:
+def _room_of(graph: GraphReader, node: Any, rooms: dict[int, int]) -> int | None:
     """The column of the room ``node`` is ``in`` (its ``in`` edge), or None."""
     for edge in graph.edges_from(node.id, "in"):
         if edge.dst in rooms:
@@ -84,7 +85,7 @@ def _room_of(graph: Any, node: Any, rooms: dict[int, int]) -> int | None:
     return None
 
 
-def layout(graph: Any, node_ids: list[int]) -> list[tuple[float, float]]:
+def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]:
     """Column per room (west to east), objects then people under it; missions in a last column."""
     nodes = {i: graph.get_node(i) for i in node_ids}
     room_nodes = [n for n in nodes.values() if n.type == "room"]
@@ -131,9 +132,9 @@ def layout(graph: Any, node_ids: list[int]) -> list[tuple[float, float]]:
     return [placed.get(i, ((extra + 1) * COLUMN_PX, 0.0)) for i in node_ids]
 
 
-def _all_nodes(graph: Any) -> list[Any]:
+def _all_nodes(graph: GraphReader) -> list[Any]:
     return list(graph.nodes())
 
 
-def _all_edges(graph: Any) -> list[Any]:
+def _all_edges(graph: GraphReader) -> list[Any]:
     return list(graph.edges())
