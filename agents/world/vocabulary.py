@@ -570,9 +570,10 @@ class ClockView:
 
 
 def now_s(graph: Any) -> float | None:
-    """The sim time the DSR's clock shows, or None before the simulator wrote it."""
-    clock = ClockView.of(graph)
-    return None if clock is None else clock.now_s
+    """The sim time the DSR's clock shows, or None before the simulator wrote it (or if it is not a number)."""
+    clock = graph.get_node_by_name(CLOCK)
+    value = None if clock is None or clock.type != NodeType.CLOCK else clock.attrs.get(ClockAttr.NOW_S)
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
 
 
 @dataclass(frozen=True)
