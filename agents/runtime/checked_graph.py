@@ -61,23 +61,27 @@ class CheckedGraph:
         return self._graph.insert_node(str(type), name, attrs, **kwargs)   # a StrEnum member: its plain value
 
     def update_node(self, node_id: int, attrs: Mapping[str, Any]) -> None:
-        node = self._graph.get_node(node_id)
-        if node is not None:      # a missing node: the graph's own error, as before
-            problem = _problem(lambda: check_attrs(node.type, attrs))
+        node_type = self._graph.node_type_of(node_id)   # no snapshot of the node: this is the hot path
+        if node_type is not None:      # an unknown node: the graph's own error, as before
+            problem = _problem(lambda: check_attrs(node_type, attrs))
             if problem is not None:
-                return self._refuse(f"set attributes of {node.name!r}", problem)
+                return self._refuse(f"set attributes of {self._name(node_id)}", problem)
         return self._graph.update_node(node_id, attrs)
 
     def update_nodes(self, updates: Mapping[int, Mapping[str, Any]]) -> None:
         """All or nothing, like the graph's own batch: one refused node refuses the batch."""
         for node_id, attrs in updates.items():
-            node = self._graph.get_node(node_id)
-            if node is None:
+            node_type = self._graph.node_type_of(node_id)
+            if node_type is None:
                 continue
-            problem = _problem(lambda n=node, a=attrs: check_attrs(n.type, a))
+            problem = _problem(lambda t=node_type, a=attrs: check_attrs(t, a))
             if problem is not None:
-                return self._refuse(f"set attributes of {node.name!r} (a batch of {len(updates)})", problem)
+                return self._refuse(f"set attributes of {self._name(node_id)} (a batch of {len(updates)})", problem)
         return self._graph.update_nodes(updates)
+
+    def _name(self, node_id: int) -> str:
+        node = self._graph.get_node(node_id)
+        return repr(node.name) if node is not None else f"node {node_id}"
 
     def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
                               attrs: Mapping[str, Any] | None = None) -> Any:

@@ -498,10 +498,12 @@ def _kind_ok(kind: str, value: Any) -> bool:
         return isinstance(value, (int, float)) and not isinstance(value, bool)
     if kind == STR:
         return isinstance(value, str)
+    # Lists: the DSR itself refuses a list that mixes kinds (dsr/model.py), so the first item tells
+    # floats from strings; not walking every item keeps a 360-ray laser scan cheap to check.
     if kind == FLOATS:
-        return isinstance(value, list) and all(_kind_ok(FLOAT, v) for v in value)
+        return isinstance(value, (list, tuple)) and (not value or _kind_ok(FLOAT, value[0]))
     if kind == STRS:
-        return isinstance(value, list) and all(isinstance(v, str) for v in value)
+        return isinstance(value, (list, tuple)) and (not value or isinstance(value[0], str))
     return False
 
 
