@@ -7,8 +7,9 @@ shutdown uniform: SIGINT/SIGTERM end the loop, the recording gets its footer, th
 closed (an unclosed session hangs the interpreter at exit).  The loop also stamps the agent's
 heartbeat in the DSR (agents/runtime/heartbeat.py), so a launcher can tell a stuck agent from a
 busy one.  The graph an agent gets is a ``CheckedGraph`` (agents/runtime/checked_graph.py): a
-write outside the vocabulary is refused, logged and counted, never written.  Credentials come from the environment like every Zenoh setting
-(``CHRONAV_ZENOH_USER`` + ``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
+write outside the vocabulary is refused, logged and counted, never written.  Credentials come
+from the environment like every Zenoh setting (``CHRONAV_ZENOH_USER`` +
+``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
 """
 
 from __future__ import annotations

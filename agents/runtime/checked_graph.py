@@ -98,7 +98,8 @@ class CheckedGraph:
 
     # ------------------------------------------------------------------ refusals
     def _refuse(self, what: str, problem: str) -> None:
-        text = f"agent {self.agent!r} may not {what}: {problem} (agents/world/vocabulary.py); refused, the graph is unchanged"
+        text = (f"agent {self.agent!r} may not {what}: {problem} (agents/world/vocabulary.py); refused, "
+                "the graph is unchanged")
         self.refused += 1
         self.last_refusal = text
         stats = getattr(getattr(self._graph, "replica", None), "stats", None)

@@ -38,8 +38,8 @@ from agents.world.freshness import LOCKSTEP, observed_up_to
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
-from agents.world.vocabulary import (AGENDA, CLOCK, WORLD, ClockMode, EdgeType, IntentionKind, IntentionState, MissionState,
-                                     NodeType, intentions, missions)
+from agents.world.vocabulary import (AGENDA, CLOCK, WORLD, ClockMode, EdgeType, IntentionKind, IntentionState,
+                                     MissionState, NodeType, intentions, missions)
 from scenes.geometry import project_on_segments
 from scenes.clock import format_clock
 

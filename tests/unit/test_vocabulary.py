@@ -15,7 +15,8 @@ def test_the_shipped_policy_is_what_the_vocabulary_generates() -> None:
     from agents.world.write_policy import render_policy_yaml, vocabulary_rules
 
     assert list(POLICY.rules) == vocabulary_rules(), \
-        "write_policy.yaml differs from the vocabulary: python -m agents.world.write_policy > agents/world/write_policy.yaml"
+        ("write_policy.yaml differs from the vocabulary: "
+         "python -m agents.world.write_policy > agents/world/write_policy.yaml")
     assert DEFAULT_POLICY_FILE.read_text() == render_policy_yaml()
 
 

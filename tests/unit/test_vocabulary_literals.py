@@ -54,8 +54,8 @@ def _names_a_state(node: ast.AST) -> bool:
 def _items(node: ast.AST) -> list[ast.AST]:
     if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
         return list(node.elts)
-    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("frozenset", "set", "tuple") \
-            and node.args:
+    if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) \
+            and node.func.id in ("frozenset", "set", "tuple") and node.args:
         return _items(node.args[0])
     return [node]
 
