@@ -124,7 +124,7 @@ def check_type_name(value: Any, what: str = "type") -> str:
     if not isinstance(value, str) or not _TYPE_RE.fullmatch(value):
         raise InvalidIdentifierError(
             f"{what} {value!r} must match {TYPE_PATTERN} (letters, digits, '_' or '-')")
-    return value
+    return value if type(value) is str else str(value)   # a StrEnum member: its plain value
 
 
 def check_name(value: Any, allow_hash: bool = False) -> str:
@@ -176,7 +176,8 @@ def check_attr_value(key: str, value: Any) -> AttrValue:
         items = value.tolist() if hasattr(value, "tolist") else list(value)
         if not isinstance(items, list):  # numpy scalar
             return check_attr_value(key, items)
-        if items and all(type(item) is str for item in items):
+        if items and all(isinstance(item, str) for item in items):
+            items = [item if type(item) is str else str(item) for item in items]   # StrEnum members
             if value_bytes(items) > LIMITS.max_value_bytes:
                 raise _too_large(key, items)
             return items
@@ -193,6 +194,8 @@ def check_attr_value(key: str, value: Any) -> AttrValue:
                 raise InvalidAttributeError(f"attribute {key!r}: {item!r} is not finite")
             out.append(number)
         return out
+    if isinstance(value, str):  # StrEnum members (agents/world/vocabulary.py): their plain value
+        return check_attr_value(key, str(value))
     if isinstance(value, bool):
         return bool(value)
     if isinstance(value, int):  # numpy integers, IntEnum
@@ -213,9 +216,10 @@ def check_attrs(attrs: Any) -> Attrs:
         raise InvalidAttributeError(f"attrs must be a dict, got {type(attrs).__name__}")
     out: Attrs = {}
     for key, value in attrs.items():
-        if key not in _GOOD_KEYS:
-            if type(key) is not str or not _ATTR_KEY_RE.fullmatch(key):
+        if type(key) is not str or key not in _GOOD_KEYS:
+            if not isinstance(key, str) or not _ATTR_KEY_RE.fullmatch(key):
                 raise InvalidAttributeError(f"attribute key {key!r} must be a non-empty string")
+            key = str(key)                      # a StrEnum member (the vocabulary's keys): its value
             if len(_GOOD_KEYS) < 4096:
                 _GOOD_KEYS.add(key)
         kind = type(value)

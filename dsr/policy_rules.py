@@ -19,14 +19,17 @@ rules:
     from: [world]                           # edge rules may restrict the end node types
     to: [person]
     ops: [create, delete]
-    attrs: ["*"]
+    attrs: [x, y, theta]
+    init_attrs: []                          # create brings only the named attributes
 ```
 
 A write is allowed when some rule matches its writer, element type (and end types), and grants
 its operation (`create`, `delete`) or its attribute (`attrs` patterns minus `except_attrs`).
 Values given at creation come with `create`, except the keys of `except_attrs`, and a key of
 `init_values` only with one of the values it lists (a staff tool creates an `agenda_request`
-`pending`; only the agenda may answer it).
+`pending`; only the agenda may answer it).  A rule that lists `init_attrs` (even empty) lets
+`create` bring only the values of `attrs` and `init_attrs`: chronav's own table, generated from
+its vocabulary (agents/world/write_policy.py), names every attribute that way.
 Deleting a node also deletes its edges: such edge deletes are allowed to whoever may delete the
 node.  Types this replica has not seen yet (a delta overtaking the node's creation) match any
 pattern: the write lands on an element nobody can see until its creator's write arrives.
@@ -68,6 +71,10 @@ class Rule(BaseModel):
     ops: list[Literal["create", "delete"]] = []
     attrs: list[Pattern] = []
     except_attrs: list[Pattern] = []
+    #: with `create`: the keys (besides `attrs`) whose values may be given at creation only.  When
+    #: absent, `create` brings any initial value (hand-written tables); when present (even `[]`),
+    #: only the named ones (chronav's table, generated from its vocabulary, always names them)
+    init_attrs: list[Pattern] | None = None
     #: attribute -> the only values it may be given at creation under this rule's `create`
     #: (e.g. a request must be created `pending`: only its answerer sets another state)
     init_values: dict[Annotated[str, StringConstraints(min_length=1, max_length=128)],
@@ -85,6 +92,8 @@ class Rule(BaseModel):
             raise ValueError("a rule grants `ops`, `attrs` or both")
         if self.except_attrs and not self.attrs:
             raise ValueError("`except_attrs` needs `attrs`")
+        if self.init_attrs is not None and "create" not in self.ops:
+            raise ValueError("`init_attrs` names values given at creation: needs `ops: [create]`")
         if self.init_values and "create" not in self.ops:
             raise ValueError("`init_values` restricts values given at creation: needs "
                              "`ops: [create]`")
@@ -103,8 +112,12 @@ class Rule(BaseModel):
                 return False
             if write.op == "init" and key in self.init_values:
                 return write.value in self.init_values[key]
-            # a value given at creation comes with the create grant
-            return _match(key, self.attrs) or (write.op == "init" and "create" in self.ops)
+            if _match(key, self.attrs):
+                return True
+            # a value given at creation comes with the create grant (only the named ones when
+            # the rule names them in `init_attrs`)
+            return write.op == "init" and "create" in self.ops and (
+                self.init_attrs is None or _match(key, self.init_attrs))
         return write.op in self.ops
 
 

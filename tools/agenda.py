@@ -39,9 +39,6 @@ from tools.system.connection import (CONNECT_HELP, GRAPH_HELP, RUN_HELP, Connect
                               require_system, resolve_target)
 from tools.system.runs import TOOL_AGENT_PREFIX, Role
 
-AGENDA_AGENT = "agenda"
-REQUEST_TYPE = "agenda_request"
-ANSWERED = ("accepted", "refused")
 DEFAULT_TIMEOUT_S = 10.0
 SYNC_TIMEOUT_S = 5.0
 POLL_S = 0.02
@@ -214,6 +211,7 @@ def open_system(target: Target, *, read_only: bool, need_agenda_agent: bool,
                 timeout_s: float = SYNC_TIMEOUT_S) -> Iterator[Any]:
     """A replica of the running graph for the block; refuses (exit 2) when nobody is there or,
     for a change, when the agenda agent is missing."""
+    from agents.world.vocabulary import AGENDA_AGENT
     try:
         with open_replica(target, agent=tool_agent_name(), read_only=read_only, timeout_s=timeout_s) as graph:
             others = require_system(graph, target)
@@ -236,21 +234,22 @@ class Answer:
 def submit_change(graph: Any, change: dict[str, Any], *, timeout_s: float,
                   requester: str | None = None) -> Answer:
     """Insert the request, wait for the agent's answer, delete the request (always)."""
-    name = f"{REQUEST_TYPE}/{uuid.uuid4().hex}"
-    attrs: dict[str, Any] = {"change": json.dumps(change), "state": "pending",
-                             "requested_by": requester or requested_by()}
+    from agents.world.vocabulary import AGENDA_REQUEST_PREFIX, NodeType, RequestAttr, RequestState, now_s
+    name = f"{AGENDA_REQUEST_PREFIX}{uuid.uuid4().hex}"
+    attrs: dict[str, Any] = {RequestAttr.CHANGE: json.dumps(change), RequestAttr.STATE: RequestState.PENDING,
+                             RequestAttr.REQUESTED_BY: requester or requested_by()}
     asked_at = now_s(graph)
     if asked_at is not None:
-        attrs["requested_s"] = asked_at
-    node = graph.insert_node(type=REQUEST_TYPE, name=name, attrs=attrs)
+        attrs[RequestAttr.REQUESTED_S] = asked_at
+    node = graph.insert_node(type=NodeType.AGENDA_REQUEST, name=name, attrs=attrs)
     graph.flush()
     deadline = time.monotonic() + timeout_s
     try:
         while True:
             current = graph.get_node(node.id)
             state = None if current is None else current.attrs.get("state")
-            if current is not None and state in ANSWERED:
-                return Answer(state == "accepted", str(current.attrs.get("message", "")), name)
+            if current is not None and state in RequestState.ANSWERED:
+                return Answer(state == RequestState.ACCEPTED, str(current.attrs.get("message", "")), name)
             if current is None:
                 raise NoSystemError(f"request {name} was deleted by someone else before an answer came")
             if time.monotonic() >= deadline:
@@ -283,12 +282,6 @@ def _band_name(band: object) -> str:
     return BAND_NAMES[band] if isinstance(band, int) and 0 <= band < len(BAND_NAMES) else "?"
 
 
-def now_s(graph: Any) -> float | None:
-    clock = graph.get_node_by_name("clock")
-    value = None if clock is None else clock.attrs.get("now_s")
-    return float(value) if isinstance(value, (int, float)) else None
-
-
 def object_row(node: Any) -> dict[str, Any]:
     r = node.attrs.get("R")
     return {"name": node.name, "R": float(r) if isinstance(r, (int, float)) else None,
@@ -309,8 +302,9 @@ def activity_row(node: Any, objects: Mapping[str, dict[str, Any]]) -> dict[str, 
 
 def snapshot(graph: Any) -> dict[str, Any]:
     """Today's activities (by start) and every object's current R: what `list --json` prints."""
-    objects = {n.name: object_row(n) for n in graph.nodes_of_type("object")}
-    rows = [activity_row(n, objects) for n in graph.nodes_of_type("activity")]
+    from agents.world.vocabulary import NodeType, now_s
+    objects = {n.name: object_row(n) for n in graph.nodes_of_type(NodeType.OBJECT)}
+    rows = [activity_row(n, objects) for n in graph.nodes_of_type(NodeType.ACTIVITY)]
     rows.sort(key=lambda r: (float(r["start_s"]) if isinstance(r["start_s"], (int, float)) else 0.0, r["id"]))
     now = now_s(graph)
     return {"graph": graph.graph_name, "now_s": now, "now": None if now is None else _clock_text(now),
@@ -361,10 +355,11 @@ class ChangeWatcher:
     """
 
     def __init__(self, graph: Any, *, r_step: float, as_json: bool, out: TextIO, limit: int = 0) -> None:
+        from agents.world.vocabulary import NodeType
         self.graph, self.r_step, self.as_json, self.out, self.limit = graph, r_step, as_json, out, limit
         self.lines = 0
-        self.activities: dict[int, dict[str, Any]] = {n.id: dict(n.attrs) for n in graph.nodes_of_type("activity")}
-        self.objects: dict[int, dict[str, Any]] = {n.id: object_row(n) for n in graph.nodes_of_type("object")}
+        self.activities: dict[int, dict[str, Any]] = {n.id: dict(n.attrs) for n in graph.nodes_of_type(NodeType.ACTIVITY)}
+        self.objects: dict[int, dict[str, Any]] = {n.id: object_row(n) for n in graph.nodes_of_type(NodeType.OBJECT)}
         self.finished = False
 
     def connect(self) -> None:
@@ -377,6 +372,7 @@ class ChangeWatcher:
         return bool(self.limit) and self.lines >= self.limit
 
     def emit(self, kind: str, text: str, **fields: Any) -> None:
+        from agents.world.vocabulary import now_s
         if self.done:
             return
         now = now_s(self.graph)
@@ -391,13 +387,14 @@ class ChangeWatcher:
         self.lines += 1
 
     def on_node(self, node: Any, changed: Any = None) -> None:
-        if node.type == "activity":
+        from agents.world.vocabulary import NodeType
+        if node.type == NodeType.ACTIVITY:
             self._activity(node)
-        elif node.type == "object":
+        elif node.type == NodeType.OBJECT:
             self._object(node)
-        elif node.type == REQUEST_TYPE:
+        elif node.type == NodeType.AGENDA_REQUEST:
             self._request(node, changed)
-        elif node.type == "clock" and node.attrs.get("finished") and not self.finished:
+        elif node.type == NodeType.CLOCK and node.attrs.get("finished") and not self.finished:
             self.finished = True
             self.emit("clock", "the sim day is over (clock finished)")
 
@@ -441,8 +438,9 @@ class ChangeWatcher:
                   event="R", object=new)
 
     def _request(self, node: Any, changed: Any) -> None:
+        from agents.world.vocabulary import RequestState
         state = node.attrs.get("state")
-        if state in ANSWERED and (changed is None or "state" in changed):
+        if state in RequestState.ANSWERED and (changed is None or "state" in changed):
             self.emit("request", f"request from {node.attrs.get('requested_by', '?')} {state}: "
                       f"{node.attrs.get('message', '')}", event=state, request=node.name)
 
@@ -605,6 +603,7 @@ def watch_command(
     as_json: bool = typer.Option(False, "--json", help="one JSON object per line"),
 ) -> None:
     """Follow the agenda live: one line per activity change, R step or answered request."""
+    from agents.world.vocabulary import now_s
     from dsr.process import exit_on_sigterm
 
     exit_on_sigterm()

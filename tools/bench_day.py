@@ -36,6 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from agents.world.people import people_at  # noqa: E402
 from agents.world.scene_world import load_world  # noqa: E402
+from agents.world.vocabulary import MissionState  # noqa: E402
 
 AGENTS = ("sim_robot", "human_observer", "object_recognition", "agenda", "social_navigation", "executive")
 
@@ -98,7 +99,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
         "scene": world.scene.name, "people": len(world.scene.people), "people_moving": moving,
         "sim_s": clock.end_s - clock.start_s, "wall_s": round(wall, 1),
         "sim_speedup": round((clock.end_s - clock.start_s) / wall, 1),
-        "missions": len(missions), "missions_done": sum(1 for m in missions.values() if m.get("state") == "done"),
+        "missions": len(missions), "missions_done": sum(1 for m in missions.values() if m.get("state") == MissionState.DONE),
         "cpu_s_total": round(cpu_total, 1), f"cpu_share_percent_of_{cores}_cores": round(100 * cpu_total / (wall * cores), 1),
         "crowd_day_replay_s": round(replay_s, 1), "outcome": result.get("outcome"),
     }
@@ -115,7 +116,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
         trajectory, tracks = read_trajectory_csv(run_dir / "trajectory.csv"), read_people_csv(run_dir / "people.csv")
         collisions = entries = 0
         for mission in missions.values():
-            if mission.get("state") != "done" or "started_s" not in mission:
+            if mission.get("state") != MissionState.DONE or "started_s" not in mission:
                 continue
             rows = trajectory[(trajectory[:, 0] >= mission["started_s"]) & (trajectory[:, 0] <= mission["finished_s"])]
             if len(rows) < 2:

@@ -61,6 +61,12 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+from agents.world.vocabulary import EdgeType, NodeType  # noqa: E402 - after the path fix above
+
+# Plain strings from the vocabulary: this benchmark measures the DSR, whose writes it makes with
+# synthetic attributes on these types (it never runs through an agent's checked graph).
+OBJECT, WORLD, RT = str(NodeType.OBJECT), str(NodeType.WORLD), str(EdgeType.RT)
+
 
 def _free_port() -> int:
     with socket.socket() as sock:
@@ -103,7 +109,7 @@ def run_echo(endpoint: str, graph_name: str, poll: bool = True) -> None:
             raw_echoes(raw, graph_name)
         spin = None if poll else SpinPolicy(window_us=0)
         with join("echo", graph=graph_name, settings=settings, spin=spin) as graph:
-            pong = graph.insert_node("object", "pong", {"seq": -1})
+            pong = graph.insert_node(OBJECT, "pong", {"seq": -1})
 
             def on_updated(node: Any, keys: list[str]) -> None:
                 if node.name == "ping" and "seq" in keys:
@@ -275,7 +281,7 @@ class DsrPing:
         _wait(lambda: graph.get_node_by_name("pong") is not None, 10, "echo replica")
         self.graph = graph
         self.pong_id = graph.get_node_by_name("pong").id
-        self.ping = graph.insert_node("object", "ping", {"seq": -1})
+        self.ping = graph.insert_node(OBJECT, "ping", {"seq": -1})
         self.got: dict[str, Any] = {}
         graph.connect("node_updated", self._on_updated)
 
@@ -337,8 +343,8 @@ def latencies(bare: BareZenoh, floor: WireFloor, ping: DsrPing, nopoll: DsrPing,
 def throughput(ping: DsrPing, updates: int) -> dict[str, float]:
     graph = ping.graph
     with graph.transaction():
-        load_ids = [graph.insert_node("object", f"load{k}", {"i": -1}).id for k in range(1000)]
-        load_end = graph.insert_node("object", "load_end", {"i": -1})
+        load_ids = [graph.insert_node(OBJECT, f"load{k}", {"i": -1}).id for k in range(1000)]
+        load_end = graph.insert_node(OBJECT, "load_end", {"i": -1})
     count = len(load_ids)
     out: dict[str, float] = {}
     # batched: one update_nodes() call updates each of the 1,000 nodes once
@@ -377,7 +383,7 @@ def profile_split(rounds: int = 20000) -> dict[str, Any]:
 
     from dsr import DSRGraph, wire
     writer, reader = DSRGraph("w"), DSRGraph("r")
-    node = writer.insert_node("object", "n", {"seq": -1})
+    node = writer.insert_node(OBJECT, "n", {"seq": -1})
     reader.apply_message(wire.decode(writer.state_message()))
     payloads: list[bytes] = []
     writer.attach(payloads.append, linger_s=0.0)
@@ -445,16 +451,16 @@ def fill_graph(graph: Any, nodes: int) -> None:
     """The join benchmark's graph: a world node, objects with an RT edge and 3 attributes each,
     and a "marker" node, `nodes` nodes in all (tools/bench_dsr_decode.py decodes the same)."""
     with graph.transaction():
-        world = graph.insert_node("world", "world")
+        world = graph.insert_node(WORLD, "world")
     todo = nodes - len(graph) - 1     # exactly `nodes` nodes, marker included
     for chunk in range(0, todo, 1000):
         with graph.transaction():
             for i in range(chunk, min(chunk + 1000, todo)):
-                node = graph.insert_node("object", f"obj{i}", {"x": i * 0.1, "y": 1.0,
+                node = graph.insert_node(OBJECT, f"obj{i}", {"x": i * 0.1, "y": 1.0,
                                                                "label": f"thing {i}"})
-                graph.insert_or_assign_edge(world.id, node.id, "RT",
+                graph.insert_or_assign_edge(world.id, node.id, RT,
                                             {"x": i * 0.1, "y": 1.0, "theta": 0.0})
-    graph.insert_node("object", "marker")
+    graph.insert_node(OBJECT, "marker")
 
 
 def main(argv: list[str] | None = None) -> int:

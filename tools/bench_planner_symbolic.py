@@ -32,6 +32,7 @@ import networkx as nx
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from agents.world.vocabulary import ActivityState  # noqa: E402
 from grammar.missions import plan_mission  # noqa: E402
 from grammar.parser import default_grammar_path, load_grammar  # noqa: E402
 
@@ -79,7 +80,7 @@ def generate_centre(rooms: int, seed: int = 7) -> tuple[nx.MultiDiGraph, str]:
             edge(f"person{i}_0", f"person{i}_1", "interacting")
         if i > 0 and rng.random() < 0.1:
             busy.add(room)
-            node(f"therapy{i}", "activity", state="running")
+            node(f"therapy{i}", "activity", state=ActivityState.RUNNING)
             edge(f"therapy{i}", f"obj{i}_0", "has")
             edge(f"person{i}_0", f"therapy{i}", "participant")
             edge(f"person{i}_1", f"therapy{i}", "participant")

@@ -157,6 +157,7 @@ def social_map_build_ms() -> float:
     """A 1000 x 600 social map with 30 people built from a DSR, as the bridge does each 0.2 s."""
     from agents.world.navigation import NavigationMaps
     from agents.world.offline import graph_at
+    from agents.world.vocabulary import EdgeType, NodeType
     from agents.world.scene_world import load_world
     from dsr import DSRGraph
 
@@ -170,8 +171,8 @@ def social_map_build_ms() -> float:
     rng = np.random.default_rng(2)
     world_node = graph.get_node_by_name("world")
     for i in range(30):
-        node = graph.insert_node("person", f"bench_{i}", {"role": "resident", "vx": 0.2, "vy": 0.0})
-        graph.insert_or_assign_edge(world_node.id, node.id, "RT", {"x": float(rng.uniform(2, 48)),
+        node = graph.insert_node(NodeType.PERSON, f"bench_{i}", {"role": "resident", "vx": 0.2, "vy": 0.0})
+        graph.insert_or_assign_edge(world_node.id, node.id, EdgeType.RT, {"x": float(rng.uniform(2, 48)),
                                                                   "y": float(rng.uniform(2, 28)), "theta": 0.0})
     t_s = world.scene.clock.start_s
     maps.build(graph, t_s).cost   # warm-up: numba compilation, static map

@@ -23,7 +23,8 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from tools.launch import AGENTS, TERMINAL_STATES, LaunchError, RunResult, check_rate, check_timeout
+from agents.world.vocabulary import MissionState, NodeType
+from tools.launch import AGENTS, LaunchError, RunResult, check_rate, check_timeout
 
 #: the order of a round: the clock first, then who perceives the tick, then who acts on it
 ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
@@ -113,7 +114,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
 
         def status() -> dict[str, object]:
             clock = graph.get_node_by_name("clock")
-            found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type("mission")}
+            found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type(NodeType.MISSION)}
             return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
                     "clock_mode": None if clock is None else clock.attrs.get("mode"),
                     "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
@@ -129,7 +130,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
                 on_tick(current)
             return bool(current["clock_finished"]) or (
                 len(missions) == len(spec.missions) and bool(missions)
-                and all(m.get("state") in TERMINAL_STATES for m in missions.values()))
+                and all(m.get("state") in MissionState.TERMINAL for m in missions.values()))
 
         outcome = scheduler.run(done, timeout_s=timeout_s, stop=stop)
         reason = outcome.reason

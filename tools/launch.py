@@ -40,7 +40,6 @@ AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", 
 #: started with `--ros` (agents/ros_bridge): the run's topics over rmw_zenoh, /goal_pose -> missions
 ROS_BRIDGE = "ros_bridge"
 DEFAULT_SCENE = "icra_usecase"
-TERMINAL_STATES = ("done", "failed")
 NOT_STARTED = "not started"
 #: an agent whose heartbeat stops for this long (wall s) is killed and restarted
 DEFAULT_HANG_TIMEOUT_S = 60.0
@@ -73,12 +72,14 @@ class RunResult:
 
     @property
     def ok(self) -> bool:
+        from agents.world.vocabulary import MissionState
         return (not self.interrupted and not self.timed_out and self.error is None and bool(self.missions)
-                and all(m.get("state") == "done" for m in self.missions.values()))
+                and all(m.get("state") == MissionState.DONE for m in self.missions.values()))
 
     @property
     def missions_done(self) -> int:
-        return sum(1 for m in self.missions.values() if m.get("state") == "done")
+        from agents.world.vocabulary import MissionState
+        return sum(1 for m in self.missions.values() if m.get("state") == MissionState.DONE)
 
 
 def check_rate(rate: float | None, option: str = "--rate") -> float | None:
@@ -199,6 +200,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
     the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
     instead of the simulated one (docs/ros2.md)."""
+    from agents.world.vocabulary import MissionState
     from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
     from dsr import DSRError, join
@@ -288,7 +290,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                         interrupted = True
                         break
                     if len(missions) == len(spec.missions) and missions and all(
-                            m.get("state") in TERMINAL_STATES for m in missions.values()):
+                            m.get("state") in MissionState.TERMINAL for m in missions.values()):
                         break
                     if status.get("clock_finished"):
                         break
@@ -362,9 +364,10 @@ def _write_result(result: RunResult) -> None:
 
 
 def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
+    from agents.world.vocabulary import NodeType
     clock = graph.get_node_by_name("clock")
     missions = {}
-    for node in graph.nodes_of_type("mission"):
+    for node in graph.nodes_of_type(NodeType.MISSION):
         missions[str(node.attrs.get("mission_id", node.name))] = dict(node.attrs)
     return {
         "now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),

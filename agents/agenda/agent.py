@@ -21,7 +21,7 @@ from agents.runtime.drawing.series import log_series_styles
 from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
 from agents.world.freshness import mark_observed
-from agents.world.vocabulary import ClockView
+from agents.world.vocabulary import ClockView, NodeType, RequestState
 from scenes.clock import format_clock
 
 
@@ -111,8 +111,8 @@ class AgendaAgent(Agent):
         self.graph.update_node(node.id, attrs={"applied": [*node.attrs.get("applied", []), key]})
 
     def _requests(self, now_s: float) -> None:
-        for request in self.graph.nodes_of_type("agenda_request"):
-            if request.attrs.get("state") != "pending":
+        for request in self.graph.nodes_of_type(NodeType.AGENDA_REQUEST):
+            if request.attrs.get("state") != RequestState.PENDING:
                 continue
             text = request.attrs.get("change")
             if not isinstance(text, str):
@@ -125,7 +125,7 @@ class AgendaAgent(Agent):
                 if ok:
                     self._remember(str(text))
                 if self.graph.get_node(request.id) is not None:  # the requester may have withdrawn it
-                    self.graph.update_node(request.id, attrs={"state": "accepted" if ok else "refused",
+                    self.graph.update_node(request.id, attrs={"state": RequestState.ACCEPTED if ok else RequestState.REFUSED,
                                                               "message": message, "answered_s": now_s})
 
     def _publish_activities(self, now_s: float) -> None:

@@ -47,7 +47,7 @@ from agents.ros_bridge.wire import RosNode, RosPublisher, ros_session_config
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.world.dsr_readers import closed_doors, dsr_people
-from agents.world.vocabulary import WORLD, MissionState, NodeType, activities, mission_name, now_s
+from agents.world.vocabulary import WORLD, EdgeType, MissionState, NodeType, activities, mission_name, now_s
 from scenes.clock import format_clock
 
 GOAL_PREFIX = "ros_goal_"
@@ -161,7 +161,7 @@ class RosBridgeAgent(Agent):
         if self._scan is not None and angles:
             attrs["laser_ranges"] = resample_scan(self._scan, angles, self.scene.robot.laser_range)
         with g.transaction():
-            g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": float(p.position.x), "y": float(p.position.y),
+            g.insert_or_assign_edge(world.id, robot.id, EdgeType.RT, attrs={"x": float(p.position.x), "y": float(p.position.y),
                                                                      "theta": msgs.yaw_of(p.orientation)})
             g.update_node(robot.id, attrs=attrs)
         self._robot_written = wall

@@ -6,8 +6,10 @@ signals and the cleanup.  That makes every agent constructible offline in a unit
 shutdown uniform: SIGINT/SIGTERM end the loop, the recording gets its footer, the Zenoh session is
 closed (an unclosed session hangs the interpreter at exit).  The loop also stamps the agent's
 heartbeat in the DSR (agents/runtime/heartbeat.py), so a launcher can tell a stuck agent from a
-busy one.  Credentials come from the environment like every Zenoh setting
-(``CHRONAV_ZENOH_USER`` + ``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
+busy one.  The graph an agent gets is a ``CheckedGraph`` (agents/runtime/checked_graph.py): a
+write outside the vocabulary is refused, logged and counted, never written.  Credentials come
+from the environment like every Zenoh setting (``CHRONAV_ZENOH_USER`` +
+``CHRONAV_ZENOH_PASSWORD_FILE``, written by the launcher for each run).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import ClassVar
 
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.config import AgentConfig, parse_agent_args
 from agents.runtime.heartbeat import Heartbeat
 from agents.runtime.recording import Recorder
@@ -51,8 +54,9 @@ class Agent(ABC):
         self.log = logging.getLogger(f"chronav.{config.name}")
 
     @abstractmethod
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
-        """Called once the replica has joined: declare signal handlers, write initial nodes."""
+    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph or a CheckedGraph of one
+        """Called once the replica has joined: declare signal handlers, write initial nodes.  Run by
+        ``run_agent`` or the lockstep scheduler, ``graph`` checks every write against the vocabulary."""
 
     @abstractmethod
     def step(self) -> None:
@@ -101,7 +105,8 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     settings = ZenohSettings.from_env()
     policy = policy_from_env()  # agents/world/write_policy.yaml unless CHRONAV_WRITE_POLICY says otherwise
     try:
-        with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as graph:
+        with join(agent=config.name, graph=config.graph, settings=settings, policy=policy) as replicated:
+            graph = CheckedGraph(replicated, config.name)   # writes outside the vocabulary are refused
             agent.setup(graph, recorder)
             log.info("%s joined graph %r", config.name, config.graph)
             heartbeat = Heartbeat(graph, config.name)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.recording import Recorder
 
 if TYPE_CHECKING:   # the scheduler drives the concrete graph: its dispatch loop and local write policy
@@ -96,7 +97,7 @@ class Lockstep:
             agent.wall_clock = self.clock
             try:
                 with self._as(agent):
-                    agent.setup(self.graph, recorder)
+                    agent.setup(CheckedGraph(self.graph, agent.config.name), recorder)
             except Exception as exc:  # noqa: BLE001 - named and re-raised for the run's result
                 raise AgentError(agent.config.name, exc) from exc
             self._set_up.append(agent)

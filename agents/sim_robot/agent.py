@@ -38,7 +38,8 @@ from agents.world.freshness import LOCKSTEP, observed_up_to
 from agents.world.dsr_writers import set_doors, write_building, write_clock, write_ground_truth, write_robot
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
-from agents.world.vocabulary import AGENDA, CLOCK, WORLD, MissionState, intentions, missions
+from agents.world.vocabulary import (AGENDA, CLOCK, WORLD, ClockMode, EdgeType, IntentionKind, IntentionState,
+                                     MissionState, NodeType, intentions, missions)
 from scenes.geometry import project_on_segments
 from scenes.clock import format_clock
 
@@ -101,7 +102,7 @@ class SimRobotAgent(Agent):
         self._waiting_since: float | None = None
         self._agenda_hold: tuple[tuple[str, ...], float] | None = None
         self._trajectory_file = self._open_trajectory()
-        self._last_mode: str | None = None
+        self._last_mode: ClockMode | None = None
         self._room_name: str | None = None
         self._trail: list[list[float]] = []
         self._trail_times: list[float] = []   # sim s of each trail point (the recording shows the last minutes)
@@ -122,7 +123,7 @@ class SimRobotAgent(Agent):
         now_s = float(g.get_node_by_name(CLOCK).attrs.get("now_s", self.scene.clock.start_s))
         node = g.get_node_by_name(spec.name)
         world = g.get_node_by_name(WORLD)
-        edge = g.get_edge(world.id, node.id, "RT") if node is not None else None
+        edge = g.get_edge(world.id, node.id, EdgeType.RT) if node is not None else None
         if edge is not None:
             self.log.info("resuming robot at (%.2f, %.2f) t=%.1f", edge.attrs["x"], edge.attrs["y"], now_s)
             return RobotState(edge.attrs["x"], edge.attrs["y"], edge.attrs["theta"], Velocity()), now_s
@@ -153,13 +154,13 @@ class SimRobotAgent(Agent):
         wall_now = self.wall_clock()
         end_s = self.scene.clock.end_s
         if self.now_s >= end_s:
-            self._set_clock(mode="finished", finished=True)
+            self._set_clock(mode=ClockMode.FINISHED, finished=True)
             return
         if not self._perceived(wall_now):
             return
         if self.external:
             self._follow_external(wall_now, mode)
-        elif mode == "driving":
+        elif mode == ClockMode.DRIVING:
             robot = self.graph.get_node_by_name(self.scene.robot.name)
             fresh = float(robot.attrs.get("cmd_stamp", -1.0)) >= float(robot.attrs.get("pose_stamp", 0.0))
             if not self._rate_allows(wall_now, self.control_dt):
@@ -174,9 +175,9 @@ class SimRobotAgent(Agent):
                     return
                 cmd = Velocity()  # stale command: brake, keep time flowing
             self._advance(self.control_dt, cmd)
-        elif mode == "starting":
+        elif mode == ClockMode.STARTING:
             return
-        elif mode == "busy":
+        elif mode == ClockMode.BUSY:
             dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * self.busy_rate - (self.now_s - self._sim_anchor)))
             if dt > 0:
                 self._advance(dt, Velocity())
@@ -219,23 +220,23 @@ class SimRobotAgent(Agent):
             self._agenda_hold = (pending, wall_now)
         return wall_now - self._agenda_hold[1] < AGENDA_HOLD_WALL_S
 
-    def _follow_external(self, wall_now: float, mode: str) -> None:
+    def _follow_external(self, wall_now: float, mode: ClockMode) -> None:
         """--robot ros: real time, the robot where the bridge last put it (no lockstep, no skips)."""
-        if mode == "starting":
+        if mode == ClockMode.STARTING:
             return
         dt = (wall_now - self._wall_anchor) - (self.now_s - self._sim_anchor)
         if dt < self.control_dt:
             return
         g = self.graph
         robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
-        edge = g.get_edge(world.id, robot.id, "RT") if robot is not None and world is not None else None
+        edge = g.get_edge(world.id, robot.id, EdgeType.RT) if robot is not None and world is not None else None
         if edge is not None:
             a = robot.attrs
             self.state = RobotState(float(edge.attrs["x"]), float(edge.attrs["y"]), float(edge.attrs["theta"]),
                                     Velocity(float(a.get("v", 0.0)), float(a.get("vy", 0.0)), float(a.get("omega", 0.0))))
         self.now_s += min(dt, 1.0)
         self._publish()
-        if self._trajectory_file is not None and mode == "driving":
+        if self._trajectory_file is not None and mode == ClockMode.DRIVING:
             s = self.state
             self._trajectory_file.write(f"{self.now_s:.3f},{s.x:.4f},{s.y:.4f},{s.theta:.5f}\n")
 
@@ -255,8 +256,8 @@ class SimRobotAgent(Agent):
 
     def _due_now(self) -> bool:
         """A pending mission's time has come (the executive is about to start it)."""
-        return any(n.attrs.get("state") == "pending" and float(n.attrs.get("time_s", math.inf)) <= self.now_s
-                   for n in self.graph.nodes_of_type("mission"))
+        return any(n.attrs.get("state") == MissionState.PENDING and float(n.attrs.get("time_s", math.inf)) <= self.now_s
+                   for n in self.graph.nodes_of_type(NodeType.MISSION))
 
     def skip_to(self, t_s: float) -> None:
         """Jump the sim clock to ``t_s`` with the robot at rest, and carry out what is due by then
@@ -273,34 +274,36 @@ class SimRobotAgent(Agent):
         self._wall_anchor = self.wall_clock()
         self._sim_anchor = self.now_s
 
-    def _mode(self) -> str:
+    def _mode(self) -> ClockMode:
         g = self.graph
         robot = g.get_node_by_name(self.scene.robot.name)
         if robot is not None and robot.attrs.get("nav_active"):
-            return "driving"
-        if any(n.attrs.get("state") == "active" and n.attrs.get("kind", "navigate") != "wait"
-               for n in g.nodes_of_type("intention")):
-            return "busy"
+            return ClockMode.DRIVING
+        if any(n.attrs.get("state") == IntentionState.ACTIVE
+               and n.attrs.get("kind", IntentionKind.NAVIGATE) != IntentionKind.WAIT
+               for n in g.nodes_of_type(NodeType.INTENTION)):
+            return ClockMode.BUSY
         day = missions(g)
         if self.scene.missions and not day:
-            return "starting"  # the executive has not written the day's missions yet: time stands still
+            return ClockMode.STARTING  # the executive has not written the day's missions yet: time stands still
         if any(m.state == MissionState.ACTIVE for m in day) and not any(i.active for i in intentions(g)):
-            return "busy"
+            return ClockMode.BUSY
         if not any(m.state == MissionState.ACTIVE for m in day) and any(
                 m.state == MissionState.PENDING and m.time_s <= self.now_s for m in day):
-            return "busy"  # a mission is due: let the executive start it now, not minutes of sim time later
-        return "idle"
+            return ClockMode.BUSY  # a mission is due: let the executive start it now, not minutes of sim time later
+        return ClockMode.IDLE
 
     def _next_deadline(self) -> float | None:
         """Earliest future time something is due: a pending mission, the end of a wait.
 
         While a mission is active (waiting for an activity), pending missions cannot start, so
         their times are not deadlines: the clock skips straight to the end of the wait."""
-        busy = any(n.attrs.get("state") == "active" for n in self.graph.nodes_of_type("mission"))
-        times = [] if busy else [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type("mission")
-                                 if n.attrs.get("state") == "pending" and "time_s" in n.attrs]
-        times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type("intention")
-                  if n.attrs.get("state") == "active" and n.attrs.get("kind") == "wait" and "until_s" in n.attrs]
+        busy = any(n.attrs.get("state") == MissionState.ACTIVE for n in self.graph.nodes_of_type(NodeType.MISSION))
+        times = [] if busy else [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type(NodeType.MISSION)
+                                 if n.attrs.get("state") == MissionState.PENDING and "time_s" in n.attrs]
+        times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type(NodeType.INTENTION)
+                  if n.attrs.get("state") == IntentionState.ACTIVE and n.attrs.get("kind") == IntentionKind.WAIT
+                  and "until_s" in n.attrs]
         future = [t for t in times if t > self.now_s]
         due_now = [t for t in times if t <= self.now_s]
         if due_now:
@@ -323,7 +326,7 @@ class SimRobotAgent(Agent):
         self.state = RobotState(x, y, theta, vel)
         self.now_s += dt
         self._publish()
-        if self._trajectory_file is not None and self._last_mode == "driving":
+        if self._trajectory_file is not None and self._last_mode == ClockMode.DRIVING:
             self._trajectory_file.write(f"{self.now_s:.3f},{x:.4f},{y:.4f},{theta:.5f}\n")
             self._trail.append([x, y])
             self._trail_times.append(self.now_s)
@@ -384,7 +387,7 @@ class SimRobotAgent(Agent):
                 self.feed = WorldFeed(self.world, manual)
         s = self.state
         vx = vy = 0.0
-        if self._last_mode == "driving":
+        if self._last_mode == ClockMode.DRIVING:
             vx = s.velocity.vx * math.cos(s.theta) - s.velocity.vy * math.sin(s.theta)
             vy = s.velocity.vx * math.sin(s.theta) + s.velocity.vy * math.cos(s.theta)
         self.crowd.advance(self.now_s, self.feed, RobotBody(s.x, s.y, vx, vy, self.scene.robot.radius))
@@ -404,11 +407,11 @@ class SimRobotAgent(Agent):
         room = self._room_change(s.x, s.y)
         with g.transaction():
             if not self.external:
-                g.insert_or_assign_edge(world.id, robot.id, "RT", attrs={"x": s.x, "y": s.y, "theta": s.theta})
+                g.insert_or_assign_edge(world.id, robot.id, EdgeType.RT, attrs={"x": s.x, "y": s.y, "theta": s.theta})
             if room is not None:
-                for edge in g.edges_from(robot.id, "in"):
-                    g.delete_edge(robot.id, edge.dst, "in")
-                g.insert_or_assign_edge(robot.id, room.id, "in", attrs={})
+                for edge in g.edges_from(robot.id, EdgeType.IN):
+                    g.delete_edge(robot.id, edge.dst, EdgeType.IN)
+                g.insert_or_assign_edge(robot.id, room.id, EdgeType.IN, attrs={})
             if not self.external:
                 g.update_node(robot.id, attrs={"pose_stamp": self.now_s, "v": s.velocity.vx, "vy": s.velocity.vy,
                                                 "omega": s.velocity.omega, "laser_ranges": ranges.tolist()})

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from agents.lib.agenda.model import ActivityWindow, AgendaError
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
-from agents.world.vocabulary import CLOCK, EdgeType, NodeType
+from agents.world.vocabulary import CLOCK, ActivityState, EdgeType, NodeType
 from dsr.protocols import GraphReader
 from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
 
@@ -81,7 +81,7 @@ def destinations(graph: GraphReader) -> dict[int, tuple[float, float]]:
     now_s = clock.attrs.get("now_s") if clock is not None else None
     for edge in graph.edges_of_type(EdgeType.PARTICIPANT):
         activity = graph.get_node(edge.dst)
-        if activity is None or activity.attrs.get("state") not in ("upcoming", "running"):
+        if activity is None or activity.attrs.get("state") not in (ActivityState.UPCOMING, ActivityState.RUNNING):
             continue
         if isinstance(now_s, (int, float)) and float(activity.attrs.get("start_s", 0.0)) - now_s > DUE_BEFORE_S:
             continue   # not due yet: the participant is not on the way (motion.py)
@@ -192,7 +192,7 @@ def dsr_activity_windows(graph: GraphReader) -> list[ActivityWindow]:
         attrs = node.attrs
         try:
             out.append(ActivityWindow(object=str(attrs["object"]), start_s=float(attrs["start_s"]),
-                                      end_s=float(attrs["end_s"]), cancelled=attrs.get("state") == "cancelled"))
+                                      end_s=float(attrs["end_s"]), cancelled=attrs.get("state") == ActivityState.CANCELLED))
         except (KeyError, ValueError, TypeError, AgendaError):
             continue
     return out
@@ -219,7 +219,7 @@ def running_activities(graph: GraphReader) -> list[tuple[str, tuple[float, float
     """(object, object position, participants) of every activity the DSR says is running."""
     out = []
     for node in graph.nodes_of_type(NodeType.ACTIVITY):
-        if node.attrs.get("state") != "running":
+        if node.attrs.get("state") != ActivityState.RUNNING:
             continue
         obj = graph.get_node_by_name(str(node.attrs.get("object", "")))
         if obj is None:

@@ -14,7 +14,8 @@ from typing import Any
 
 from agents.lib.agenda import Activity, AgendaDay
 from agents.lib.agenda.chronemics import ChronemicsParams, r_band, r_of_t
-from agents.world.vocabulary import (AGENDA, CLOCK, GROUND_TRUTH_PEOPLE, WORLD, EdgeType, NodeType, activity_name)
+from agents.world.vocabulary import (AGENDA, CLOCK, GROUND_TRUTH_PEOPLE, WORLD, ClockMode, EdgeType, NodeType,
+                                     activity_name)
 from dsr.model import Node
 from dsr.protocols import GraphWriter
 from scenes.geometry import Shape, shape_keys
@@ -91,7 +92,7 @@ def write_clock(graph: GraphWriter, scene: Scene, now_s: float, rate: float) -> 
     if node is None:
         node = graph.insert_node(type=NodeType.CLOCK, name=CLOCK,
                                  attrs={"now_s": now_s, "start_s": scene.clock.start_s, "end_s": scene.clock.end_s,
-                                        "rate": rate, "mode": "idle", "finished": False})
+                                        "rate": rate, "mode": ClockMode.IDLE, "finished": False})
     elif node.attrs.get("now_s") != now_s:
         graph.update_node(node.id, attrs={"now_s": now_s})
     return node

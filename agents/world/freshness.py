@@ -8,29 +8,29 @@ states in the DSR still describe 10:45 for a few milliseconds.  A planner starti
 
 from __future__ import annotations
 
-from typing import Any
 
-from agents.world.vocabulary import ActivityState, EdgeType, NodeType
+from agents.world.vocabulary import (AGENDA_AGENT, EXECUTIVE, OBSERVER, ActivityState, EdgeType, NodeType,
+                                     SensorAttr, sensor_name)
 from dsr.protocols import GraphReader, GraphWriter
 
-PERCEIVERS: tuple[str, ...] = ("human_observer", "agenda")
+PERCEIVERS: tuple[str, ...] = (OBSERVER, AGENDA_AGENT)
 #: who stamps every tick in lockstep (-o perception_lockstep=1): the perceivers, then the executive,
 #: which acts on what they saw; the navigation and the simulator's clock wait for all of them
-LOCKSTEP: tuple[str, ...] = (*PERCEIVERS, "executive")
+LOCKSTEP: tuple[str, ...] = (*PERCEIVERS, EXECUTIVE)
 
 
 def mark_observed(graph: GraphWriter, agent: str, now_s: float) -> None:
-    name = f"sensor/{agent}"
+    name = sensor_name(agent)
     node = graph.get_node_by_name(name)
     if node is None:
-        graph.insert_node(type="sensor", name=name, attrs={"observed_s": now_s})
+        graph.insert_node(type=NodeType.SENSOR, name=name, attrs={SensorAttr.OBSERVED_S: now_s})
     elif node.attrs.get("observed_s") != now_s:
         graph.update_node(node.id, attrs={"observed_s": now_s})
 
 
 def observed_s(graph: GraphReader, agent: str) -> float | None:
     """The sim time ``agent`` last stamped, or None before its first stamp."""
-    node = graph.get_node_by_name(f"sensor/{agent}")
+    node = graph.get_node_by_name(sensor_name(agent))
     if node is None:
         return None
     try:
@@ -42,7 +42,7 @@ def observed_s(graph: GraphReader, agent: str) -> float | None:
 def observed_up_to(graph: GraphReader, now_s: float, agents: tuple[str, ...] = PERCEIVERS, slack_s: float = 1.0) -> bool:
     """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
     for agent in agents:
-        node = graph.get_node_by_name(f"sensor/{agent}")
+        node = graph.get_node_by_name(sensor_name(agent))
         if node is None or float(node.attrs.get("observed_s", -1e9)) < now_s - slack_s:
             return False
     return True

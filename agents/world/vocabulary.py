@@ -1,24 +1,38 @@
-"""The DSR vocabulary: every node type, edge type and attribute the agents agree on, declared once.
+"""The DSR vocabulary: every node type, edge type, attribute and state the agents agree on, declared once.
 
 Why a registry (after robocomp cortex's closed vocabulary): the agents are separate processes,
 possibly on separate machines, that share nothing but the graph.  A misspelt ``"now_S"`` in one of
-them would be a silent divergence; here each name is a constant, each attribute has a type and an
-owner, and ``tests/unit/test_vocabulary.py`` checks that the write policy
-(``agents/world/write_policy.yaml``) grants exactly these writes.
+them would be a silent divergence; here each name is a constant (a ``StrEnum``: the members *are*
+the strings that travel on the wire), each attribute has a kind, its writers and, for a state, the
+set of values it may take.  Everything else is derived from this module:
+
+- the write policy (``agents/world/write_policy.py`` generates ``write_policy.yaml`` from ``NODES``
+  and ``EDGES``; ``tests/unit/test_vocabulary.py`` checks that the shipped file is what it generates);
+- the checked graph every agent is handed (``agents/runtime/checked_graph.py``): a write of an
+  unknown type, attribute or state is refused in the writer's own process, logged and counted;
+- ``tests/unit/test_vocabulary_literals.py`` fails on a bare type or state string in agents/ or tools/.
 
 Typed views (``ClockView`` ...) read a node's attributes with their declared types, so agents stop
 writing ``float(node.attrs["now_s"])`` by hand.
+
+``ActivityState`` is computed by the agenda library, which sits below this module in the import
+layers (pyproject.toml): its one definition is ``agents/lib/states.py``, a leaf module below both,
+re-exported here and by ``agents.lib.agenda``.
 """
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from enum import StrEnum
+from typing import Any, NamedTuple
+
+from agents.lib.states import ActivityState
 
 
-class NodeType:
-    """Node types (plain strings: they travel on the wire as they are)."""
+class NodeType(StrEnum):
+    """Node types."""
 
     WORLD = "world"
     ROOM = "room"
@@ -37,7 +51,7 @@ class NodeType:
     GROUND_TRUTH = "ground_truth"   # the simulated world's truth for simulated sensors (never for planning)
 
 
-class EdgeType:
+class EdgeType(StrEnum):
     """Edge types."""
 
     RT = "RT"                    # pose of the child in the parent's frame: x, y, theta
@@ -50,17 +64,18 @@ class EdgeType:
     TARGETS = "targets"          # mission -> what it is about
 
 
-class MissionState:
+# ----------------------------------------------------------------------------------- state sets
+class MissionState(StrEnum):
     """``mission.state``: pending -> active -> done | failed (written by the executive)."""
 
     PENDING = "pending"
     ACTIVE = "active"
     DONE = "done"
     FAILED = "failed"
-    TERMINAL = (DONE, FAILED)
+    TERMINAL = enum.nonmember((DONE, FAILED))
 
 
-class IntentionState:
+class IntentionState(StrEnum):
     """``intention.state``: active -> done | failed (the executing agent) | cancelled (the executive)."""
 
     ACTIVE = "active"
@@ -69,22 +84,191 @@ class IntentionState:
     CANCELLED = "cancelled"
 
 
-class IntentionKind:
+class IntentionKind(StrEnum):
     """``intention.kind``: drive to a goal pose (social navigation) or wait for an activity (executive)."""
 
     NAVIGATE = "navigate"
     WAIT = "wait"
 
 
-class ActivityState:
-    """``activity.state`` (the agenda library's states, as they travel on the wire)."""
+class RequestState(StrEnum):
+    """``agenda_request.state``: a staff tool creates it pending; the agenda answers accepted | refused."""
 
-    SCHEDULED = "scheduled"
-    UPCOMING = "upcoming"
-    RUNNING = "running"
+    PENDING = "pending"
+    ACCEPTED = "accepted"
+    REFUSED = "refused"
+    ANSWERED = enum.nonmember((ACCEPTED, REFUSED))
+
+
+class ClockMode(StrEnum):
+    """``clock.mode``: how the simulator runs the sim clock (agents/sim_robot/agent.py says when)."""
+
+    IDLE = "idle"
+    STARTING = "starting"
+    DRIVING = "driving"
+    BUSY = "busy"
     FINISHED = "finished"
-    CANCELLED = "cancelled"
-    ENDED = (FINISHED, CANCELLED)
+
+
+# ------------------------------------------------------------------- attribute keys, per type
+class RoomAttr(StrEnum):
+    POLYGON_X = "polygon_x"
+    POLYGON_Y = "polygon_y"
+
+
+class DoorAttr(StrEnum):
+    X = "x"
+    Y = "y"
+    WIDTH = "width"
+    ROOMS = "rooms"
+    OPEN = "open"
+
+
+class ClockAttr(StrEnum):
+    NOW_S = "now_s"
+    START_S = "start_s"
+    END_S = "end_s"
+    RATE = "rate"
+    MODE = "mode"
+    FINISHED = "finished"
+
+
+class RobotAttr(StrEnum):
+    RADIUS = "radius"
+    KINEMATICS = "kinematics"
+    MAX_SPEED = "max_speed"
+    LASER_ANGLES = "laser_angles"
+    POSE_STAMP = "pose_stamp"
+    V = "v"
+    VY = "vy"
+    OMEGA = "omega"
+    LASER_RANGES = "laser_ranges"
+    NAV_ACTIVE = "nav_active"
+    CMD_VX = "cmd_vx"
+    CMD_VY = "cmd_vy"
+    CMD_OMEGA = "cmd_omega"
+    CMD_STAMP = "cmd_stamp"
+    PATH_X = "path_x"
+    PATH_Y = "path_y"
+    PATH_COST = "path_cost"
+    PLANNED_S = "planned_s"
+
+
+class PersonAttr(StrEnum):
+    ROLE = "role"
+    SEEN_S = "seen_s"
+    VX = "vx"
+    VY = "vy"
+
+
+class GroundTruthAttr(StrEnum):
+    NAMES = "names"
+    ROLES = "roles"
+    X = "x"
+    Y = "y"
+    THETA = "theta"
+    VX = "vx"
+    VY = "vy"
+    GROUPS = "groups"
+    STAMP = "stamp"
+
+
+class ObjectAttr(StrEnum):
+    KIND = "kind"
+    FORBIDDEN_WHILE_ACTIVE = "forbidden_while_active"
+    FOOTPRINT_SHAPE = "footprint_shape"
+    FOOTPRINT_DIMS = "footprint_dims"
+    INTERACTION_SHAPE = "interaction_shape"
+    INTERACTION_DIMS = "interaction_dims"
+    R = "R"
+    R_BAND = "R_band"
+    ACTIVE = "active"
+
+
+class ActivityAttr(StrEnum):
+    ACTIVITY_ID = "activity_id"
+    NAME = "name"
+    OBJECT = "object"
+    ROOM = "room"
+    START_S = "start_s"
+    END_S = "end_s"
+    PARTICIPANTS = "participants"
+    STATE = "state"
+    SOURCE = "source"
+
+
+class AgendaAttr(StrEnum):
+    APPLIED = "applied"
+    CHANGES = "changes"
+
+
+class RequestAttr(StrEnum):
+    CHANGE = "change"
+    REQUESTED_BY = "requested_by"
+    REQUESTED_S = "requested_s"
+    STATE = "state"
+    MESSAGE = "message"
+    ANSWERED_S = "answered_s"
+
+
+class MissionAttr(StrEnum):
+    MISSION_ID = "mission_id"
+    GOAL = "goal"
+    TIME_S = "time_s"
+    STATE = "state"
+    DESCRIPTION = "description"
+    REPLANS = "replans"
+    STARTED_S = "started_s"
+    FINISHED_S = "finished_s"
+    REASON = "reason"
+    PLAN = "plan"
+
+
+class IntentionAttr(StrEnum):
+    KIND = "kind"
+    GOAL_X = "goal_x"
+    GOAL_Y = "goal_y"
+    GOAL_THETA = "goal_theta"
+    GOAL_HAS_THETA = "goal_has_theta"
+    UNTIL_S = "until_s"
+    TARGET = "target"
+    PASS_THROUGH = "pass_through"
+    ROOMS = "rooms"
+    MISSION_ID = "mission_id"
+    STEP = "step"
+    RULE = "rule"
+    BINDINGS = "bindings"
+    ISSUED_S = "issued_s"
+    STATE = "state"
+    REASON = "reason"
+    REPLANS = "replans"
+    PATH_X = "path_x"
+    PATH_Y = "path_y"
+    PATH_COST = "path_cost"
+    PLANNED_S = "planned_s"
+
+
+class SensorAttr(StrEnum):
+    OBSERVED_S = "observed_s"
+
+
+class HeartbeatAttr(StrEnum):
+    BEAT = "beat"
+    PID = "pid"
+    WALL_S = "wall_s"
+
+
+class PoseAttr(StrEnum):
+    """The attributes of an ``RT`` edge."""
+
+    X = "x"
+    Y = "y"
+    THETA = "theta"
+
+
+class ConnectedAttr(StrEnum):
+    DOOR = "door"
+    DOORS = "doors"
 
 
 # Well-known node names.
@@ -93,6 +277,7 @@ CLOCK = "clock"
 AGENDA = "agenda"
 GROUND_TRUTH_PEOPLE = "ground_truth/people"
 ACTIVITY_PREFIX = "activity/"
+AGENDA_REQUEST_PREFIX = "agenda_request/"
 
 
 def activity_name(activity_id: str) -> str:
@@ -134,90 +319,156 @@ ALL_AGENTS = (SIM_ROBOT, OBSERVER, RECOGNITION, AGENDA_AGENT, NAVIGATION, EXECUT
 ROS_BRIDGE = "ros_bridge"
 
 
+class Attr(NamedTuple):
+    """One attribute of a node type.
+
+    ``writers`` may set it at any time; ``init_by`` (creators of the node) may give it only when
+    they create the node (the robot's radius, a ROS goal's mission fields); ``values``, for a
+    state, is the set of values it may take."""
+
+    kind: str
+    writers: tuple[str, ...] = ()
+    init_by: tuple[str, ...] = ()
+    values: type[StrEnum] | None = None
+
+
 @dataclass(frozen=True)
 class NodeSpec:
-    """Who creates (and deletes) nodes of a type, and each attribute's kind and writers."""
+    """Who creates (and deletes) nodes of a type, and each attribute's kind and writers.
+
+    ``deleters`` defaults to the creators; ``init_values`` narrows, per creator, the values some
+    attribute may be given at creation (a staff tool creates a request ``pending`` only)."""
 
     type: str
     creators: tuple[str, ...]
-    attrs: Mapping[str, tuple[str, tuple[str, ...]]] = field(default_factory=dict)
+    attrs: Mapping[str, Attr] = field(default_factory=dict)
+    deleters: tuple[str, ...] | None = None
+    init_values: Mapping[str, Mapping[str, tuple[str, ...]]] = field(default_factory=dict)
+
+    @property
+    def may_delete(self) -> tuple[str, ...]:
+        return self.creators if self.deleters is None else self.deleters
 
 
 @dataclass(frozen=True)
 class EdgeSpec:
-    """An edge type between node types, who writes it, and its attributes' kinds."""
+    """An edge type between node types, who writes it, and its attributes' kinds.  ``delete``:
+    whether its writers may also delete it (the ROS bridge only ever sets the robot's pose)."""
 
     type: str
     src: tuple[str, ...]
     dst: tuple[str, ...]
     writers: tuple[str, ...]
     attrs: Mapping[str, str] = field(default_factory=dict)
+    delete: bool = True
 
 
-def _attrs(writer: str | tuple[str, ...], **kinds: str) -> dict[str, tuple[str, tuple[str, ...]]]:
-    writers = (writer,) if isinstance(writer, str) else writer
-    return {key: (kind, writers) for key, kind in kinds.items()}
+def _attrs(writers: str | tuple[str, ...], kinds: Mapping[StrEnum, str], *, init_only: bool = False,
+           values: Mapping[StrEnum, type[StrEnum]] | None = None) -> dict[str, Attr]:
+    """``kinds`` written by ``writers`` (at creation only with ``init_only``)."""
+    who = (writers,) if isinstance(writers, str) else writers
+    values = values or {}
+    return {key: Attr(kind, () if init_only else who, who if init_only else (), values.get(key))
+            for key, kind in kinds.items()}
 
+
+def _merge(*parts: dict[str, Attr]) -> dict[str, Attr]:
+    """Attributes of several writer groups; a key listed twice adds up its writers."""
+    out: dict[str, Attr] = {}
+    for part in parts:
+        for key, attr in part.items():
+            old = out.get(key)
+            out[key] = attr if old is None else old._replace(writers=old.writers + attr.writers,
+                                                             init_by=old.init_by + attr.init_by,
+                                                             values=old.values or attr.values)
+    return out
+
+
+_R, _C, _D, _RB = RobotAttr, ClockAttr, DoorAttr, RequestAttr
+_M, _I, _O, _A = MissionAttr, IntentionAttr, ObjectAttr, ActivityAttr
+_G, _P = GroundTruthAttr, PersonAttr
 
 NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.WORLD, (SIM_ROBOT,)),
-    NodeSpec(NodeType.ROOM, (SIM_ROBOT,), _attrs(SIM_ROBOT, polygon_x=FLOATS, polygon_y=FLOATS)),
-    NodeSpec(NodeType.DOOR, (SIM_ROBOT,), _attrs(SIM_ROBOT, x=FLOAT, y=FLOAT, width=FLOAT, rooms=STRS, open=BOOL)),
-    NodeSpec(NodeType.CLOCK, (SIM_ROBOT,), _attrs(SIM_ROBOT, now_s=FLOAT, start_s=FLOAT, end_s=FLOAT, rate=FLOAT,
-                                                  mode=STR, finished=BOOL)),
-    NodeSpec(NodeType.ROBOT, (SIM_ROBOT,), {
-        **_attrs(SIM_ROBOT, radius=FLOAT, kinematics=STR, max_speed=FLOAT, laser_angles=FLOATS),
+    NodeSpec(NodeType.ROOM, (SIM_ROBOT,), _attrs(SIM_ROBOT, {RoomAttr.POLYGON_X: FLOATS, RoomAttr.POLYGON_Y: FLOATS})),
+    NodeSpec(NodeType.DOOR, (SIM_ROBOT,), _attrs(SIM_ROBOT, {_D.X: FLOAT, _D.Y: FLOAT, _D.WIDTH: FLOAT,
+                                                             _D.ROOMS: STRS, _D.OPEN: BOOL})),
+    NodeSpec(NodeType.CLOCK, (SIM_ROBOT,), _attrs(SIM_ROBOT, {_C.NOW_S: FLOAT, _C.START_S: FLOAT, _C.END_S: FLOAT,
+                                                              _C.RATE: FLOAT, _C.MODE: STR, _C.FINISHED: BOOL},
+                                                  values={_C.MODE: ClockMode})),
+    NodeSpec(NodeType.ROBOT, (SIM_ROBOT,), _merge(
+        # the body, given once when the simulator creates the robot
+        _attrs(SIM_ROBOT, {_R.RADIUS: FLOAT, _R.KINEMATICS: STR, _R.MAX_SPEED: FLOAT, _R.LASER_ANGLES: FLOATS,
+                           _R.NAV_ACTIVE: BOOL}, init_only=True),
         # the simulated robot's motion, or a ROS 2 robot's as the bridge reports it (--robot ros)
-        **_attrs((SIM_ROBOT, ROS_BRIDGE), pose_stamp=FLOAT, v=FLOAT, vy=FLOAT, omega=FLOAT, laser_ranges=FLOATS),
-        **_attrs((SIM_ROBOT, NAVIGATION), nav_active=BOOL),
-        **_attrs(NAVIGATION, cmd_vx=FLOAT, cmd_vy=FLOAT, cmd_omega=FLOAT, cmd_stamp=FLOAT, path_x=FLOATS,
-                 path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
-    NodeSpec(NodeType.PERSON, (OBSERVER,), _attrs(OBSERVER, role=STR, seen_s=FLOAT, vx=FLOAT, vy=FLOAT)),
+        _attrs((SIM_ROBOT, ROS_BRIDGE), {_R.POSE_STAMP: FLOAT, _R.V: FLOAT, _R.VY: FLOAT, _R.OMEGA: FLOAT,
+                                         _R.LASER_RANGES: FLOATS}),
+        _attrs(NAVIGATION, {_R.NAV_ACTIVE: BOOL, _R.CMD_VX: FLOAT, _R.CMD_VY: FLOAT, _R.CMD_OMEGA: FLOAT,
+                            _R.CMD_STAMP: FLOAT, _R.PATH_X: FLOATS, _R.PATH_Y: FLOATS, _R.PATH_COST: FLOAT,
+                            _R.PLANNED_S: FLOAT}))),
+    NodeSpec(NodeType.PERSON, (OBSERVER,), _attrs(OBSERVER, {_P.ROLE: STR, _P.SEEN_S: FLOAT, _P.VX: FLOAT,
+                                                             _P.VY: FLOAT})),
     # the simulator's people as they truly are, one list per attribute (agents/world/people.py); only
     # the human observer reads it, to perceive them with noise
-    NodeSpec(NodeType.GROUND_TRUTH, (SIM_ROBOT,), _attrs(SIM_ROBOT, names=STRS, roles=STRS, x=FLOATS, y=FLOATS,
-                                                         theta=FLOATS, vx=FLOATS, vy=FLOATS, groups=STRS,
-                                                         stamp=FLOAT)),
-    NodeSpec(NodeType.OBJECT, (RECOGNITION,), {
-        **_attrs(RECOGNITION, kind=STR, forbidden_while_active=BOOL, footprint_shape=STR, footprint_dims=FLOATS,
-                 interaction_shape=STR, interaction_dims=FLOATS),
-        **_attrs(AGENDA_AGENT, R=FLOAT, R_band=INT, active=BOOL)}),
-    NodeSpec(NodeType.ACTIVITY, (AGENDA_AGENT,), _attrs(AGENDA_AGENT, activity_id=STR, name=STR, object=STR, room=STR,
-                                                        start_s=FLOAT, end_s=FLOAT, participants=STRS, state=STR,
-                                                        source=STR)),
-    NodeSpec(NodeType.AGENDA, (AGENDA_AGENT,), _attrs(AGENDA_AGENT, applied=STRS, changes=STRS)),
-    NodeSpec(NodeType.AGENDA_REQUEST, (AGENDA_TOOL,), {
-        **_attrs(AGENDA_TOOL, change=STR, requested_by=STR, requested_s=FLOAT),
-        **_attrs(AGENDA_AGENT, state=STR, message=STR, answered_s=FLOAT)}),
-    # the ROS bridge only creates missions (a /goal_pose, due now); the executive runs them
-    NodeSpec(NodeType.MISSION, (EXECUTIVE, ROS_BRIDGE), {
-        **_attrs(EXECUTIVE, started_s=FLOAT, finished_s=FLOAT, reason=STR, plan=STRS),
-        **_attrs((EXECUTIVE, ROS_BRIDGE), mission_id=STR, goal=STR, time_s=FLOAT, state=STR, description=STR,
-                 replans=INT)}),
-    NodeSpec(NodeType.INTENTION, (EXECUTIVE,), {
-        **_attrs(EXECUTIVE, kind=STR, goal_x=FLOAT, goal_y=FLOAT, goal_theta=FLOAT, goal_has_theta=BOOL,
-                 until_s=FLOAT, target=STR, pass_through=BOOL, rooms=STRS, mission_id=STR, step=INT, rule=STR,
-                 bindings=STRS, issued_s=FLOAT),
-        **_attrs((EXECUTIVE, NAVIGATION), state=STR, reason=STR),
-        **_attrs(NAVIGATION, replans=INT, path_x=FLOATS, path_y=FLOATS, path_cost=FLOAT, planned_s=FLOAT)}),
-    NodeSpec(NodeType.SENSOR, (OBSERVER, RECOGNITION, AGENDA_AGENT), _attrs((OBSERVER, RECOGNITION, AGENDA_AGENT),
-                                                                            observed_s=FLOAT)),
+    NodeSpec(NodeType.GROUND_TRUTH, (SIM_ROBOT,), _attrs(SIM_ROBOT, {
+        _G.NAMES: STRS, _G.ROLES: STRS, _G.X: FLOATS, _G.Y: FLOATS, _G.THETA: FLOATS, _G.VX: FLOATS,
+        _G.VY: FLOATS, _G.GROUPS: STRS, _G.STAMP: FLOAT})),
+    NodeSpec(NodeType.OBJECT, (RECOGNITION,), _merge(
+        _attrs(RECOGNITION, {_O.KIND: STR, _O.FORBIDDEN_WHILE_ACTIVE: BOOL, _O.FOOTPRINT_SHAPE: STR,
+                             _O.FOOTPRINT_DIMS: FLOATS, _O.INTERACTION_SHAPE: STR, _O.INTERACTION_DIMS: FLOATS}),
+        # R(t) and the activity flag of an object are the agenda's
+        _attrs(AGENDA_AGENT, {_O.R: FLOAT, _O.R_BAND: INT, _O.ACTIVE: BOOL}))),
+    NodeSpec(NodeType.ACTIVITY, (AGENDA_AGENT,), _attrs(AGENDA_AGENT, {
+        _A.ACTIVITY_ID: STR, _A.NAME: STR, _A.OBJECT: STR, _A.ROOM: STR, _A.START_S: FLOAT, _A.END_S: FLOAT,
+        _A.PARTICIPANTS: STRS, _A.STATE: STR, _A.SOURCE: STR}, values={_A.STATE: ActivityState})),
+    NodeSpec(NodeType.AGENDA, (AGENDA_AGENT,), _attrs(AGENDA_AGENT, {AgendaAttr.APPLIED: STRS,
+                                                                     AgendaAttr.CHANGES: STRS})),
+    # staff tools (chronav agenda) ask for changes, created pending; only the agenda answers them.  The
+    # agenda may create one too (its answer may arrive at a replica before the request itself).
+    NodeSpec(NodeType.AGENDA_REQUEST, (AGENDA_TOOL, AGENDA_AGENT), _merge(
+        _attrs(AGENDA_TOOL, {_RB.CHANGE: STR, _RB.REQUESTED_BY: STR, _RB.REQUESTED_S: FLOAT}),
+        _attrs(AGENDA_TOOL, {_RB.STATE: STR}, init_only=True),
+        _attrs(AGENDA_AGENT, {_RB.STATE: STR, _RB.MESSAGE: STR, _RB.ANSWERED_S: FLOAT},
+               values={_RB.STATE: RequestState})),
+        deleters=(AGENDA_TOOL,), init_values={AGENDA_TOOL: {_RB.STATE: (RequestState.PENDING,)}}),
+    # the ROS bridge only creates missions (a /goal_pose, due now), never changes them; the executive runs them
+    NodeSpec(NodeType.MISSION, (EXECUTIVE, ROS_BRIDGE), _merge(
+        _attrs(EXECUTIVE, {_M.STARTED_S: FLOAT, _M.FINISHED_S: FLOAT, _M.REASON: STR, _M.PLAN: STRS}),
+        _attrs(EXECUTIVE, {_M.MISSION_ID: STR, _M.GOAL: STR, _M.TIME_S: FLOAT, _M.STATE: STR,
+                           _M.DESCRIPTION: STR, _M.REPLANS: INT}, values={_M.STATE: MissionState}),
+        _attrs(ROS_BRIDGE, {_M.MISSION_ID: STR, _M.GOAL: STR, _M.TIME_S: FLOAT, _M.STATE: STR,
+                            _M.DESCRIPTION: STR, _M.REPLANS: INT}, init_only=True)),
+        deleters=(EXECUTIVE,)),
+    NodeSpec(NodeType.INTENTION, (EXECUTIVE,), _merge(
+        _attrs(EXECUTIVE, {_I.KIND: STR, _I.GOAL_X: FLOAT, _I.GOAL_Y: FLOAT, _I.GOAL_THETA: FLOAT,
+                           _I.GOAL_HAS_THETA: BOOL, _I.UNTIL_S: FLOAT, _I.TARGET: STR, _I.PASS_THROUGH: BOOL,
+                           _I.ROOMS: STRS, _I.MISSION_ID: STR, _I.STEP: INT, _I.RULE: STR, _I.BINDINGS: STRS,
+                           _I.ISSUED_S: FLOAT}, values={_I.KIND: IntentionKind}),
+        _attrs((EXECUTIVE, NAVIGATION), {_I.STATE: STR, _I.REASON: STR}, values={_I.STATE: IntentionState}),
+        _attrs(NAVIGATION, {_I.REPLANS: INT, _I.PATH_X: FLOATS, _I.PATH_Y: FLOATS, _I.PATH_COST: FLOAT,
+                            _I.PLANNED_S: FLOAT}))),
+    # each perceiver (and, in lockstep, the executive) stamps the sim time it has caught up with
+    # (agents/world/freshness.py)
+    NodeSpec(NodeType.SENSOR, (OBSERVER, RECOGNITION, AGENDA_AGENT, EXECUTIVE),
+             _attrs((OBSERVER, RECOGNITION, AGENDA_AGENT, EXECUTIVE), {SensorAttr.OBSERVED_S: FLOAT})),
     # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them
-    NodeSpec(NodeType.HEARTBEAT, (*ALL_AGENTS, ROS_BRIDGE), _attrs((*ALL_AGENTS, ROS_BRIDGE), beat=INT, pid=INT,
-                                                                   wall_s=FLOAT)),
+    NodeSpec(NodeType.HEARTBEAT, (*ALL_AGENTS, ROS_BRIDGE),
+             _attrs((*ALL_AGENTS, ROS_BRIDGE), {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT,
+                                                HeartbeatAttr.WALL_S: FLOAT}), deleters=()),
 )}
 
-_POSE = {"x": FLOAT, "y": FLOAT, "theta": FLOAT}
+_POSE = {PoseAttr.X: FLOAT, PoseAttr.Y: FLOAT, PoseAttr.THETA: FLOAT}
 
 EDGES: tuple[EdgeSpec, ...] = (
-    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROOM, NodeType.ROBOT), (SIM_ROBOT,), _POSE),
-    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROBOT,), (ROS_BRIDGE,), _POSE),   # --robot ros
+    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROOM, NodeType.ROBOT, NodeType.DOOR), (SIM_ROBOT,), _POSE),
+    EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROBOT,), (ROS_BRIDGE,), _POSE, delete=False),  # --robot ros
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.PERSON,), (OBSERVER,), _POSE),
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.OBJECT,), (RECOGNITION,), _POSE),
     EdgeSpec(EdgeType.IN, (NodeType.ROBOT,), (NodeType.ROOM,), (SIM_ROBOT,)),
     EdgeSpec(EdgeType.IN, (NodeType.PERSON,), (NodeType.ROOM,), (OBSERVER,)),
     EdgeSpec(EdgeType.IN, (NodeType.OBJECT,), (NodeType.ROOM,), (RECOGNITION,)),
-    EdgeSpec(EdgeType.CONNECTED, (NodeType.ROOM,), (NodeType.ROOM,), (SIM_ROBOT,), {"door": STR, "doors": STRS}),
+    EdgeSpec(EdgeType.CONNECTED, (NodeType.ROOM,), (NodeType.ROOM,), (SIM_ROBOT,),
+             {ConnectedAttr.DOOR: STR, ConnectedAttr.DOORS: STRS}),
     EdgeSpec(EdgeType.INTERACTING, (NodeType.PERSON,), (NodeType.PERSON, NodeType.OBJECT), (OBSERVER,)),
     EdgeSpec(EdgeType.HAS, (NodeType.ACTIVITY,), (NodeType.OBJECT,), (AGENDA_AGENT,)),
     EdgeSpec(EdgeType.PARTICIPANT, (NodeType.PERSON,), (NodeType.ACTIVITY,), (AGENDA_AGENT,)),
@@ -225,8 +476,17 @@ EDGES: tuple[EdgeSpec, ...] = (
 )
 
 
+def edge_attrs(edge_type: str) -> dict[str, str]:
+    """Every attribute an edge of ``edge_type`` may carry, with its kind (any end types)."""
+    out: dict[str, str] = {}
+    for spec in EDGES:
+        if spec.type == edge_type:
+            out.update(spec.attrs)
+    return out
+
+
 class VocabularyError(ValueError):
-    """A node that does not carry its type's attributes with their declared kinds."""
+    """A write outside the vocabulary: unknown type, unknown attribute, wrong kind or state."""
 
 
 def _kind_ok(kind: str, value: Any) -> bool:
@@ -238,26 +498,53 @@ def _kind_ok(kind: str, value: Any) -> bool:
         return isinstance(value, (int, float)) and not isinstance(value, bool)
     if kind == STR:
         return isinstance(value, str)
+    # Lists: the DSR itself refuses a list that mixes kinds (dsr/model.py), so the first item tells
+    # floats from strings; not walking every item keeps a 360-ray laser scan cheap to check.
     if kind == FLOATS:
-        return isinstance(value, list) and all(_kind_ok(FLOAT, v) for v in value)
+        return isinstance(value, (list, tuple)) and (not value or _kind_ok(FLOAT, value[0]))
     if kind == STRS:
-        return isinstance(value, list) and all(isinstance(v, str) for v in value)
+        return isinstance(value, (list, tuple)) and (not value or isinstance(value[0], str))
     return False
 
 
-def check_attrs(node_type: str, attrs: Mapping[str, Any]) -> None:
-    """VocabularyError naming the first attribute of ``attrs`` that is unknown for ``node_type`` or
-    of the wrong kind (used where values are written, so a typo fails in the writer's own process)."""
+def _known(names: Any) -> str:
+    return ", ".join(sorted(str(n) for n in names)) or "none"
+
+
+def check_node_type(node_type: str) -> NodeSpec:
+    """The spec of ``node_type``, or VocabularyError listing the known types."""
     spec = NODES.get(node_type)
     if spec is None:
-        raise VocabularyError(f"unknown node type {node_type!r}; known: {', '.join(sorted(NODES))}")
+        raise VocabularyError(f"unknown node type {node_type!r}; known: {_known(NODES)}")
+    return spec
+
+
+def check_attrs(node_type: str, attrs: Mapping[str, Any]) -> None:
+    """VocabularyError naming the first attribute of ``attrs`` that is unknown for ``node_type``, of
+    the wrong kind, or a state value outside its set (a typo fails in the writer's own process)."""
+    spec = check_node_type(node_type)
     for key, value in attrs.items():
         declared = spec.attrs.get(key)
         if declared is None:
-            raise VocabularyError(f"a {node_type} node has no attribute {key!r}; "
-                                  f"known: {', '.join(sorted(spec.attrs)) or 'none'}")
-        if not _kind_ok(declared[0], value):
-            raise VocabularyError(f"{node_type}.{key} must be {declared[0]}, got {value!r}")
+            raise VocabularyError(f"a {node_type} node has no attribute {key!r}; known: {_known(spec.attrs)}")
+        if not _kind_ok(declared.kind, value):
+            raise VocabularyError(f"{node_type}.{key} must be {declared.kind}, got {value!r}")
+        if declared.values is not None and value not in declared.values.__members__.values():
+            raise VocabularyError(f"{node_type}.{key} cannot be {value!r}; it is one of: "
+                                  f"{', '.join(str(v) for v in declared.values)}")
+
+
+def check_edge(edge_type: str, attrs: Mapping[str, Any]) -> None:
+    """VocabularyError naming an unknown edge type, or an attribute it does not carry / of the wrong kind."""
+    kinds = edge_attrs(edge_type)
+    if not any(spec.type == edge_type for spec in EDGES):
+        raise VocabularyError(f"unknown edge type {edge_type!r}; known: {_known({e.type for e in EDGES})}")
+    for key, value in attrs.items():
+        kind = kinds.get(key)
+        if kind is None:
+            raise VocabularyError(f"a {edge_type} edge has no attribute {key!r}; known: {_known(kinds)}")
+        if not _kind_ok(kind, value):
+            raise VocabularyError(f"{edge_type} edge .{key} must be {kind}, got {value!r}")
 
 
 # ----------------------------------------------------------------------------------- typed views
@@ -281,13 +568,14 @@ class ClockView:
             return None
         a = node.attrs
         return cls(float(_get(a, "now_s", 0.0)), float(_get(a, "start_s", 0.0)), float(_get(a, "end_s", 0.0)),
-                   str(_get(a, "mode", "idle")), bool(_get(a, "finished", False)))
+                   str(_get(a, "mode", ClockMode.IDLE)), bool(_get(a, "finished", False)))
 
 
 def now_s(graph: Any) -> float | None:
-    """The sim time the DSR's clock shows, or None before the simulator wrote it."""
-    clock = ClockView.of(graph)
-    return None if clock is None else clock.now_s
+    """The sim time the DSR's clock shows, or None before the simulator wrote it (or if it is not a number)."""
+    clock = graph.get_node_by_name(CLOCK)
+    value = None if clock is None or clock.type != NodeType.CLOCK else clock.attrs.get(ClockAttr.NOW_S)
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from agents.lib.agenda.chronemics import ChronemicsParams, r_of_t
 from agents.world.dsr_writers import R_DECIMALS
 from agents.lib.agenda.model import ActivityWindow
 from agents.world.dsr_writers import object_attrs
+from agents.world.vocabulary import NodeType
 from dsr import DSRGraph, ZenohSettings, join
 from scenes.loader import load_scene
 from tests.support import REPO_ROOT, free_port, wait_until
@@ -92,7 +93,7 @@ class LiveSystem:
         return float(self.world.get_node_by_name("tv").attrs.get("R", -1.0))
 
     def requests(self) -> list[Any]:
-        return self.world.nodes_of_type(tool.REQUEST_TYPE)
+        return self.world.nodes_of_type(NodeType.AGENDA_REQUEST)
 
 
 def _populate_world(world: DSRGraph) -> None:

@@ -135,7 +135,7 @@ LEGIT: list[tuple[str, str, Action]] = [
     ("human_observer", "see an interaction", lambda g, i: g.insert_or_assign_edge(
         i["alice"], i["table"], "interacting")),
     ("object_recognition", "update an object", lambda g, i: g.update_node(
-        i["table"], {"kind": "table", "footprint_x": [0.0, 1.0, 1.0]})),
+        i["table"], {"kind": "table", "footprint_dims": [0.0, 1.0, 1.0]})),
     ("agenda", "update R(t)", lambda g, i: g.update_node(i["table"], {"R": 0.9, "active": True})),
     ("agenda", "run an activity", lambda g, i: g.update_node(i["activity"], {"state": "running"})),
     ("agenda", "add an activity", lambda g, i: g.insert_node(

@@ -47,7 +47,7 @@ class Counter:
         if self.fail_at is not None and len(self.log) >= self.fail_at:
             raise ValueError("broken on purpose")
         if self.writes:
-            self.graph.insert_node(type="x", name=f"{self.config.name}/{len(self.log)}", attrs={})
+            self.graph.insert_node(type="sensor", name=f"{self.config.name}/{len(self.log)}", attrs={})
 
     def teardown(self) -> None:
         self.torn_down = True

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 
+
 def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, Any]:
     """Every replica that answers one state query, as an offline DSRGraph copy, by agent name."""
     import zenoh
@@ -97,14 +98,15 @@ def lost_writes(graph: Any, loaded: Any, done_seen: set[str], accepted: list[str
     """Every acknowledged write that is not in the final graph, as a sentence each (empty: none).
 
     ``accepted``: change JSON texts whose requests were answered "accepted"."""
+    from agents.world.vocabulary import ActivityState, MissionState, NodeType
     from agents.lib.agenda.changes import AgendaChangeError, apply_change, parse_change
 
     lost: list[str] = []
-    for node in graph.nodes_of_type("mission"):
+    for node in graph.nodes_of_type(NodeType.MISSION):
         mission_id = str(node.attrs.get("mission_id", node.name))
-        if mission_id in done_seen and node.attrs.get("state") != "done":
+        if mission_id in done_seen and node.attrs.get("state") != MissionState.DONE:
             lost.append(f"mission {mission_id} was done, now {node.attrs.get('state')!r}")
-    missing = done_seen - {str(n.attrs.get("mission_id", n.name)) for n in graph.nodes_of_type("mission")}
+    missing = done_seen - {str(n.attrs.get("mission_id", n.name)) for n in graph.nodes_of_type(NodeType.MISSION)}
     lost += [f"mission {m} was done, now missing" for m in sorted(missing)]
     agenda = graph.get_node_by_name("agenda")
     log = list(agenda.attrs.get("changes", [])) if agenda is not None else []
@@ -120,14 +122,14 @@ def lost_writes(graph: Any, loaded: Any, done_seen: set[str], accepted: list[str
                                known_rooms={r.name for r in scene.rooms})
         except AgendaChangeError as exc:
             lost.append(f"logged agenda change {text} no longer applies: {exc}")
-    published = {str(n.attrs.get("activity_id")): n.attrs for n in graph.nodes_of_type("activity")}
+    published = {str(n.attrs.get("activity_id")): n.attrs for n in graph.nodes_of_type(NodeType.ACTIVITY)}
     for activity in day.activities:
         attrs = published.get(activity.id)
         if attrs is None:
             lost.append(f"activity {activity.id} is missing from the DSR")
             continue
         if (float(attrs.get("start_s", -1)), float(attrs.get("end_s", -1))) != (activity.start_s, activity.end_s) \
-                or attrs.get("object") != activity.object or (attrs.get("state") == "cancelled") != activity.cancelled:
+                or attrs.get("object") != activity.object or (attrs.get("state") == ActivityState.CANCELLED) != activity.cancelled:
             lost.append(f"activity {activity.id} in the DSR ({attrs.get('start_s')}-{attrs.get('end_s')}, "
                         f"{attrs.get('state')}) differs from the agenda log ({activity.start_s}-{activity.end_s}, "
                         f"{'cancelled' if activity.cancelled else 'not cancelled'})")

@@ -94,6 +94,7 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
               runs_dir: Path | None = None, rate: float | None = None,
               log: Callable[[str], None] | None = None) -> ChaosReport:
     """Launch SCENE, inject the faults (``schedule``, else a random one from ``seed``), report."""
+    from agents.world.vocabulary import MissionState, NodeType, RequestState
     from agents.world.scene_world import load_world
     from tools.launch import run_system
 
@@ -115,14 +116,14 @@ def run_chaos(scene: str | Path, schedule: list[Fault] | None = None, *, seed: i
         if graph is None:
             lost, missions = ["the chaos replica never joined the graph"], {}
         else:
-            done = chaos.done_seen | {m for m, a in result.missions.items() if a.get("state") == "done"}
+            done = chaos.done_seen | {m for m, a in result.missions.items() if a.get("state") == MissionState.DONE}
             lost = lost_writes(graph, loaded, done, accepted)
             missions = {str(n.attrs.get("mission_id", n.name)): str(n.attrs.get("state"))
-                        for n in graph.nodes_of_type("mission")}
+                        for n in graph.nodes_of_type(NodeType.MISSION)}
             graph.save(str(result.run_dir / "final_graph.json"))  # the DSR after the run, for tests and people
     finally:
         chaos.close()
-    pending = [name for name, state in requests.items() if state not in ("accepted", "refused")]
+    pending = [name for name, state in requests.items() if state not in RequestState.ANSWERED]
     # Faults the run outlived are reported (faults_injected < faults_planned), not failures.
     # Kills, stops and restarts are not hostile: no member may refuse an honest one's state, and
     # no member may serve a claim about another that the other does not make.

@@ -20,7 +20,7 @@ from typing import Any
 
 from tools.chaos.checks import describe_divergence, probe_replicas
 from tools.chaos.schedule import Fault, clock_text
-from tools.launch import AGENTS, TERMINAL_STATES
+from tools.launch import AGENTS
 
 CHAOS_AGENT = "agenda_tool-chaos"
 PROBE_PERIOD_S = 0.2
@@ -76,18 +76,19 @@ class ChaosRun:
 
     # --------------------------------------------------------------- launcher thread
     def on_tick(self, status: dict[str, Any]) -> None:
+        from agents.world.vocabulary import MissionState
         self.status = status
         now = time.monotonic()
         missions = status.get("missions", {})
         for mission_id, attrs in missions.items():
-            if attrs.get("state") in ("active", *TERMINAL_STATES):
+            if attrs.get("state") in (MissionState.ACTIVE, *MissionState.TERMINAL):
                 self.activated.setdefault(mission_id, now)
-            if attrs.get("state") == "done":
+            if attrs.get("state") == MissionState.DONE:
                 self.done_seen.add(mission_id)
         if self._thread is None and "run" in status:
             self._thread = threading.Thread(target=self._main, name="chaos-injector", daemon=True)
             self._thread.start()
-        if missions and all(m.get("state") in TERMINAL_STATES for m in missions.values()) \
+        if missions and all(m.get("state") in MissionState.TERMINAL for m in missions.values()) \
                 and not self._final_probed:
             self._final_probed = True
             self.finish()
@@ -141,12 +142,13 @@ class ChaosRun:
         return not self._stop.wait(max(0.0, seconds))
 
     def _wait_trigger(self, fault: Fault) -> bool:
+        from agents.world.vocabulary import NodeType
         driving_since: float | None = None
         while not self._stop.is_set():
             now = time.monotonic()
             started = self.activated.get(fault.mission) if fault.mission else min(self.activated.values(), default=None)
             if fault.driving and started is not None:
-                driving = any(n.attrs.get("nav_active") for n in self.graph.nodes_of_type("robot"))
+                driving = any(n.attrs.get("nav_active") for n in self.graph.nodes_of_type(NodeType.ROBOT))
                 driving_since = (driving_since or now) if driving else None
                 started = driving_since
             if started is not None and now >= started + fault.at_s:
@@ -169,10 +171,11 @@ class ChaosRun:
             self._stopped_pids.discard(pid)
 
     def _inject(self, outcome: FaultOutcome) -> None:
+        from agents.world.vocabulary import MissionState
         fault = outcome.fault
         first = min(self.activated.values(), default=time.monotonic())
         clock = self.graph.get_node_by_name("clock")
-        active = [m for m, a in self.status.get("missions", {}).items() if a.get("state") == "active"]
+        active = [m for m, a in self.status.get("missions", {}).items() if a.get("state") == MissionState.ACTIVE]
         outcome.at_wall_s = round(time.monotonic() - first, 2)
         outcome.at_sim_s = None if clock is None else round(float(clock.attrs.get("now_s", 0.0)), 2)
         outcome.mission = active[0] if active else None
@@ -227,10 +230,11 @@ class ChaosRun:
         return predicate()
 
     def _request(self, change: str) -> str:
+        from agents.world.vocabulary import NodeType, RequestState
         index = len(self._requests)
         name = f"agenda_request/chaos-{os.getpid()}-{index}"
-        self.graph.insert_node(type="agenda_request", name=name,
-                               attrs={"change": change, "state": "pending", "requested_by": CHAOS_AGENT})
+        self.graph.insert_node(type=NodeType.AGENDA_REQUEST, name=name,
+                               attrs={"change": change, "state": RequestState.PENDING, "requested_by": CHAOS_AGENT})
         self._requests.append(name)
         return name
 

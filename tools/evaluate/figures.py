@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.world.vocabulary import MissionState
 from tools.evaluate.stats import MissionKey, done_rows, missions_of, planners_of
 
 #: one colour per planner, the same in every figure (colour-blind safe: Okabe-Ito)
@@ -232,7 +233,7 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], mission: MissionKey, maps: A
             ax.plot(*xy[0], marker="o", color=colour, markersize=5, zorder=8)
             ax.plot(*xy[-1], marker="*", color=colour, markersize=11, markeredgecolor="black", zorder=8)
             drawn += 1
-        failed = sum(1 for r in mine if r["planner"] == planner and r.get("state") != "done")
+        failed = sum(1 for r in mine if r["planner"] == planner and r.get("state") != MissionState.DONE)
         note = f" ({drawn} run{'s' if drawn != 1 else ''}" + (f", {failed} not done" if failed else "") + ")"
         handles.append(Line2D([], [], color=colour, linewidth=width, label=planner + note))
     handles += [Patch(color=ZONE_COLOURS[z], label=f"{z} zone") for z in ("intimate", "personal", "social")]

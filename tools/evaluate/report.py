@@ -18,6 +18,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
+from agents.world.vocabulary import MissionState
 from tools.evaluate.stats import REFERENCE, PairedTest, Summary, missions_of, paired_tests, planners_of, summarise
 
 REPORT = "report.html"
@@ -177,7 +178,7 @@ def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any
     done = []
     for planner in planners:
         mine = [r for r in rows if r["planner"] == planner]
-        ok = sum(1 for r in mine if r.get("state") == "done")
+        ok = sum(1 for r in mine if r.get("state") == MissionState.DONE)
         done.append(f"<td>{ok} / {len(mine)}</td>")
     body = [f"<tr><td>missions completed (runs x missions)</td>{''.join(done)}</tr>"]
     for metric in metrics:
@@ -221,7 +222,7 @@ def main_figure(figures: Mapping[str, Sequence[Path]], rows: Sequence[Mapping[st
         for planner in {r["planner"] for r in rows}:
             values = [float(r["distance_travelled_m"]) for r in rows
                       if (r["scene"], r["mission"], r["planner"]) == (scene, mission, planner)
-                      and r.get("state") == "done" and math.isfinite(float(r.get("distance_travelled_m", math.nan)))]
+                      and r.get("state") == MissionState.DONE and math.isfinite(float(r.get("distance_travelled_m", math.nan)))]
             if values:
                 means.append(sum(values) / len(values))
         candidate = next((p for p in paths if p.name == f"paths_{slug(scene)}_{slug(mission)}.png"), None)
@@ -278,7 +279,7 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     parts.append("<h2>Summary</h2>" + _summary_table(summaries, rows, planners, metrics))
     parts.append("<h2>Per mission: mean &plusmn; std over the seeds</h2>")
     for scene, mission in missions_of(rows):
-        done = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission) and r.get("state") == "done")
+        done = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission) and r.get("state") == MissionState.DONE)
         total = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission))
         # Folded: with many missions and metrics the details would bury the summary.
         parts.append(f"<details><summary><b>{esc(scene)} / {esc(mission)}</b> <span class='note'>({done} of "

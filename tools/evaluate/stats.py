@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from agents.world.vocabulary import MissionState
 from tools.evaluate.table import metric_columns
 
 REFERENCE = "social"
@@ -52,7 +53,7 @@ class PairedTest:
 
 
 def done_rows(rows: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
-    return [row for row in rows if row.get("state") == "done"]
+    return [row for row in rows if row.get("state") == MissionState.DONE]
 
 
 def summarise(rows: Sequence[Mapping[str, Any]]) -> list[Summary]:

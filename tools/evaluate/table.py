@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from agents.world.vocabulary import MissionState
+
 #: columns that describe a row; every other column is a metric
 META_COLUMNS: tuple[str, ...] = (
     "scene", "planner", "seed", "mission", "state", "mission_time_s", "started_s", "finished_s", "at_s",
@@ -72,7 +74,7 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
             "at_s": math.nan, "trajectory_csv": None, "run_dir": str(run_dir), "rrd": rrd, "host": host,
             "run_wall_s": float(run_wall_s),
         }
-        if trajectory is not None and row["state"] == "done" and math.isfinite(row["started_s"]) \
+        if trajectory is not None and row["state"] == MissionState.DONE and math.isfinite(row["started_s"]) \
                 and math.isfinite(row["finished_s"]):
             csv_path = Path(run_dir) / MISSIONS_DIR / f"{mission_id}.csv"
             if write_mission_trajectory(trajectory, row["started_s"], row["finished_s"], csv_path) >= 2:

@@ -15,6 +15,7 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
+from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
 
 
@@ -61,7 +62,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
             last_print["t"] = time.monotonic()
             now = status.get("now_s")
             missions = status.get("missions", {})
-            done = sum(1 for m in missions.values() if m.get("state") == "done")
+            done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
             err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
                       f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False)
 

@@ -15,6 +15,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from agents.world.vocabulary import MissionState
+
 
 def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -> np.ndarray:
     mask = (trajectory[:, 0] >= started_s - 1e-6) & (trajectory[:, 0] <= finished_s + 1e-6)
@@ -49,7 +51,7 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
     except TrajectoryFormatError:
         tracks = None
     for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
-        if mission.get("state") != "done" or "started_s" not in mission:
+        if mission.get("state") != MissionState.DONE or "started_s" not in mission:
             continue
         started, finished = float(mission["started_s"]), float(mission["finished_s"])
         social = _mission_rows(trajectory, started, finished)

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import builtins
 import datetime as dt
-import enum
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -25,6 +24,7 @@ from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, StringConstraints, ValidationInfo,
                       field_validator, model_validator)
 
+from agents.lib.states import ActivityState  # the one definition; re-exported (the vocabulary's too)
 from scenes.clock import CLOCK_PATTERN, format_clock, parse_clock
 from scenes.names import check_name, shown
 from scenes.yamlio import SourceError
@@ -151,16 +151,6 @@ class ActivityWindow:
     def running_at(self, t_s: float) -> bool:
         """The one rule for "is this activity running": [start, end), never when cancelled."""
         return not self.cancelled and self.start_s <= t_s < self.end_s
-
-
-class ActivityState(enum.StrEnum):
-    """Life cycle of an activity; only ``cancelled`` is stored, the others follow from the clock."""
-
-    SCHEDULED = "scheduled"
-    UPCOMING = "upcoming"
-    RUNNING = "running"
-    FINISHED = "finished"
-    CANCELLED = "cancelled"
 
 
 def _time_text(value: object) -> object:

@@ -22,17 +22,18 @@ from __future__ import annotations
 from typing import Any
 
 from agents.runtime.drawing.labels import short_id
+from agents.world.vocabulary import ActivityState, EdgeType, NodeType
 from dsr.protocols import GraphReader
 
 TYPE_COLOURS: dict[str, tuple[int, int, int]] = {
-    "room": (90, 160, 90), "person": (240, 160, 40), "object": (160, 90, 200), "robot": (0, 230, 90),
-    "activity": (230, 60, 60), "mission": (20, 180, 180),
+    NodeType.ROOM: (90, 160, 90), NodeType.PERSON: (240, 160, 40), NodeType.OBJECT: (160, 90, 200),
+    NodeType.ROBOT: (0, 230, 90), NodeType.ACTIVITY: (230, 60, 60), NodeType.MISSION: (20, 180, 180),
 }
 SHOWN_TYPES = frozenset(TYPE_COLOURS)
 # RT: poses are the map view's; in: a node's column is its room already (one edge per person was a web)
-HIDDEN_EDGES = {"RT", "in"}
+HIDDEN_EDGES = {EdgeType.RT, EdgeType.IN}
 #: activities worth a node: what runs or is about to (the rest of the day is in R(t) and the agenda)
-SHOWN_ACTIVITY_STATES = frozenset({"upcoming", "running"})
+SHOWN_ACTIVITY_STATES = frozenset({ActivityState.UPCOMING, ActivityState.RUNNING})
 # Compact: the view zooms to fit the whole graph, so a wide layout would shrink every label.
 COLUMN_PX, ROW_PX, PERSON_COLUMN_PX, ACTIVITY_INDENT_PX = 140.0, 30.0, 60.0, 18.0
 CROWDED_ROOM = 4   # more people than this in a room: they go two to a row
@@ -49,7 +50,7 @@ class GraphLogger:
         if not self.rec.enabled or now_s is None:
             return
         shown = [n for n in _all_nodes(graph) if n.type in SHOWN_TYPES
-                 and (n.type != "activity" or n.attrs.get("state") in SHOWN_ACTIVITY_STATES)]
+                 and (n.type != NodeType.ACTIVITY or n.attrs.get("state") in SHOWN_ACTIVITY_STATES)]
         ids = {n.id for n in shown}
         nodes = sorted((n.id, n.type, n.name, str(n.attrs.get("state", ""))) for n in shown)
         edges = sorted((e.src, e.dst, e.type) for e in _all_edges(graph)
@@ -73,13 +74,13 @@ class GraphLogger:
 
 def label(node_type: str, name: str, state: str) -> str:
     """Short: a person's id without role, an activity or mission without its ``kind/`` prefix."""
-    text = short_id(name) if node_type == "person" else name.rsplit("/", 1)[-1]
-    return f"{text} [{state}]" if state and node_type in ("activity", "mission") else text
+    text = short_id(name) if node_type == NodeType.PERSON else name.rsplit("/", 1)[-1]
+    return f"{text} [{state}]" if state and node_type in (NodeType.ACTIVITY, NodeType.MISSION) else text
 
 
 def _room_of(graph: GraphReader, node: Any, rooms: dict[int, int]) -> int | None:
     """The column of the room ``node`` is ``in`` (its ``in`` edge), or None."""
-    for edge in graph.edges_from(node.id, "in"):
+    for edge in graph.edges_from(node.id, EdgeType.IN):
         if edge.dst in rooms:
             return rooms[edge.dst]
     return None
@@ -88,7 +89,7 @@ def _room_of(graph: GraphReader, node: Any, rooms: dict[int, int]) -> int | None
 def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]:
     """Column per room (west to east), objects then people under it; missions in a last column."""
     nodes = {i: graph.get_node(i) for i in node_ids}
-    room_nodes = [n for n in nodes.values() if n.type == "room"]
+    room_nodes = [n for n in nodes.values() if n.type == NodeType.ROOM]
 
     def centre_x(node: Any) -> float:
         xs = node.attrs.get("polygon_x") or [0.0]
@@ -101,20 +102,20 @@ def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]
     placed: dict[int, tuple[float, float]] = {n.id: (rooms[n.id] * COLUMN_PX, 0.0) for n in room_nodes}
     objects_by_name: dict[str, int] = {}
     for node in sorted(nodes.values(), key=lambda n: n.name):
-        if node.type in ("object", "robot"):
+        if node.type in (NodeType.OBJECT, NodeType.ROBOT):
             col = _room_of(graph, node, rooms)
             col = extra if col is None else col
             placed[node.id] = (col * COLUMN_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
             objects_by_name[node.name] = node.id
     for node in sorted(nodes.values(), key=lambda n: (str(n.attrs.get("object", "")), n.name)):
-        if node.type == "activity":   # a row of its own below the objects, indented: labels are long
+        if node.type == NodeType.ACTIVITY:   # a row of its own below the objects, indented: labels are long
             obj = objects_by_name.get(str(node.attrs.get("object", "")))
             col = extra if obj is None else round(placed[obj][0] / COLUMN_PX)
             placed[node.id] = (col * COLUMN_PX + ACTIVITY_INDENT_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
     people = [(n, _room_of(graph, n, rooms)) for n in sorted(nodes.values(), key=lambda n: n.name)
-              if n.type == "person"]
+              if n.type == NodeType.PERSON]
     people = [(n, extra if col is None else col) for n, col in people]
     per_room = {col: sum(1 for _, c in people if c == col) for _, col in people}
     counts: dict[int, int] = {}
@@ -125,7 +126,7 @@ def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]
         placed[node.id] = (col * COLUMN_PX + (k % across) * PERSON_COLUMN_PX, (rows[col] + 0.5 + k // across) * ROW_PX)
     missions_col = extra + (1 if any(x >= extra * COLUMN_PX for x, _ in placed.values()) else 0)
     for node in sorted(nodes.values(), key=lambda n: n.name):
-        if node.type == "mission":
+        if node.type == NodeType.MISSION:
             col = missions_col
             placed[node.id] = (col * COLUMN_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
