@@ -34,9 +34,9 @@ import psutil
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from agents.world.people import people_at  # noqa: E402
-from agents.world.scene_world import load_world  # noqa: E402
-from agents.world.vocabulary import MissionState  # noqa: E402
+from agents.world.people import people_at
+from agents.world.scene_world import load_world
+from agents.world.vocabulary import MissionState
 
 AGENTS = ("sim_robot", "human_observer", "object_recognition", "agenda", "social_navigation", "executive")
 

@@ -32,9 +32,9 @@ import networkx as nx
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from agents.world.vocabulary import ActivityState  # noqa: E402
-from grammar.missions import plan_mission  # noqa: E402
-from grammar.parser import default_grammar_path, load_grammar  # noqa: E402
+from agents.world.vocabulary import ActivityState
+from grammar.missions import plan_mission
+from grammar.parser import default_grammar_path, load_grammar
 
 SIZES = (10, 50, 200)
 

@@ -363,7 +363,7 @@ def _write_result(result: RunResult) -> None:
         "scene_path": str(result.scene_path.resolve()) if result.scene_path else None}, indent=2))
 
 
-def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:  # noqa: ANN001
+def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:
     from agents.world.vocabulary import NodeType
     clock = graph.get_node_by_name("clock")
     missions = {}

@@ -171,7 +171,7 @@ def clock_offset_s(store: Any) -> float | None:
     clock = table.column(CLOCK_TIMELINE)[0].as_py()
     if clock is None or sim is None:
         return None
-    clock_s = clock.replace(tzinfo=dt.timezone.utc).timestamp() if isinstance(clock, dt.datetime) else clock / 1e9
+    clock_s = clock.replace(tzinfo=dt.UTC).timestamp() if isinstance(clock, dt.datetime) else clock / 1e9
     return clock_s - _seconds(sim)
 
 

@@ -28,7 +28,7 @@ from scenes.clock import format_clock
 class AgendaAgent(Agent):
     kind = "agenda"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.params = ChronemicsParams()

@@ -21,7 +21,7 @@ from collections import Counter
 
 from agents.missions.kinds import MissionStringError
 from agents.missions.planning import MissionPlanner, intention_end, remaining_route, route_rooms
-from agents.missions.steps import PlanStep, Rule, StepFailed
+from agents.missions.steps import PlanStep, StepFailed
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.world.freshness import interactions_follow_activities, mark_observed, observed_up_to
@@ -38,7 +38,7 @@ FAILURE, WORLD = "failure", "world"
 class ExecutiveAgent(Agent):
     kind = "executive"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.planner = MissionPlanner(self.scene, grammar_file=self.config.options.get("grammar"))
@@ -56,7 +56,7 @@ class ExecutiveAgent(Agent):
     def _on_change(self, *_args: object) -> None:
         self._dirty = True
 
-    def _on_symbolic_change(self, node, *_rest: object) -> None:  # noqa: ANN001 - dsr.Node
+    def _on_symbolic_change(self, node, *_rest: object) -> None:
         """Activities and doors are what the grammar's preconditions read: re-check the plan."""
         if node.type in (NodeType.ACTIVITY, NodeType.DOOR):
             self._world_changed = True

@@ -43,7 +43,7 @@ TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing 
 class HumanObserverAgent(Agent):
     kind = "human_observer"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.noise_xy = float(self.config.option("noise_xy", "0.02"))

@@ -21,7 +21,7 @@ CHECK_PERIOD_S = 5.0
 class ObjectRecognitionAgent(Agent):
     kind = "object_recognition"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self._last_check = -math.inf

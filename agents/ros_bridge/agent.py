@@ -62,7 +62,7 @@ RETRY_S = 2.0            # between attempts to reach the ROS side's router
 class RosBridgeAgent(Agent):
     kind = "ros_bridge"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         try:

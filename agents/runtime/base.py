@@ -54,7 +54,7 @@ class Agent(ABC):
         self.log = logging.getLogger(f"chronav.{config.name}")
 
     @abstractmethod
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001 - dsr.DSRGraph or a CheckedGraph of one
+    def setup(self, graph, recorder: Recorder) -> None:
         """Called once the replica has joined: declare signal handlers, write initial nodes.  Run by
         ``run_agent`` or the lockstep scheduler, ``graph`` checks every write against the vocabulary."""
 
@@ -62,7 +62,7 @@ class Agent(ABC):
     def step(self) -> None:
         """One iteration of the agent loop (wall period ``config.period_s``)."""
 
-    def teardown(self) -> None:
+    def teardown(self) -> None:  # noqa: B027 - optional hook: most agents have nothing to release
         """Called once on the way out, still connected."""
 
 

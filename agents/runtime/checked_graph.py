@@ -53,7 +53,7 @@ class CheckedGraph:
         return self._graph
 
     # ------------------------------------------------------------------ checked writes
-    def insert_node(self, type: str, name: str, attrs: Mapping[str, Any] | None = None,  # noqa: A002
+    def insert_node(self, type: str, name: str, attrs: Mapping[str, Any] | None = None,
                     **kwargs: Any) -> Any:
         problem = _problem(lambda: check_attrs(type, attrs or {}))
         if problem is not None:
@@ -83,7 +83,7 @@ class CheckedGraph:
         node = self._graph.get_node(node_id)
         return repr(node.name) if node is not None else f"node {node_id}"
 
-    def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
+    def insert_or_assign_edge(self, src: int, dst: int, type: str,
                               attrs: Mapping[str, Any] | None = None) -> Any:
         problem = _problem(lambda: check_edge(type, attrs or {}))
         if problem is not None:

@@ -98,7 +98,7 @@ class Lockstep:
             try:
                 with self._as(agent):
                     agent.setup(CheckedGraph(self.graph, agent.config.name), recorder)
-            except Exception as exc:  # noqa: BLE001 - named and re-raised for the run's result
+            except Exception as exc:
                 raise AgentError(agent.config.name, exc) from exc
             self._set_up.append(agent)
             self.graph.dispatch()
@@ -109,7 +109,7 @@ class Lockstep:
             try:
                 with self._as(agent):
                     agent.step()
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 raise AgentError(agent.config.name, exc) from exc
             self.graph.dispatch()
         self.clock.advance(self.period_s)

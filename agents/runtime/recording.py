@@ -31,7 +31,7 @@ DEFAULT_DAY = dt.date(2026, 11, 25)   # only when no scene date is given (the sc
 def clock_epoch_s(day: dt.date | None) -> float:
     """POSIX seconds of ``day``'s midnight read as UTC: the ``clock`` timeline's zero."""
     day = day or DEFAULT_DAY
-    return dt.datetime(day.year, day.month, day.day, tzinfo=dt.timezone.utc).timestamp()
+    return dt.datetime(day.year, day.month, day.day, tzinfo=dt.UTC).timestamp()
 
 
 class Recorder:

@@ -62,7 +62,7 @@ class RobotState:
 class SimRobotAgent(Agent):
     kind = "sim_robot"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         scene = self.scene
@@ -349,7 +349,7 @@ class SimRobotAgent(Agent):
             nearest = min(nearest, self._occupancy.clearance(x, y, reach_m=max(2 * self._contact_m, 0.5)))
         return nearest
 
-    def _open_trajectory(self):  # noqa: ANN202 - text file or None
+    def _open_trajectory(self):
         """Ground-truth poses while driving, appended (a restarted simulator continues the file)."""
         if self.config.run_dir is None:
             return None
@@ -360,7 +360,7 @@ class SimRobotAgent(Agent):
             handle.write("t,x,y,theta\n")
         return handle
 
-    def _open_people(self):  # noqa: ANN202 - text file or None
+    def _open_people(self):
         """Every person's true pose and velocity at each trajectory sample (``people.csv`` beside
         ``trajectory.csv``: what `chronav metrics` measures the robot's manners against)."""
         if self.config.run_dir is None:
@@ -420,7 +420,7 @@ class SimRobotAgent(Agent):
         self.rec.set_time(self.now_s)
         self._log_frame(ranges)
 
-    def _room_change(self, x: float, y: float):  # noqa: ANN202 - Node | None
+    def _room_change(self, x: float, y: float):
         """The room node to link with `in` when the robot crossed into another room, else None."""
         name = self.scene.room_at(x, y)
         if name is None or name == self._room_name:

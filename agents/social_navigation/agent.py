@@ -72,7 +72,7 @@ def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: 
 class SocialNavigationAgent(Agent):
     kind = "social_navigation"
 
-    def setup(self, graph, recorder: Recorder) -> None:  # noqa: ANN001
+    def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         robot = self.scene.robot

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall

@@ -8,7 +8,7 @@ the offline planner at 09:30 too.  Where the people are at ``t`` is agents/world
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from agents.lib.agenda import AgendaChangeError, AgendaDay
 from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S
 from agents.world.scene_world import SceneWorld

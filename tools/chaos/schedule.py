@@ -113,8 +113,8 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
         raise ChaosError(f"scene {loaded.scene.name!r} has no missions to inject faults into")
     rng = random.Random(seed)
     known_ids = list(loaded.agenda.ids())
-    planned = sorted(((index * len(missions) // max(faults, 1), round(rng.uniform(0.0, duration_s), 2))
-                      for index in range(faults)))
+    planned = sorted((index * len(missions) // max(faults, 1), round(rng.uniform(0.0, duration_s), 2))
+                      for index in range(faults))
     out: list[Fault] = []
     for index, (mission_index, at_s) in enumerate(planned):
         mission = missions[mission_index]

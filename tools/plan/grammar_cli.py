@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -161,20 +161,20 @@ def _report(result: Any, what: str, payload: dict[str, Any], as_json: bool) -> N
         raise typer.Exit(1)
 
 
-def plan_command(scene: Optional[Path] = typer.Argument(None, help="scene file, or a world file (.json node-link "
+def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or a world file (.json node-link "
                                                                    "graph, .xml AGM world)"),
-                 mission: Optional[str] = typer.Option(None, "--mission", "-m",
+                 mission: str | None = typer.Option(None, "--mission", "-m",
                                                        help="room:NAME, object:NAME, person:NAME, group:P1+P2, "
                                                             "wait:ACTIVITY, pose:X,Y,THETA (pose on scenes)"),
-                 world_file: Optional[Path] = typer.Option(None, "--world", "-w",
+                 world_file: Path | None = typer.Option(None, "--world", "-w",
                                                            help="AGM world (.xml) or node-link graph (.json); "
                                                                 "use with --target, as AGM's agglplan"),
-                 target_file: Optional[Path] = typer.Option(None, "--target", "-t",
+                 target_file: Path | None = typer.Option(None, "--target", "-t",
                                                             help="target file (.aggt), with --world"),
-                 grammar_file: Optional[Path] = typer.Option(None, "--grammar", "-g",
+                 grammar_file: Path | None = typer.Option(None, "--grammar", "-g",
                                                              help="grammar file (default: shipped social_navigation.aggl)"),
-                 robot: Optional[str] = typer.Option(None, "--robot", help="robot node name if there are several"),
-                 at: Optional[str] = typer.Option(None, "--at",
+                 robot: str | None = typer.Option(None, "--robot", help="robot node name if there are several"),
+                 at: str | None = typer.Option(None, "--at",
                                                   help="time of day (HH:MM) for the activities' state"),
                  max_expansions: int = typer.Option(20_000, "--max-expansions", min=1),
                  as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:

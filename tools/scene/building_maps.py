@@ -65,7 +65,7 @@ def ward(resolution: float = 0.05) -> Floor:
     floor = Floor(31.0, 17.0, resolution)
     ox, oy = 0.5, 0.5                                   # the building inside an unexplored margin
     floor.room(ox, oy + 6.3, ox + 30, oy + 8.7)         # corridor
-    for i, x in enumerate((0.0, 6.0, 12.0, 18.0, 24.0)):
+    for x in (0.0, 6.0, 12.0, 18.0, 24.0):
         floor.room(ox + x, oy, ox + x + 6.0, oy + 6.3)  # bedrooms 1-4 and the bathroom
         floor.door(ox + x + 3.0, oy + 6.3, 1.2, vertical_wall=False)
     floor.room(ox, oy + 8.7, ox + 14.0, oy + 16.0)      # lounge

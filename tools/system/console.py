@@ -48,7 +48,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     from tools.launch import LaunchError, run_system
 
     if in_process:   # every agent in this process, in lockstep (tools/inprocess.py): no supervision limits
-        from tools.inprocess import run_in_process as run_system  # type: ignore[assignment]  # noqa: F811
+        from tools.inprocess import run_in_process as run_system  # type: ignore[assignment]
 
         restart_limit = 0
     err = Console(stderr=True)
