@@ -93,12 +93,15 @@ class Crowd:
     def clone(self) -> Crowd:
         """An independent copy in the same state (the offline world's snapshots); it continues
         exactly as this one would."""
-        orca, routers = self.motion.without_engines()
+        motion = self.motion
+        orca, routers = motion.orca, motion.routers
+        motion.orca, motion.routers = None, {}  # type: ignore[assignment]  # ORCA cloned, routers shared
         try:
             twin = copy.deepcopy(self)
         finally:
-            self.motion.attach(orca, routers)
-        twin.motion.attach(orca.clone(), routers)   # routers are immutable once built: shared
+            motion.orca, motion.routers = orca, routers
+        twin.motion.orca = orca.clone()
+        twin.motion.routers = routers         # immutable once built: shared
         return twin
 
     # ------------------------------------------------------------------------------------ time

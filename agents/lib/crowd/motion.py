@@ -63,7 +63,7 @@ class Motion:
         self.robot_parked: tuple[float, float] | None = PARKED   # where the resting robot stands (None: it drives)
         self.robot_radius = robot_radius_m + ROBOT_MARGIN_M
         self.closed: frozenset[str] = frozenset()
-        self._routers: dict[frozenset[str], Router] = {}
+        self.routers: dict[frozenset[str], Router] = {}   # immutable once built: clones share them
         self.room_polys = {name: poly for name, poly in building.rooms.items()}
         for poly in self.room_polys.values():
             shapely.prepare(poly)
@@ -88,15 +88,6 @@ class Motion:
         self.pick_up: Callable[[Person, float], None] = _no_pick_up
         self.rejoin: Callable[[Person, float], bool] = _no_rejoin
 
-    def without_engines(self) -> tuple[Orca, dict[frozenset[str], Router]]:
-        """Detach ORCA and the routers (for a deep copy of the rest); ``attach`` puts them back."""
-        engines = (self.orca, self._routers)
-        self.orca, self._routers = None, {}  # type: ignore[assignment]
-        return engines
-
-    def attach(self, orca: Orca, routers: dict[frozenset[str], Router]) -> None:
-        self.orca, self._routers = orca, routers
-
     # ------------------------------------------------------------------------------------ geometry
     def obstacles(self, closed: frozenset[str]) -> list[list[tuple[float, float]]]:
         obstacles = [[tuple(a), tuple(b)] for w in self.building.walls for a, b in zip(w, w[1:], strict=False)
@@ -113,21 +104,18 @@ class Motion:
     @property
     def router(self) -> Router:
         """Routes with the doors closed now (built once per set of closed doors, then shared)."""
-        if self.closed not in self._routers:
+        if self.closed not in self.routers:
             walls = [*self.building.walls, *(list(self.building.door_leaves[d]) for d in sorted(self.closed)
                                              if d in self.building.door_leaves)]
-            self._routers[self.closed] = Router.build(self.building_poly, walls,
+            self.routers[self.closed] = Router.build(self.building_poly, walls,
                                                       [t.footprint for t in self.building.things.values()])
-        return self._routers[self.closed]
+        return self.routers[self.closed]
 
     def room_of(self, x: float, y: float) -> str | None:
         for name, poly in self.room_polys.items():
             if shapely.intersects_xy(poly, x, y):
                 return name
         return None
-
-    def room_of_person(self, person: Person) -> str | None:
-        return self.room_of(*self.pos[person.index])
 
     def out_of_the_way(self, x: float, y: float) -> bool:
         """A body fits at (x, y) and does not stand where routes turn (a chat or a rest place)."""

@@ -65,13 +65,13 @@ class Routines:
             friend = self.people[spec.visits]
             if self._chat_with(person, friend, t, dwell):
                 return
-            room = motion.room_of_person(friend) or spec.home
+            room = motion.room_of(*motion.pos[friend.index]) or spec.home
             self._dwell(person, t, room, u, min(dwell, VISIT_DWELL_MAX_S))
             return
         if u[0] < CHAT_CHANCE.get(spec.routine, 0.0):
             candidates = [p for name, p in sorted(self.people.items()) if p is not person and p.spec.dynamic
                           and p.task.kind == "stand" and p.task.purpose in ("dwell", "chat")
-                          and motion.room_of_person(p) in self.rooms(person)]
+                          and motion.room_of(*motion.pos[p.index]) in self.rooms(person)]
             if candidates and self._chat_with(person, candidates[int(u[6] * len(candidates))], t, dwell):
                 return
         rooms = self.rooms(person)
