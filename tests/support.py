@@ -1,5 +1,5 @@
-"""Shared test helpers: free ports, polling waits, process groups that are always cleaned up,
-and a stand-in for a received Zenoh sample.
+"""Shared test helpers: free ports and polling waits (defined once in tools/ports.py, shared with
+the tools), process groups that are always cleaned up, and a stand-in for a received Zenoh sample.
 
 Why: multi-process tests must never use fixed ports or fixed sleeps (flaky on a 2-core CI box),
 and every spawned process must die even when an assertion fails mid-test.
@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -17,6 +16,10 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+
+from tools.ports import free_port, poll, port_open
+
+__all__ = ["REPO_ROOT", "FakeSample", "ProcessGroup", "free_port", "port_open", "process_group", "wait_until"]
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,24 +40,12 @@ class FakeSample:
         return self.data
 
 
-def free_port() -> int:
-    """A TCP port on 127.0.0.1 that was free a moment ago (bind to port 0, read it, release)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
 def wait_until(predicate: Callable[[], bool], timeout: float, interval: float = 0.02,
                message: str = "condition") -> None:
-    """Poll ``predicate`` until it is true; raise AssertionError naming ``message`` on timeout."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return
-        time.sleep(interval)
-    if predicate():
-        return
-    raise AssertionError(f"timed out after {timeout:.1f} s waiting for {message}")
+    """Poll ``predicate`` until it is true (tools/ports.poll); raise AssertionError naming
+    ``message`` on timeout."""
+    if not poll(predicate, timeout, interval_s=interval):
+        raise AssertionError(f"timed out after {timeout:.1f} s waiting for {message}")
 
 
 class ProcessGroup:

@@ -49,7 +49,6 @@ import json
 import os
 import queue
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -68,12 +67,6 @@ from agents.world.vocabulary import EdgeType, NodeType  # noqa: E402 - after the
 OBJECT, WORLD, RT = str(NodeType.OBJECT), str(NodeType.WORLD), str(EdgeType.RT)
 
 
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
 def _wait(predicate: Any, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -81,12 +74,6 @@ def _wait(predicate: Any, timeout: float, what: str) -> None:
             return
         time.sleep(0.01)
     raise TimeoutError(f"bench: timed out waiting for {what}")
-
-
-def _port_open(port: int) -> bool:
-    with socket.socket() as sock:
-        sock.settimeout(0.2)
-        return sock.connect_ex(("127.0.0.1", port)) == 0
 
 
 def _percentile(samples: list[float], q: float) -> float:
@@ -484,9 +471,10 @@ def main(argv: list[str] | None = None) -> int:
 
     from dsr import SpinPolicy, ZenohSettings, join
     from dsr.process import exit_on_sigterm
+    from tools.ports import free_port, port_open
     exit_on_sigterm()
     procs = Procs()
-    port = _free_port()
+    port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     graph_name = f"bench{os.getpid()}"
     me = str(Path(__file__).resolve())
@@ -497,7 +485,7 @@ def main(argv: list[str] | None = None) -> int:
     result.update(profile_split())
     try:
         procs.spawn(["-m", "dsr.router", "--listen", endpoint])
-        _wait(lambda: _port_open(port), 10, "router")
+        _wait(lambda: port_open(port), 10, "router")
         procs.spawn([me, "--role", "echo", "--connect", endpoint, "--graph", graph_name])
         nopoll_echo = procs.spawn([me, "--role", "echo", "--connect", endpoint, "--graph",
                                    f"{graph_name}np", "--no-poll"])

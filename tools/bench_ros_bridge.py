@@ -43,17 +43,11 @@ REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "scenes" / "icra_usecase.yaml"
 
 
-def _free_port() -> int:
-    from tools.launch import free_port
-
-    return free_port()
-
-
 def _router(port: int) -> subprocess.Popen[bytes]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("CHRONAV_")}
     proc = subprocess.Popen([sys.executable, "-m", "dsr.router", "--listen", f"tcp/127.0.0.1:{port}"], cwd=REPO,
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    from tools.launch import wait_for_port
+    from tools.ports import wait_for_port
 
     if not wait_for_port(port, 15):
         proc.kill()
@@ -319,7 +313,9 @@ def main() -> None:
     if args.subscriber:
         subscriber_main(args.subscriber[0], int(args.subscriber[1]), float(args.subscriber[2]))
         return
-    port = _free_port()
+    from tools.ports import free_port
+
+    port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     router = _router(port)
     out: dict[str, Any] = {}

@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -52,6 +52,20 @@ def agent_classes() -> dict[str, type[Any]]:
                                       ExecutiveAgent, SocialNavigationAgent)}
 
 
+def build_agents(scene: Path, names: Sequence[str], *, graph_name: str = "chronav", run_dir: Path | None = None,
+                 recording_id: str | None = None,
+                 options: Mapping[str, Mapping[str, str]] | None = None) -> list[Any]:
+    """The named agents as their processes build them: one ``AgentConfig`` each, ``options`` by name.
+
+    Shared by ``run_in_process`` and the offline-agents harness (tools/offline_agents.py)."""
+    from agents.runtime.config import AgentConfig
+
+    classes = agent_classes()
+    return [classes[name](AgentConfig(name=name, scene=scene, graph=graph_name, run_dir=run_dir,
+                                      recording_id=recording_id, options=dict((options or {}).get(name, {}))))
+            for name in names]
+
+
 def merged_options(agent_options: dict[str, list[str]] | None, rate: float | None) -> dict[str, dict[str, str]]:
     """Each agent's ``-o KEY=VALUE`` options as a dict: the lockstep ones, then the caller's."""
     merged: dict[str, dict[str, str]] = {name: {} for name in AGENTS}
@@ -75,7 +89,6 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     """Run one scene with every agent in this process; the same result a launch returns.
 
     ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
-    from agents.runtime.config import AgentConfig
     from agents.runtime.lockstep import AgentError, Lockstep
     from agents.runtime.recording import Recorder
     from agents.world.scene_world import load_world
@@ -94,12 +107,10 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     options = merged_options(agent_options, rate)
     record = record and os.environ.get("RERUN", "on") != "off"   # what the agents' Recorders honour too
     recording_id = run_id if record else None
-    classes = agent_classes()
     started = time.monotonic()
     graph = DSRGraph(agent="lockstep", graph=run_id.replace(".", "_"))
-    agents = [classes[name](AgentConfig(name=name, scene=scene_path, graph=graph.graph_name, run_dir=run_dir,
-                                        recording_id=recording_id, options=options[name]))
-              for name in ROUND_ORDER]
+    agents = build_agents(scene_path, ROUND_ORDER, graph_name=graph.graph_name, run_dir=run_dir,
+                          recording_id=recording_id, options=options)
     recorders = [Recorder(name, run_dir if record else None, recording_id, day=spec.clock.date)
                  for name in ROUND_ORDER]
     scheduler = Lockstep(graph, agents, recorders, policy=policy_from_env())

@@ -20,7 +20,6 @@ import json
 import math
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -32,6 +31,7 @@ from typing import Any
 
 import typer
 
+from tools.ports import free_port, wait_for_port
 from tools.system.runs import prepare_run_security, runs_dir as default_runs_dir, write_connect_file
 from tools.system.supervisor import ProgressWatch, Supervisor
 
@@ -95,22 +95,6 @@ def check_timeout(value: float, option: str = "--timeout") -> float:
     if not math.isfinite(value) or value <= 0:
         raise LaunchError(f"{option} {value:g}: give a number of wall seconds greater than 0")
     return value
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def wait_for_port(port: int, timeout_s: float, give_up: Callable[[], bool] = lambda: False) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline and not give_up():
-        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-            if sock.connect_ex(("127.0.0.1", port)) == 0:
-                return True
-        time.sleep(0.05)
-    return False
 
 
 def rerun_binary() -> Path:

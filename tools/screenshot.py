@@ -26,13 +26,14 @@ import argparse
 import datetime as dt
 import os
 import re
-import socket
 import subprocess
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from tools.ports import free_port, port_open
 
 DEFAULT_SIZE = "1600x900"
 BASE_BUDGET_S = 45.0
@@ -176,20 +177,13 @@ def clock_offset_s(store: Any) -> float | None:
 
 
 # ----------------------------------------------------------------------------- the viewer
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def _wait_port(port: int, process: subprocess.Popen[bytes], deadline: float) -> None:
     while time.monotonic() < deadline:
         if process.poll() is not None:
             raise ScreenshotError(f"the headless viewer exited (code {process.returncode}); is a Vulkan driver "
                                   "installed? (Debian: apt-get install mesa-vulkan-drivers)")
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                return
+        if port_open(port):
+            return
         time.sleep(0.1)
     raise ScreenshotError("the headless viewer did not start listening in time")
 
@@ -201,7 +195,7 @@ class Viewer:
         import rerun_cli
 
         binary = str(Path(rerun_cli.__file__).parent / "rerun")
-        self.port = _free_port()
+        self.port = free_port()
         env = {**os.environ, "RERUN_APP_ONLY": "true", "WGPU_BACKEND": os.environ.get("WGPU_BACKEND", "vulkan")}
         self._log = open(log_path or os.devnull, "wb")   # noqa: SIM115 - closed in close()
         self.process = subprocess.Popen(

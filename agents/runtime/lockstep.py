@@ -94,26 +94,40 @@ class Lockstep:
     def setup(self) -> None:
         """Set every agent up in order (the simulator first: it writes the building and the clock)."""
         for agent, recorder in zip(self.agents, self.recorders, strict=True):
-            agent.wall_clock = self.clock
-            try:
-                with self._as(agent):
-                    agent.setup(CheckedGraph(self.graph, agent.config.name), recorder)
-            except Exception as exc:
-                raise AgentError(agent.config.name, exc) from exc
-            self._set_up.append(agent)
-            self.graph.dispatch()
+            self._set_up_one(agent, recorder)
 
-    def round(self) -> None:
-        """One tick: every agent steps once, the graph's signals delivered after each."""
-        for agent in self.agents:
-            try:
-                with self._as(agent):
-                    agent.step()
-            except Exception as exc:
-                raise AgentError(agent.config.name, exc) from exc
-            self.graph.dispatch()
+    def add(self, agent: Agent, recorder: Recorder) -> None:
+        """One more agent joins the run now (set up on the graph as it is), stepped after the others."""
+        self.agents.append(agent)
+        self.recorders.append(recorder)
+        self._set_up_one(agent, recorder)
+
+    def _set_up_one(self, agent: Agent, recorder: Recorder) -> None:
+        agent.wall_clock = self.clock
+        try:
+            with self._as(agent):
+                agent.setup(CheckedGraph(self.graph, agent.config.name), recorder)
+        except Exception as exc:
+            raise AgentError(agent.config.name, exc) from exc
+        self._set_up.append(agent)
+        self.graph.dispatch()
+
+    def round(self, agents: Sequence[Agent] | None = None) -> None:
+        """One tick: every agent (or ``agents``, in that order) steps once, the graph's signals
+        delivered after each; then the virtual wall clock moves one period."""
+        for agent in self.agents if agents is None else agents:
+            self.step(agent)
         self.clock.advance(self.period_s)
         self.rounds += 1
+
+    def step(self, agent: Agent) -> None:
+        """``agent`` steps once (writing as itself) and the graph's signals are delivered."""
+        try:
+            with self._as(agent):
+                agent.step()
+        except Exception as exc:
+            raise AgentError(agent.config.name, exc) from exc
+        self.graph.dispatch()
 
     @contextmanager
     def _as(self, agent: Agent) -> Iterator[None]:

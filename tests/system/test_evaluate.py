@@ -15,7 +15,6 @@ import hashlib
 import json
 import math
 import re
-import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +23,8 @@ import pytest
 from typer.testing import CliRunner
 
 from agents.lib.socialmap.metrics import flatten, read_trajectory_csv
-from tests.support import REPO_ROOT, ProcessGroup
+from tests.support import REPO_ROOT
+from tests.system.launch_helpers import EvaluateRuns
 from tools.cli import app
 from tools.evaluate.report import format_value
 from tools.evaluate.table import META_COLUMNS, read_table
@@ -33,44 +33,22 @@ pytestmark = pytest.mark.slow
 
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 PLANNERS = "social,baseline"
-
-
-def _start(group: ProcessGroup, out: Path, *extra: str) -> tuple[subprocess.Popen[bytes], Path]:
-    """`chronav evaluate TINY ... --json` as a user runs it, in the background."""
-    log = out.parent / f"{out.name}.log"
-    proc = group.spawn(["-m", "tools.cli", "evaluate", str(TINY), "--planners", PLANNERS, "--seeds", "1",
-                        "--out", str(out), "--timeout", "300", "--json", *extra], env={"RERUN": "on"}, log_path=log)
-    return proc, log
-
-
-def _result(proc: subprocess.Popen[bytes], log: Path, timeout_s: float = 900) -> dict[str, Any]:
-    """Its JSON plus the exit code."""
-    try:
-        proc.wait(timeout=timeout_s)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"chronav evaluate did not finish; log:\n{log.read_text()[-3000:]}")
-    text = log.read_text()
-    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
-    assert line is not None, f"no JSON result; log:\n{text[-3000:]}"
-    return {**json.loads(line), "returncode": proc.returncode}
+RERUN_ON = {"RERUN": "on"}    # the report links each run's recording
 
 
 @pytest.fixture(scope="module")
-def sweeps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
+def sweeps(tmp_path_factory: pytest.TempPathFactory, evaluate_runs: EvaluateRuns) -> dict[str, dict[str, Any]]:
     """Both sweeps at once (4 launches, 2 by 2): the same pair here and on the cluster."""
     from distributed import LocalCluster
 
     base = tmp_path_factory.mktemp("evaluate")
-    group = ProcessGroup()
-    try:
-        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                          dashboard_address=None) as cluster:
-            local = _start(group, base / "local", "--jobs", "2", "--mode", "launch")
-            dask = _start(group, base / "dask", "--executor", f"dask://{cluster.scheduler_address.removeprefix('tcp://')}",
-                          "--mode", "in-process")
-            return {"local": _result(*local), "dask": _result(*dask)}
-    finally:
-        group.close()
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        local = evaluate_runs.start(TINY, base / "local", PLANNERS, "--jobs", "2", "--mode", "launch", env=RERUN_ON)
+        dask = evaluate_runs.start(TINY, base / "dask", PLANNERS, "--executor",
+                                   f"dask://{cluster.scheduler_address.removeprefix('tcp://')}", "--mode", "in-process",
+                                   env=RERUN_ON)
+        return {"local": evaluate_runs.result(local), "dask": evaluate_runs.result(dask)}
 
 
 def _key(row: dict[str, Any]) -> tuple:
@@ -144,7 +122,7 @@ def test_report_is_one_self_contained_file_that_says_what_ran(sweeps: dict[str, 
 
 
 
-def test_a_worker_lost_mid_run_is_queued_again_once(tmp_path: Path) -> None:
+def test_a_worker_lost_mid_run_is_queued_again_once(tmp_path: Path, evaluate_runs: EvaluateRuns) -> None:
     """The scheduler is told to give a task up at its worker's first death (allowed-failures 0), so
     what brings the run back is chronav's own re-queue; the worker running a run is SIGKILLed."""
     import os
@@ -154,25 +132,21 @@ def test_a_worker_lost_mid_run_is_queued_again_once(tmp_path: Path) -> None:
     import dask
     from distributed import Client, LocalCluster
 
-    group = ProcessGroup()
-    try:
-        with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
-                LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                             dashboard_address=None) as cluster, Client(cluster) as client:
-            out = tmp_path / "lost"
-            proc, log = _start(group, out, "--executor", f"dask://{cluster.scheduler_address.removeprefix('tcp://')}",
-                               "--mode", "in-process")
-            victim, deadline = None, time.monotonic() + 180
-            while victim is None and time.monotonic() < deadline and proc.poll() is None:
-                busy = [w for w, keys in client.processing().items()
-                        if any(str(k).startswith("chronav-evaluate") for k in keys)]
-                victim = busy[0] if busy else None
-                time.sleep(0.02)
-            assert victim is not None, "no run was seen under way on a worker"
-            os.kill(client.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
-            result = _result(proc, log)
-    finally:
-        group.close()
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+            LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                         dashboard_address=None) as cluster, Client(cluster) as client:
+        sweep = evaluate_runs.start(TINY, tmp_path / "lost", PLANNERS, "--executor",
+                                    f"dask://{cluster.scheduler_address.removeprefix('tcp://')}", "--mode", "in-process",
+                                    env=RERUN_ON)
+        victim, deadline = None, time.monotonic() + 180
+        while victim is None and time.monotonic() < deadline and sweep.proc.poll() is None:
+            busy = [w for w, keys in client.processing().items()
+                    if any(str(k).startswith("chronav-evaluate") for k in keys)]
+            victim = busy[0] if busy else None
+            time.sleep(0.02)
+        assert victim is not None, "no run was seen under way on a worker"
+        os.kill(client.run(os.getpid, workers=[victim])[victim], signal.SIGKILL)
+        result = evaluate_runs.result(sweep)
     assert result["returncode"] == 0, result
     assert (result["runs"], result["ok"], result["pending"]) == (2, 2, 0), result
     assert len(result["requeued"]) == 1, result

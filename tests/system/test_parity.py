@@ -11,15 +11,14 @@ second in-process sweep shows that repeat runs with one seed are identical as we
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.support import REPO_ROOT, ProcessGroup
+from tests.support import REPO_ROOT
+from tests.system.launch_helpers import EvaluateRuns, Sweep
 from tools.evaluate.table import read_table
 
 pytestmark = pytest.mark.slow
@@ -33,24 +32,6 @@ STUDIES = {"tiny": (TINY, "social,baseline"), "crowd": (CROWD, "social")}
 WHERE = {"run_dir", "rrd", "host", "run_wall_s", "trajectory_csv"}
 
 
-def _sweep(group: ProcessGroup, out: Path, scene: Path, planners: str, *extra: str) -> subprocess.Popen[bytes]:
-    return group.spawn(["-m", "tools.cli", "evaluate", str(scene), "--planners", planners, "--seeds", "1",
-                        "--first-seed", "4", "--out", str(out), "--timeout", "600", "--json", "--jobs", "1", *extra],
-                       log_path=out.parent / f"{out.name}.log")
-
-
-def _result(proc: subprocess.Popen[bytes], out: Path) -> dict[str, Any]:
-    log = out.parent / f"{out.name}.log"
-    try:
-        proc.wait(timeout=1200)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"chronav evaluate did not finish; log:\n{log.read_text()[-3000:]}")
-    text = log.read_text()
-    line = next((ln for ln in reversed(text.splitlines()) if ln.startswith("{")), None)
-    assert line is not None, f"no JSON result; log:\n{text[-3000:]}"
-    return {**json.loads(line), "returncode": proc.returncode}
-
-
 def _merged(results: list[dict[str, Any]]) -> dict[str, Any]:
     return {"returncode": max(r["returncode"] for r in results), "runs": sum(r["runs"] for r in results),
             "ok": sum(r["ok"] for r in results), "pending": sum(r["pending"] for r in results),
@@ -58,22 +39,23 @@ def _merged(results: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 @pytest.fixture(scope="module")
-def sweeps(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, Any]]:
+def sweeps(tmp_path_factory: pytest.TempPathFactory, evaluate_runs: EvaluateRuns) -> dict[str, dict[str, Any]]:
     """The two launch sweeps at once (their agents interleave as load decides) and, meanwhile, the
     same sweeps in-process twice."""
     base = tmp_path_factory.mktemp("parity")
-    group = ProcessGroup()
-    try:
-        launches = {name: _sweep(group, base / f"launch_{name}", scene, planners, "--mode", "launch")
-                    for name, (scene, planners) in STUDIES.items()}
-        found = {}
-        for run in ("in_process", "in_process_again"):
-            found[run] = _merged([_result(_sweep(group, base / f"{run}_{name}", scene, planners, "--mode", "in-process"),
-                                          base / f"{run}_{name}") for name, (scene, planners) in STUDIES.items()])
-        found["launch"] = _merged([_result(proc, base / f"launch_{name}") for name, proc in launches.items()])
-        return found
-    finally:
-        group.close()
+
+    def sweep(out: Path, scene: Path, planners: str, mode: str) -> Sweep:
+        return evaluate_runs.start(scene, out, planners, "--first-seed", "4", "--jobs", "1", "--mode", mode,
+                                   run_timeout_s=600)
+
+    launches = {name: sweep(base / f"launch_{name}", scene, planners, "launch")
+                for name, (scene, planners) in STUDIES.items()}
+    found = {}
+    for run in ("in_process", "in_process_again"):
+        found[run] = _merged([evaluate_runs.result(sweep(base / f"{run}_{name}", scene, planners, "in-process"),
+                                                   timeout_s=1200) for name, (scene, planners) in STUDIES.items()])
+    found["launch"] = _merged([evaluate_runs.result(proc, timeout_s=1200) for proc in launches.values()])
+    return found
 
 
 def _rows(sweep: dict[str, Any]) -> dict[tuple[str, str, int, str], dict[str, Any]]:

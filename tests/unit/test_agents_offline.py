@@ -9,54 +9,27 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 import pytest
 
-from agents.agenda.agent import AgendaAgent
-from agents.executive.agent import ExecutiveAgent
-from agents.human_observer.agent import HumanObserverAgent
-from agents.object_recognition.agent import ObjectRecognitionAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
-from agents.sim_robot.agent import SimRobotAgent
-from dsr import DSRGraph
 from scenes.loader import SCENES_DIR
 from scenes.clock import parse_clock
-
-if TYPE_CHECKING:
-    from agents.social_navigation.agent import SocialNavigationAgent
-
-AGENTS = (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent, ExecutiveAgent)
+from tools.offline_agents import WITHOUT_NAVIGATION, OfflineAgents
 
 
-def world(scene: str, tmp_path: Path) -> tuple[DSRGraph, dict[str, object]]:
-    graph = DSRGraph(agent="offline")
-    agents = {}
-    for cls in AGENTS:
-        config = AgentConfig(name=cls.kind, scene=SCENES_DIR / f"{scene}.yaml", run_dir=tmp_path)
-        agent = cls(config)
-        agent.setup(graph, Recorder(cls.kind, None, None))
-        agents[cls.kind] = agent
-    for agent in agents.values():
-        agent.step()
-    graph.dispatch()
-    return graph, agents
-
-
-def set_clock(graph: DSRGraph, agents: dict, hhmm: str | float) -> None:
-    """The simulator jumps to the time (clock, pose and the people's truth in one delta), then the
-    perceivers catch up, as they do live."""
-    agents["sim_robot"].skip_to(parse_clock(hhmm) if isinstance(hhmm, str) else hhmm)
-    for name in ("object_recognition", "agenda", "human_observer"):  # the observer's links follow the agenda
-        agents[name].step()
-    graph.dispatch()
+def world(scene: str | Path, tmp_path: Path) -> OfflineAgents:
+    """Every agent but the navigation on one graph, each stepped once."""
+    centre = OfflineAgents(scene, tmp_path, agents=WITHOUT_NAVIGATION)
+    centre.tick()
+    return centre
 
 
 def test_agents_write_the_shared_vocabulary(tmp_path: Path) -> None:
-    graph, agents = world("center_a", tmp_path)
-    set_clock(graph, agents, "11:30")
+    centre = world("center_a", tmp_path)
+    centre.at("11:30")     # the clock, pose and people in one delta; then the perceivers catch up
+    graph = centre.graph
     names = {n.name for n in graph.nodes()}
     assert {"world", "clock", "corridor", "dining_room", "door_ot", "robot", "ot_tv", "senior_1"} <= names
     corridor, dining = graph.get_node_by_name("corridor"), graph.get_node_by_name("dining_room")
@@ -73,11 +46,10 @@ def test_agents_write_the_shared_vocabulary(tmp_path: Path) -> None:
 
 
 def test_executive_issues_one_route_confined_intention(tmp_path: Path) -> None:
-    graph, agents = world("center_a", tmp_path)
-    set_clock(graph, agents, "11:30")
-    executive = agents["executive"]
-    executive.step()
-    graph.dispatch()
+    centre = world("center_a", tmp_path)
+    centre.at("11:30")
+    centre.tick("executive")
+    graph = centre.graph
     mission = graph.get_node_by_name("mission/m1000")
     assert mission.attrs["state"] == "active"  # the first pending mission whose time has come
     intentions = [n for n in graph.nodes_of_type("intention") if n.attrs["state"] == "active"]
@@ -91,15 +63,16 @@ def test_executive_issues_one_route_confined_intention(tmp_path: Path) -> None:
 
 
 def test_agenda_request_round_trip(tmp_path: Path) -> None:
-    graph, agents = world("icra_usecase", tmp_path)
-    set_clock(graph, agents, "09:30")
+    centre = world("icra_usecase", tmp_path)
+    centre.at("09:30")
+    graph = centre.graph
     ok = graph.insert_node(type="agenda_request", name="agenda_request/1", attrs={
         "state": "pending", "change": '{"op": "add", "activity": {"name": "Extra", "object": "stretcher", '
                                       '"start": "09:40", "end": "10:00"}}'})
     bad = graph.insert_node(type="agenda_request", name="agenda_request/2", attrs={
         "state": "pending", "change": '{"op": "add", "activity": {"name": "x", "object": "piano", '
                                       '"start": "09:40", "end": "10:00"}}'})
-    agents["agenda"].step()
+    centre.tick("agenda")
     assert graph.get_node(ok.id).attrs["state"] == "accepted"
     refused = graph.get_node(bad.id).attrs
     assert refused["state"] == "refused" and "piano" in refused["message"]
@@ -108,22 +81,18 @@ def test_agenda_request_round_trip(tmp_path: Path) -> None:
 
 
 def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> None:
-    from agents.social_navigation.agent import SocialNavigationAgent
     from agents.lib.socialmap.social_map import plan
 
     text = (SCENES_DIR / "center_b.yaml").read_text()
     scene = tmp_path / "center_b_door.yaml"
     scene.write_text(text + '\ndoor_changes:\n  - {at: "10:00:05", door: door_ot_north, open: false}\n')
-    graph = DSRGraph(agent="offline")
-    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=scene, run_dir=tmp_path))
-    sim.setup(graph, Recorder("sim_robot", None, None))
-    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=scene))
-    nav.setup(graph, Recorder("social_navigation", None, None))
+    centre = OfflineAgents(scene, tmp_path, agents=("sim_robot", "social_navigation"))
+    graph, sim, nav = centre.graph, centre.sim, centre["social_navigation"]
     door = graph.get_node_by_name("door_ot_north")
     assert door.attrs["open"] is True
 
     sim.now_s = parse_clock("10:00:10")
-    sim.step()
+    centre.tick("sim_robot")
     assert graph.get_node_by_name("door_ot_north").attrs["open"] is False
     beam = sim.laser.scan(7.6, 14.0, 0.0, np.empty((0, 2)))
     assert beam[len(beam) // 2] == pytest.approx(0.8, abs=0.06), "the laser sees the closed leaf"
@@ -136,18 +105,13 @@ def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> No
     assert shut > corridor_to_ot() + 5.0, "with the north door shut the way in is the south door"
 
 
-def navigation_at_1130(tmp_path: Path) -> tuple[DSRGraph, dict[str, object], SocialNavigationAgent]:
+def navigation_at_1130(tmp_path: Path) -> tuple[OfflineAgents, Any]:
     """center_a at 11:30 with the executive's first intention issued, and a navigation agent on
     the same graph that has not stepped yet."""
-    from agents.social_navigation.agent import SocialNavigationAgent
-
-    graph, agents = world("center_a", tmp_path)
-    set_clock(graph, agents, "11:30")
-    agents["executive"].step()
-    graph.dispatch()
-    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENES_DIR / "center_a.yaml"))
-    nav.setup(graph, Recorder("social_navigation", None, None))
-    return graph, agents, nav
+    centre = world("center_a", tmp_path)
+    centre.at("11:30")
+    centre.tick("executive")
+    return centre, centre.add("social_navigation")
 
 
 def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
@@ -159,7 +123,8 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
     from agents.social_navigation.agent import REPLAN_PERIOD_S
 
     assert REPLAN_PERIOD_S <= 0.2
-    graph, agents, nav = navigation_at_1130(tmp_path)
+    centre, nav = navigation_at_1130(tmp_path)
+    graph = centre.graph
     found: list[tuple[float, object]] = []
     search = nav.replanner.search
 
@@ -169,15 +134,15 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
         return result
 
     nav.replanner.search = recording  # type: ignore[method-assign]
-    nav.step()
+    centre.tick("social_navigation")
     assert nav.intention_id is not None and len(found) == 1 and found[0][1].refreshed
     assert nav.replanner.costs.last_windows is None   # the first grid is composed whole
     refresh_work = found[0][1].backward_expanded
     start_s = parse_clock("11:30")
     for k in range(1, 4):
         now = start_s + k * REPLAN_PERIOD_S
-        set_clock(graph, agents, now)
-        nav.step()
+        centre.at(now)
+        centre.tick("social_navigation")
         assert len(found) == 1 + k, "one search per replan period (0.2 s, float rounding included)"
         cost, stats = found[-1]
         assert not stats.refreshed and stats.expanded < refresh_work / 4
@@ -201,22 +166,19 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
     from agents.social_navigation import agent as navigation
 
     monkeypatch.setattr(navigation, "STALL_TIMEOUT_S", 2.0)
-    graph, agents, nav = navigation_at_1130(tmp_path)
-    nav.step()
-    graph.dispatch()
+    centre, nav = navigation_at_1130(tmp_path)
+    graph = centre.graph
+    centre.tick("social_navigation")
     assert nav.intention_id is not None and nav.map is not None
     intention_id = nav.intention_id
     walls = blocked_core(nav.map.static, nav.map.spec, nav.map.params.grid.robot_radius_m * 0.5)
     spec = nav.map.spec
     robot = graph.get_node_by_name("robot")
-    sim = agents["sim_robot"]
+    sim = centre.sim
     sim.rate = 1e6                     # lockstep as fast as the test can go
     in_walls = []
     for _ in range(1500):
-        sim.step()
-        graph.dispatch()
-        nav.step()
-        graph.dispatch()
+        centre.tick("sim_robot", "social_navigation")
         x, y, _ = graph.world_pose(robot.id)
         if walls[spec.cell_of(x, y)]:
             in_walls.append((round(x, 2), round(y, 2)))
@@ -233,16 +195,14 @@ def test_a_recovery_still_answers_the_pose(tmp_path: Path) -> None:
     the lockstep simulator stood still for its wall-clock watchdog (1 s) after every recovery."""
     from agents.social_navigation.agent import STALL_S
 
-    graph, agents, nav = navigation_at_1130(tmp_path)
-    nav.step()
-    graph.dispatch()
-    sim, robot = agents["sim_robot"], graph.get_node_by_name("robot")
+    centre, nav = navigation_at_1130(tmp_path)
+    graph = centre.graph
+    centre.tick("social_navigation")
+    sim, robot = centre.sim, graph.get_node_by_name("robot")
     sim.rate = 1e6
-    sim.step()
-    graph.dispatch()
+    centre.tick("sim_robot")
     nav._best_distance, nav._progress_s = 0.0, sim.now_s - STALL_S - 1.0   # no progress for a while
-    nav.step()
-    graph.dispatch()
+    centre.tick("social_navigation")
     attrs = graph.get_node(robot.id).attrs
     assert nav._progress_s == pytest.approx(sim.now_s), "the stall was noticed and recovered from"
     assert attrs.get("cmd_stamp", -1.0) >= attrs["pose_stamp"], "the pose was answered"
@@ -258,7 +218,8 @@ def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) 
     from agents.world.dsr_writers import write_person
     from agents.world.vocabulary import intentions
 
-    graph, agents, nav = navigation_at_1130(tmp_path)
+    centre, nav = navigation_at_1130(tmp_path)
+    graph = centre.graph
     intention = next(i for i in intentions(graph) if i.active and i.goal is not None)
     gx, gy = intention.goal[0], intention.goal[1]
     room = nav.scene.room_at(gx, gy)
@@ -267,19 +228,17 @@ def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) 
         write_person(graph, name, "resident", (gx + dx, gy, 0.0), room, now)
     graph.dispatch()
     robot = graph.get_node_by_name("robot")
-    sim = agents["sim_robot"]
+    sim = centre.sim
     sim.rate = 1e6
-    nav.step()
-    graph.dispatch()
+    centre.tick("social_navigation")
     assert nav.intention_id is not None and nav.band is None     # waiting: the goal is taken
     stand_in = None
     for _ in range(3000):
-        sim.step()
-        graph.dispatch()
+        centre.tick("sim_robot")
         for name, dx in (("talker_a", -0.25), ("talker_b", 0.25)):   # they keep talking
             write_person(graph, name, "resident", (gx + dx, gy, 0.0), room, sim.now_s)
-        nav.step()
         graph.dispatch()
+        centre.tick("social_navigation")
         if nav.goal is not None and nav.goal[:2] != (gx, gy):
             stand_in = nav.goal
         if graph.get_node(intention.node_id).attrs.get("state") != "active":

@@ -14,24 +14,17 @@ from pathlib import Path
 import pytest
 import shapely
 
-from agents.agenda.agent import AgendaAgent
-from agents.executive.agent import MAX_REPLANS, ExecutiveAgent
-from agents.human_observer.agent import HumanObserverAgent
+from agents.executive.agent import MAX_REPLANS
 from agents.missions.goals import SOCIAL_DISTANCE_M, GoalPose
-from agents.object_recognition.agent import ObjectRecognitionAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
 from agents.sim_robot.agent import RobotState, SimRobotAgent
 from agents.sim_robot.kinematics import Velocity
 from agents.world.freshness import interactions_follow_activities
 from agents.world.vocabulary import (IntentionKind, IntentionState, IntentionView, MissionState, MissionView,
                                      intentions, mission_name)
-from dsr import DSRGraph
 from scenes.clock import parse_clock
 from scenes.geometry import posed_polygon
 from scenes.loader import SCENES_DIR
-
-AGENTS = (SimRobotAgent, ObjectRecognitionAgent, AgendaAgent, HumanObserverAgent, ExecutiveAgent)
+from tools.offline_agents import WITHOUT_NAVIGATION, OfflineAgents
 
 
 def day_with(tmp_path: Path, *missions: str) -> Path:
@@ -42,34 +35,20 @@ def day_with(tmp_path: Path, *missions: str) -> Path:
     return path
 
 
-class Centre:
+class Centre(OfflineAgents):
     """Every agent but the navigation on one graph; the test drives the clock and the navigation."""
 
     def __init__(self, scene: Path, tmp_path: Path, start_executive: bool = True) -> None:
-        self.graph = DSRGraph(agent="offline")
-        self.agents = {cls.kind: cls(AgentConfig(name=cls.kind, scene=scene, run_dir=tmp_path)) for cls in AGENTS}
-        for kind, agent in self.agents.items():
-            agent.setup(self.graph, Recorder(kind, None, None))
-        for kind, agent in self.agents.items():
-            if kind != "executive" or start_executive:
-                agent.step()
-        self.graph.dispatch()
+        super().__init__(scene, tmp_path, agents=WITHOUT_NAVIGATION)
+        self.tick(*(name for name in WITHOUT_NAVIGATION if name != "executive" or start_executive))
 
     @property
     def sim(self) -> SimRobotAgent:
-        return self.agents["sim_robot"]  # type: ignore[return-value]
-
-    def at(self, hhmm: str) -> None:
-        """The clock at ``hhmm``, perceived by every perceiving agent (the agenda before the observer)."""
-        self.sim.skip_to(parse_clock(hhmm))
-        for kind in ("object_recognition", "agenda", "human_observer"):
-            self.agents[kind].step()
-        self.graph.dispatch()
+        return self.agents["sim_robot"]  # type: ignore[no-any-return]
 
     def execute(self) -> None:
         self.graph.dispatch()
-        self.agents["executive"].step()
-        self.graph.dispatch()
+        self.tick("executive")
 
     def mission(self, mission_id: str) -> MissionView:
         return MissionView.from_node(self.graph.get_node_by_name(mission_name(mission_id)))
@@ -287,9 +266,8 @@ def test_a_mission_waits_until_the_observer_has_seen_the_activity_end(tmp_path: 
                              '{id: o, time: "09:06", goal: {object: therapy_table}}'), tmp_path)
     centre.at("09:05")
     centre.execute()
-    centre.sim.skip_to(parse_clock("09:20"))
-    for kind in ("object_recognition", "human_observer", "agenda"):  # the observer looks first: stale links
-        centre.agents[kind].step()
+    centre.skip_to("09:20")
+    centre.tick("object_recognition", "human_observer", "agenda")  # the observer looks first: stale links
     centre.execute()
     centre.execute()
     assert centre.mission("w").state == MissionState.DONE

@@ -13,15 +13,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from agents.agenda.agent import AgendaAgent
-from agents.executive.agent import ExecutiveAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
-from agents.sim_robot.agent import CONTROL_DT_S, SimRobotAgent
+from agents.sim_robot.agent import CONTROL_DT_S
 from agents.world.vocabulary import AGENDA, CLOCK
-from dsr import DSRGraph
 from scenes.clock import parse_clock
 from scenes.loader import SCENES_DIR
+from tools.offline_agents import OfflineAgents
 
 
 def afternoon(tmp_path: Path) -> Path:
@@ -36,20 +32,14 @@ def afternoon(tmp_path: Path) -> Path:
 
 def test_a_change_inside_an_idle_stretch_fires_within_one_tick(tmp_path: Path) -> None:
     scene = afternoon(tmp_path)
-    graph = DSRGraph(agent="offline")
-    agents = [cls(AgentConfig(name=cls.kind, scene=scene, run_dir=tmp_path))
-              for cls in (SimRobotAgent, AgendaAgent, ExecutiveAgent)]
-    for agent in agents:
-        agent.setup(graph, Recorder(agent.kind, None, None))
-    sim = agents[0]
+    centre = OfflineAgents(scene, tmp_path, agents=("sim_robot", "agenda", "executive"))
+    graph, sim = centre.graph, centre.sim
     change = next(c for c in sim.world.scripted if c.at_s == parse_clock("13:30"))
     door_at = parse_clock("13:12")
     applied_at = None
     clocks = []
     for _ in range(400):
-        for agent in agents:
-            agent.step()
-            graph.dispatch()
+        centre.tick()
         now = float(graph.get_node_by_name(CLOCK).attrs["now_s"])
         clocks.append(now)
         door = graph.get_node_by_name("door_lounge")

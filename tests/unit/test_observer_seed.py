@@ -11,35 +11,24 @@ from pathlib import Path
 
 import pytest
 
-from agents.human_observer.agent import HumanObserverAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
-from agents.sim_robot.agent import SimRobotAgent
 from agents.world.people import people_at
 from agents.world.scene_world import load_world
-from dsr import DSRGraph
 from scenes.clock import parse_clock
 from scenes.loader import SCENES_DIR
+from tools.offline_agents import OfflineAgents
 
 SCENE = SCENES_DIR / "icra_usecase.yaml"     # everyone stands still until 10:50
 
 
 def _seen_at(times: list[float], seed: int, tmp_path: Path) -> dict[str, tuple[float, float, float]]:
     """The people's poses in the DSR after an observer with ``seed`` processed the clock ``times``."""
-    graph = DSRGraph(agent="test")
     tmp_path.mkdir(parents=True)
-
-    def build(cls: type, **options: str):  # noqa: ANN202
-        agent = cls(AgentConfig(name=cls.kind, scene=SCENE, run_dir=tmp_path, options=options))
-        agent.setup(graph, Recorder(cls.kind, None, None))
-        return agent
-
-    sim, observer = build(SimRobotAgent), build(HumanObserverAgent, seed=str(seed))
+    centre = OfflineAgents(SCENE, tmp_path, agents=("sim_robot", "human_observer"),
+                           options={"human_observer": {"seed": str(seed)}})
     for t in times:
-        sim.skip_to(t)
-        graph.dispatch()
-        observer.step()
-        graph.dispatch()
+        centre.skip_to(t)
+        centre.tick("human_observer")
+    graph = centre.graph
     return {node.name: graph.world_pose(node.id) for node in graph.nodes_of_type("person")}
 
 

@@ -8,23 +8,18 @@ import csv
 from pathlib import Path
 
 from agents.agenda.agent import AgendaAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
 from agents.sim_robot.agent import PEOPLE_HEADER, SimRobotAgent
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE
 from dsr import DSRGraph
 from scenes.clock import parse_clock
+from tools.offline_agents import OfflineAgents
 
 SCENE = Path(__file__).resolve().parents[1] / "data" / "crowd_small.yaml"
 
 
 def agents(tmp_path: Path) -> tuple[DSRGraph, SimRobotAgent, AgendaAgent]:
-    graph = DSRGraph(agent="test")
-    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path))
-    sim.setup(graph, Recorder("sim_robot", None, None))
-    agenda = AgendaAgent(AgentConfig(name="agenda", scene=SCENE))
-    agenda.setup(graph, Recorder("agenda", None, None))
-    return graph, sim, agenda
+    centre = OfflineAgents(SCENE, tmp_path, agents=("sim_robot", "agenda"))
+    return centre.graph, centre.sim, centre["agenda"]
 
 
 def truth(graph: DSRGraph) -> dict[str, dict[str, object]]:
@@ -75,15 +70,12 @@ def test_the_robot_waits_for_people_to_clear_the_only_way_then_goes(tmp_path: Pa
     """Someone stands in the lounge's door, the only way in: the navigation does not fail the
     intention but stops and tries again; once the doorway is clear it plans and drives.  A way that
     stays closed fails after BLOCKED_WAIT_S."""
-    from agents.social_navigation.agent import BLOCKED_WAIT_S, SocialNavigationAgent
+    from agents.social_navigation.agent import BLOCKED_WAIT_S
     from agents.world.dsr_writers import write_person
     from agents.world.freshness import mark_observed
 
-    graph = DSRGraph(agent="test")
-    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path))
-    sim.setup(graph, Recorder("sim_robot", None, None))
-    nav = SocialNavigationAgent(AgentConfig(name="social_navigation", scene=SCENE))
-    nav.setup(graph, Recorder("social_navigation", None, None))
+    centre = OfflineAgents(SCENE, tmp_path, agents=("sim_robot", "social_navigation"))
+    graph, sim, nav = centre.graph, centre.sim, centre["social_navigation"]
     write_person(graph, "doorkeeper", "resident", (15.0, 2.4, 0.0), "corridor", sim.now_s)
 
     def tick(t: float) -> None:

@@ -9,18 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.human_observer.agent import HumanObserverAgent
 from agents.lib.perception.tracking import Detection, Tracker
 from agents.lib.socialmap.grid import walls_geometry
 from agents.lib.socialmap.motion import MotionParams, predict
 from agents.lib.socialmap.social_map import build_social_map
 from agents.lib.socialmap.types import Person, Wall
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
-from agents.sim_robot.agent import SimRobotAgent
 from agents.world.dsr_readers import dsr_people
-from dsr import DSRGraph
 from scenes.clock import parse_clock
+from tools.offline_agents import OfflineAgents
 
 SCENE = Path(__file__).resolve().parents[1] / "data" / "crowd_small.yaml"
 BOUNDS = (0.0, 0.0, 12.0, 6.0)
@@ -52,11 +48,9 @@ def test_tracks_keep_identities_when_two_people_cross_and_estimate_velocity() ->
 def test_the_observer_tracks_the_simulators_people_with_noise_and_velocities(tmp_path: Path) -> None:
     """The simulator publishes the truth (ground_truth/people); the observer writes every person
     with a noisy pose and an estimated velocity close to the walkers' true one."""
-    graph = DSRGraph(agent="test")
-    sim = SimRobotAgent(AgentConfig(name="sim_robot", scene=SCENE, run_dir=tmp_path))
-    sim.setup(graph, Recorder("sim_robot", None, None))
-    observer = HumanObserverAgent(AgentConfig(name="human_observer", scene=SCENE, options={"noise_xy": "0.03"}))
-    observer.setup(graph, Recorder("human_observer", None, None))
+    centre = OfflineAgents(SCENE, tmp_path, agents=("sim_robot", "human_observer"),
+                           options={"human_observer": {"noise_xy": "0.03"}})
+    graph, sim, observer = centre.graph, centre.sim, centre["human_observer"]
     t = parse_clock("09:26:00")
     errors, speeds = [], []
     while t < parse_clock("09:27:30"):

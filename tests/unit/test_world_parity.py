@@ -15,19 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.agenda.agent import AgendaAgent
-from agents.human_observer.agent import HumanObserverAgent
-from agents.object_recognition.agent import ObjectRecognitionAgent
-from agents.runtime.config import AgentConfig
-from agents.runtime.recording import Recorder
-from agents.sim_robot.agent import SimRobotAgent
 from agents.world.dsr_readers import symbolic_view
 from agents.world.navigation import NavigationMaps
 from agents.world.offline import graph_at
 from agents.world.scene_world import load_world
-from dsr import DSRGraph
 from scenes.clock import parse_clock
 from scenes.loader import SCENES_DIR
+from tools.offline_agents import PERCEIVERS, OfflineAgents
 
 SCENES = sorted(p.stem for p in SCENES_DIR.glob("*.yaml"))
 # A scene whose people live their day (agents/lib/crowd): the offline replay equals the live crowd.
@@ -56,31 +50,10 @@ def parity_times(scene_name: str) -> list[float]:
     return times
 
 
-def live_agents(scene_name: str, tmp_path: Path) -> tuple[DSRGraph, SimRobotAgent, list]:
-    graph = DSRGraph(agent="parity")
-    scene = scene_path(scene_name)
-
-    def build(cls: type, **options: str):  # noqa: ANN202
-        agent = cls(AgentConfig(name=cls.kind, scene=scene, run_dir=tmp_path, options=options))
-        agent.setup(graph, Recorder(cls.kind, None, None))
-        return agent
-
-    sim = build(SimRobotAgent)
-    perceivers = [build(ObjectRecognitionAgent), build(AgendaAgent),
-                  build(HumanObserverAgent, noise_xy="0", noise_theta="0")]
-    return graph, sim, perceivers
-
-
-def settle(graph: DSRGraph, agents: list) -> None:
-    """Step the perceivers until the graph stops changing (live, they run concurrently)."""
-    for _ in range(6):
-        before = graph.digest()
-        for agent in agents:
-            agent.step()
-        graph.dispatch()
-        if graph.digest() == before:
-            return
-    raise AssertionError("the agents did not settle")
+def live_agents(scene_name: str, tmp_path: Path) -> OfflineAgents:
+    """The simulator and the perceivers (the observer without sensor noise) on one graph."""
+    return OfflineAgents(scene_path(scene_name), tmp_path, agents=("sim_robot", *PERCEIVERS),
+                         options={"human_observer": {"noise_xy": "0", "noise_theta": "0"}})
 
 
 def named(view) -> tuple[dict[str, dict], dict[tuple[str, str, str], dict]]:  # noqa: ANN001
@@ -98,12 +71,13 @@ def named(view) -> tuple[dict[str, dict], dict[tuple[str, str, str], dict]]:  # 
 def test_offline_world_equals_what_the_agents_hold(scene_name: str, tmp_path: Path) -> None:
     world = load_world(scene_path(scene_name))
     nav = NavigationMaps.for_scene(world.scene)
-    graph, sim, perceivers = live_agents(scene_name, tmp_path)
+    live = live_agents(scene_name, tmp_path)
+    graph = live.graph
     times = parity_times(scene_name)
     assert len(times) >= 5
     for t_s in times:
-        sim.skip_to(t_s)
-        settle(graph, perceivers)
+        live.skip_to(t_s)
+        live.settle(*PERCEIVERS)     # live, they run concurrently: until the graph stops changing
         live_nodes, live_edges = named(symbolic_view(graph))
         offline = graph_at(world, t_s)
         off_nodes, off_edges = named(symbolic_view(offline))
