@@ -13,28 +13,27 @@ queued and delivered by `dispatch()` on the caller's thread with no lock held.
 
 from __future__ import annotations
 
-import hashlib
 import secrets
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-import orjson
-
-from dsr import crdt, poses, wire
+from dsr import crdt, graph_io, poses, wire
+from dsr.bindings import WriterBindings
 from dsr.crdt import ElementState
-from dsr.errors import (DSRError, EdgeNotFoundError, InvalidAttributeError,
-                        InvalidIdentifierError, NameTakenError, NodeNotFoundError, PoseError,
-                        ReadOnlyGraphError, TransactionError, WriteRefusedError)
-from dsr.limits import LIMITS, node_problem, value_bytes
+from dsr.errors import (EdgeNotFoundError, InvalidAttributeError, InvalidIdentifierError,
+                        NameTakenError, NodeNotFoundError, PoseError, ReadOnlyGraphError,
+                        TransactionError, WriteRefusedError)
 from dsr.hlc import HybridLogicalClock
+from dsr.limits import LIMITS, node_problem, value_bytes
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
                        check_node_id, check_type_name, make_node)
 from dsr.names import NameIndex
 from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
+from dsr.table import Changes, Encoded, ElementTable
 
 if TYPE_CHECKING:
     import networkx
@@ -55,11 +54,12 @@ class _NodeView:
 class _Transaction:
     owner: int
     rollback: bool
-    undo_nodes: dict[int, ElementState | None] = field(default_factory=dict)
-    undo_edges: dict[EdgeKey, ElementState | None] = field(default_factory=dict)
-    out_nodes: dict[int, ElementState] = field(default_factory=dict)
-    out_edges: dict[EdgeKey, ElementState] = field(default_factory=dict)
+    nodes: Changes[int] = field(default_factory=Changes)
+    edges: Changes[EdgeKey] = field(default_factory=Changes)
     events: list[Event] = field(default_factory=list)
+
+    def changed(self) -> bool:
+        return bool(self.nodes.out or self.edges.out)
 
 
 class IdAllocator:
@@ -100,15 +100,6 @@ def _cannot_grow(values: Attrs, held: dict[str, Any]) -> bool:
     return True
 
 
-def _settled(state: ElementState, acked: Callable[[int, int], bool]) -> bool:
-    for replica, hlc in state.add.items():
-        if not acked(replica, hlc):
-            return False
-    if state.meta is not None and not acked(state.meta[1], state.meta[0]):
-        return False
-    return all(acked(reg[1], reg[0]) for reg in state.attrs.values())
-
-
 class DSRGraph:
     """A full replica of a DSR graph.  Offline until a transport (dsr.transport.join) attaches."""
 
@@ -126,8 +117,11 @@ class DSRGraph:
         self._publish: Publisher | None = None
         self._outbox: Outbox | None = None
         self._lock = threading.RLock()
-        self._nodes: dict[int, ElementState] = {}
-        self._edges: dict[EdgeKey, ElementState] = {}
+        self._node_table: ElementTable[int] = ElementTable("node", wire.node_entry)
+        self._edge_table: ElementTable[EdgeKey] = ElementTable("edge", wire.edge_entry)
+        #: the tables' state dicts (same objects), for the hot paths
+        self._nodes = self._node_table.states
+        self._edges = self._edge_table.states
         self._out: dict[int, set[EdgeKey]] = {}
         self._in: dict[int, set[EdgeKey]] = {}
         self._view: dict[int, _NodeView] = {}
@@ -140,16 +134,10 @@ class DSRGraph:
         self._tx_depth = 0
         self._version = 0
         self._snapshot_cache: tuple[int, bytes] | None = None
-        #: element -> (its state object, that object's rev, its JSON): see state_parts
-        self._encoded_nodes: dict[int, tuple[ElementState, int, bytes]] = {}
-        self._encoded_edges: dict[EdgeKey, tuple[ElementState, int, bytes]] = {}
-        self._writers: dict[int, str] = {self.replica_id: self.agent}
-        self._bound: dict[int, str] = {self.replica_id: self.agent}
-        self._encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
-        #: elements that are not present (removed, or only known from stray registers): the
-        #: candidates of tombstone compaction (compact())
-        self._dead_nodes: set[int] = set()
-        self._dead_edges: set[EdgeKey] = set()
+        #: replica id -> agent: who wrote what this replica holds (dsr/bindings.py)
+        self.writers = WriterBindings(self.replica_id, self.agent, self._lock)
+        #: encodes this replica's deltas and digests (dsr/wire.py)
+        self.encoder = wire.DeltaEncoder(self.graph_name, self.agent, self.replica_id)
         #: write policy checked on local writes (set by the transport when join() has one;
         #: None: every local write is allowed, as in library use)
         self.local_policy: Any = None
@@ -169,6 +157,17 @@ class DSRGraph:
     def version(self) -> int:
         """Increases on every state change (local or remote)."""
         return self._version
+
+    @property
+    def node_states(self) -> Mapping[int, ElementState]:
+        """Replicated CRDT state of every node this replica holds, visible or not (admission
+        checks, tests); callers must not mutate it."""
+        return self._nodes
+
+    @property
+    def edge_states(self) -> Mapping[EdgeKey, ElementState]:
+        """Replicated CRDT state of every edge this replica holds (see node_states)."""
+        return self._edges
 
     def _node(self, node_id: int) -> Node:
         view = self._view[node_id]
@@ -301,7 +300,7 @@ class DSRGraph:
             out = None
             if outer:
                 self._tx = None
-                if tx.out_nodes or tx.out_edges:
+                if tx.changed():
                     self._check_size(tx)
                 outbox = self._outbox
                 out = self._commit(tx, outbox)
@@ -314,13 +313,12 @@ class DSRGraph:
         """Refuse (and undo) a write whose delta receivers would drop as too large."""
         limit = LIMITS.max_delta_bytes
         estimate = 0
-        for state in (*tx.out_nodes.values(), *tx.out_edges.values()):
+        for state in (*tx.nodes.out.values(), *tx.edges.out.values()):
             estimate += 200 + sum(value_bytes(reg[2]) + 60 for reg in state.attrs.values())
         if estimate * 2 < limit:
             return
-        size = len(self._encoder.encode(
-            [wire.node_entry(i, st) for i, st in tx.out_nodes.items()],
-            [wire.edge_entry(k, st) for k, st in tx.out_edges.items()]))
+        size = len(self.encoder.encode(self._node_table.entries(tx.nodes.out),
+                                       self._edge_table.entries(tx.edges.out)))
         if size > limit:
             self._undo(tx)
             raise InvalidAttributeError(
@@ -340,27 +338,21 @@ class DSRGraph:
 
     def _commit(self, tx: _Transaction, outbox: Outbox | None) -> Outgoing | None:
         self._signals.post(tx.events)
-        if not tx.out_nodes and not tx.out_edges:
+        if not tx.changed():
             return None
         self._version += 1
-        return outbox.add(tx.out_nodes, tx.out_edges, self.clock.last) \
+        return outbox.add(tx.nodes.out, tx.edges.out, self.clock.last) \
             if outbox is not None else None
 
     def _undo(self, tx: _Transaction) -> None:
-        for node_id, before in tx.undo_nodes.items():
-            if before is None:
-                self._nodes.pop(node_id, None)
-            else:
-                self._nodes[node_id] = before
-        for key, before_edge in tx.undo_edges.items():
-            if before_edge is None:
-                self._edges.pop(key, None)
+        node_ids = self._node_table.restore(tx.nodes)
+        edge_keys = self._edge_table.restore(tx.edges)
+        for key in edge_keys:
+            if key not in self._edges:
                 self._unlink_edge(key)
-            else:
-                self._edges[key] = before_edge
-        for node_id in tx.undo_nodes:
+        for node_id in node_ids:
             self._sync_node(node_id, [], None)
-        for key in tx.undo_edges:
+        for key in edge_keys:
             self._sync_edge(key, [], None)
         self._version += 1
 
@@ -389,8 +381,9 @@ class DSRGraph:
             self._check_node_limits(node_id, values, fresh=True)
         hlc = self.clock.tick()
         me = self.replica_id
-        self._local_node(tx, node_id, add=((me, hlc),), meta=(hlc, me, (type_, name)),
-                         attrs={k: (hlc, me, v) for k, v in values.items()})
+        self._local(tx, self._node_table, node_id, add=((me, hlc),),
+                    meta=(hlc, me, (type_, name)),
+                    attrs={k: (hlc, me, v) for k, v in values.items()})
         return self._node(node_id)
 
     def update_node(self, node_id: int, attrs: Attrs) -> None:
@@ -497,7 +490,8 @@ class DSRGraph:
             self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
-            self._local_node(tx, node_id, attrs={k: (hlc, me, v) for k, v in values.items()})
+            self._local(tx, self._node_table, node_id,
+                        attrs={k: (hlc, me, v) for k, v in values.items()})
 
     def delete_node(self, node_id: int) -> None:
         """Delete a node and every edge from or to it."""
@@ -513,13 +507,13 @@ class DSRGraph:
                 for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
                     edge = self._edges[key]
                     if edge.present():
-                        self._local_edge(tx, key, rem=tuple(edge.add.items()), cleared=hlc,
-                                         attrs=receipt)
+                        self._local(tx, self._edge_table, key, rem=tuple(edge.add.items()),
+                                    cleared=hlc, attrs=receipt)
             finally:
                 self._cascade = None
             node = self._nodes[node_id]
-            self._local_node(tx, node_id, rem=tuple(node.add.items()), cleared=hlc,
-                             attrs=receipt)
+            self._local(tx, self._node_table, node_id, rem=tuple(node.add.items()),
+                        cleared=hlc, attrs=receipt)
 
     def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
                               attrs: Attrs | None = None) -> Edge:
@@ -536,9 +530,9 @@ class DSRGraph:
             regs = {k: (hlc, me, v) for k, v in values.items()}
             if key in self._visible_edges:
                 if regs:
-                    self._local_edge(tx, key, attrs=regs)
+                    self._local(tx, self._edge_table, key, attrs=regs)
             else:
-                self._local_edge(tx, key, add=((me, hlc),), attrs=regs)
+                self._local(tx, self._edge_table, key, add=((me, hlc),), attrs=regs)
             return self._edge(key)
 
     def delete_edge(self, src: int, dst: int, type: str) -> None:  # noqa: A002
@@ -547,32 +541,23 @@ class DSRGraph:
             if key not in self._visible_edges:
                 raise EdgeNotFoundError(f"cannot delete edge {src}->{dst} ({type}): not found")
             hlc = self.clock.tick()
-            self._local_edge(tx, key, rem=tuple(self._edges[key].add.items()), cleared=hlc,
-                             attrs=crdt.removal_receipt(hlc, self.replica_id))
+            self._local(tx, self._edge_table, key, rem=tuple(self._edges[key].add.items()),
+                        cleared=hlc, attrs=crdt.removal_receipt(hlc, self.replica_id))
 
-    def _local_node(self, tx: _Transaction, node_id: int, **delta: Any) -> None:
+    def _local(self, tx: _Transaction, table: ElementTable[Any], key: Any,
+               **delta: Any) -> None:
+        """A local change of one element inside a transaction: checked against the write
+        policy, recorded for undo, merged here, added to the outgoing delta."""
         if self.local_policy is not None:
-            self._check_local("node", node_id, delta)
-        if node_id not in tx.undo_nodes:
-            before = self._nodes.get(node_id)
-            tx.undo_nodes[node_id] = before.copy() if before is not None else None
-        self._merge_node(node_id, delta, tx.events)
-        out = tx.out_nodes.get(node_id)
-        if out is None:
-            out = tx.out_nodes[node_id] = ElementState()
-        crdt.merge_into(out, **delta)
-
-    def _local_edge(self, tx: _Transaction, key: EdgeKey, **delta: Any) -> None:
-        if self.local_policy is not None:
-            self._check_local("edge", key, delta)
-        if key not in tx.undo_edges:
-            before = self._edges.get(key)
-            tx.undo_edges[key] = before.copy() if before is not None else None
-        self._merge_edge(key, delta, tx.events)
-        out = tx.out_edges.get(key)
-        if out is None:
-            out = tx.out_edges[key] = ElementState()
-        crdt.merge_into(out, **delta)
+            self._check_local(table.kind, key, delta)
+        if table is self._node_table:
+            table.record(tx.nodes, key)
+            self._merge_node(key, delta, tx.events)
+            table.stage(tx.nodes, key, delta)
+        else:
+            table.record(tx.edges, key)
+            self._merge_edge(key, delta, tx.events)
+            table.stage(tx.edges, key, delta)
 
     def _check_local(self, element: str, key: Any, delta: dict[str, Any]) -> None:
         """Ask the write policy about a local write before it changes anything; a refusal
@@ -590,7 +575,7 @@ class DSRGraph:
         state = self._nodes.get(node_id)
         if state is None:
             state = self._nodes[node_id] = ElementState()
-            self._dead_nodes.add(node_id)
+            self._node_table.dead.add(node_id)
         if len(delta) == 1 and "attrs" in delta:   # attribute-only: visibility cannot change
             changed, keys = crdt.merge_attrs(state, delta["attrs"])
             if keys and events is not None and node_id in self._view \
@@ -614,13 +599,17 @@ class DSRGraph:
         return changed
 
     def _unlink_edge(self, key: EdgeKey) -> None:
+        self._unindex_edge(key)
+        self._sync_edge(key, [], None)
+
+    def _unindex_edge(self, key: EdgeKey) -> None:
+        """Drop a forgotten edge from the adjacency indexes."""
         for index, end in ((self._out, key[0]), (self._in, key[1])):
             keys = index.get(end)
             if keys is not None:
                 keys.discard(key)
                 if not keys:
                     del index[end]
-        self._sync_edge(key, [], None)
 
     def _sync_node(self, node_id: int, keys: list[str], events: list[Event] | None) -> None:
         """Bring the derived view of one node in line with its state; queue signals."""
@@ -628,13 +617,11 @@ class DSRGraph:
         old = self._view.get(node_id)
         new = None
         if state is not None:
-            if state.present():
-                self._dead_nodes.discard(node_id)
-                if state.meta is not None:
-                    hlc, _, (type_, name) = state.meta
-                    new = _NodeView(type_, name, hlc)
-            else:
-                self._dead_nodes.add(node_id)
+            present = state.present()
+            self._node_table.settle(node_id, present)
+            if present and state.meta is not None:
+                hlc, _, (type_, name) = state.meta
+                new = _NodeView(type_, name, hlc)
         renamed: list[int] = []
         if old is not None and (new is None or new != old):
             self._types[old.type].discard(node_id)
@@ -678,10 +665,7 @@ class DSRGraph:
         was = key in self._visible_edges
         present = state is not None and state.present()
         if state is not None:
-            if present:
-                self._dead_edges.discard(key)
-            else:
-                self._dead_edges.add(key)
+            self._edge_table.settle(key, present)
         now = present and key[0] in self._view and key[1] in self._view
         if was and not now:
             self._visible_edges.discard(key)
@@ -708,7 +692,7 @@ class DSRGraph:
             old, self._outbox = self._outbox, None
             self._publish = publish
             if publish is not None:
-                self._outbox = Outbox(self._encoder, publish, linger_s=linger_s)
+                self._outbox = Outbox(self.encoder, publish, linger_s=linger_s)
         if old is not None:
             old.close()
             self.sent_hlc = max(self.sent_hlc, old.sent_top)
@@ -720,100 +704,110 @@ class DSRGraph:
             outbox.flush()
 
     def apply_message(self, message: wire.Decoded) -> int:
-        """Merge a validated remote delta or state; returns how many elements changed."""
+        """Merge a validated remote delta or state; returns how many elements changed.
+
+        Whoever hands a message here vouches for its writers (the transport judges a state's
+        table itself and passes none: dsr/transport.py Replica._note_writers)."""
         if self._tx is not None and self._tx.owner == threading.get_ident():
             raise TransactionError("apply_message() inside a local transaction")
         with self._lock:
             top = message.top_hlc
             if top:
                 self.clock.observe(top)
-            # whoever hands a message to apply_message vouches for its writers (the transport
-            # judges a state's table itself and passes none: dsr/transport.py _note_writers)
-            bound, writers = self._bound, self._writers
-            for replica, agent in message.writers.items():
-                if int(replica) not in bound:
-                    bound[int(replica)] = writers[int(replica)] = agent
-            if message.kind == "delta" and message.replica not in bound:
-                bound[message.replica] = writers[message.replica] = message.agent
+            self.writers.vouch(message.writers,
+                               message.replica if message.kind == "delta" else None,
+                               message.agent)
             events: list[Event] = []
-            changed = 0
-            nodes, edges = self._nodes, self._edges
-            view = self._view
-            want_updated = self._signals.wants("node_updated")
-            merge_attrs = crdt.merge_attrs
-            types, names = self._types, self._names
-            wants_added = self._signals.wants("node_added")
-            out_index, in_index = self._out, self._in
-            for node_id, state in message.nodes:
-                current = nodes.get(node_id)
-                if current is None:        # unknown element: the decoded state is installed
-                    if state.cleared:
-                        state.prune()
-                    nodes[node_id] = state
-                    changed += 1
-                    meta = state.meta
-                    if meta is None or not state.present():
-                        self._dead_nodes.add(node_id)
-                        continue
-                    hlc, _, (type_, name) = meta      # a new visible node (a join: 10^4 times)
-                    view[node_id] = _NodeView(type_, name, hlc)
-                    of_type = types.get(type_)
-                    if of_type is None:
-                        types[type_] = {node_id}
-                    else:
-                        of_type.add(node_id)
-                    renamed = names.add(name, node_id, hlc)
-                    if wants_added:
-                        events.append(("node_added", (self._node(node_id),)))
-                    if node_id in out_index or node_id in in_index:
-                        self._sync_incident(node_id, events)
-                    if renamed and self._signals.wants("node_updated"):
-                        for other in dict.fromkeys(renamed):
-                            if other in view:
-                                events.append(("node_updated", (self._node(other), ["name"])))
-                elif state.meta is None and not state.add and not state.rem \
-                        and not state.cleared:        # an update: the hot path, inlined
-                    was_changed, keys = merge_attrs(current, state.attrs)
-                    if was_changed:
-                        changed += 1
-                        if keys and want_updated and node_id in view:
-                            events.append(("node_updated", (self._node(node_id), keys)))
-                else:
-                    changed += self._merge_node(node_id, {
-                        "add": state.add.items(), "rem": state.rem.items(),
-                        "cleared": state.cleared, "meta": state.meta, "attrs": state.attrs},
-                        events)
-            for key, state in message.edges:
-                if key not in edges:
-                    if state.cleared:
-                        state.prune()
-                    edges[key] = state
-                    src, dst = key[0], key[1]
-                    ends = out_index.get(src)
-                    if ends is None:
-                        out_index[src] = {key}
-                    else:
-                        ends.add(key)
-                    ends = in_index.get(dst)
-                    if ends is None:
-                        in_index[dst] = {key}
-                    else:
-                        ends.add(key)
-                    self._sync_edge(key, [], events)
-                    changed += 1
-                else:
-                    changed += self._merge_edge(key, {
-                        "add": state.add.items(), "rem": state.rem.items(),
-                        "cleared": state.cleared, "attrs": state.attrs}, events)
+            changed = self._apply_nodes(message.nodes, events)
+            changed += self._apply_edges(message.edges, events)
             if changed:
                 self._version += 1
             self._signals.post(events)
             return changed
 
+    def _apply_nodes(self, entries: Iterable[tuple[int, ElementState]],
+                     events: list[Event]) -> int:
+        """Merge received node states: an unknown node's state is installed as decoded, an
+        attribute update (the hot path) merges its registers, anything else goes through
+        the general merge."""
+        changed = 0
+        nodes, view = self._nodes, self._view
+        merge_attrs = crdt.merge_attrs
+        want_updated = self._signals.wants("node_updated")
+        for node_id, state in entries:
+            current = nodes.get(node_id)
+            if current is None:
+                self._install_node(node_id, state, events)
+                changed += 1
+            elif state.meta is None and not state.add and not state.rem and not state.cleared:
+                was_changed, keys = merge_attrs(current, state.attrs)   # inlined: hot path
+                if was_changed:
+                    changed += 1
+                    if keys and want_updated and node_id in view:
+                        events.append(("node_updated", (self._node(node_id), keys)))
+            else:
+                changed += self._merge_node(node_id, _as_delta(state), events)
+        return changed
+
+    def _install_node(self, node_id: int, state: ElementState, events: list[Event]) -> None:
+        """A node this replica did not hold: its decoded state becomes the replica's (a join
+        does this 10^4 times, so the derived view is built directly, not through merge)."""
+        if state.cleared:
+            state.prune()
+        self._nodes[node_id] = state
+        meta = state.meta
+        if meta is None or not state.present():
+            self._node_table.dead.add(node_id)
+            return
+        hlc, _, (type_, name) = meta
+        self._view[node_id] = _NodeView(type_, name, hlc)
+        of_type = self._types.get(type_)
+        if of_type is None:
+            self._types[type_] = {node_id}
+        else:
+            of_type.add(node_id)
+        renamed = self._names.add(name, node_id, hlc)
+        signals = self._signals
+        if signals.wants("node_added"):
+            events.append(("node_added", (self._node(node_id),)))
+        if node_id in self._out or node_id in self._in:
+            self._sync_incident(node_id, events)
+        if renamed and signals.wants("node_updated"):
+            for other in dict.fromkeys(renamed):
+                if other in self._view:
+                    events.append(("node_updated", (self._node(other), ["name"])))
+
+    def _apply_edges(self, entries: Iterable[tuple[EdgeKey, ElementState]],
+                     events: list[Event]) -> int:
+        changed = 0
+        edges = self._edges
+        for key, state in entries:
+            if key not in edges:
+                self._install_edge(key, state, events)
+                changed += 1
+            else:
+                changed += self._merge_edge(key, _as_delta(state, meta=False), events)
+        return changed
+
+    def _install_edge(self, key: EdgeKey, state: ElementState, events: list[Event]) -> None:
+        """An edge this replica did not hold: its decoded state becomes the replica's."""
+        if state.cleared:
+            state.prune()
+        self._edges[key] = state
+        for index, end in ((self._out, key[0]), (self._in, key[1])):
+            ends = index.get(end)
+            if ends is None:
+                index[end] = {key}
+            else:
+                ends.add(key)
+        self._sync_edge(key, [], events)
+
+    # ------------------------------------------------------------------ for the transport
     def element_state(self, element: str, key: int | EdgeKey) -> ElementState | None:
         """The replicated CRDT state of a node (key: id) or edge (key: (src, dst, type)), for
         write policies; callers must not mutate it."""
-        return (self._nodes if element == "node" else self._edges).get(key)  # type: ignore[call-overload]
+        table: Mapping[Any, ElementState] = self._nodes if element == "node" else self._edges
+        return table.get(key)
 
     def node_type_of(self, node_id: int) -> str | None:
         """Type from the replicated state, even for a node not visible (for write policies)."""
@@ -822,37 +816,14 @@ class DSRGraph:
 
     def writer_agent(self, replica: int) -> str | None:
         """The agent a replica id writes for, as far as this replica knows (first-hand or
-        relayed by a state's `writers` table)."""
-        return self._writers.get(replica)
-
-    def bound_agent(self, replica: int) -> str | None:
-        """The agent of a replica id known first-hand: from a message on that agent's own key,
-        or vouched for by that agent's own state (dsr/state_trust.py)."""
-        return self._bound.get(replica)
-
-    def note_writer(self, replica: int, agent: str) -> None:
-        """Record a first-hand binding replica id -> agent (it replaces a relayed one: what
-        the agent's own key says beats what a relay said)."""
-        if self._bound.get(replica) != agent:
-            with self._lock:
-                if replica not in self._bound:
-                    self._bound[replica] = agent
-                    self._writers[replica] = agent
-
-    def note_relayed_writer(self, replica: int, agent: str) -> None:
-        """Record a binding only relayed by another member's state (an agent that is not
-        running): used to attribute that replica's writes to the write policy, never served
-        in this replica's own state replies (it proves nothing: dsr/state_trust.py)."""
-        if replica not in self._writers:
-            with self._lock:
-                self._writers.setdefault(replica, agent)
+        relayed by a state's `writers` table: dsr/bindings.py)."""
+        return self.writers.writer_agent(replica)
 
     def served_writers(self) -> dict[int, str]:
         """The `writers` table of this replica's state replies: only bindings it can prove
         (first-hand, vouched for by the agent itself, or taken from the state it joined
         with), never a claim it merely relayed or deferred."""
-        with self._lock:
-            return dict(self._bound)
+        return self.writers.served()
 
     def state_message(self, seen: dict[int, int] | None = None) -> bytes:
         """Full CRDT state (uncompacted tombstones included) as a "state" message, stamped
@@ -865,7 +836,7 @@ class DSRGraph:
             clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             payload = wire.encode(kind="state", graph=self.graph_name, agent=self.agent,
                                   replica=self.replica_id, nodes=self._nodes.items(),
-                                  edges=self._edges.items(), writers=self._bound,
+                                  edges=self._edges.items(), writers=self.writers.bound,
                                   clock=clock, seen={**(seen or {}), self.replica_id: clock})
             self._snapshot_cache = (self._version, payload)
             return payload
@@ -877,15 +848,12 @@ class DSRGraph:
         so encoding here, transfer and decoding at the joiner overlap (join time).  Each part
         is a valid state (a join of element states); the last one carries `clock` and `seen`
         (only once every part has been merged does the receiver hold what they describe).
-        The graph lock is held per part, not for the whole state.
-
-        Each element's JSON is cached with the state object and its `rev` (crdt.py bumps it on
-        every change): in a live graph a few elements change between two joins (poses, people)
-        while encoding all of them cost a 10k-node join most of its time."""
+        The graph lock is held per part, not for the whole state; each element's JSON comes
+        from its table's cache when unchanged (ElementTable.encoded_parts)."""
         with self._lock:
             clock = self.clock.last or self.clock.tick()   # never 0: 0 means "not the last part"
             node_ids, edge_keys = list(self._nodes), list(self._edges)
-            writers = dict(self._bound)
+            writers = dict(self.writers.bound)
         seen = {**(seen or {}), self.replica_id: clock}
         chunks: list[tuple[list[int], list[EdgeKey]]] = []
         for start in range(0, len(node_ids), per_part):
@@ -894,21 +862,20 @@ class DSRGraph:
             chunks.append(([], edge_keys[start:start + per_part]))
         if not chunks:
             chunks.append(([], []))
-        node_cache, edge_cache = self._encoded_nodes, self._encoded_edges
-        fresh_nodes: dict[int, tuple[ElementState, int, bytes]] = {}
-        fresh_edges: dict[EdgeKey, tuple[ElementState, int, bytes]] = {}
+        fresh_nodes: dict[int, Encoded] = {}
+        fresh_edges: dict[EdgeKey, Encoded] = {}
         for index, (ids, keys) in enumerate(chunks):
             last = index == len(chunks) - 1
             with self._lock:
-                node_parts = _encoded(self._nodes, ids, node_cache, fresh_nodes, wire.node_entry)
-                edge_parts = _encoded(self._edges, keys, edge_cache, fresh_edges, wire.edge_entry)
                 payload = wire.encode_parts(
                     kind="state", graph=self.graph_name, agent=self.agent,
-                    replica=self.replica_id, nodes=node_parts, edges=edge_parts,
+                    replica=self.replica_id,
+                    nodes=self._node_table.encoded_parts(ids, fresh_nodes),
+                    edges=self._edge_table.encoded_parts(keys, fresh_edges),
                     writers=writers, clock=clock if last else 0, seen=seen if last else None)
             yield payload
-        # only what this state held is kept (removed and compacted elements drop out)
-        self._encoded_nodes, self._encoded_edges = fresh_nodes, fresh_edges
+        self._node_table.keep_encoded(fresh_nodes)
+        self._edge_table.keep_encoded(fresh_edges)
 
     def compact(self, acked: Callable[[int, int], bool]) -> int:
         """Forget removed elements whose removal every member has seen; returns how many.
@@ -921,36 +888,17 @@ class DSRGraph:
         with self._lock:
             if self._tx is not None:
                 return 0
-            removed = 0
-            for node_id in list(self._dead_nodes):
-                state = self._nodes.get(node_id)
-                if state is None or state.present():
-                    self._dead_nodes.discard(node_id)
-                elif state.cleared and _settled(state, acked):
-                    del self._nodes[node_id]
-                    self._dead_nodes.discard(node_id)
-                    removed += 1
-            for key in list(self._dead_edges):
-                edge = self._edges.get(key)
-                if edge is None or edge.present():
-                    self._dead_edges.discard(key)
-                elif edge.cleared and _settled(edge, acked):
-                    del self._edges[key]
-                    self._dead_edges.discard(key)
-                    for index, end in ((self._out, key[0]), (self._in, key[1])):
-                        keys = index.get(end)
-                        if keys is not None:
-                            keys.discard(key)
-                            if not keys:
-                                del index[end]
-                    removed += 1
+            removed = len(self._node_table.compact(acked))
+            for key in self._edge_table.compact(acked):
+                self._unindex_edge(key)
+                removed += 1
             if removed:
                 self._version += 1
             return removed
 
     def tombstones(self) -> int:
         """How many removed elements this replica still remembers."""
-        return len(self._dead_nodes) + len(self._dead_edges)
+        return len(self._node_table.dead) + len(self._edge_table.dead)
 
     def state_equals(self, other: DSRGraph) -> bool:
         """True if both replicas hold the same CRDT state (tests)."""
@@ -993,36 +941,23 @@ class DSRGraph:
                 current = edge.src
             return poses.compose_chain(reversed(chain))
 
+    # ------------------------------------------------------------------ graph files (graph_io)
     def to_networkx(self) -> networkx.MultiDiGraph:
-        """Copy of the visible graph: nodes keyed by id with data {**attrs, type, name}
-        (type/name win over attributes of the same key); edges keyed by edge type."""
-        import networkx as nx
-        graph = nx.MultiDiGraph(name=self.graph_name)
+        """Copy of the visible graph (dsr/graph_io.py to_networkx)."""
         with self._lock:
-            for node in (self._node(i) for i in self._view):
-                graph.add_node(node.id, **{**node.attrs, "type": node.type, "name": node.name})
-            for key in self._visible_edges:
-                graph.add_edge(key[0], key[1], key=key[2],
-                               **{**self._edges[key].visible_attrs(), "type": key[2]})
-        return graph
+            return graph_io.to_networkx(self)
 
     def to_document(self) -> dict[str, Any]:
         """The visible graph as a plain dict in the graph-file format (files.py)."""
-        from dsr.files import FORMAT
         with self._lock:
-            return {"format": FORMAT,
-                    "nodes": [{"id": n.id, "type": n.type, "name": n.name, "attrs": n.attrs}
-                              for n in self.nodes()],
-                    "edges": [{"src": e.src, "dst": e.dst, "type": e.type, "attrs": e.attrs}
-                              for e in self.edges()]}
+            return graph_io.to_document(self)
 
     def to_json(self, indent: bool = False) -> str:
-        option = orjson.OPT_SORT_KEYS | (orjson.OPT_INDENT_2 if indent else 0)
-        return orjson.dumps(self.to_document(), option=option).decode()
+        return graph_io.to_json(self, indent)
 
     def digest(self) -> str:
         """SHA-256 of the canonical visible graph: equal digests = identical graphs."""
-        return hashlib.sha256(self.to_json().encode()).hexdigest()
+        return graph_io.digest(self)
 
     @classmethod
     def from_json(cls, text: str | bytes, agent: str, source: str = "<json>",
@@ -1034,75 +969,34 @@ class DSRGraph:
 
     def load_json(self, text: str | bytes, source: str = "<json>") -> list[int]:
         """Insert a graph document into this graph in one transaction; returns node ids."""
-        from dsr.files import parse_document
-        document = parse_document(text, source)
-        with self.transaction() as tx_graph:
-            return tx_graph._load_document(document, source)
+        return graph_io.load_json(self, text, source)
 
-    def _load_document(self, document: Any, source: str) -> list[int]:
-        from dsr.errors import GraphFileError
+    def insert_file_node(self, type_: str, name: str, values: Attrs,
+                         node_id: int | None) -> Node:
+        """Insert a node of a graph file inside the current transaction (dsr/graph_io.py):
+        unlike insert_node, its name may be a shown name with '#' (checked by the caller)."""
         tx = self._tx
-        assert tx is not None
-        ids: list[int] = []
-        by_name: dict[str, int] = {}
-        for index, node in enumerate(document.nodes):
-            try:
-                check_name(node.name, allow_hash=True)
-                created = self._insert_node(tx, node.type, node.name, dict(node.attrs), node.id)
-            except DSRError as exc:
-                raise GraphFileError(f"{source}: nodes[{index}] ({node.name!r}): {exc}") from None
-            ids.append(created.id)
-            by_name[node.name] = created.id
-        for index, edge in enumerate(document.edges):
-            ends = []
-            for end in (edge.src, edge.dst):
-                if isinstance(end, str):
-                    found = by_name.get(end) or self._names.lookup(end)
-                    if found is None:
-                        raise GraphFileError(f"{source}: edges[{index}]: unknown node name {end!r}")
-                    ends.append(found)
-                else:
-                    ends.append(end)
-            try:
-                self.insert_or_assign_edge(ends[0], ends[1], edge.type, dict(edge.attrs))
-            except DSRError as exc:
-                raise GraphFileError(f"{source}: edges[{index}]: {exc}") from None
-        return ids
+        if tx is None:
+            raise TransactionError("insert_file_node() outside a transaction")
+        return self._insert_node(tx, type_, name, values, node_id)
+
+    def node_id_of(self, name: str) -> int | None:
+        """Id of the node shown as `name`, or None."""
+        with self._lock:
+            return self._names.lookup(name)
 
     def save(self, path: str) -> None:
-        from pathlib import Path
-        Path(path).write_text(self.to_json(indent=True) + "\n", encoding="utf-8")
+        graph_io.save(self, path)
 
     @classmethod
     def load(cls, path: str, agent: str, **kwargs: Any) -> DSRGraph:
-        from pathlib import Path
-
-        from dsr.errors import GraphFileError
-        try:
-            text = Path(path).read_bytes()
-        except OSError as exc:
-            raise GraphFileError(f"{path}: cannot read: {exc.strerror}") from None
-        return cls.from_json(text, agent, source=str(path), **kwargs)
+        return cls.from_json(graph_io.read(path), agent, source=str(path), **kwargs)
 
 
-def _encoded(states: dict[Any, ElementState], keys: list[Any],
-             cache: dict[Any, tuple[ElementState, int, bytes]],
-             fresh: dict[Any, tuple[ElementState, int, bytes]],
-             entry: Callable[[Any, ElementState], dict[str, object]]) -> list[bytes]:
-    """The JSON of each element still in `states`, from `cache` when the element's state is
-    the same object at the same rev, encoded anew otherwise; every one is put in `fresh`."""
-    out: list[bytes] = []
-    dumps = orjson.dumps
-    for key in keys:
-        state = states.get(key)
-        if state is None:
-            continue
-        hit = cache.get(key)
-        if hit is not None and hit[0] is state and hit[1] == state.rev:
-            fresh[key] = hit
-            out.append(hit[2])
-        else:
-            data = dumps(entry(key, state))
-            fresh[key] = (state, state.rev, data)
-            out.append(data)
-    return out
+def _as_delta(state: ElementState, meta: bool = True) -> dict[str, Any]:
+    """A received element state as the keyword arguments of a merge (crdt.merge_into)."""
+    delta: dict[str, Any] = {"add": state.add.items(), "rem": state.rem.items(),
+                             "cleared": state.cleared, "attrs": state.attrs}
+    if meta:
+        delta["meta"] = state.meta
+    return delta

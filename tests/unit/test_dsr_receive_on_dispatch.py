@@ -65,7 +65,7 @@ class Pair:
         self.writer = DSRGraph("writer")
         self.graph = DSRGraph("agent", spin=spin)
         self.replica = Replica(self.graph)
-        self.replica._joined = True
+        self.replica.joined = True
         self.channel = Channel()
         self.handled_on: list[int] = []        # thread ident of each merge
         apply = self.graph.apply_message
