@@ -6,6 +6,17 @@ from it and kept in sync element by element, so queries are O(1)/O(degree) and s
 computed exactly where the state changed.  Local writes are built as deltas and go through the
 same merge code as remote deltas, so a replica cannot diverge from what it publishes.
 
+DSRGraph composes the parts that do this and keeps the API agents, tools and tests call:
+- dsr/graph_state.py GraphState: the node and edge tables and the derived indexes (merge,
+  install, sync of one element);
+- dsr/table.py ElementTable: one generic table for nodes and for edges (undo record and
+  outgoing delta of a transaction, tombstones, the state-reply JSON cache);
+- dsr/bindings.py WriterBindings: which agent each replica id writes for;
+- dsr/graph_io.py: graph files (JSON) and networkx import/export;
+- dsr/signals.py SignalHub and dsr/outbox.py Outbox: signal delivery and publishing.
+What stays here: locking, transactions and local write checks, the replication hooks
+(attach, apply_message, state replies, compaction) and poses.
+
 Threading: one re-entrant lock guards the state.  A transaction holds it for its whole body
 (remote merges wait, which gives the transaction isolation and makes rollback safe); signals are
 queued and delivered by `dispatch()` on the caller's thread with no lock held.
@@ -15,7 +26,7 @@ from __future__ import annotations
 
 import secrets
 import threading
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -29,10 +40,10 @@ from dsr.errors import (EdgeNotFoundError, InvalidAttributeError, InvalidIdentif
 from dsr.hlc import HybridLogicalClock
 from dsr.limits import LIMITS, node_problem, value_bytes
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
-                       check_node_id, check_type_name, make_node)
-from dsr.names import NameIndex
+                       check_node_id, check_type_name)
 from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
+from dsr.graph_state import GraphState
 from dsr.table import Changes, Encoded, ElementTable
 
 if TYPE_CHECKING:
@@ -41,13 +52,6 @@ if TYPE_CHECKING:
 EdgeKey = tuple[int, int, str]
 Publisher = Callable[[bytes], None]
 RT = "RT"
-
-
-@dataclass(slots=True)
-class _NodeView:
-    type: str
-    name: str
-    created: int
 
 
 @dataclass
@@ -117,19 +121,15 @@ class DSRGraph:
         self._publish: Publisher | None = None
         self._outbox: Outbox | None = None
         self._lock = threading.RLock()
-        self._node_table: ElementTable[int] = ElementTable("node", wire.node_entry)
-        self._edge_table: ElementTable[EdgeKey] = ElementTable("edge", wire.edge_entry)
-        #: the tables' state dicts (same objects), for the hot paths
-        self._nodes = self._node_table.states
-        self._edges = self._edge_table.states
-        self._out: dict[int, set[EdgeKey]] = {}
-        self._in: dict[int, set[EdgeKey]] = {}
-        self._view: dict[int, _NodeView] = {}
-        self._visible_edges: set[EdgeKey] = set()
-        self._types: dict[str, set[int]] = {}
-        self._edge_types: dict[str, set[EdgeKey]] = {}
-        self._names = NameIndex()
         self._signals = SignalHub(spin)     # spin None: SpinPolicy.from_env()
+        #: element states and the indexes derived from them (dsr/graph_state.py); the
+        #: attributes below are the same objects, named for the queries and hot paths here
+        self._state = state = GraphState(self._signals)
+        self._node_table, self._edge_table = state.node_table, state.edge_table
+        self._nodes, self._edges = state.nodes, state.edges
+        self._out, self._in = state.outgoing, state.incoming
+        self._view, self._types, self._names = state.view, state.types, state.names
+        self._visible_edges, self._edge_types = state.visible_edges, state.edge_types
         self._tx: _Transaction | None = None
         self._tx_depth = 0
         self._version = 0
@@ -169,22 +169,14 @@ class DSRGraph:
         """Replicated CRDT state of every edge this replica holds (see node_states)."""
         return self._edges
 
-    def _node(self, node_id: int) -> Node:
-        view = self._view[node_id]
-        return make_node(node_id, view.type, self._names.shown(view.name, node_id),
-                         self._nodes[node_id].visible_attrs())
-
-    def _edge(self, key: EdgeKey) -> Edge:
-        return Edge(src=key[0], dst=key[1], type=key[2], attrs=self._edges[key].visible_attrs())
-
     def get_node(self, node_id: int) -> Node | None:
         with self._lock:
-            return self._node(node_id) if node_id in self._view else None
+            return self._state.node(node_id) if node_id in self._view else None
 
     def get_node_by_name(self, name: str) -> Node | None:
         with self._lock:
             node_id = self._names.lookup(name)
-            return self._node(node_id) if node_id is not None else None
+            return self._state.node(node_id) if node_id is not None else None
 
     def require_node(self, node: int | str) -> Node:
         """Node by id or shown name, or NodeNotFoundError (for agents that expect it)."""
@@ -203,34 +195,34 @@ class DSRGraph:
 
     def nodes(self) -> list[Node]:
         with self._lock:
-            return [self._node(i) for i in sorted(self._view)]
+            return [self._state.node(i) for i in sorted(self._view)]
 
     def nodes_of_type(self, type: str) -> list[Node]:  # noqa: A002 - DSR vocabulary
         with self._lock:
-            return [self._node(i) for i in sorted(self._types.get(type, ()))]
+            return [self._state.node(i) for i in sorted(self._types.get(type, ()))]
 
     def get_edge(self, src: int, dst: int, type: str) -> Edge | None:  # noqa: A002
         with self._lock:
             key = (src, dst, type)
-            return self._edge(key) if key in self._visible_edges else None
+            return self._state.edge(key) if key in self._visible_edges else None
 
     def edges(self) -> list[Edge]:
         with self._lock:
-            return [self._edge(k) for k in sorted(self._visible_edges)]
+            return [self._state.edge(k) for k in sorted(self._visible_edges)]
 
     def edges_from(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
         with self._lock:
-            return [self._edge(k) for k in sorted(self._out.get(node_id, ()))
+            return [self._state.edge(k) for k in sorted(self._out.get(node_id, ()))
                     if k in self._visible_edges and (type is None or k[2] == type)]
 
     def edges_to(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
         with self._lock:
-            return [self._edge(k) for k in sorted(self._in.get(node_id, ()))
+            return [self._state.edge(k) for k in sorted(self._in.get(node_id, ()))
                     if k in self._visible_edges and (type is None or k[2] == type)]
 
     def edges_of_type(self, type: str) -> list[Edge]:  # noqa: A002
         with self._lock:
-            return [self._edge(k) for k in sorted(self._edge_types.get(type, ()))]
+            return [self._state.edge(k) for k in sorted(self._edge_types.get(type, ()))]
 
     # ------------------------------------------------------------------ signals
     def connect(self, signal: str, callback: Callable[..., Any]) -> None:
@@ -349,11 +341,11 @@ class DSRGraph:
         edge_keys = self._edge_table.restore(tx.edges)
         for key in edge_keys:
             if key not in self._edges:
-                self._unlink_edge(key)
+                self._state.unlink_edge(key)
         for node_id in node_ids:
-            self._sync_node(node_id, [], None)
+            self._state.sync_node(node_id, [], None)
         for key in edge_keys:
-            self._sync_edge(key, [], None)
+            self._state.sync_edge(key, [], None)
         self._version += 1
 
     # ------------------------------------------------------------------ local writes
@@ -384,7 +376,7 @@ class DSRGraph:
         self._local(tx, self._node_table, node_id, add=((me, hlc),),
                     meta=(hlc, me, (type_, name)),
                     attrs={k: (hlc, me, v) for k, v in values.items()})
-        return self._node(node_id)
+        return self._state.node(node_id)
 
     def update_node(self, node_id: int, attrs: Attrs) -> None:
         """Set attributes of a visible node (last writer wins per attribute).
@@ -409,7 +401,7 @@ class DSRGraph:
                 _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
                 event = None
                 if keys and self._signals.wants("node_updated"):
-                    event = ("node_updated", (self._node(node_id), keys))
+                    event = ("node_updated", (self._state.node(node_id), keys))
                 self._version += 1
                 outbox = self._outbox
                 if outbox is not None:
@@ -464,7 +456,7 @@ class DSRGraph:
                 regs = {k: (hlc, me, v) for k, v in values.items()}
                 _, keys = merge_attrs(nodes[node_id], regs)
                 if keys and want:
-                    events.append(("node_updated", (self._node(node_id), keys)))
+                    events.append(("node_updated", (self._state.node(node_id), keys)))
                 entries.append({"id": node_id, "attrs": regs})
             if not entries:
                 return
@@ -533,7 +525,7 @@ class DSRGraph:
                     self._local(tx, self._edge_table, key, attrs=regs)
             else:
                 self._local(tx, self._edge_table, key, add=((me, hlc),), attrs=regs)
-            return self._edge(key)
+            return self._state.edge(key)
 
     def delete_edge(self, src: int, dst: int, type: str) -> None:  # noqa: A002
         with self._write(rollback=False) as tx:
@@ -552,11 +544,11 @@ class DSRGraph:
             self._check_local(table.kind, key, delta)
         if table is self._node_table:
             table.record(tx.nodes, key)
-            self._merge_node(key, delta, tx.events)
+            self._state.merge_node(key, delta, tx.events)
             table.stage(tx.nodes, key, delta)
         else:
             table.record(tx.edges, key)
-            self._merge_edge(key, delta, tx.events)
+            self._state.merge_edge(key, delta, tx.events)
             table.stage(tx.edges, key, delta)
 
     def _check_local(self, element: str, key: Any, delta: dict[str, Any]) -> None:
@@ -571,117 +563,6 @@ class DSRGraph:
                 raise WriteRefusedError(problem)
 
     # ------------------------------------------------------------------ merge + derived view
-    def _merge_node(self, node_id: int, delta: dict[str, Any], events: list[Event] | None) -> bool:
-        state = self._nodes.get(node_id)
-        if state is None:
-            state = self._nodes[node_id] = ElementState()
-            self._node_table.dead.add(node_id)
-        if len(delta) == 1 and "attrs" in delta:   # attribute-only: visibility cannot change
-            changed, keys = crdt.merge_attrs(state, delta["attrs"])
-            if keys and events is not None and node_id in self._view \
-                    and self._signals.wants("node_updated"):
-                events.append(("node_updated", (self._node(node_id), keys)))
-            return changed
-        changed, keys = crdt.merge_into(state, **delta)
-        if changed:
-            self._sync_node(node_id, keys, events)
-        return changed
-
-    def _merge_edge(self, key: EdgeKey, delta: dict[str, Any], events: list[Event] | None) -> bool:
-        state = self._edges.get(key)
-        if state is None:
-            state = self._edges[key] = ElementState()
-            self._out.setdefault(key[0], set()).add(key)
-            self._in.setdefault(key[1], set()).add(key)
-        changed, keys = crdt.merge_into(state, **delta)
-        if changed:
-            self._sync_edge(key, keys, events)
-        return changed
-
-    def _unlink_edge(self, key: EdgeKey) -> None:
-        self._unindex_edge(key)
-        self._sync_edge(key, [], None)
-
-    def _unindex_edge(self, key: EdgeKey) -> None:
-        """Drop a forgotten edge from the adjacency indexes."""
-        for index, end in ((self._out, key[0]), (self._in, key[1])):
-            keys = index.get(end)
-            if keys is not None:
-                keys.discard(key)
-                if not keys:
-                    del index[end]
-
-    def _sync_node(self, node_id: int, keys: list[str], events: list[Event] | None) -> None:
-        """Bring the derived view of one node in line with its state; queue signals."""
-        state = self._nodes.get(node_id)
-        old = self._view.get(node_id)
-        new = None
-        if state is not None:
-            present = state.present()
-            self._node_table.settle(node_id, present)
-            if present and state.meta is not None:
-                hlc, _, (type_, name) = state.meta
-                new = _NodeView(type_, name, hlc)
-        renamed: list[int] = []
-        if old is not None and (new is None or new != old):
-            self._types[old.type].discard(node_id)
-            if not self._types[old.type]:
-                del self._types[old.type]
-            renamed += self._names.remove(old.name, node_id)
-            del self._view[node_id]
-        if new is not None and (old is None or new != old):
-            self._types.setdefault(new.type, set()).add(node_id)
-            renamed += self._names.add(new.name, node_id, new.created)
-            self._view[node_id] = new
-        want = events is not None
-        signals = self._signals
-        if old is None and new is not None:
-            if want and signals.wants("node_added"):
-                events.append(("node_added", (self._node(node_id),)))
-            self._sync_incident(node_id, events)
-        elif old is not None and new is None:
-            self._sync_incident(node_id, events)
-            if want and signals.wants("node_deleted"):
-                events.append(("node_deleted", (node_id,)))
-        elif old is not None and new is not None and want and signals.wants("node_updated"):
-            changed = list(keys)
-            if old.type != new.type:
-                changed.append("type")
-            if old.name != new.name:
-                changed.append("name")
-            if changed:
-                events.append(("node_updated", (self._node(node_id), changed)))
-        if renamed and want and signals.wants("node_updated"):
-            for other in dict.fromkeys(renamed):
-                if other in self._view:
-                    events.append(("node_updated", (self._node(other), ["name"])))
-
-    def _sync_incident(self, node_id: int, events: list[Event] | None) -> None:
-        for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
-            self._sync_edge(key, [], events)
-
-    def _sync_edge(self, key: EdgeKey, keys: list[str], events: list[Event] | None) -> None:
-        state = self._edges.get(key)
-        was = key in self._visible_edges
-        present = state is not None and state.present()
-        if state is not None:
-            self._edge_table.settle(key, present)
-        now = present and key[0] in self._view and key[1] in self._view
-        if was and not now:
-            self._visible_edges.discard(key)
-            self._edge_types[key[2]].discard(key)
-            if not self._edge_types[key[2]]:
-                del self._edge_types[key[2]]
-            if events is not None and self._signals.wants("edge_deleted"):
-                events.append(("edge_deleted", key))
-        elif now and not was:
-            self._visible_edges.add(key)
-            self._edge_types.setdefault(key[2], set()).add(key)
-            if events is not None and self._signals.wants("edge_added"):
-                events.append(("edge_added", (self._edge(key),)))
-        elif now and keys and events is not None and self._signals.wants("edge_updated"):
-            events.append(("edge_updated", (self._edge(key), list(keys))))
-
     # ------------------------------------------------------------------ replication hooks
     def attach(self, publish: Publisher | None, *, linger_s: float = 0.0) -> None:
         """Called by the transport: where encoded local deltas go (None = offline).
@@ -718,89 +599,12 @@ class DSRGraph:
                                message.replica if message.kind == "delta" else None,
                                message.agent)
             events: list[Event] = []
-            changed = self._apply_nodes(message.nodes, events)
-            changed += self._apply_edges(message.edges, events)
+            changed = self._state.apply_nodes(message.nodes, events)
+            changed += self._state.apply_edges(message.edges, events)
             if changed:
                 self._version += 1
             self._signals.post(events)
             return changed
-
-    def _apply_nodes(self, entries: Iterable[tuple[int, ElementState]],
-                     events: list[Event]) -> int:
-        """Merge received node states: an unknown node's state is installed as decoded, an
-        attribute update (the hot path) merges its registers, anything else goes through
-        the general merge."""
-        changed = 0
-        nodes, view = self._nodes, self._view
-        merge_attrs = crdt.merge_attrs
-        want_updated = self._signals.wants("node_updated")
-        for node_id, state in entries:
-            current = nodes.get(node_id)
-            if current is None:
-                self._install_node(node_id, state, events)
-                changed += 1
-            elif state.meta is None and not state.add and not state.rem and not state.cleared:
-                was_changed, keys = merge_attrs(current, state.attrs)   # inlined: hot path
-                if was_changed:
-                    changed += 1
-                    if keys and want_updated and node_id in view:
-                        events.append(("node_updated", (self._node(node_id), keys)))
-            else:
-                changed += self._merge_node(node_id, _as_delta(state), events)
-        return changed
-
-    def _install_node(self, node_id: int, state: ElementState, events: list[Event]) -> None:
-        """A node this replica did not hold: its decoded state becomes the replica's (a join
-        does this 10^4 times, so the derived view is built directly, not through merge)."""
-        if state.cleared:
-            state.prune()
-        self._nodes[node_id] = state
-        meta = state.meta
-        if meta is None or not state.present():
-            self._node_table.dead.add(node_id)
-            return
-        hlc, _, (type_, name) = meta
-        self._view[node_id] = _NodeView(type_, name, hlc)
-        of_type = self._types.get(type_)
-        if of_type is None:
-            self._types[type_] = {node_id}
-        else:
-            of_type.add(node_id)
-        renamed = self._names.add(name, node_id, hlc)
-        signals = self._signals
-        if signals.wants("node_added"):
-            events.append(("node_added", (self._node(node_id),)))
-        if node_id in self._out or node_id in self._in:
-            self._sync_incident(node_id, events)
-        if renamed and signals.wants("node_updated"):
-            for other in dict.fromkeys(renamed):
-                if other in self._view:
-                    events.append(("node_updated", (self._node(other), ["name"])))
-
-    def _apply_edges(self, entries: Iterable[tuple[EdgeKey, ElementState]],
-                     events: list[Event]) -> int:
-        changed = 0
-        edges = self._edges
-        for key, state in entries:
-            if key not in edges:
-                self._install_edge(key, state, events)
-                changed += 1
-            else:
-                changed += self._merge_edge(key, _as_delta(state, meta=False), events)
-        return changed
-
-    def _install_edge(self, key: EdgeKey, state: ElementState, events: list[Event]) -> None:
-        """An edge this replica did not hold: its decoded state becomes the replica's."""
-        if state.cleared:
-            state.prune()
-        self._edges[key] = state
-        for index, end in ((self._out, key[0]), (self._in, key[1])):
-            ends = index.get(end)
-            if ends is None:
-                index[end] = {key}
-            else:
-                ends.add(key)
-        self._sync_edge(key, [], events)
 
     # ------------------------------------------------------------------ for the transport
     def element_state(self, element: str, key: int | EdgeKey) -> ElementState | None:
@@ -890,7 +694,7 @@ class DSRGraph:
                 return 0
             removed = len(self._node_table.compact(acked))
             for key in self._edge_table.compact(acked):
-                self._unindex_edge(key)
+                self._state.unindex_edge(key)
                 removed += 1
             if removed:
                 self._version += 1
@@ -914,7 +718,7 @@ class DSRGraph:
             if not keys:
                 return None
             best = max(keys, key=lambda k: (max(self._edges[k].add.values()), k))
-            return self._edge(best)
+            return self._state.edge(best)
 
     def world_pose(self, node_id: int) -> poses.Pose:
         """(x, y, theta) of a node in the root frame, composing RT edges up to a node without
@@ -991,12 +795,3 @@ class DSRGraph:
     @classmethod
     def load(cls, path: str, agent: str, **kwargs: Any) -> DSRGraph:
         return cls.from_json(graph_io.read(path), agent, source=str(path), **kwargs)
-
-
-def _as_delta(state: ElementState, meta: bool = True) -> dict[str, Any]:
-    """A received element state as the keyword arguments of a merge (crdt.merge_into)."""
-    delta: dict[str, Any] = {"add": state.add.items(), "rem": state.rem.items(),
-                             "cleared": state.cleared, "attrs": state.attrs}
-    if meta:
-        delta["meta"] = state.meta
-    return delta
