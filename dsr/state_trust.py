@@ -20,7 +20,7 @@ running:
   (stamp <= seen[z]: z published everything up to there, and not this; reason forged_stamp) or
   not yet arrived from z itself (stamp > seen[z]: dropped here, z's own delta or state brings
   it; counted as `deferred`).  `seen[z]` exists only once z's own state has been merged here
-  (dsr/transport.py `_advance`): until then every such stamp is deferred.
+  (dsr/membership.py `advance`): until then every such stamp is deferred.
 
 - this replica knows first-hand what it wrote itself: a relayed stamp of its own replica id
   that would change it is forged whatever its time (forged_stamp), and a table entry giving

@@ -1,7 +1,7 @@
 """Fuzzing the receive path of a replica with hostile payloads (in-process, no network).
 
-Every payload goes through the transport's real handlers (`Replica._on_delta`,
-`Replica._merge_state`).  Invariants: the handler never raises, nothing is counted as an
+Every payload goes through the transport's admission API (`Replica.admit_delta`,
+`Replica.admit_state`), what the Zenoh callbacks call.  Invariants: the handler never raises, nothing is counted as an
 unexpected error, every message is either refused (counted, logged) or - only when it is a
 valid message of an agent allowed to write it - merged; with the shipped write policy, agent
 "fuzzer" holds no grant, so the guarded graph never changes.

@@ -1,7 +1,7 @@
 """The write policy (agents/world/write_policy.yaml) as every replica enforces it on receipt.
 
 Offline and in-process: each agent is a DSRGraph whose deltas are captured; a "guard" replica
-runs the real transport hook (`Replica._on_delta` / `_merge_state`, no network) with the shipped
+runs the transport's admission API (`Replica.admit_delta` / `admit_state`, no network) with the shipped
 policy.  The multi-process version with real Zenoh is tests/integration/test_trust_policy.py.
 """
 

@@ -1,8 +1,8 @@
 """The DSR protocol rules of docs/dsr_wire_format.md, through the real transport hooks.
 
-Each replica here is a `Replica` that is never opened: samples are handed to its Zenoh
-callbacks (`_on_delta`, `_merge_state`) directly, and its publisher is a function, so the rules
-(limits, clock offset, removals, trust in states, digests, compaction, per-reason counters,
+Each replica here is a `Replica` that is never opened: received messages are handed to its
+admission API (`admit_delta`, `admit_state`: what its Zenoh callbacks call) directly, and its
+publisher is a function, so the rules (limits, clock offset, removals, trust in states, digests, compaction, per-reason counters,
 local policy checks) are exercised exactly as over Zenoh, without processes.
 """
 
@@ -38,7 +38,7 @@ class Publisher:
 
 class Net:
     """Replicas wired together in memory: every published delta or digest reaches the others'
-    `_on_delta`, in order (like one Zenoh publisher per replica).  A joiner merges one
+    `admit_delta`, in order (like one Zenoh publisher per replica).  A joiner merges one
     member's state, then every member's (the round after the join); every member merges the
     joiner's (its token appeared): as over Zenoh, each running writer's watermark starts from
     its own state."""
