@@ -45,6 +45,7 @@ from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
 from dsr.graph_state import GraphState
 from dsr.table import Changes, Encoded, ElementTable
+from dsr.writes import Element
 
 if TYPE_CHECKING:
     import networkx
@@ -272,13 +273,13 @@ class DSRGraph:
             raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
         self._lock.acquire()
         try:
-            outer = self._tx is None
-            if outer:
-                self._tx = _Transaction(owner=threading.get_ident(), rollback=rollback)
-            elif rollback and not self._tx.rollback:
+            tx = self._tx
+            outer = tx is None
+            if tx is None:
+                tx = self._tx = _Transaction(owner=threading.get_ident(), rollback=rollback)
+            elif rollback and not tx.rollback:
                 raise TransactionError("transaction opened inside a single write")
             self._tx_depth += 1
-            tx = self._tx
             try:
                 yield tx
             except BaseException:
@@ -397,7 +398,8 @@ class DSRGraph:
                     self._check_node_limits(node_id, values)
                 hlc = self.clock.tick()
                 me = self.replica_id
-                regs = {k: (hlc, me, v) for k, v in values.items()}
+                regs: dict[str, tuple[int, int, object]] = {
+                    k: (hlc, me, v) for k, v in values.items()}
                 _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
                 event = None
                 if keys and self._signals.wants("node_updated"):
@@ -551,12 +553,12 @@ class DSRGraph:
             self._state.merge_edge(key, delta, tx.events)
             table.stage(tx.edges, key, delta)
 
-    def _check_local(self, element: str, key: Any, delta: dict[str, Any]) -> None:
+    def _check_local(self, element: Element, key: Any, delta: dict[str, Any]) -> None:
         """Ask the write policy about a local write before it changes anything; a refusal
         raises WriteRefusedError naming the write (what every other replica would refuse)."""
         from dsr.writes import local_writes
         refusal = self.local_policy.refusal
-        valued = getattr(self.local_policy, "valued", frozenset())
+        valued: frozenset[str] = getattr(self.local_policy, "valued", frozenset())
         for write in local_writes(self, self.agent, element, key, delta, self._cascade, valued):
             problem = refusal(write)
             if problem is not None:
@@ -607,7 +609,7 @@ class DSRGraph:
             return changed
 
     # ------------------------------------------------------------------ for the transport
-    def element_state(self, element: str, key: int | EdgeKey) -> ElementState | None:
+    def element_state(self, element: str, key: object) -> ElementState | None:
         """The replicated CRDT state of a node (key: id) or edge (key: (src, dst, type)), for
         write policies; callers must not mutate it."""
         table: Mapping[Any, ElementState] = self._nodes if element == "node" else self._edges
@@ -734,8 +736,8 @@ class DSRGraph:
                 if edge is None:
                     break
                 try:
-                    chain.append((float(edge.attrs["x"]), float(edge.attrs["y"]),
-                                  float(edge.attrs["theta"])))
+                    chain.append((_coordinate(edge.attrs["x"]), _coordinate(edge.attrs["y"]),
+                                  _coordinate(edge.attrs["theta"])))
                 except (KeyError, TypeError, ValueError):
                     raise PoseError(f"RT edge {edge.src}->{edge.dst} needs float x, y, theta; "
                                     f"has {sorted(edge.attrs)}") from None
@@ -795,3 +797,10 @@ class DSRGraph:
     @classmethod
     def load(cls, path: str, agent: str, **kwargs: Any) -> DSRGraph:
         return cls.from_json(graph_io.read(path), agent, source=str(path), **kwargs)
+
+
+def _coordinate(value: object) -> float:
+    """An RT edge's x, y or theta as a float (TypeError/ValueError if it is not a number)."""
+    if isinstance(value, (int, float, str)):
+        return float(value)
+    raise TypeError(f"not a number: {value!r}")

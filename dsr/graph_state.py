@@ -62,10 +62,8 @@ class GraphState:
         return make_node(node_id, view.type, self.names.shown(view.name, node_id),
                          self.nodes[node_id].visible_attrs())
 
-
     def edge(self, key: EdgeKey) -> Edge:
         return Edge(src=key[0], dst=key[1], type=key[2], attrs=self.edges[key].visible_attrs())
-
 
     def merge_node(self, node_id: int, delta: dict[str, Any], events: list[Event] | None) -> bool:
         state = self.nodes.get(node_id)
@@ -83,7 +81,6 @@ class GraphState:
             self.sync_node(node_id, keys, events)
         return changed
 
-
     def merge_edge(self, key: EdgeKey, delta: dict[str, Any], events: list[Event] | None) -> bool:
         state = self.edges.get(key)
         if state is None:
@@ -95,11 +92,9 @@ class GraphState:
             self.sync_edge(key, keys, events)
         return changed
 
-
     def unlink_edge(self, key: EdgeKey) -> None:
         self.unindex_edge(key)
         self.sync_edge(key, [], None)
-
 
     def unindex_edge(self, key: EdgeKey) -> None:
         """Drop a forgotten edge from the adjacency indexes."""
@@ -109,7 +104,6 @@ class GraphState:
                 keys.discard(key)
                 if not keys:
                     del index[end]
-
 
     def sync_node(self, node_id: int, keys: list[str], events: list[Event] | None) -> None:
         """Bring the derived view of one node in line with its state; queue signals."""
@@ -133,17 +127,17 @@ class GraphState:
             self.types.setdefault(new.type, set()).add(node_id)
             renamed += self.names.add(new.name, node_id, new.created)
             self.view[node_id] = new
-        want = events is not None
         signals = self.signals
         if old is None and new is not None:
-            if want and signals.wants("node_added"):
+            if events is not None and signals.wants("node_added"):
                 events.append(("node_added", (self.node(node_id),)))
             self.sync_incident(node_id, events)
         elif old is not None and new is None:
             self.sync_incident(node_id, events)
-            if want and signals.wants("node_deleted"):
+            if events is not None and signals.wants("node_deleted"):
                 events.append(("node_deleted", (node_id,)))
-        elif old is not None and new is not None and want and signals.wants("node_updated"):
+        elif old is not None and new is not None and events is not None \
+                and signals.wants("node_updated"):
             changed = list(keys)
             if old.type != new.type:
                 changed.append("type")
@@ -151,16 +145,14 @@ class GraphState:
                 changed.append("name")
             if changed:
                 events.append(("node_updated", (self.node(node_id), changed)))
-        if renamed and want and signals.wants("node_updated"):
+        if renamed and events is not None and signals.wants("node_updated"):
             for other in dict.fromkeys(renamed):
                 if other in self.view:
                     events.append(("node_updated", (self.node(other), ["name"])))
 
-
     def sync_incident(self, node_id: int, events: list[Event] | None) -> None:
         for key in sorted(self.outgoing.get(node_id, set()) | self.incoming.get(node_id, set())):
             self.sync_edge(key, [], events)
-
 
     def sync_edge(self, key: EdgeKey, keys: list[str], events: list[Event] | None) -> None:
         state = self.edges.get(key)
@@ -183,7 +175,6 @@ class GraphState:
                 events.append(("edge_added", (self.edge(key),)))
         elif now and keys and events is not None and self.signals.wants("edge_updated"):
             events.append(("edge_updated", (self.edge(key), list(keys))))
-
 
     def apply_nodes(self, entries: Iterable[tuple[int, ElementState]],
                      events: list[Event]) -> int:
@@ -208,7 +199,6 @@ class GraphState:
             else:
                 changed += self.merge_node(node_id, _as_delta(state), events)
         return changed
-
 
     def install_node(self, node_id: int, state: ElementState, events: list[Event]) -> None:
         """A node this replica did not hold: its decoded state becomes the replica's (a join
@@ -238,7 +228,6 @@ class GraphState:
                 if other in self.view:
                     events.append(("node_updated", (self.node(other), ["name"])))
 
-
     def apply_edges(self, entries: Iterable[tuple[EdgeKey, ElementState]],
                      events: list[Event]) -> int:
         changed = 0
@@ -250,7 +239,6 @@ class GraphState:
             else:
                 changed += self.merge_edge(key, _as_delta(state, meta=False), events)
         return changed
-
 
     def install_edge(self, key: EdgeKey, state: ElementState, events: list[Event]) -> None:
         """An edge this replica did not hold: its decoded state becomes the replica's."""

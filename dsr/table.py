@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass, field
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, Literal, TypeVar
 
 import orjson
 
@@ -38,7 +38,8 @@ class Changes(Generic[K]):
 class ElementTable(Generic[K]):
     """CRDT states of one kind of element, keyed by K (node id, or edge key)."""
 
-    def __init__(self, kind: str, entry: Callable[[Any, ElementState], dict[str, object]]) -> None:
+    def __init__(self, kind: Literal["node", "edge"],
+                 entry: Callable[[Any, ElementState], dict[str, object]]) -> None:
         #: "node" or "edge" (the names write policies and wire entries use)
         self.kind = kind
         #: key -> replicated state (visible or not); the graph indexes are derived from it
