@@ -290,7 +290,7 @@ class DSRGraph:
                     self._undo(tx)
                 raise
             self._tx_depth -= 1
-            out = None
+            out = outbox = None
             if outer:
                 self._tx = None
                 if tx.changed():
@@ -299,8 +299,8 @@ class DSRGraph:
                 out = self._commit(tx, outbox)
         finally:
             self._lock.release()
-        if out is not None:
-            outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
+        if out is not None and outbox is not None:
+            outbox.send(out)
 
     def _check_size(self, tx: _Transaction) -> None:
         """Refuse (and undo) a write whose delta receivers would drop as too large."""
@@ -387,36 +387,25 @@ class DSRGraph:
         values = check_attrs(attrs)
         if self.read_only:
             raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
-        out = None
+        out = outbox = None
+        events: list[Event] = []
         with self._lock:
-            if self._tx is None:
-                if node_id not in self._view:
-                    raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
-                if self.local_policy is not None:
-                    self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
-                if not _cannot_grow(values, self._nodes[node_id].attrs):
-                    self._check_node_limits(node_id, values)
-                hlc = self.clock.tick()
-                me = self.replica_id
-                regs: dict[str, tuple[int, int, object]] = {
-                    k: (hlc, me, v) for k, v in values.items()}
-                _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
-                event = None
-                if keys and self._signals.wants("node_updated"):
-                    event = ("node_updated", (self._state.node(node_id), keys))
-                self._version += 1
-                outbox = self._outbox
-                if outbox is not None:
-                    out = outbox.add_attrs(node_id, regs, hlc)
-            else:
+            if self._tx is not None:
                 self._update_node_tx(node_id, values)
                 return
-        try:
-            if event is not None:
-                self._signals.post([event])
-        finally:
-            if out is not None:
-                outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
+            self._check_update(node_id, values)
+            hlc = self.clock.tick()
+            me = self.replica_id
+            regs: dict[str, tuple[int, int, object]] = {
+                k: (hlc, me, v) for k, v in values.items()}
+            _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
+            if keys and self._signals.wants("node_updated"):
+                events.append(("node_updated", (self._state.node(node_id), keys)))
+            self._version += 1
+            outbox = self._outbox
+            if outbox is not None:
+                out = outbox.add_attrs(node_id, regs, hlc)
+        self._deliver(events, outbox, out)
 
     def update_nodes(self, updates: dict[int, Attrs]) -> None:
         """Set attributes of many visible nodes at once: one stamp, one delta, one lock.
@@ -431,46 +420,58 @@ class DSRGraph:
             for node_id, values in checked.items():
                 self._update_node_tx(node_id, values)
             return
-        out = None
+        out = outbox = None
         with self._lock:
             if self._tx is not None:          # another thread's transaction: wait for it
                 for node_id, values in checked.items():
                     self._update_node_tx(node_id, values)
                 return
-            view = self._view
-            nodes = self._nodes
             for node_id, values in checked.items():
-                if node_id not in view:
-                    raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
-                if self.local_policy is not None:
-                    self._check_local("node", node_id,
-                                      {"attrs": dict.fromkeys(values, (0, 0, 0))})
-                if not _cannot_grow(values, nodes[node_id].attrs):
-                    self._check_node_limits(node_id, values)
-            hlc = self.clock.tick()
-            me = self.replica_id
-            events: list[Event] = []
-            merge_attrs = crdt.merge_attrs
-            nodes = self._nodes
-            want = self._signals.wants("node_updated")
-            entries: list[dict[str, object]] = []
-            for node_id, values in checked.items():
-                regs = {k: (hlc, me, v) for k, v in values.items()}
-                _, keys = merge_attrs(nodes[node_id], regs)
-                if keys and want:
-                    events.append(("node_updated", (self._state.node(node_id), keys)))
-                entries.append({"id": node_id, "attrs": regs})
-            if not entries:
+                self._check_update(node_id, values)
+            if not checked:
                 return
+            hlc = self.clock.tick()
+            events, entries = self._merge_updates(checked, hlc)
             self._version += 1
             outbox = self._outbox
             if outbox is not None:
                 out = outbox.add_entries(entries, hlc)
+        self._deliver(events, outbox, out)
+
+    def _check_update(self, node_id: int, values: Attrs) -> None:
+        """Refuse an attribute update of a node that is not visible, that the write policy
+        refuses, or that would take the node over a node limit.  Caller holds the lock."""
+        if node_id not in self._view:
+            raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+        if self.local_policy is not None:
+            self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
+        if not _cannot_grow(values, self._nodes[node_id].attrs):
+            self._check_node_limits(node_id, values)
+
+    def _merge_updates(self, checked: dict[int, Attrs], hlc: int
+                       ) -> tuple[list[Event], list[dict[str, object]]]:
+        """Merge checked attribute updates stamped `hlc`: the signal events and the delta's
+        entries.  Caller holds the lock."""
+        me = self.replica_id
+        events: list[Event] = []
+        entries: list[dict[str, object]] = []
+        merge_attrs, nodes, node = crdt.merge_attrs, self._nodes, self._state.node
+        want = self._signals.wants("node_updated")
+        for node_id, values in checked.items():
+            regs = {k: (hlc, me, v) for k, v in values.items()}
+            _, keys = merge_attrs(nodes[node_id], regs)
+            if keys and want:
+                events.append(("node_updated", (node(node_id), keys)))
+            entries.append({"id": node_id, "attrs": regs})
+        return events, entries
+
+    def _deliver(self, events: list[Event], outbox: Outbox | None, out: Outgoing | None) -> None:
+        """After a write, with the lock released: queue its signals, publish its delta."""
         try:
             self._signals.post(events)
         finally:
-            if out is not None:
-                outbox.send(out)   # type: ignore[union-attr]  # out comes from this outbox
+            if out is not None and outbox is not None:
+                outbox.send(out)
 
     def published_hlc(self) -> int:
         """Every local write stamped up to this HLC has been handed to the publisher."""
