@@ -695,10 +695,7 @@ class DSRGraph:
         with self._lock:
             if self._tx is not None:
                 return 0
-            removed = len(self._node_table.compact(acked))
-            for key in self._edge_table.compact(acked):
-                self._state.unindex_edge(key)
-                removed += 1
+            removed = self._state.compact(acked)
             if removed:
                 self._version += 1
             return removed

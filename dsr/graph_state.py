@@ -13,7 +13,7 @@ Not thread-safe on its own: DSRGraph's lock guards every call.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,14 +58,18 @@ class GraphState:
         self.edge_types: dict[str, set[EdgeKey]] = {}
 
     def node(self, node_id: int) -> Node:
+        """Snapshot of a visible node (its shown name, its visible attributes)."""
         view = self.view[node_id]
         return make_node(node_id, view.type, self.names.shown(view.name, node_id),
                          self.nodes[node_id].visible_attrs())
 
     def edge(self, key: EdgeKey) -> Edge:
+        """Snapshot of a held edge with its visible attributes."""
         return Edge(src=key[0], dst=key[1], type=key[2], attrs=self.edges[key].visible_attrs())
 
     def merge_node(self, node_id: int, delta: dict[str, Any], events: list[Event] | None) -> bool:
+        """Merge a delta into one node's state (creating it) and sync the view; True if the
+        state changed."""
         state = self.nodes.get(node_id)
         if state is None:
             state = self.nodes[node_id] = ElementState()
@@ -82,17 +86,27 @@ class GraphState:
         return changed
 
     def merge_edge(self, key: EdgeKey, delta: dict[str, Any], events: list[Event] | None) -> bool:
+        """Merge a delta into one edge's state (creating it) and sync its view."""
         state = self.edges.get(key)
         if state is None:
             state = self.edges[key] = ElementState()
-            self.outgoing.setdefault(key[0], set()).add(key)
-            self.incoming.setdefault(key[1], set()).add(key)
+            self.index_edge(key)
         changed, keys = crdt.merge_into(state, **delta)
         if changed:
             self.sync_edge(key, keys, events)
         return changed
 
+    def index_edge(self, key: EdgeKey) -> None:
+        """Add an edge held (visible or not) to the adjacency indexes."""
+        for index, end in ((self.outgoing, key[0]), (self.incoming, key[1])):
+            ends = index.get(end)
+            if ends is None:
+                index[end] = {key}
+            else:
+                ends.add(key)
+
     def unlink_edge(self, key: EdgeKey) -> None:
+        """An edge no longer held (undone): out of the indexes and of the view."""
         self.unindex_edge(key)
         self.sync_edge(key, [], None)
 
@@ -151,10 +165,12 @@ class GraphState:
                     events.append(("node_updated", (self.node(other), ["name"])))
 
     def sync_incident(self, node_id: int, events: list[Event] | None) -> None:
+        """Re-sync every edge from or to a node whose visibility changed."""
         for key in sorted(self.outgoing.get(node_id, set()) | self.incoming.get(node_id, set())):
             self.sync_edge(key, [], events)
 
     def sync_edge(self, key: EdgeKey, keys: list[str], events: list[Event] | None) -> None:
+        """Bring the view of one edge in line with its state and its ends; queue signals."""
         state = self.edges.get(key)
         was = key in self.visible_edges
         present = state is not None and state.present()
@@ -245,14 +261,18 @@ class GraphState:
         if state.cleared:
             state.prune()
         self.edges[key] = state
-        for index, end in ((self.outgoing, key[0]), (self.incoming, key[1])):
-            ends = index.get(end)
-            if ends is None:
-                index[end] = {key}
-            else:
-                ends.add(key)
+        self.index_edge(key)
         self.sync_edge(key, [], events)
 
+
+    def compact(self, acked: Callable[[int, int], bool]) -> int:
+        """Forget removed elements whose every stamp is acknowledged (DSRGraph.compact);
+        returns how many."""
+        removed = len(self.node_table.compact(acked))
+        for key in self.edge_table.compact(acked):
+            self.unindex_edge(key)
+            removed += 1
+        return removed
 
 def _as_delta(state: ElementState, meta: bool = True) -> dict[str, Any]:
     """A received element state as the keyword arguments of a merge (crdt.merge_into)."""
