@@ -11,12 +11,14 @@ REASONS (counted and logged per reason by the replica), the text says what was w
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from dsr import wire
 from dsr.limits import node_problem
 
 if TYPE_CHECKING:
+    from dsr.bindings import WriterBindings
     from dsr.graph import DSRGraph
 
 Problem = tuple[str, str]
@@ -171,3 +173,28 @@ def within_node_limits(graph: DSRGraph, nodes: list[tuple[int, Any]]
                 continue
         kept.append((node_id, state))
     return kept, problems
+
+
+def note_state_writers(bindings: WriterBindings, me: str, sender: str,
+                       writers: Mapping[str, str], live: set[str], *, joined: bool) -> None:
+    """Which `writers` entries of a merged state this replica takes as its own knowledge
+    (and will serve in its state replies: DSRGraph.served_writers), and which only to
+    attribute relayed writes (dsr/state_trust.py):
+    - the sender's own replica ids (an agent vouches for its incarnations): proven (after
+      the join, the screening has removed every entry naming this replica's own agent
+      that it does not know: state_trust.screen_state);
+    - every entry of the first state of a join (`joined` False): nothing to check it against,
+      trusted (documented limit; its sender served only what it could prove).  Entries about
+      running agents included: a joiner that left them out would relay their writes
+      without attribution to the next joiner, whose policy would refuse them;
+    - after the join, an entry about an agent that is not running: attribution only, never
+      served (a relay proves nothing); about a running agent: nothing (deferred until that
+      agent's own messages or state say it)."""
+    for key, agent in writers.items():
+        replica = int(key)
+        if bindings.bound_agent(replica) is not None:
+            continue
+        if agent == sender or agent == me or not joined:
+            bindings.note(replica, agent)
+        elif agent not in live:
+            bindings.note_relayed(replica, agent)

@@ -52,7 +52,7 @@ class WriterBindings:
 
     def vouch(self, writers: Mapping[str, str], sender: int | None, agent: str) -> None:
         """Whoever hands a message to DSRGraph.apply_message vouches for its `writers` (the
-        transport judges a state's table itself and passes none: Replica._note_writers) and,
+        transport judges a state's table itself and passes none: admission.note_state_writers) and,
         for a delta, for its sender (`sender`, None for a state).  Caller holds the lock."""
         bound, attributed = self.bound, self.attributed
         for key, name in writers.items():

@@ -591,7 +591,7 @@ class DSRGraph:
         """Merge a validated remote delta or state; returns how many elements changed.
 
         Whoever hands a message here vouches for its writers (the transport judges a state's
-        table itself and passes none: dsr/transport.py Replica._note_writers)."""
+        table itself and passes none: dsr/admission.py note_state_writers)."""
         if self._tx is not None and self._tx.owner == threading.get_ident():
             raise TransactionError("apply_message() inside a local transaction")
         with self._lock:

@@ -31,7 +31,7 @@ running:
   again, which another member has already compacted) forges nothing: it is not judged.
 
 What a replica serves in its own state replies is decided elsewhere (DSRGraph.served_writers,
-transport `_note_writers`): only bindings it can prove, never a claim it relayed or deferred,
+admission `note_state_writers`): only bindings it can prove, never a claim it relayed or deferred,
 so a lie told to one member is not repeated as that member's word.
 
 Writes of agents that are not running (a previous incarnation, a tool that has exited) can

@@ -34,7 +34,7 @@ import orjson
 
 from dsr import wire
 from dsr.admission import (REASONS, LogBudget, delta_node_problem, message_problem,
-                           within_node_limits)
+                           note_state_writers, within_node_limits)
 from dsr.anti_entropy import ALL, AntiEntropy
 from dsr.collector import FREEZE_AFTER_JOIN_NODES, gc_paused, tune_collector
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
@@ -368,7 +368,8 @@ class Replica:
             self._reject(key, "policy", text)
         if kept is None:
             return False
-        self._note_writers(message.agent, kept.writers, live)
+        note_state_writers(graph.writers, graph.agent, message.agent, kept.writers, live,
+                           joined=self.joined)
         nodes, problems = within_node_limits(graph, kept.nodes)
         for reason, (first, count) in problems.items():   # one refusal per reason and state
             self._reject(key, reason, first + (f" (and {count - 1} more nodes)" if count > 1
@@ -393,31 +394,6 @@ class Replica:
             log.warning("DSR %s dropped message from %s [%s]: %s (%d refused for this reason%s)",
                         self.graph.agent, source, reason, text, stats.rejects[reason],
                         f"; {quiet} not logged since the last line" if quiet else "")
-
-    def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
-        """Which `writers` entries of a merged state this replica takes as its own knowledge
-        (and will serve in its state replies: DSRGraph.served_writers), and which only to
-        attribute relayed writes (dsr/state_trust.py):
-        - the sender's own replica ids (an agent vouches for its incarnations): proven (after
-          the join, the screening has removed every entry naming this replica's own agent
-          that it does not know: state_trust.screen_state);
-        - every entry of the first state of a join: nothing to check it against, trusted
-          (documented limit; its sender served only what it could prove).  Entries about
-          running agents included: a joiner that left them out would relay their writes
-          without attribution to the next joiner, whose policy would refuse them;
-        - after the join, an entry about an agent that is not running: attribution only, never
-          served (a relay proves nothing); about a running agent: nothing (deferred until that
-          agent's own messages or state say it)."""
-        bindings = self.graph.writers
-        me = self.graph.agent
-        for key, agent in writers.items():
-            replica = int(key)
-            if bindings.bound_agent(replica) is not None:
-                continue
-            if agent == sender or agent == me or not self.joined:
-                bindings.note(replica, agent)
-            elif agent not in live:
-                bindings.note_relayed(replica, agent)
 
     def _screen(self, key: str, message: wire.Decoded, live: set[str]) -> wire.Decoded:
         from dsr.state_trust import screen_state
