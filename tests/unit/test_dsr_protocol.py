@@ -506,3 +506,24 @@ def test_a_joiner_that_missed_a_delta_while_subscribing_does_not_call_it_forged(
     assert joiner.graph.get_node(missed.id) is not None
     assert joiner.graph.digest() == b.graph.digest() == c.graph.digest()
     assert joiner.seen()[b.graph.replica_id] >= b.graph.published_hlc()
+
+
+def test_the_admission_api_says_whether_a_message_was_merged():
+    """admit_delta / admit_state: the door every received message goes through (what the
+    Zenoh callbacks call); True only when the message reached the graph."""
+    writer = DSRGraph("w")
+    sent: list[bytes] = []
+    writer.attach(sent.append)
+    node = writer.insert_node("object", "cup", {"k": 1})
+    guard = Replica(DSRGraph("guard"))          # no write policy: only the admission checks
+    key = wire.delta_key("chronav", "w")
+    assert guard.admit_delta(wire.delta_key("chronav", "x"), sent[-1]) is False   # forged key
+    assert guard.graph.get_node(node.id) is None
+    assert guard.admit_delta(key, b"junk") is False
+    assert guard.admit_delta(key, sent[-1]) is True
+    assert guard.graph.get_node(node.id).attrs == {"k": 1}
+    assert guard.stats.applied == 1 and guard.stats.rejects == {"forged_writer": 1, "invalid": 1}
+    other = Replica(DSRGraph("other"))
+    assert other.admit_state(wire.state_key("chronav", "guard"), b"{}") is False
+    assert other.admit_state(*state_of(guard)) is True
+    assert other.graph.state_equals(guard.graph) and other.stats.state_merged == 1
