@@ -94,13 +94,39 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
     relayed while its agent was not running): a stamp it gives to a running agent is judged
     like one the table gives to it."""
     vouched = live if vouched is None else vouched
-    sender = message.agent
     result = Screened(message)
-    lying: dict[int, str] = {}
-    writers = dict(message.writers)
     my_agent, my_replica = me if me is not None else (None, 0)
     if me is not None:
         seen = {**seen, my_replica: _ALL_OF_IT}
+    lying, writers = _judge_table(result, binding, live, vouched, my_agent)
+
+    def agent_of(replica: int) -> str | None:
+        agent = binding(replica) or writers.get(str(replica))
+        if agent is None and attributed is not None:
+            agent = attributed(replica)
+        return agent
+
+    suspects = _suspects(message, lying, agent_of, live)
+    if not suspects:
+        if lying or writers != message.writers:
+            result.message = _with(message, message.nodes, message.edges, writers)
+        return result
+    nodes = [(k, _screen(result, "node", k, s, local("node", k), suspects, lying, seen))
+             for k, s in message.nodes]
+    edges = [(k, _screen(result, "edge", k, s, local("edge", k), suspects, lying, seen))
+             for k, s in message.edges]
+    result.message = _with(message, nodes, edges, writers)
+    return result
+
+
+def _judge_table(result: Screened, binding: Callable[[int], str | None], live: set[str],
+                 vouched: set[str], my_agent: str | None) -> tuple[dict[int, str], dict[str, str]]:
+    """The lying entries of a state's `writers` table (replica -> the agent it names) and the
+    table without them; one forged_writer problem for all of them."""
+    message = result.message
+    sender = message.agent
+    lying: dict[int, str] = {}
+    writers = dict(message.writers)
     for key, agent in message.writers.items():
         replica = int(key)
         known = binding(replica)
@@ -120,14 +146,14 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
         result.problems.append((
             "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
             f"but {agent!r} is running and never used or vouched for that replica{more}"))
+    return lying, writers
 
-    def agent_of(replica: int) -> str | None:
-        agent = binding(replica) or writers.get(str(replica))
-        if agent is None and attributed is not None:
-            agent = attributed(replica)
-        return agent
 
-    # replicas whose relayed stamps must be checked: running agents other than the sender
+def _suspects(message: Decoded, lying: dict[int, str],
+              agent_of: Callable[[int], str | None], live: set[str]) -> dict[int, str]:
+    """Replicas whose relayed stamps must be checked: running agents other than the sender,
+    and the replica ids the table lied about."""
+    sender = message.agent
     suspects: dict[int, str] = {}
     for entries in (message.nodes, message.edges):
         for _, state in entries:
@@ -137,16 +163,7 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
                 agent = lying.get(replica) or agent_of(replica)
                 if agent is not None and agent != sender and (agent in live or replica in lying):
                     suspects[replica] = agent
-    if not suspects:
-        if lying or writers != message.writers:
-            result.message = _with(message, message.nodes, message.edges, writers)
-        return result
-    nodes = [(k, _screen(result, "node", k, s, local(("node"), k), suspects, lying, seen))
-             for k, s in message.nodes]
-    edges = [(k, _screen(result, "edge", k, s, local("edge", k), suspects, lying, seen))
-             for k, s in message.edges]
-    result.message = _with(message, nodes, edges, writers)
-    return result
+    return suspects
 
 
 def removal_changes_view(state: ElementState, held: ElementState | None) -> bool:
