@@ -509,14 +509,6 @@ class Replica:
             log.debug("undeclaring %s failed", key_expr, exc_info=True)
 
     # ------------------------------------------------------------------ anti-entropy
-    def live_agents(self) -> set[str]:
-        return self.members.live_agents()
-
-    def acked(self, replica: int, hlc: int) -> bool:
-        """Every member (running, or gone less than its retention) holds every write of
-        `replica` up to `hlc` (dsr/membership.py)."""
-        return self.members.acked(replica, hlc)
-
     def _on_digest(self, message: wire.Decoded) -> None:
         self.stats.digests_received += 1
         self.graph.writers.note(message.replica, message.agent)
@@ -584,7 +576,7 @@ class Replica:
         if self.graph.read_only:
             return
         self.publish_digest()
-        forgotten = self.graph.compact(self.acked)
+        forgotten = self.graph.compact(self.members.acked)
         self.stats.compacted += forgotten
         self.stats.tombstones = self.graph.tombstones()
 
