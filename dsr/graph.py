@@ -500,15 +500,11 @@ class DSRGraph:
             self._cascade = self._view[node_id].type
             try:
                 for key in sorted(self._out.get(node_id, set()) | self._in.get(node_id, set())):
-                    edge = self._edges[key]
-                    if edge.present():
-                        self._local(tx, self._edge_table, key, rem=tuple(edge.add.items()),
-                                    cleared=hlc, attrs=receipt)
+                    if self._edges[key].present():
+                        self._remove(tx, self._edge_table, key, hlc, receipt)
             finally:
                 self._cascade = None
-            node = self._nodes[node_id]
-            self._local(tx, self._node_table, node_id, rem=tuple(node.add.items()),
-                        cleared=hlc, attrs=receipt)
+            self._remove(tx, self._node_table, node_id, hlc, receipt)
 
     def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
                               attrs: Attrs | None = None) -> Edge:
@@ -536,8 +532,14 @@ class DSRGraph:
             if key not in self._visible_edges:
                 raise EdgeNotFoundError(f"cannot delete edge {src}->{dst} ({type}): not found")
             hlc = self.clock.tick()
-            self._local(tx, self._edge_table, key, rem=tuple(self._edges[key].add.items()),
-                        cleared=hlc, attrs=crdt.removal_receipt(hlc, self.replica_id))
+            self._remove(tx, self._edge_table, key, hlc, crdt.removal_receipt(hlc, self.replica_id))
+
+    def _remove(self, tx: _Transaction, table: ElementTable[Any], key: Any, hlc: int,
+                receipt: dict[str, Any]) -> None:
+        """Remove a node or an edge: observe every add it holds, clear its registers up to
+        `hlc`, and leave the removal receipt (crdt.removal_receipt)."""
+        self._local(tx, table, key, rem=tuple(table.states[key].add.items()), cleared=hlc,
+                    attrs=receipt)
 
     def _local(self, tx: _Transaction, table: ElementTable[Any], key: Any,
                **delta: Any) -> None:
