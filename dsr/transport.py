@@ -481,8 +481,8 @@ class Replica:
 
         Why: deltas arrive through one wildcard subscription (`delta/*`: writers come and go),
         and Zenoh delivers a sample faster when the receiving session has declared its exact
-        key (measured: docs/dsr_wire_format.md, "Key space").  Only an optimisation: the
-        wildcard subscription delivers every delta either way."""
+        key (Session.declare_keyexpr; measured: docs/performance.md).  Only an optimisation:
+        the wildcard subscription delivers every delta either way."""
         with self._writer_keys_lock:
             session = self.session
             declared = self._writer_keys.get(agent)
