@@ -21,10 +21,6 @@ from pathlib import Path
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
-#: a received message as `Replica.admit_delta` / `admit_state` take it: (key, payload)
-Received = tuple[str, bytes]
-
-
 @dataclass
 class FakeSample:
     """What a replica's receiver reads of a Zenoh sample (`key_expr`, `payload.to_bytes()`),

@@ -111,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m tests.integration.replica_worker", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m tests.integration.replica_worker",
+                                     description=__doc__)
     parser.add_argument("--connect", required=True)
     parser.add_argument("--agent", required=True)
     parser.add_argument("--graph", default="chronav")

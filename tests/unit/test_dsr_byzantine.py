@@ -24,8 +24,7 @@ from hypothesis import strategies as st
 from dsr import DSRGraph, wire
 from dsr.crdt import REMOVAL_RECEIPT
 from dsr.transport import Replica
-from tests.support import Received
-from tests.unit.test_dsr_protocol import POLICY, Net, state_of
+from tests.unit.test_dsr_protocol import POLICY, Net, Received, state_of
 
 HONEST = ("sim_robot", "agenda", "executive")
 EVIL = "agenda_tool-evil"

@@ -1,10 +1,10 @@
 """Fuzzing the receive path of a replica with hostile payloads (in-process, no network).
 
 Every payload goes through the transport's admission API (`Replica.admit_delta`,
-`Replica.admit_state`), what the Zenoh callbacks call.  Invariants: the handler never raises, nothing is counted as an
-unexpected error, every message is either refused (counted, logged) or - only when it is a
-valid message of an agent allowed to write it - merged; with the shipped write policy, agent
-"fuzzer" holds no grant, so the guarded graph never changes.
+`Replica.admit_state`: what the Zenoh callbacks call).  Invariants: the handler never raises,
+nothing is counted as an unexpected error, every message is either refused (counted, logged)
+or - only when it is a valid message of an agent allowed to write it - merged; with the
+shipped write policy, agent "fuzzer" holds no grant, so the guarded graph never changes.
 """
 
 from __future__ import annotations

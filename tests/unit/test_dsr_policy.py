@@ -1,8 +1,9 @@
 """The write policy (agents/world/write_policy.yaml) as every replica enforces it on receipt.
 
 Offline and in-process: each agent is a DSRGraph whose deltas are captured; a "guard" replica
-runs the transport's admission API (`Replica.admit_delta` / `admit_state`, no network) with the shipped
-policy.  The multi-process version with real Zenoh is tests/integration/test_trust_policy.py.
+runs the transport's admission API (`Replica.admit_delta` / `admit_state`, no network) with
+the shipped policy.  The multi-process version with real Zenoh is
+tests/integration/test_trust_policy.py.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ class Guard:
 
     def state(self, source: DSRGraph) -> None:
         self.replica.admit_state(wire.state_key("chronav", source.agent),
-                                             source.state_message())
+                                 source.state_message())
 
     @property
     def stats(self):  # noqa: ANN201
@@ -287,7 +288,7 @@ def test_relayed_removals_need_a_receipt_from_an_allowed_remover():
     without_receipts = relayed.replace(b'"~removed"', b'"~other"')
     assert without_receipts != relayed
     laggard.replica.admit_state(wire.state_key("chronav", "executive"),
-                                            without_receipts)
+                                without_receipts)
     assert world.ids["activity"] in laggard.graph, "a removal without receipt was merged"
     assert "without a receipt" in laggard.stats.last_reject
     laggard.state(world.graphs["executive"])
@@ -297,7 +298,7 @@ def test_relayed_removals_need_a_receipt_from_an_allowed_remover():
     # which carries the removal, cannot delete it either.
     other = Guard(agent="other")
     other.replica.admit_state(wire.state_key("chronav", "executive"),
-                                          state_before_delete)
+                              state_before_delete)
     buggy = world.agent("object_recognition", legit=False)
     buggy.delete_node(world.ids["mission"])
     assert world.guard.stats.rejected_policy == 1

@@ -2,8 +2,9 @@
 
 Each replica here is a `Replica` that is never opened: received messages are handed to its
 admission API (`admit_delta`, `admit_state`: what its Zenoh callbacks call) directly, and its
-publisher is a function, so the rules (limits, clock offset, removals, trust in states, digests, compaction, per-reason counters,
-local policy checks) are exercised exactly as over Zenoh, without processes.
+publisher is a function, so the rules (limits, clock offset, removals, trust in states,
+digests, compaction, per-reason counters, local policy checks) are exercised exactly as over
+Zenoh, without processes.
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ from dsr.limits import LIMITS, Limits
 from agents.world.write_policy import policy_from_env
 from dsr.policy import AllowAll
 from dsr.transport import Replica
-from tests.support import Received
 
 POLICY = policy_from_env({})
+#: a received message as `Replica.admit_delta` / `admit_state` take it: (key, payload)
+Received = tuple[str, bytes]
 
 
 class Publisher:
@@ -390,7 +392,8 @@ def test_a_member_that_left_holds_compaction_back_until_its_retention_ends():
     net.maintain()
     node = a.graph.insert_node("object", "o")
     a.graph.delete_node(node.id)
-    a.members.members["b"].live, a.members.members["b"].gone_at = False, time.monotonic()   # b cut off
+    b_seen = a.members.members["b"]
+    b_seen.live, b_seen.gone_at = False, time.monotonic()              # b cut off
     b.graph.attach(None)                                             # its digests stop
     a.maintain()
     assert a.graph.tombstones() == 1
@@ -455,7 +458,7 @@ def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forg
     assert guard.stats.rejects == {} and guard.stats.deferred >= 1
     assert guard.graph.get_node_by_name("m1") is None                 # left for executive
     guard.admit_state(wire.state_key("chronav", "executive"),
-                              newcomer.state_message())
+                      newcomer.state_message())
     assert guard.graph.get_node_by_name("m1") is not None
 
 
