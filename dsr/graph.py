@@ -196,11 +196,13 @@ class DSRGraph:
 
     def nodes(self) -> list[Node]:
         with self._lock:
-            return [self._state.node(i) for i in sorted(self._view)]
+            node = self._state.node
+            return [node(i) for i in sorted(self._view)]
 
     def nodes_of_type(self, type: str) -> list[Node]:  # noqa: A002 - DSR vocabulary
         with self._lock:
-            return [self._state.node(i) for i in sorted(self._types.get(type, ()))]
+            node = self._state.node
+            return [node(i) for i in sorted(self._types.get(type, ()))]
 
     def get_edge(self, src: int, dst: int, type: str) -> Edge | None:  # noqa: A002
         with self._lock:
@@ -209,21 +211,26 @@ class DSRGraph:
 
     def edges(self) -> list[Edge]:
         with self._lock:
-            return [self._state.edge(k) for k in sorted(self._visible_edges)]
+            edge = self._state.edge
+            return [edge(k) for k in sorted(self._visible_edges)]
 
     def edges_from(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
-        with self._lock:
-            return [self._state.edge(k) for k in sorted(self._out.get(node_id, ()))
-                    if k in self._visible_edges and (type is None or k[2] == type)]
+        return self._incident(self._out, node_id, type)
 
     def edges_to(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
+        return self._incident(self._in, node_id, type)
+
+    def _incident(self, index: dict[int, set[EdgeKey]], node_id: int,
+                  type_: str | None) -> list[Edge]:
         with self._lock:
-            return [self._state.edge(k) for k in sorted(self._in.get(node_id, ()))
-                    if k in self._visible_edges and (type is None or k[2] == type)]
+            visible, edge = self._visible_edges, self._state.edge
+            return [edge(k) for k in sorted(index.get(node_id, ()))
+                    if k in visible and (type_ is None or k[2] == type_)]
 
     def edges_of_type(self, type: str) -> list[Edge]:  # noqa: A002
         with self._lock:
-            return [self._state.edge(k) for k in sorted(self._edge_types.get(type, ()))]
+            edge = self._state.edge
+            return [edge(k) for k in sorted(self._edge_types.get(type, ()))]
 
     # ------------------------------------------------------------------ signals
     def connect(self, signal: str, callback: Callable[..., Any]) -> None:

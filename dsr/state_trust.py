@@ -240,8 +240,12 @@ def _screen(result: Screened, element: str, key: object, state: ElementState,
         else:
             judge(("attr", attr), reg[1], reg[0], reg[0] > floor and register_wins(
                 reg, held.attrs.get(attr) if held is not None else None))
-    if not bad:
-        return state
+    return _without(state, bad) if bad else state
+
+
+def _without(state: ElementState, bad: set[tuple[str, object]]) -> ElementState:
+    """`state` minus the pieces judged forged or deferred: adds, type/name, registers, or the
+    removal (its dots, its clearing and its receipt go together)."""
     kept = ElementState(add={r: h for r, h in state.add.items() if ("add", r) not in bad},
                         meta=None if ("meta", None) in bad else state.meta,
                         attrs={k: v for k, v in state.attrs.items() if ("attr", k) not in bad})
