@@ -157,7 +157,7 @@ class AntiEntropy:
                     next_digest = time.monotonic() + self.digest_interval
                     if now_connected:
                         maintain()
-            except Exception:  # noqa: BLE001 - session closed under us, or a bad reply
+            except Exception:  # session closed under us, or a bad reply
                 if closed.is_set():
                     return
                 on_error()

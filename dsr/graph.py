@@ -199,12 +199,12 @@ class DSRGraph:
             node = self._state.node
             return [node(i) for i in sorted(self._view)]
 
-    def nodes_of_type(self, type: str) -> list[Node]:  # noqa: A002 - DSR vocabulary
+    def nodes_of_type(self, type: str) -> list[Node]:  # DSR vocabulary
         with self._lock:
             node = self._state.node
             return [node(i) for i in sorted(self._types.get(type, ()))]
 
-    def get_edge(self, src: int, dst: int, type: str) -> Edge | None:  # noqa: A002
+    def get_edge(self, src: int, dst: int, type: str) -> Edge | None:
         with self._lock:
             key = (src, dst, type)
             return self._state.edge(key) if key in self._visible_edges else None
@@ -214,10 +214,10 @@ class DSRGraph:
             edge = self._state.edge
             return [edge(k) for k in sorted(self._visible_edges)]
 
-    def edges_from(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
+    def edges_from(self, node_id: int, type: str | None = None) -> list[Edge]:
         return self._incident(self._out, node_id, type)
 
-    def edges_to(self, node_id: int, type: str | None = None) -> list[Edge]:  # noqa: A002
+    def edges_to(self, node_id: int, type: str | None = None) -> list[Edge]:
         return self._incident(self._in, node_id, type)
 
     def _incident(self, index: dict[int, set[EdgeKey]], node_id: int,
@@ -227,7 +227,7 @@ class DSRGraph:
             return [edge(k) for k in sorted(index.get(node_id, ()))
                     if k in visible and (type_ is None or k[2] == type_)]
 
-    def edges_of_type(self, type: str) -> list[Edge]:  # noqa: A002
+    def edges_of_type(self, type: str) -> list[Edge]:
         with self._lock:
             edge = self._state.edge
             return [edge(k) for k in sorted(self._edge_types.get(type, ()))]
@@ -357,8 +357,8 @@ class DSRGraph:
         self._version += 1
 
     # ------------------------------------------------------------------ local writes
-    def insert_node(self, type: str, name: str, attrs: Attrs | None = None,  # noqa: A002
-                    *, id: int | None = None) -> Node:  # noqa: A002
+    def insert_node(self, type: str, name: str, attrs: Attrs | None = None,
+                    *, id: int | None = None) -> Node:
         """Create a node; `id` is generated unless given (e.g. by a world file)."""
         check_type_name(type)
         check_name(name)
@@ -513,7 +513,7 @@ class DSRGraph:
                 self._cascade = None
             self._remove(tx, self._node_table, node_id, hlc, receipt)
 
-    def insert_or_assign_edge(self, src: int, dst: int, type: str,  # noqa: A002
+    def insert_or_assign_edge(self, src: int, dst: int, type: str,
                               attrs: Attrs | None = None) -> Edge:
         """Create the edge (src, dst, type) or, if it exists, set the given attributes."""
         check_type_name(type, "edge type")
@@ -533,7 +533,7 @@ class DSRGraph:
                 self._local(tx, self._edge_table, key, add=((me, hlc),), attrs=regs)
             return self._state.edge(key)
 
-    def delete_edge(self, src: int, dst: int, type: str) -> None:  # noqa: A002
+    def delete_edge(self, src: int, dst: int, type: str) -> None:
         with self._write(rollback=False) as tx:
             key = (src, dst, type)
             if key not in self._visible_edges:

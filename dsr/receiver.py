@@ -135,7 +135,7 @@ class DeltaReceiver:
                     self._receive_one()
             except ChannelClosed:
                 return
-            except Exception:  # noqa: BLE001 - the thread must go on; handle() logs its own
+            except Exception:  # the thread must go on; handle() logs its own
                 log.exception("DSR receiver %s failed", self._thread.name)
                 time.sleep(self.park_s)
 

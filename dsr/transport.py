@@ -199,7 +199,7 @@ class Replica:
         try:
             conf.insert_json5("connect/retry", json.dumps(
                 {"period_init_ms": 200, "period_max_ms": 500, "period_increase_factor": 1.5}))
-        except Exception:  # noqa: BLE001 - an older Zenoh without the key: keep its default
+        except Exception:  # an older Zenoh without the key: keep its default
             log.debug("connect/retry not supported", exc_info=True)
 
     def _declare(self, zenoh: Any) -> None:
@@ -241,11 +241,11 @@ class Replica:
             for entity in reversed(self._entities):
                 try:
                     entity.undeclare()
-                except Exception:  # noqa: BLE001, S110 - already gone with the session
+                except Exception:  # noqa: BLE001 - already gone with the session
                     pass
             try:
                 session.close()
-            except Exception:  # noqa: BLE001
+            except Exception:
                 log.debug("closing Zenoh session failed", exc_info=True)
         receiver = self._receiver
         if receiver is not None:            # its blocking take ended with the session
@@ -325,7 +325,7 @@ class Replica:
             return True
         except WireError as exc:
             self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001 - never kill the receiving thread or the agent's
+        except Exception:  # never kill the receiving thread or the agent's
             self.stats.errors += 1
             log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
         return False
@@ -348,7 +348,7 @@ class Replica:
             return True
         except WireError as exc:
             self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001
+        except Exception:
             self.stats.errors += 1
             log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
         return False
@@ -448,7 +448,7 @@ class Replica:
                     for part in self.graph.state_parts(self.seen()):
                         query.reply(self._state_key, part, encoding=wire.ENCODING)
                 self.stats.state_served += 1
-        except Exception:  # noqa: BLE001
+        except Exception:
             self.stats.errors += 1
             log.exception("DSR %s failed to answer a state query", self.graph.agent)
 
@@ -497,7 +497,7 @@ class Replica:
             try:
                 self._writer_keys[agent] = session.declare_keyexpr(
                     wire.delta_key(self.graph.graph_name, agent))
-            except Exception:  # noqa: BLE001 - a name Zenoh refuses: the wildcard serves it
+            except Exception:  # a name Zenoh refuses: the wildcard serves it
                 log.debug("DSR %s: cannot declare the delta key of %r", self.graph.agent, agent,
                           exc_info=True)
 
@@ -505,7 +505,7 @@ class Replica:
     def _undeclare(session: Any, key_expr: Any) -> None:
         try:
             session.undeclare(key_expr)
-        except Exception:  # noqa: BLE001 - already gone with the session
+        except Exception:  # already gone with the session
             log.debug("undeclaring %s failed", key_expr, exc_info=True)
 
     # ------------------------------------------------------------------ anti-entropy

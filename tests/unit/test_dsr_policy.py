@@ -43,7 +43,7 @@ class Guard:
                                  source.state_message())
 
     @property
-    def stats(self):  # noqa: ANN201
+    def stats(self):
         return self.replica.stats
 
 

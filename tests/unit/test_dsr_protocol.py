@@ -31,7 +31,7 @@ Received = tuple[str, bytes]
 
 
 class Publisher:
-    def __init__(self, deliver) -> None:  # noqa: ANN001
+    def __init__(self, deliver) -> None:
         self.deliver = deliver
 
     def put(self, payload: bytes) -> None:
