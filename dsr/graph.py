@@ -37,13 +37,13 @@ from dsr.crdt import ElementState
 from dsr.errors import (EdgeNotFoundError, InvalidAttributeError, InvalidIdentifierError,
                         NameTakenError, NodeNotFoundError, PoseError, ReadOnlyGraphError,
                         TransactionError, WriteRefusedError)
+from dsr.graph_state import GraphState
 from dsr.hlc import HybridLogicalClock
 from dsr.limits import LIMITS, node_problem, value_bytes
 from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_name,
                        check_node_id, check_type_name)
 from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
-from dsr.graph_state import GraphState
 from dsr.table import Changes, Encoded, ElementTable
 from dsr.writes import Element
 
