@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import queue
+import random
 import threading
 import time
 from collections.abc import Callable
@@ -70,6 +71,23 @@ class AntiEntropy:
 
     def stop(self) -> None:
         self.requests.put(None)
+
+    def join_round(self, members: list[str], sync: Callable[[str], int]) -> None:
+        """A joiner's first round: one member's complete state is enough to start (merging
+        every member's copy of a large graph would multiply the join time).  Members are tried
+        in random order (spreading the load when many agents start together); a member whose
+        state covers every running member (its `seen` has as many writers) is a complete
+        copy; a tool that serves only its own writes is not: merge it and go on
+        (docs/dsr_wire_format.md, "Writing as a foreign client").  `sync(agent)` fetches and
+        merges a state, returning how many replies were merged."""
+        members = list(members)
+        random.shuffle(members)
+        for member in members:
+            self.membership.state_cover = 0
+            if sync(member) and self.membership.state_cover >= len(members):
+                return
+        if not members:
+            sync(ALL)
 
     # ------------------------------------------------------------------ digests
     def lagging(self, message: wire.Decoded) -> set[str]:

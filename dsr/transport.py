@@ -23,7 +23,6 @@ door a received message goes through, with or without Zenoh (tests use them dire
 from __future__ import annotations
 
 import logging
-import random
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -530,16 +529,7 @@ class Replica:
         for member in members:
             self.members.add(member)
             self._declare_writer_key(member, True)
-        random.shuffle(members)          # spread the load when many agents start together
-        for member in members:
-            # a member whose state covers every running member (its `seen` has as many
-            # writers) is a complete copy; a tool that serves only its own writes is not:
-            # merge it and go on (docs/dsr_wire_format.md, "Writing as a foreign client")
-            self.members.state_cover = 0
-            if self._sync(member) and self.members.state_cover >= len(members):
-                return
-        if not members:
-            self._sync(ALL)
+        self.anti_entropy.join_round(members, self._sync)
 
     def _sync(self, agent: str) -> int:
         """Fetch and merge the state of one member (or of all, agent == '*'); returns the
