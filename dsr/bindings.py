@@ -31,9 +31,6 @@ class WriterBindings:
         """The agent a replica id writes for, first-hand or relayed."""
         return self.attributed.get(replica)
 
-    def bound_table(self) -> Mapping[int, str]:
-        return self.bound
-
     def note(self, replica: int, agent: str) -> None:
         """Record a first-hand binding (it replaces a relayed one: what the agent's own key
         says beats what a relay said).  The first binding of a replica id stays."""

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from dsr import wire
+
+if TYPE_CHECKING:
+    from dsr.bindings import WriterBindings
 
 
 @dataclass
@@ -39,15 +42,14 @@ class Member:
 class Membership:
     """The member table and the watermarks of one replica (thread-safe: one lock)."""
 
-    def __init__(self, me: str, bound_agent: Callable[[int], str | None],
-                 bindings: Callable[[], Mapping[int, str]], my_replica: int,
+    def __init__(self, me: str, bindings: WriterBindings, my_replica: int,
                  retention_s: float = 60.0) -> None:
         self.me = me
         self.my_replica = my_replica
         #: a member that left still counts for tombstone compaction this long (a partitioned
         #: member must not come back with elements everybody else forgot)
         self.retention_s = retention_s
-        self._bound_agent = bound_agent
+        #: the graph's writer bindings: whose watermarks to forget, who owns a replica id
         self._bindings = bindings
         self.lock = threading.Lock()
         self.members: dict[str, Member] = {}
@@ -128,7 +130,7 @@ class Membership:
     def _gap(self, agent: str | None) -> None:
         """Deltas of `agent` (None: of everybody) may have been lost: forget its watermarks
         until its own state has been merged again.  Caller holds the lock."""
-        for replica, owner in list(self._bindings().items()):
+        for replica, owner in list(self._bindings.bound.items()):
             if replica != self.my_replica and (agent is None or owner == agent):
                 self.seen.pop(replica, None)
 
@@ -145,7 +147,7 @@ class Membership:
                 self.vouched.add(sender)
                 self.state_cover = len(message.seen)
             for replica, hlc in message.seen.items():
-                owner = self._bound_agent(replica) or message.writers.get(str(replica))
+                owner = self._bindings.bound_agent(replica) or message.writers.get(str(replica))
                 own = replica == message.replica or owner == sender
                 if not own and owner in live:
                     continue    # a running writer: only its own state sets its watermark

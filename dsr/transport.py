@@ -114,8 +114,7 @@ class Replica:
         self.sync_timeout = sync_timeout
         self.watch_interval = watch_interval
         self.linger_s = linger_s
-        self.members = Membership(graph.agent, graph.writers.bound_agent,
-                                  graph.writers.bound_table, graph.replica_id,
+        self.members = Membership(graph.agent, graph.writers, graph.replica_id,
                                   retention_s=member_retention_s)
         self.anti_entropy = AntiEntropy(self.members, graph.writers.bound_agent,
                                         digest_interval=digest_interval)
