@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import secrets
 import threading
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -394,25 +394,34 @@ class DSRGraph:
         values = check_attrs(attrs)
         if self.read_only:
             raise ReadOnlyGraphError(f"graph replica of agent {self.agent!r} is read-only")
-        out = outbox = None
-        events: list[Event] = []
+        out = outbox = event = None
         with self._lock:
             if self._tx is not None:
                 self._update_node_tx(node_id, values)
                 return
-            self._check_update(node_id, values)
+            if node_id not in self._view:      # (_check_updates for one node, inlined)
+                raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+            if self.local_policy is not None:
+                self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
+            if not _cannot_grow(values, self._nodes[node_id].attrs):
+                self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             regs: dict[str, tuple[int, int, object]] = {
                 k: (hlc, me, v) for k, v in values.items()}
             _, keys = crdt.merge_attrs(self._nodes[node_id], regs)
             if keys and self._signals.wants("node_updated"):
-                events.append(("node_updated", (self._state.node(node_id), keys)))
+                event = ("node_updated", (self._state.node(node_id), keys))
             self._version += 1
             outbox = self._outbox
             if outbox is not None:
                 out = outbox.add_attrs(node_id, regs, hlc)
-        self._deliver(events, outbox, out)
+        try:                        # (_deliver, inlined: the hot path of every agent)
+            if event is not None:
+                self._signals.post([event])
+        finally:
+            if out is not None and outbox is not None:
+                outbox.send(out)
 
     def update_nodes(self, updates: dict[int, Attrs]) -> None:
         """Set attributes of many visible nodes at once: one stamp, one delta, one lock.
@@ -433,8 +442,7 @@ class DSRGraph:
                 for node_id, values in checked.items():
                     self._update_node_tx(node_id, values)
                 return
-            for node_id, values in checked.items():
-                self._check_update(node_id, values)
+            self._check_updates(checked.items())
             if not checked:
                 return
             hlc = self.clock.tick()
@@ -445,15 +453,17 @@ class DSRGraph:
                 out = outbox.add_entries(entries, hlc)
         self._deliver(events, outbox, out)
 
-    def _check_update(self, node_id: int, values: Attrs) -> None:
-        """Refuse an attribute update of a node that is not visible, that the write policy
-        refuses, or that would take the node over a node limit.  Caller holds the lock."""
-        if node_id not in self._view:
-            raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
-        if self.local_policy is not None:
-            self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
-        if not _cannot_grow(values, self._nodes[node_id].attrs):
-            self._check_node_limits(node_id, values)
+    def _check_updates(self, updates: Iterable[tuple[int, Attrs]]) -> None:
+        """Refuse attribute updates of a node that is not visible, that the write policy
+        refuses, or that would take a node over a node limit.  Caller holds the lock."""
+        view, nodes, policy = self._view, self._nodes, self.local_policy
+        for node_id, values in updates:
+            if node_id not in view:
+                raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
+            if policy is not None:
+                self._check_local("node", node_id, {"attrs": dict.fromkeys(values, (0, 0, 0))})
+            if not _cannot_grow(values, nodes[node_id].attrs):
+                self._check_node_limits(node_id, values)
 
     def _merge_updates(self, checked: dict[int, Attrs], hlc: int
                        ) -> tuple[list[Event], list[dict[str, object]]]:
