@@ -12,14 +12,14 @@ The CRDT state (tombstones, clocks) is not here: that is the wire "state" messag
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Final, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from dsr.errors import GraphFileError
 from dsr.model import AttrKey, AttrValueSchema, NodeId, NodeName, TypeName
 
-FORMAT = "chronav-dsr-graph/1"
+FORMAT: Final = "chronav-dsr-graph/1"
 
 
 class NodeDoc(BaseModel):

@@ -68,8 +68,9 @@ class Edge:
 
 
 _new = object.__new__
-_set_id, _set_type = Node.id.__set__, Node.type.__set__  # type: ignore[attr-defined]
-_set_name, _set_attrs = Node.name.__set__, Node.attrs.__set__  # type: ignore[attr-defined]
+_slots = vars(Node)           # the slot descriptors of the frozen dataclass
+_set_id, _set_type = _slots["id"].__set__, _slots["type"].__set__
+_set_name, _set_attrs = _slots["name"].__set__, _slots["attrs"].__set__
 
 
 def make_node(node_id: int, type_: str, name: str, attrs: Attrs) -> Node:

@@ -31,6 +31,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 from dsr import crdt, wire
 from dsr.crdt import ElementState
@@ -124,7 +125,7 @@ class Outbox:
             if not self._nodes and not self._edges and (
                     len(entries) * 4 >= self.max_entries or self._tokens_now(now) >= 1.0):
                 return self._issue(self._encoder.encode(entries, []), top, now)
-        return self.add({entry["id"]: ElementState(attrs=entry["attrs"])  # type: ignore[misc]
+        return self.add({cast(int, entry["id"]): ElementState(attrs=cast("dict[str, crdt.Register]", entry["attrs"]))
                          for entry in entries}, {}, top)
 
     def _encode(self, nodes: dict[int, ElementState], edges: dict[EdgeKey, ElementState]) -> bytes:
@@ -174,7 +175,7 @@ class Outbox:
                           self._turn)
         try:
             self._publish(out.payload)
-        except Exception:  # noqa: BLE001 - session closing under us; state stays for anti-entropy
+        except Exception:  # session closing under us; state stays for anti-entropy
             log.warning("DSR outbox: publish failed", exc_info=True)
         else:
             if out.top > self.sent_top:

@@ -50,7 +50,7 @@ class TypePolicy:
     """Base of the simple policies: one yes/no per (sending agent, element kind, type) of a
     delta.  States are merged as they come (their writers are many)."""
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
+    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
         raise NotImplementedError
 
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
@@ -79,7 +79,7 @@ class TypePolicy:
 class AllowAll(TypePolicy):
     """Every agent may write everything."""
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
+    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
         return True
 
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
@@ -93,7 +93,7 @@ class DenyTypes(TypePolicy):
         self.types = set(types)
         self.agents = None if agents is None else set(agents)
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:  # noqa: A002
+    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
         if self.agents is not None and agent not in self.agents:
             return True
         return type not in self.types

@@ -45,7 +45,6 @@ from typing import TYPE_CHECKING, Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
-from dsr.errors import PolicyError
 from dsr.state_review import review_state
 from dsr.writes import Write, delta_writes
 

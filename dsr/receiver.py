@@ -14,8 +14,8 @@ thread fills without the GIL, and are taken from it by:
 - otherwise this module's receiver thread, which sleeps in the channel's blocking `recv()`
   as Zenoh's callback thread did.
 
-Order: a writer's deltas must be handled in the order they came (dsr/transport.py,
-`_advance`).  Two threads taking from one channel could each hold a sample and handle them
+Order: a writer's deltas must be handled in the order they came (dsr/membership.py,
+`advance`).  Two threads taking from one channel could each hold a sample and handle them
 the wrong way round, so every sample is taken and handled under one lock, and a blocking
 `recv()`, which cannot be taken under that lock, happens only while the agent's thread takes
 nothing.  Ownership goes back and forth like this:
@@ -134,7 +134,7 @@ class DeltaReceiver:
                     self._receive_one()
             except ChannelClosed:
                 return
-            except Exception:  # noqa: BLE001 - the thread must go on; handle() logs its own
+            except Exception:  # the thread must go on; handle() logs its own
                 log.exception("DSR receiver %s failed", self._thread.name)
                 time.sleep(self.park_s)
 

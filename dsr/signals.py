@@ -232,7 +232,7 @@ class SignalHub:
             for callback in self._callbacks[signal]:
                 try:
                     callback(*args)
-                except Exception:  # noqa: BLE001 - one bad callback must not stop the agent
+                except Exception:  # one bad callback must not stop the agent
                     self.callback_errors += 1
                     log.exception("DSR %s callback %r raised", signal, callback)
         return len(events)

@@ -20,7 +20,7 @@ running:
   (stamp <= seen[z]: z published everything up to there, and not this; reason forged_stamp) or
   not yet arrived from z itself (stamp > seen[z]: dropped here, z's own delta or state brings
   it; counted as `deferred`).  `seen[z]` exists only once z's own state has been merged here
-  (dsr/transport.py `_advance`): until then every such stamp is deferred.
+  (dsr/membership.py `advance`): until then every such stamp is deferred.
 
 - this replica knows first-hand what it wrote itself: a relayed stamp of its own replica id
   that would change it is forged whatever its time (forged_stamp), and a table entry giving
@@ -31,7 +31,7 @@ running:
   again, which another member has already compacted) forges nothing: it is not judged.
 
 What a replica serves in its own state replies is decided elsewhere (DSRGraph.served_writers,
-transport `_note_writers`): only bindings it can prove, never a claim it relayed or deferred,
+admission `note_state_writers`): only bindings it can prove, never a claim it relayed or deferred,
 so a lie told to one member is not repeated as that member's word.
 
 Writes of agents that are not running (a previous incarnation, a tool that has exited) can
@@ -94,13 +94,39 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
     relayed while its agent was not running): a stamp it gives to a running agent is judged
     like one the table gives to it."""
     vouched = live if vouched is None else vouched
-    sender = message.agent
     result = Screened(message)
-    lying: dict[int, str] = {}
-    writers = dict(message.writers)
     my_agent, my_replica = me if me is not None else (None, 0)
     if me is not None:
         seen = {**seen, my_replica: _ALL_OF_IT}
+    lying, writers = _judge_table(result, binding, live, vouched, my_agent)
+
+    def agent_of(replica: int) -> str | None:
+        agent = binding(replica) or writers.get(str(replica))
+        if agent is None and attributed is not None:
+            agent = attributed(replica)
+        return agent
+
+    suspects = _suspects(message, lying, agent_of, live)
+    if not suspects:
+        if lying or writers != message.writers:
+            result.message = _with(message, message.nodes, message.edges, writers)
+        return result
+    nodes = [(k, _screen(result, "node", k, s, local("node", k), suspects, lying, seen))
+             for k, s in message.nodes]
+    edges = [(k, _screen(result, "edge", k, s, local("edge", k), suspects, lying, seen))
+             for k, s in message.edges]
+    result.message = _with(message, nodes, edges, writers)
+    return result
+
+
+def _judge_table(result: Screened, binding: Callable[[int], str | None], live: set[str],
+                 vouched: set[str], my_agent: str | None) -> tuple[dict[int, str], dict[str, str]]:
+    """The lying entries of a state's `writers` table (replica -> the agent it names) and the
+    table without them; one forged_writer problem for all of them."""
+    message = result.message
+    sender = message.agent
+    lying: dict[int, str] = {}
+    writers = dict(message.writers)
     for key, agent in message.writers.items():
         replica = int(key)
         known = binding(replica)
@@ -120,14 +146,14 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
         result.problems.append((
             "forged_writer", f"state of {sender!r} says replica {replica} is {agent!r}, "
             f"but {agent!r} is running and never used or vouched for that replica{more}"))
+    return lying, writers
 
-    def agent_of(replica: int) -> str | None:
-        agent = binding(replica) or writers.get(str(replica))
-        if agent is None and attributed is not None:
-            agent = attributed(replica)
-        return agent
 
-    # replicas whose relayed stamps must be checked: running agents other than the sender
+def _suspects(message: Decoded, lying: dict[int, str],
+              agent_of: Callable[[int], str | None], live: set[str]) -> dict[int, str]:
+    """Replicas whose relayed stamps must be checked: running agents other than the sender,
+    and the replica ids the table lied about."""
+    sender = message.agent
     suspects: dict[int, str] = {}
     for entries in (message.nodes, message.edges):
         for _, state in entries:
@@ -137,16 +163,7 @@ def screen_state(message: Decoded, *, local: Callable[[str, object], ElementStat
                 agent = lying.get(replica) or agent_of(replica)
                 if agent is not None and agent != sender and (agent in live or replica in lying):
                     suspects[replica] = agent
-    if not suspects:
-        if lying or writers != message.writers:
-            result.message = _with(message, message.nodes, message.edges, writers)
-        return result
-    nodes = [(k, _screen(result, "node", k, s, local(("node"), k), suspects, lying, seen))
-             for k, s in message.nodes]
-    edges = [(k, _screen(result, "edge", k, s, local("edge", k), suspects, lying, seen))
-             for k, s in message.edges]
-    result.message = _with(message, nodes, edges, writers)
-    return result
+    return suspects
 
 
 def removal_changes_view(state: ElementState, held: ElementState | None) -> bool:
@@ -223,8 +240,12 @@ def _screen(result: Screened, element: str, key: object, state: ElementState,
         else:
             judge(("attr", attr), reg[1], reg[0], reg[0] > floor and register_wins(
                 reg, held.attrs.get(attr) if held is not None else None))
-    if not bad:
-        return state
+    return _without(state, bad) if bad else state
+
+
+def _without(state: ElementState, bad: set[tuple[str, object]]) -> ElementState:
+    """`state` minus the pieces judged forged or deferred: adds, type/name, registers, or the
+    removal (its dots, its clearing and its receipt go together)."""
     kept = ElementState(add={r: h for r, h in state.add.items() if ("add", r) not in bad},
                         meta=None if ("meta", None) in bad else state.meta,
                         attrs={k: v for k, v in state.attrs.items() if ("attr", k) not in bad})

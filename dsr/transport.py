@@ -13,49 +13,50 @@
   comes back (puts made while disconnected are lost by Zenoh, so this anti-entropy is needed).
 - Presence: a liveliness token ``chronav/<graph>/members/<agent>``; when a member (re)appears,
   the others query its state, which carries what it wrote while it was cut off.
+
+This module is the lifecycle and the Zenoh I/O; beside it: dsr/admission.py (the checks a
+received message must pass), dsr/membership.py (members and watermarks), dsr/anti_entropy.py
+(when to fetch a state, and the sync loop).  `Replica.admit_delta` / `admit_state` are the one
+door a received message goes through, with or without Zenoh (tests use them directly).
 """
 
 from __future__ import annotations
 
 import logging
-import queue
-import random
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
-import time
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import orjson
 
 from dsr import wire
+from dsr.admission import (REASONS, LogBudget, delta_node_problem, message_problem,
+                           note_state_writers, within_node_limits)
+from dsr.anti_entropy import ALL, AntiEntropy
 from dsr.collector import FREEZE_AFTER_JOIN_NODES, gc_paused, tune_collector
 from dsr.config import ZenohSettings, clean_zenoh_error, graph_name_from_env
 from dsr.errors import DSRError, WireError
 from dsr.graph import DSRGraph
-from dsr.limits import LIMITS, node_problem
+from dsr.limits import LIMITS
+from dsr.membership import Member, Membership
 from dsr.policy import AllowAll, WritePolicy
 from dsr.receiver import DeltaReceiver, receiver_of
 from dsr.signals import SpinPolicy
 
 log = logging.getLogger(__name__)
-_ALL = "*"
+__all__ = ["REASONS", "Member", "Replica", "ReplicaStats", "TransportError", "join",
+           "delta_publisher_options"]
 #: members whose delta key a session declares (Replica._declare_writer_key); past this many the
 #: wildcard subscription still delivers every delta, only without the shortcut
 MAX_DECLARED_WRITER_KEYS = 256
-_LOG_FIRST_REJECTS = 20
 STATS_FORMAT = "chronav-dsr-stats/1"
 STATS_ENCODING = "application/json;chronav-dsr-stats/1"
 
 
 class TransportError(DSRError, ConnectionError):
     """The Zenoh session could not be opened (router not reachable, bad endpoint...)."""
-
-
-#: reasons a received message (or part of a state) is refused; counted one by one
-REASONS = ("invalid", "too_large", "wrong_graph", "wrong_kind", "forged_writer", "forged_stamp",
-           "clock_ahead", "removal_receipt", "policy", "too_many_attrs", "node_too_large")
 
 
 @dataclass
@@ -88,50 +89,20 @@ class ReplicaStats:
         return asdict(self)
 
 
-@dataclass
-class Member:
-    """What this replica knows of another writable member, from its digests."""
-
-    agent: str
-    replica: int = 0
-    clock: int = 0
-    seen: dict[int, int] = field(default_factory=dict)
-    live: bool = True
-    gone_at: float = 0.0
-    #: writer replica -> (stamp this member holds and we lacked, since when)
-    behind: dict[int, tuple[int, float]] = field(default_factory=dict)
-
-
 def delta_publisher_options(zenoh: Any) -> dict[str, Any]:
     """The options of a replica's delta publisher (docs/dsr_wire_format.md, "Key space")."""
     return {"encoding": wire.ENCODING, "congestion_control": zenoh.CongestionControl.BLOCK,
             "reliability": zenoh.Reliability.RELIABLE}
 
 
-class _LogBudget:
-    """Per-reason log rate limit: the first `burst` refusals of a reason are logged, then at
-    most one line per `period_s` saying how many were not logged in between."""
-
-    def __init__(self, burst: int = _LOG_FIRST_REJECTS, period_s: float = 10.0) -> None:
-        self.burst, self.period_s = burst, period_s
-        self._count: dict[str, int] = {}
-        self._last: dict[str, float] = {}
-        self._quiet: dict[str, int] = {}
-
-    def allow(self, reason: str) -> tuple[bool, int]:
-        """(log this one?, how many of this reason went unlogged since the last line)"""
-        count = self._count.get(reason, 0) + 1
-        self._count[reason] = count
-        now = time.monotonic()
-        if count <= self.burst or now - self._last.get(reason, 0.0) >= self.period_s:
-            self._last[reason] = now
-            return True, self._quiet.pop(reason, 0)
-        self._quiet[reason] = self._quiet.get(reason, 0) + 1
-        return False, 0
-
 
 class Replica:
-    """Binds a DSRGraph to a Zenoh session.  Use `join()` or `with Replica(...) as replica:`."""
+    """Binds a DSRGraph to a Zenoh session.  Use `join()` or `with Replica(...) as replica:`.
+
+    Received messages go through the public admission API, `admit_delta` and `admit_state`
+    (what the Zenoh callbacks call, and what tests call without a network); who the other
+    members are and how far this replica has caught up is `members` (dsr/membership.py);
+    when to fetch a state is `anti_entropy` (dsr/anti_entropy.py)."""
 
     def __init__(self, graph: DSRGraph, settings: ZenohSettings | None = None, *,
                  policy: WritePolicy | None = None, sync_timeout: float = 10.0,
@@ -143,43 +114,23 @@ class Replica:
         self.sync_timeout = sync_timeout
         self.watch_interval = watch_interval
         self.linger_s = linger_s
-        #: how often a digest is published, tombstones compacted and lags checked
-        self.digest_interval = digest_interval
-        #: a member that left still counts for tombstone compaction this long (a partitioned
-        #: member must not come back with elements everybody else forgot)
-        self.member_retention_s = member_retention_s
-        #: how long a member must hold writes we lack before we fetch a state for them
-        self.lag_grace_s = 4 * digest_interval
-        #: longest pause between two digest-triggered state fetches of one member
-        self.max_fetch_backoff_s = 30.0
-        #: member -> (no digest-triggered fetch before, pause after the next one, last fetch)
-        self._fetch_backoff: dict[str, tuple[float, float, float]] = {}
-        #: monotonic clock of the anti-entropy timers (tests replace it)
-        self._now: Callable[[], float] = time.monotonic
+        self.members = Membership(graph.agent, graph.writers, graph.replica_id,
+                                  retention_s=member_retention_s)
+        self.anti_entropy = AntiEntropy(self.members, graph.writers.bound_agent,
+                                        digest_interval=digest_interval)
         self.stats = ReplicaStats()
-        self._log_budget = _LogBudget()
+        self._log_budget = LogBudget()
         self.session: Any = None
         self._publisher: Any = None
         self._token: Any = None
         self._entities: list[Any] = []
-        self._sync_requests: queue.Queue[str | None] = queue.Queue()
         self._worker: threading.Thread | None = None
         self._closed = threading.Event()
-        self._connected = False
-        self._joined = False
-        self._table_lock = threading.Lock()
+        #: True once the first state has been merged (open(); a test acting as a running
+        #: replica sets it): states merged later are screened (dsr/state_trust.py)
+        self.joined = False
         #: takes received deltas off the Zenoh channel (dsr/receiver.py; None until opened)
         self._receiver: DeltaReceiver | None = None
-        #: seen[z]: this replica holds every write replica z stamped up to seen[z].  A running
-        #: writer's entry is set only by its own state and then moved on by its own deltas and
-        #: digests (see _advance); without an entry its relayed writes wait for it (deferred)
-        self._seen: dict[int, int] = {}
-        #: agents whose own state (this incarnation) has been merged: their replica ids known
-        self._vouched: set[str] = set()
-        self._pending_syncs: set[str] = set()
-        #: writers the `seen` of the last state merged covers (completeness of a join's copy)
-        self._state_cover = 0
-        self._members: dict[str, Member] = {}
         #: agent -> the Zenoh KeyExpr of its delta key, declared in this session
         self._writer_keys: dict[str, Any] = {}
         self._writer_keys_lock = threading.Lock()
@@ -218,20 +169,20 @@ class Replica:
             register_atexit(self.close)
         try:
             self._declare(zenoh)
-            self._connected = self._is_connected()
+            connected = self._is_connected()
             # Join: one member's complete state is enough to start (merging every member's
             # copy of a large graph would multiply the join time); then a background round
             # merges every other replica's state, which covers deltas that were in flight
             # while the answer was built and anything the first member lacked.
             with gc_paused(freeze_if=lambda: len(self.graph) >= FREEZE_AFTER_JOIN_NODES):
                 self._initial_sync()
-            self._joined = True
-            self._sync_requests.put(_ALL)
+            self.joined = True
+            self.anti_entropy.request(ALL)
             if not self.graph.read_only:
                 self.graph.attach(self._publish, linger_s=self.linger_s)
             self.graph.receive_while_polling(self._receiver)
-            self._worker = threading.Thread(target=self._work, name=f"dsr-sync-{self.graph.agent}",
-                                            daemon=True)
+            self._worker = threading.Thread(target=self._work, args=(connected,),
+                                            name=f"dsr-sync-{self.graph.agent}", daemon=True)
             self._worker.start()
         except BaseException:
             self.close()
@@ -246,19 +197,19 @@ class Replica:
         try:
             conf.insert_json5("connect/retry", json.dumps(
                 {"period_init_ms": 200, "period_max_ms": 500, "period_increase_factor": 1.5}))
-        except Exception:  # noqa: BLE001 - an older Zenoh without the key: keep its default
+        except Exception:  # an older Zenoh without the key: keep its default
             log.debug("connect/retry not supported", exc_info=True)
 
     def _declare(self, zenoh: Any) -> None:
         session = self.session
         name = self.graph.graph_name
         deltas = session.declare_subscriber(
-            wire.delta_key(name, _ALL), zenoh.handlers.FifoChannel(LIMITS.max_waiting_deltas),
+            wire.delta_key(name, ALL), zenoh.handlers.FifoChannel(LIMITS.max_waiting_deltas),
             allowed_origin=zenoh.Locality.REMOTE)
         self._entities.append(deltas)
         self.start_receiver(deltas.handler, zenoh.ZError)
         self._entities.append(session.liveliness().declare_subscriber(
-            wire.member_key(name, _ALL), self._on_member))
+            wire.member_key(name, ALL), self._on_member))
         if self.graph.read_only:
             return
         self._publisher = session.declare_publisher(self._delta_key,
@@ -278,7 +229,7 @@ class Replica:
         self.graph.attach(None)
         if self.graph.replica is self:
             self.graph.replica = None
-        self._sync_requests.put(None)
+        self.anti_entropy.stop()
         session, self.session = self.session, None
         if session is not None:
             with self._writer_keys_lock:
@@ -288,11 +239,11 @@ class Replica:
             for entity in reversed(self._entities):
                 try:
                     entity.undeclare()
-                except Exception:  # noqa: BLE001, S110 - already gone with the session
+                except Exception:  # noqa: BLE001 - already gone with the session
                     pass
             try:
                 session.close()
-            except Exception:  # noqa: BLE001
+            except Exception:
                 log.debug("closing Zenoh session failed", exc_info=True)
         receiver = self._receiver
         if receiver is not None:            # its blocking take ended with the session
@@ -315,8 +266,7 @@ class Replica:
 
     def seen(self) -> dict[int, int]:
         """This replica's watermarks: own replica -> what it has published."""
-        with self._table_lock:
-            seen = dict(self._seen)
+        seen = self.members.watermarks()
         graph = self.graph
         seen[graph.replica_id] = graph.published_hlc() if not graph.read_only else 0
         return seen
@@ -328,11 +278,105 @@ class Replica:
             return
         self.graph.flush()
         seen = self.seen()
-        payload = self.graph._encoder.digest(seen[self.graph.replica_id], seen)
+        payload = self.graph.encoder.digest(seen[self.graph.replica_id], seen)
         self._publisher.put(payload)
         self.stats.digests_sent += 1
 
-    # ------------------------------------------------------------------ incoming
+    # ------------------------------------------------------------------ admission
+    def admit_delta(self, key: str, payload: bytes) -> bool:
+        """Admit one received delta (or digest) published on `key`: size, decoding,
+        validation (dsr/admission.py), write policy, node limits, then merge.  Returns True
+        if it was merged (a digest: handled).  Never raises: a refusal is logged and counted
+        in `stats` (per reason), and leaves the graph untouched.
+
+        Called on the receiver thread or on the agent's thread polling in dispatch()
+        (dsr/receiver.py: one at a time, in arrival order)."""
+        self.stats.received += 1
+        try:
+            if len(payload) > LIMITS.max_delta_bytes:
+                self._reject(key, "too_large", f"delta of {len(payload)} bytes, over the limit "
+                             f"of {LIMITS.max_delta_bytes} (CHRONAV_DSR_MAX_DELTA_BYTES)")
+                return False
+            message = wire.decode(payload)
+            problem = message_problem(self.graph, message, wire.last_chunk(key), "delta")
+            if problem is not None:
+                self._reject(key, *problem)
+                return False
+            if message.kind == "digest":
+                self._on_digest(message)
+                return True
+            if self._checks_deltas:
+                problem_text = self.policy.check(message, self.graph)
+                if problem_text is not None:
+                    self._reject(key, "policy", problem_text)
+                    return False
+            problem = delta_node_problem(self.graph, message)
+            if problem is not None:
+                self._reject(key, *problem)
+                return False
+            graph = self.graph
+            if graph.writers.bound_agent(message.replica) is None:
+                graph.writers.note(message.replica, message.agent)
+            graph.apply_message(message)
+            self.members.advance(message.replica, message.top_hlc)
+            self.stats.applied += 1
+            return True
+        except WireError as exc:
+            self._reject(key, "invalid", str(exc))
+        except Exception:  # never kill the receiving thread or the agent's
+            self.stats.errors += 1
+            log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
+        return False
+
+    def admit_state(self, key: str, payload: bytes) -> bool:
+        """Admit one state reply (or part of one) served on `key`: size, decoding, validation,
+        screening of relayed claims once joined (dsr/state_trust.py), write policy (a state
+        may be kept in part), node limits, then merge.  Returns True if (some of) it was
+        merged.  Never raises: one bad reply must not abort the anti-entropy round that
+        carries the good ones."""
+        try:
+            if len(payload) > LIMITS.max_state_bytes:
+                self._reject(key, "too_large", f"state of {len(payload)} bytes, over the limit "
+                             f"of {LIMITS.max_state_bytes} (CHRONAV_DSR_MAX_STATE_BYTES)")
+                return False
+            with gc_paused():
+                if not self._merge_state(key, wire.decode(payload)):
+                    return False
+            self.stats.state_merged += 1
+            return True
+        except WireError as exc:
+            self._reject(key, "invalid", str(exc))
+        except Exception:
+            self.stats.errors += 1
+            log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
+        return False
+
+    def _merge_state(self, key: str, message: wire.Decoded) -> bool:
+        graph = self.graph
+        problem = message_problem(graph, message, wire.last_chunk(key), "state")
+        if problem is not None:
+            self._reject(key, *problem)
+            return False
+        graph.writers.note(message.replica, message.agent)
+        live = self.members.live_agents()
+        if self.joined:
+            message = self._screen(key, message, live)
+        kept, text = self.policy.review_state(message, graph)
+        if text is not None:    # refused whole (kept is None), or in part
+            self._reject(key, "policy", text)
+        if kept is None:
+            return False
+        note_state_writers(graph.writers, graph.agent, message.agent, kept.writers, live,
+                           joined=self.joined)
+        nodes, problems = within_node_limits(graph, kept.nodes)
+        for reason, (first, count) in problems.items():   # one refusal per reason and state
+            self._reject(key, reason, first + (f" (and {count - 1} more nodes)" if count > 1
+                                               else ""))
+        graph.apply_message(wire.Decoded(kept.kind, kept.graph, kept.agent, kept.replica, {},
+                                         nodes, kept.edges, kept.top_hlc))
+        self.members.note_state(message)
+        return True
+
     def _reject(self, source: str, reason: str, text: str, count: int = 1) -> None:
         stats = self.stats
         if reason == "policy":
@@ -349,60 +393,34 @@ class Replica:
                         self.graph.agent, source, reason, text, stats.rejects[reason],
                         f"; {quiet} not logged since the last line" if quiet else "")
 
-    def _problem(self, message: wire.Decoded, claimed: str, kind: str) -> tuple[str, str] | None:
+    def _screen(self, key: str, message: wire.Decoded, live: set[str]) -> wire.Decoded:
+        from dsr.state_trust import screen_state
         graph = self.graph
-        if message.kind != kind and not (kind == "delta" and message.kind == "digest"):
-            return "wrong_kind", f"a {message.kind!r} message on a {kind} key"
-        if message.graph != graph.graph_name:
-            return "wrong_graph", (f"message for graph {message.graph!r}, this is "
-                                   f"{graph.graph_name!r}")
-        if message.agent != claimed:
-            return "forged_writer", (f"forged writer: claims agent {message.agent!r} on the "
-                                     f"key of {claimed!r}")
-        if message.replica == graph.replica_id:
-            return "forged_writer", f"forged writer: uses this replica's id {message.replica}"
-        owner = graph.bound_agent(message.replica)
-        if owner is not None and owner != message.agent:
-            return "forged_writer", (f"forged writer: replica id {message.replica} belongs to "
-                                     f"agent {owner!r}")
-        if kind == "state":
-            for replica, agent in message.writers.items():
-                known = graph.bound_agent(int(replica))
-                if known is not None and known != agent:
-                    return "forged_writer", (f"forged writer: state says replica {replica} is "
-                                             f"{agent!r}, it is {known!r}")
-        else:
-            if message.writers:
-                return "invalid", "a delta must not carry 'writers'"
-            if message.kind == "digest" and (message.nodes or message.edges):
-                return "invalid", "a digest must not carry nodes or edges"
-            if message.edges or any(state.add or state.meta is not None or state.rem
-                                    or state.cleared for _, state in message.nodes):
-                foreign = wire.foreign_writer(message)
-                if foreign is not None:
-                    return "forged_writer", (f"forged writer: delta of replica "
-                                             f"{message.replica} carries {foreign}")
-                removal = wire.removal_problem(message)
-                if removal is not None:
-                    return "removal_receipt", removal
-            else:                       # attribute updates only (the hot path)
-                own = message.replica
-                for _, state in message.nodes:
-                    for attr, reg in state.attrs.items():
-                        if reg[1] != own:
-                            return "forged_writer", (
-                                f"forged writer: delta of replica {own} carries attribute "
-                                f"{attr!r} written by replica {reg[1]}")
-        if kind == "state":
-            removal = wire.removal_problem(message)
-            if removal is not None:
-                return "removal_receipt", removal
-        top = message.top_hlc
-        if top and graph.clock.too_far_ahead(top):
-            return "clock_ahead", (f"clock {top} is more than {graph.clock.max_offset_ms} ms "
-                                   "ahead of this replica's wall clock")
-        return None
+        seen, vouched = self.members.trust_snapshot()
+        live = live | {graph.agent}
+        screened = screen_state(message, local=graph.element_state,
+                                binding=graph.writers.bound_agent, live=live, seen=seen,
+                                vouched=vouched, me=(graph.agent, graph.replica_id),
+                                attributed=graph.writers.writer_agent)
+        self.stats.deferred += screened.deferred
+        for reason, text in screened.problems:
+            self._reject(key, reason, text)
+        if screened.about_me:
+            self._answer_forgery(message.agent)
+        return screened.message
 
+    def _answer_forgery(self, liar: str) -> None:
+        """A state forged a claim about this agent: say at once what it really published (a
+        digest on its own key: every member that has not merged this agent's own state
+        since it (re)started then fetches it, `_on_digest`), so the members that deferred the
+        claim learn the truth and refuse it from then on."""
+        self.stats.forgeries_about_me += 1
+        log.warning("DSR %s: the state of %r forged a claim about %s; publishing a digest",
+                    self.graph.agent, liar, self.graph.agent)
+        if self._publisher is not None and not self.graph.read_only:
+            self.publish_digest()
+
+    # ------------------------------------------------------------------ Zenoh callbacks
     def start_receiver(self, channel: Any, closed_error: type[Exception]) -> None:
         """Handle the deltas of `channel` (a Zenoh channel handler: try_recv() / recv(), which
         raises `closed_error` once closed) from now on: on a receiver thread, or on the
@@ -411,163 +429,12 @@ class Replica:
                                      closed_error, name=f"dsr-rx-{self.graph.agent}")
         self._receiver.start()
 
-    def _on_delta_by_agent(self, sample: Any) -> None:
-        self._on_delta(sample)
-        self.stats.received_by_agent += 1
-
     def _on_delta(self, sample: Any) -> None:
-        """Handle one received delta (or digest), on the receiver thread or on the agent's
-        thread polling in dispatch() (dsr/receiver.py: one at a time, in arrival order)."""
-        self.stats.received += 1
-        key = "?"
-        try:
-            key = str(sample.key_expr)
-            payload = sample.payload.to_bytes()
-            if len(payload) > LIMITS.max_delta_bytes:
-                self._reject(key, "too_large", f"delta of {len(payload)} bytes, over the limit "
-                             f"of {LIMITS.max_delta_bytes} (CHRONAV_DSR_MAX_DELTA_BYTES)")
-                return
-            message = wire.decode(payload)
-            problem = self._problem(message, wire.last_chunk(key), "delta")
-            if problem is not None:
-                self._reject(key, *problem)
-                return
-            if message.kind == "digest":
-                self._on_digest(message)
-                return
-            if self._checks_deltas:
-                problem_text = self.policy.check(message, self.graph)
-                if problem_text is not None:
-                    self._reject(key, "policy", problem_text)
-                    return
-            graph = self.graph
-            held = graph._nodes.get
-            for node_id, state in message.nodes:     # node limits (dsr/limits.py)
-                attrs = state.attrs
-                if not attrs:
-                    continue
-                current = held(node_id)
-                if current is not None:             # scalars over existing keys: cannot grow
-                    if len(attrs) == 1:             # (the common update: one key)
-                        ((name, reg),) = attrs.items()
-                        kind = type(reg[2])
-                        if name in current.attrs and kind is not str and kind is not list:
-                            continue
-                    elif attrs.keys() <= current.attrs.keys():
-                        for reg in attrs.values():
-                            kind = type(reg[2])
-                            if kind is str or kind is list:
-                                break
-                        else:
-                            continue
-                problem = node_problem(node_id, current.attrs if current is not None else None,
-                                       attrs, registers=True)
-                if problem is not None:
-                    self._reject(key, *problem)
-                    return
-            if graph._bound.get(message.replica) is None:
-                graph.note_writer(message.replica, message.agent)
-            graph.apply_message(message)
-            self._advance(message.replica, message.top_hlc)
-            self.stats.applied += 1
-        except WireError as exc:
-            self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001 - never kill the receiving thread or the agent's
-            self.stats.errors += 1
-            log.exception("DSR %s failed to apply a delta from %s", self.graph.agent, key)
+        self.admit_delta(str(sample.key_expr), sample.payload.to_bytes())
 
-    def _advance(self, replica: int, hlc: int) -> None:
-        """A writer's own messages arrive in order: we now hold all it stamped up to hlc, if
-        we held all it stamped before the first of them that reached us.  Only its own state
-        proves that (it sets the entry, `_note_seen`): a subscription takes effect at the
-        router a moment after it is declared, a broken session loses the puts made meanwhile,
-        and in both cases the deltas that do arrive come in order after a hole.  So without an
-        entry, nothing is advanced."""
-        with self._table_lock:
-            seen = self._seen
-            current = seen.get(replica)
-            if current is not None and hlc > current:
-                seen[replica] = hlc
-
-    def _gap(self, agent: str | None) -> None:
-        """Deltas of `agent` (None: of everybody) may have been lost: forget its watermarks
-        until its own state has been merged again.  Caller holds _table_lock."""
-        me = self.graph.replica_id
-        for replica, owner in list(self.graph._bound.items()):
-            if replica != me and (agent is None or owner == agent):
-                self._seen.pop(replica, None)
-
-    def _on_digest(self, message: wire.Decoded) -> None:
-        self.stats.digests_received += 1
-        self.graph.note_writer(message.replica, message.agent)
-        self.graph.clock.observe(message.clock)
-        self._advance(message.replica, message.clock)
-        lagging = False
-        with self._table_lock:
-            member = self._members.get(message.agent)
-            if member is None or member.replica != message.replica:
-                member = self._members[message.agent] = Member(message.agent, message.replica)
-            member.clock, member.seen, member.live = message.clock, message.seen, True
-            mine = self.graph.replica_id
-            # Anti-entropy: the member holds writes we lack.  Deltas in flight, or a backlog
-            # on a loaded machine, look the same for a while: only a lag that lasts
-            # lag_grace_s (and at most once per lag_grace_s per writer) fetches a state.
-            now = self._now()
-            since = member.behind
-            for replica, hlc in message.seen.items():
-                if replica != mine and hlc > self._seen.get(replica, 0) and replica not in since:
-                    since[replica] = (hlc, now)
-            targets: set[str] = set()
-            if message.agent not in self._vouched:
-                # its own state (this incarnation) is not merged here yet: until it is, its
-                # watermark and its replica ids are unknown here and claims about it are
-                # deferred; fetch it now (also how a member answers a forged claim about it)
-                targets.add(message.agent)
-            for replica, (hlc, at) in list(since.items()):
-                if self._seen.get(replica, 0) >= hlc:
-                    del since[replica]
-                elif now - at >= self.lag_grace_s:
-                    # fetch from the writer itself if it runs (only its own state is
-                    # trusted for its writes), else from the member that holds them
-                    owner = self.graph.bound_agent(replica)
-                    known = self._members.get(owner) if owner is not None else None
-                    targets.add(owner if known is not None and known.live
-                                else message.agent)   # type: ignore[arg-type]
-                    since[replica] = (message.seen.get(replica, hlc), now)
-            targets = {t for t in targets if self._fetch_allowed(t, now)}
-            lagging = bool(targets)
-        if lagging and not self.graph.read_only:
-            self.stats.anti_entropy += 1
-            for target in sorted(targets):
-                self._request_sync(target)
-
-    def _fetch_allowed(self, target: str, now: float) -> bool:
-        """Rate limit of the state fetches digests ask for, per member: the first at once,
-        the next ones after a pause that doubles (lag_grace_s, 2x, 4x ... up to
-        max_fetch_backoff_s) as long as digests keep asking (a member whose state is
-        refused, or that keeps announcing writes its state does not carry; or this replica
-        is so loaded that it lags behind its own queue of deltas: fetching a state then
-        makes it slower still).  The pause starts again from lag_grace_s only after a quiet
-        period of twice the longest pause.  So a member costs one fetch per change it makes
-        (a lost delta), and at most one per max_fetch_backoff_s when something keeps them
-        coming.  Caller holds _table_lock."""
-        base, longest = self.lag_grace_s, self.max_fetch_backoff_s
-        not_before, pause, last = self._fetch_backoff.get(target, (0.0, base, -2 * longest))
-        if now < not_before:
-            self.stats.fetches_postponed += 1
-            return False
-        if now - last >= 2 * longest:
-            pause = base
-        self._fetch_backoff[target] = (now + pause, min(2 * pause, longest), now)
-        return True
-
-    def _request_sync(self, agent: str) -> None:
-        """Queue a state fetch, once: digests of several members may point at the same one."""
-        with self._table_lock:
-            if agent in self._pending_syncs:
-                return
-            self._pending_syncs.add(agent)
-        self._sync_requests.put(agent)
+    def _on_delta_by_agent(self, sample: Any) -> None:
+        self.admit_delta(str(sample.key_expr), sample.payload.to_bytes())
+        self.stats.received_by_agent += 1
 
     def _on_query(self, query: Any) -> None:
         try:
@@ -579,40 +446,32 @@ class Replica:
                     for part in self.graph.state_parts(self.seen()):
                         query.reply(self._state_key, part, encoding=wire.ENCODING)
                 self.stats.state_served += 1
-        except Exception:  # noqa: BLE001
+        except Exception:
             self.stats.errors += 1
             log.exception("DSR %s failed to answer a state query", self.graph.agent)
+
+    def _on_member(self, sample: Any) -> None:
+        import zenoh
+        self.member_seen(wire.last_chunk(str(sample.key_expr)),
+                         sample.kind == zenoh.SampleKind.PUT)
+
+    def member_seen(self, agent: str, live: bool) -> None:
+        """A member's liveliness token appeared (live) or vanished: update the member table,
+        declare or undeclare its delta key, and fetch the state of one that (re)appeared."""
+        if agent == self.graph.agent:
+            return
+        self.members.presence(agent, live)
+        self._declare_writer_key(agent, live)
+        if live:
+            self.anti_entropy.request(agent)
 
     def report(self) -> dict[str, Any]:
         """What `chronav dsr stats` shows for this member."""
         graph = self.graph
-        with self._table_lock:
-            members = {m.agent: {"replica": m.replica, "live": m.live} for m in
-                       self._members.values()}
         return {"format": STATS_FORMAT, "agent": graph.agent, "graph": graph.graph_name,
                 "replica": graph.replica_id, "nodes": len(graph),
                 "tombstones": graph.tombstones(), "stats": self.stats.as_dict(),
-                "members": members}
-
-    def _on_member(self, sample: Any) -> None:
-        import zenoh
-        agent = wire.last_chunk(str(sample.key_expr))
-        if agent == self.graph.agent:
-            return
-        live = sample.kind == zenoh.SampleKind.PUT
-        with self._table_lock:
-            member = self._members.get(agent)
-            if member is None:
-                member = self._members[agent] = Member(agent)
-            member.live = live
-            member.gone_at = 0.0 if live else time.monotonic()
-            # either way its stream may have a gap (a broken session loses puts): until its
-            # own state is merged again, its watermarks and replica ids are not trusted
-            self._gap(agent)
-            self._vouched.discard(agent)
-        self._declare_writer_key(agent, live)
-        if live:
-            self._request_sync(agent)
+                "members": self.members.summary()}
 
     def _declare_writer_key(self, agent: str, live: bool) -> None:
         """Declare in this session the key a member publishes its deltas on (undeclare it when
@@ -636,7 +495,7 @@ class Replica:
             try:
                 self._writer_keys[agent] = session.declare_keyexpr(
                     wire.delta_key(self.graph.graph_name, agent))
-            except Exception:  # noqa: BLE001 - a name Zenoh refuses: the wildcard serves it
+            except Exception:  # a name Zenoh refuses: the wildcard serves it
                 log.debug("DSR %s: cannot declare the delta key of %r", self.graph.agent, agent,
                           exc_info=True)
 
@@ -644,180 +503,32 @@ class Replica:
     def _undeclare(session: Any, key_expr: Any) -> None:
         try:
             session.undeclare(key_expr)
-        except Exception:  # noqa: BLE001 - already gone with the session
+        except Exception:  # already gone with the session
             log.debug("undeclaring %s failed", key_expr, exc_info=True)
 
-    def live_agents(self) -> set[str]:
-        with self._table_lock:
-            return {m.agent for m in self._members.values() if m.live}
-
-    def acked(self, replica: int, hlc: int) -> bool:
-        """Every member (running, or gone less than member_retention_s ago) has told us, in
-        its digest, that it holds every write of `replica` up to `hlc`."""
-        now = time.monotonic()
-        with self._table_lock:
-            for member in self._members.values():
-                if not member.live and now - member.gone_at > self.member_retention_s:
-                    continue
-                if member.seen.get(replica, 0) < hlc:
-                    return False
-        return True
-
-    def _merge_state(self, sample: Any) -> None:
-        """Validate, screen, check against the policy, merge.  Never raises: one bad reply
-        must not abort the anti-entropy round that carries the good ones."""
-        key = str(sample.key_expr)
-        try:
-            payload = sample.payload.to_bytes()
-            if len(payload) > LIMITS.max_state_bytes:
-                self._reject(key, "too_large", f"state of {len(payload)} bytes, over the limit "
-                             f"of {LIMITS.max_state_bytes} (CHRONAV_DSR_MAX_STATE_BYTES)")
-                return
-            with gc_paused():
-                message = wire.decode(payload)
-                problem = self._problem(message, wire.last_chunk(key), "state")
-                if problem is not None:
-                    self._reject(key, *problem)
-                    return
-                self.graph.note_writer(message.replica, message.agent)
-                live = self.live_agents()
-                if self._joined:
-                    message = self._screen(key, message, live)
-                kept, text = self.policy.review_state(message, self.graph)
-                if text is not None:    # refused whole (kept is None), or in part
-                    self._reject(key, "policy", text)
-                if kept is None:
-                    return
-                self._note_writers(message.agent, kept.writers, live)
-                self.graph.apply_message(wire.Decoded(
-                    kept.kind, kept.graph, kept.agent, kept.replica, {},
-                    self._within_node_limits(key, kept.nodes), kept.edges, kept.top_hlc))
-                self._note_seen(message)
-            self.stats.state_merged += 1
-        except WireError as exc:
-            self._reject(key, "invalid", str(exc))
-        except Exception:  # noqa: BLE001
-            self.stats.errors += 1
-            log.exception("DSR %s failed to merge a state from %s", self.graph.agent, key)
-
-    def _within_node_limits(self, key: str, nodes: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
-        """A state's node entries minus those that would take a node over the node limits
-        (dsr/limits.py); counted once per reason and state (saying how many nodes)."""
-        held = self.graph.element_state
-        kept = []
-        problems: dict[str, tuple[str, int]] = {}
-        for node_id, state in nodes:
-            if state.attrs:
-                current = held("node", node_id)
-                problem = node_problem(node_id, current.attrs if current is not None else None,
-                                       state.attrs, registers=True)
-                if problem is not None:
-                    first, count = problems.get(problem[0], (problem[1], 0))
-                    problems[problem[0]] = (first, count + 1)
-                    continue
-            kept.append((node_id, state))
-        for reason, (text, count) in problems.items():   # one refusal per reason and state
-            self._reject(key, reason, text + (f" (and {count - 1} more nodes)" if count > 1
-                                              else ""))
-        return kept
-
-    def _note_writers(self, sender: str, writers: dict[str, str], live: set[str]) -> None:
-        """Which `writers` entries of a merged state this replica takes as its own knowledge
-        (and will serve in its state replies: DSRGraph.served_writers), and which only to
-        attribute relayed writes (dsr/state_trust.py):
-        - the sender's own replica ids (an agent vouches for its incarnations): proven (after
-          the join, the screening has removed every entry naming this replica's own agent
-          that it does not know: state_trust.screen_state);
-        - every entry of the first state of a join: nothing to check it against, trusted
-          (documented limit; its sender served only what it could prove).  Entries about
-          running agents included: a joiner that left them out would relay their writes
-          without attribution to the next joiner, whose policy would refuse them;
-        - after the join, an entry about an agent that is not running: attribution only, never
-          served (a relay proves nothing); about a running agent: nothing (deferred until that
-          agent's own messages or state say it)."""
-        graph = self.graph
-        me = graph.agent
-        for key, agent in writers.items():
-            replica = int(key)
-            if graph.bound_agent(replica) is not None:
-                continue
-            if agent == sender or agent == me or not self._joined:
-                graph.note_writer(replica, agent)
-            elif agent not in live:
-                graph.note_relayed_writer(replica, agent)
-
-    def _note_seen(self, message: wire.Decoded) -> None:
-        """After merging a state: we now hold what its sender held of its own writes, and of
-        the writes of agents that are not running.  A running writer's watermark comes only
-        from its own state, even in the first state of a join: its relayed stamps may have
-        been screened out, and deltas it published while our subscription was taking effect
-        may be missing here though the relay holds them (`_advance`)."""
-        sender = message.agent
-        live = self.live_agents()
-        graph = self.graph
-        with self._table_lock:
-            if message.clock:                   # the last part of the state: all merged
-                self._vouched.add(sender)
-                self._state_cover = len(message.seen)
-            for replica, hlc in message.seen.items():
-                owner = graph.bound_agent(replica) or message.writers.get(str(replica))
-                own = replica == message.replica or owner == sender
-                if not own and owner in live:
-                    continue    # a running writer: only its own state sets its watermark
-                if hlc >= self._seen.get(replica, 0):   # (one that is not running sends
-                    self._seen[replica] = hlc          # nothing more: a relay's is true)
-
-    def _screen(self, key: str, message: wire.Decoded, live: set[str]) -> wire.Decoded:
-        from dsr.state_trust import screen_state
-        graph = self.graph
-        with self._table_lock:
-            seen = dict(self._seen)
-            vouched = set(self._vouched)
-        live = live | {graph.agent}
-        screened = screen_state(message, local=graph.element_state, binding=graph.bound_agent,
-                                live=live, seen=seen, vouched=vouched,
-                                me=(graph.agent, graph.replica_id),
-                                attributed=graph.writer_agent)
-        self.stats.deferred += screened.deferred
-        for reason, text in screened.problems:
-            self._reject(key, reason, text)
-        if screened.about_me:
-            self._answer_forgery(message.agent)
-        return screened.message
-
-    def _answer_forgery(self, liar: str) -> None:
-        """A state forged a claim about this agent: say at once what it really published (a
-        digest on its own key: every member that has not merged this agent's own state
-        since it (re)started then fetches it, dsr/transport.py `_on_digest`), so the
-        members that deferred the claim learn the truth and refuse it from then on."""
-        self.stats.forgeries_about_me += 1
-        log.warning("DSR %s: the state of %r forged a claim about %s; publishing a digest",
-                    self.graph.agent, liar, self.graph.agent)
-        if self._publisher is not None and not self.graph.read_only:
-            self.publish_digest()
-
     # ------------------------------------------------------------------ anti-entropy
+    def _on_digest(self, message: wire.Decoded) -> None:
+        self.stats.digests_received += 1
+        self.graph.writers.note(message.replica, message.agent)
+        self.graph.clock.observe(message.clock)
+        self.members.advance(message.replica, message.clock)
+        targets = self.anti_entropy.lagging(message)
+        self.stats.fetches_postponed = self.anti_entropy.postponed
+        if targets and not self.graph.read_only:
+            self.stats.anti_entropy += 1
+            for target in sorted(targets):
+                self.anti_entropy.request(target)
+
     def _initial_sync(self) -> None:
         members = sorted({wire.last_chunk(str(reply.ok.key_expr)) for reply in
                           self.session.liveliness().get(
-                              wire.member_key(self.graph.graph_name, _ALL),
+                              wire.member_key(self.graph.graph_name, ALL),
                               timeout=self.sync_timeout) if reply.ok is not None}
                          - {self.graph.agent})
-        with self._table_lock:
-            for member in members:
-                self._members.setdefault(member, Member(member))
         for member in members:
+            self.members.add(member)
             self._declare_writer_key(member, True)
-        random.shuffle(members)          # spread the load when many agents start together
-        for member in members:
-            # a member whose state covers every running member (its `seen` has as many
-            # writers) is a complete copy; a tool that serves only its own writes is not:
-            # merge it and go on (docs/dsr_wire_format.md, "Writing as a foreign client")
-            self._state_cover = 0
-            if self._sync(member) and self._state_cover >= len(members):
-                return
-        if not members:
-            self._sync(_ALL)
+        self.anti_entropy.join_round(members, self._sync)
 
     def _sync(self, agent: str) -> int:
         """Fetch and merge the state of one member (or of all, agent == '*'); returns the
@@ -835,13 +546,13 @@ class Replica:
                               allowed_destination=zenoh.Locality.REMOTE)
         for reply in replies:
             if reply.ok is not None:
-                self._merge_state(reply.ok)
+                self.admit_state(str(reply.ok.key_expr), reply.ok.payload.to_bytes())
             else:
                 log.warning("DSR %s: state query %s failed: %s", self.graph.agent, agent,
                             reply.err.payload.to_string())
         return self.stats.state_merged - merged
 
-    def sync(self, agent: str = _ALL) -> None:
+    def sync(self, agent: str = ALL) -> None:
         """Run one anti-entropy round now (blocking)."""
         self._sync(agent)
 
@@ -854,42 +565,18 @@ class Replica:
         if self.graph.read_only:
             return
         self.publish_digest()
-        forgotten = self.graph.compact(self.acked)
+        forgotten = self.graph.compact(self.members.acked)
         self.stats.compacted += forgotten
         self.stats.tombstones = self.graph.tombstones()
 
-    def _work(self) -> None:
-        next_digest = time.monotonic()
-        while not self._closed.is_set():
-            timeout = max(0.0, min(self.watch_interval, next_digest - time.monotonic()))
-            try:
-                agent = self._sync_requests.get(timeout=timeout)
-            except queue.Empty:
-                agent = ""
-            if agent is None or self._closed.is_set():
-                return
-            if agent:
-                with self._table_lock:
-                    self._pending_syncs.discard(agent)
-            try:
-                connected = self._is_connected()
-                if connected and not self._connected:
-                    log.info("DSR %s: connection back, resynchronising", self.graph.agent)
-                    with self._table_lock:   # deltas were lost meanwhile: watermarks are void
-                        self._gap(None)
-                    agent = _ALL
-                self._connected = connected
-                if agent:
-                    self._sync(agent)
-                if time.monotonic() >= next_digest:
-                    next_digest = time.monotonic() + self.digest_interval
-                    if connected:
-                        self.maintain()
-            except Exception:  # noqa: BLE001 - session closed under us, or a bad reply
-                if self._closed.is_set():
-                    return
-                self.stats.errors += 1
-                log.exception("DSR %s: anti-entropy round failed", self.graph.agent)
+    def _work(self, connected: bool) -> None:
+        self.anti_entropy.run(self._closed, name=self.graph.agent, connected=self._is_connected,
+                              sync=self._sync, maintain=self.maintain,
+                              on_error=self._count_error, was_connected=connected,
+                              watch_interval=self.watch_interval)
+
+    def _count_error(self) -> None:
+        self.stats.errors += 1
 
 
 @contextmanager

@@ -388,25 +388,31 @@ def _struct(name: str, fields: list[tuple[Any, ...]]) -> type:
     return msgspec.defstruct(name, fields, kw_only=True, forbid_unknown_fields=True)
 
 
+def _of(origin: Any, *args: Any) -> Any:
+    """`origin[args]`: a type built at run time from types held in variables (what msgspec
+    decodes into), which a static type checker cannot follow when written as a subscript."""
+    return origin[args if len(args) > 1 else args[0]]
+
+
 def _wire_struct(list_item: Any, escapes: bool) -> type:
     """The message struct whose list values hold `list_item` (a union has one array type).
     Type and agent names are plain strings here: `struct_decode` checks them against memos
     of names already matched (a regex call per message would double an update's parse)."""
-    value = Union[bool, _MInt64, _MFloat, _MStr,  # noqa: UP007
-                  Annotated[list[list_item], Meta(max_length=_MAX_VALUE // 8)]]
-    register = tuple[_MU63, _MReplica, value]
+    value = _of(Union, bool, _MInt64, _MFloat, _MStr,
+                _of(Annotated, _of(list, list_item), Meta(max_length=_MAX_VALUE // 8)))
+    register = _of(tuple, _MU63, _MReplica, value)
     dots = list[tuple[_MReplica, _MU63]]
     entry = [("add", dots, []), ("rem", dots, []), ("cleared", _MU63, 0),
-             ("attrs", dict[_text(ATTR_KEY_PATTERN, escapes), register], {})]
-    meta = tuple[_MU63, _MReplica, str, _text(NAME_PATTERN, escapes)]
-    node = _struct("Node", [("id", _MNodeId), *entry, ("meta", Union[meta, None], None)])
+             ("attrs", _of(dict, _text(ATTR_KEY_PATTERN, escapes), register), {})]
+    meta = _of(tuple, _MU63, _MReplica, str, _text(NAME_PATTERN, escapes))
+    node = _struct("Node", [("id", _MNodeId), *entry, ("meta", meta | None, None)])
     edge = _struct("Edge", [("src", _MNodeId), ("dst", _MNodeId), ("type", str), *entry])
     return _struct("Wire", [
         ("format", Literal["chronav-dsr/1"]), ("kind", Literal["delta", "state", "digest"]),
         ("graph", str), ("agent", str), ("replica", _MReplica),
         ("writers", dict[_MReplica, str], {}), ("clock", _MU63, 0),
-        ("seen", dict[_MReplica, _MU63], {}), ("nodes", list[node], []),
-        ("edges", list[edge], [])])
+        ("seen", dict[_MReplica, _MU63], {}), ("nodes", _of(list, node), []),
+        ("edges", _of(list, edge), [])])
 
 
 def _decoders(escapes: bool) -> tuple[msgspec.json.Decoder[Any], msgspec.json.Decoder[Any]]:

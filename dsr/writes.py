@@ -13,8 +13,8 @@ reviewed differently (dsr/state_review.py).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from typing import TYPE_CHECKING, Literal, NamedTuple, Protocol
+from collections.abc import Iterator, Mapping
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple, Protocol
 
 from dsr.crdt import REMOVAL_RECEIPT
 
@@ -123,21 +123,21 @@ def _element_writes(agent: str, state: ElementState, element: Element, type_: st
 
 
 def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tuple[int, int, str],
-                 delta: dict[str, object], cascade: str | None = None,
+                 delta: Mapping[str, Any], cascade: str | None = None,
                  valued: frozenset[str] = frozenset()) -> Iterator[Write]:
     """The writes of one local change (the keyword pieces of a delta) before it is applied:
     the same questions receivers will ask about the delta (see delta_writes)."""
     from dsr.crdt import ElementState
 
-    state = ElementState(add=dict(delta.get("add") or ()),  # type: ignore[arg-type]
-                         rem=dict(delta.get("rem") or ()),  # type: ignore[arg-type]
-                         cleared=int(delta.get("cleared") or 0),  # type: ignore[arg-type]
-                         meta=delta.get("meta"),  # type: ignore[arg-type]
-                         attrs=dict(delta.get("attrs") or {}))  # type: ignore[arg-type]
+    state = ElementState(add=dict(delta.get("add") or ()), rem=dict(delta.get("rem") or ()),
+                         cleared=int(delta.get("cleared") or 0), meta=delta.get("meta"),
+                         attrs=dict(delta.get("attrs") or {}))
     if element == "node":
-        for type_ in node_types(key, state, graph):  # type: ignore[arg-type]
+        assert isinstance(key, int)
+        for type_ in node_types(key, state, graph):
             yield from _element_writes(agent, state, "node", type_, None, None, None, valued)
     else:
-        src, dst, edge_type = key  # type: ignore[misc]
+        assert isinstance(key, tuple)
+        src, dst, edge_type = key
         yield from _element_writes(agent, state, "edge", edge_type, graph.node_type_of(src),
                                    graph.node_type_of(dst), cascade, valued)

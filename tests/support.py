@@ -26,8 +26,8 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 
 @dataclass
 class FakeSample:
-    """What a replica's receiving code reads of a Zenoh sample (`key_expr`, `payload.to_bytes()`),
-    so that tests can hand messages to `Replica._on_delta` / `_merge_state` without Zenoh."""
+    """What a replica's receiver reads of a Zenoh sample (`key_expr`, `payload.to_bytes()`),
+    for tests that feed a stand-in Zenoh channel (tests/unit/test_dsr_receive_on_dispatch.py)."""
 
     key_expr: str
     data: bytes

@@ -29,7 +29,8 @@ def spawn_worker(procs: ProcessGroup, endpoint: str, log_dir: Path, agent: str,
                  *args: str) -> tuple[Any, Path]:
     status = log_dir / f"{agent}.json"
     status.unlink(missing_ok=True)
-    proc = procs.spawn(["-m", "dsr.replica_worker", "--connect", endpoint, "--agent", agent,
+    proc = procs.spawn(["-m", "tests.integration.replica_worker", "--connect", endpoint,
+                        "--agent", agent,
                         "--status", str(status), *args], log_path=log_dir / f"{agent}.log")
     return proc, status
 

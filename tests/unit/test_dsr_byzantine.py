@@ -23,9 +23,8 @@ from hypothesis import strategies as st
 
 from dsr import DSRGraph, wire
 from dsr.crdt import REMOVAL_RECEIPT
-from dsr.transport import Member, Replica
-from tests.support import FakeSample
-from tests.unit.test_dsr_protocol import POLICY, Net, state_sample
+from dsr.transport import Replica
+from tests.unit.test_dsr_protocol import POLICY, Net, Received, state_of
 
 HONEST = ("sim_robot", "agenda", "executive")
 EVIL = "agenda_tool-evil"
@@ -38,12 +37,12 @@ class Byzantine:
         self.graph = DSRGraph(EVIL)
         self.made_up: set[int] = set()
 
-    def state(self, nodes: list[dict], edges: list[dict], writers: dict[str, str]) -> FakeSample:
+    def state(self, nodes: list[dict], edges: list[dict], writers: dict[str, str]) -> Received:
         document = orjson.loads(self.graph.state_message())
         document["nodes"] += nodes
         document["edges"] += edges
         document["writers"].update(writers)
-        return FakeSample(wire.state_key("chronav", EVIL), orjson.dumps(document))
+        return wire.state_key("chronav", EVIL), orjson.dumps(document)
 
 
 class World:
@@ -56,7 +55,7 @@ class World:
             self._watch(self.net.add(agent))
         self.evil = Byzantine()
         for replica in self.net.replicas.values():
-            replica._members[EVIL] = Member(EVIL)
+            replica.members.add(EVIL)
         self.truth = {r.graph.replica_id: name for name, r in self.net.replicas.items()}
         sim = self.net.replicas["sim_robot"].graph
         with sim.transaction():
@@ -105,7 +104,7 @@ class World:
                     assert self.truth.get(rid) == agent, (name, "serves", rid, agent)
                 else:
                     assert rid == evil_id and agent == EVIL, (name, "serves", rid, agent)
-            for entries in (graph._nodes.values(), graph._edges.values()):
+            for entries in (graph.node_states.values(), graph.edge_states.values()):
                 for state in entries:
                     stamps = list(state.add.items())
                     if state.meta is not None:
@@ -123,14 +122,6 @@ class World:
                                                    wire.delta_key("chronav", a))]
         counted = [r for r in self.rejects if r[1] in honest_keys]
         assert not counted, f"honest members counted each other: {counted}"
-
-
-class Token:
-    """A liveliness sample saying a member's token is (again) up."""
-
-    def __init__(self, key: str) -> None:
-        import zenoh
-        self.key_expr, self.kind = key, zenoh.SampleKind.PUT
 
 
 # ---------------------------------------------------------------------------- the attacks
@@ -172,12 +163,12 @@ def attack(world: World, step: tuple) -> None:
         for name, replica in replicas.items():     # an anti-entropy round among honest ones
             for other_name, other in replicas.items():
                 if other_name != name:
-                    replica._merge_state(state_sample(other))
+                    replica.admit_state(*state_of(other))
         return
     if kind == "token":                   # a member's token comes back (a restart, a
         _, watcher, member = step         # partition): its own state is not merged yet
         if watcher != member:
-            replicas[watcher]._on_member(Token(wire.member_key("chronav", member)))
+            replicas[watcher].member_seen(member, live=True)
         return
     if kind == "table":                   # a fresh id given to a running honest agent
         _, agent, fresh_stamp, with_node = step
@@ -219,10 +210,10 @@ def attack(world: World, step: tuple) -> None:
                                str(evil.graph.replica_id): EVIL}
         document.pop("clock", None)
         document.pop("seen", None)
-        sample = FakeSample(wire.state_key("chronav", EVIL), orjson.dumps(document))
+        sample = wire.state_key("chronav", EVIL), orjson.dumps(document)
     assert sample is not None
     for replica in replicas.values():
-        replica._merge_state(sample)
+        replica.admit_state(*sample)
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -249,7 +240,7 @@ def test_a_forged_claim_about_a_member_is_counted_by_it_and_answered_with_its_st
     world = World()
     agenda = world.net.replicas["agenda"]
     sim = world.net.replicas["sim_robot"]
-    sim._vouched.discard("agenda")          # as just after agenda (re)started
+    sim.members.vouched.discard("agenda")          # as just after agenda (re)started
     fake = 987654321987
     world.evil.made_up.add(fake)
     hlc = world.evil.graph.clock.tick()
@@ -257,16 +248,15 @@ def test_a_forged_claim_about_a_member_is_counted_by_it_and_answered_with_its_st
                                                                         "activity/fake"]}],
                               [], {str(fake): "agenda"})
     digests_before = agenda.stats.digests_sent
-    sim._merge_state(forged)
+    sim.admit_state(*forged)
     assert sim.stats.deferred >= 1 and not sim.stats.rejects
-    agenda._merge_state(forged)
+    agenda.admit_state(*forged)
     assert agenda.stats.rejects == {"forged_writer": 1}
     assert agenda.stats.forgeries_about_me == 1
     assert agenda.stats.digests_sent == digests_before + 1
-    assert sim._sync_requests.get_nowait() == "agenda"        # sim fetches agenda's state
-    sim._pending_syncs.discard("agenda")
-    sim._merge_state(state_sample(agenda))
-    sim._merge_state(forged)
+    assert sim.anti_entropy.take(0) == "agenda"        # sim fetches agenda's state
+    sim.admit_state(*state_of(agenda))
+    sim.admit_state(*forged)
     assert sim.stats.rejects == {"forged_writer": 1}
     for replica in world.net.replicas.values():
         assert fake not in replica.graph.served_writers()
@@ -281,7 +271,7 @@ def test_a_forged_old_stamp_under_ones_own_id_is_counted_by_oneself():
     sim.graph.update_node(world.clock, {"mode": "running"})    # sim_robot publishes past it
     forged = world.evil.state([{"id": world.clock, "attrs": {
         "now_s": [stamp + 1, sim.graph.replica_id, 42.0]}}], [], {})
-    sim._merge_state(forged)
+    sim.admit_state(*forged)
     assert sim.stats.rejects.get("forged_stamp") == 1 and sim.stats.deferred == 0
     assert sim.graph.get_attr(world.clock, "now_s") == 1.0
     assert sim.stats.forgeries_about_me == 1
@@ -310,7 +300,7 @@ def test_an_old_removal_one_member_still_holds_is_not_called_forged_after_a_rest
     assert keeper.graph.element_state("edge", (person, room, "in")).cleared > 0
     restarted = net.add("executive")     # joins from sim's compacted copy, then merges all
     for _ in range(3):
-        restarted._merge_state(state_sample(keeper))
+        restarted.admit_state(*state_of(keeper))
     assert restarted.stats.rejects == {}, restarted.stats.last_reject
     assert restarted.graph.get_edge(person, room, "in") is not None
     # a removal that would hide the edge, stamped by the observer and never published by it,
@@ -321,7 +311,7 @@ def test_an_old_removal_one_member_still_holds_is_not_called_forged_after_a_rest
     entry = next(e for e in document["edges"] if (e["src"], e["dst"]) == (person, room))
     entry.update(rem=[[r, h] for r, h in edge.add.items()], cleared=hlc,
                  attrs={REMOVAL_RECEIPT: [hlc, observer.graph.replica_id, True]})
-    restarted._merge_state(state_sample(keeper, orjson.dumps(document)))
+    restarted.admit_state(*state_of(keeper, orjson.dumps(document)))
     assert restarted.stats.rejects == {"forged_stamp": 1}
     assert restarted.graph.get_edge(person, room, "in") is not None
 
@@ -339,10 +329,10 @@ def test_a_joiner_relays_what_it_joined_with_attributed():
     second = Replica(DSRGraph("agenda"), policy=POLICY)
     for joiner in (first, second):
         for name in ("sim_robot", "human_observer"):
-            joiner._members[name] = Member(name)
-    first._merge_state(state_sample(sim))          # its join: before any message of the others
-    first._joined = True
-    second._members["executive"] = Member("executive")
-    second._merge_state(state_sample(first))       # its join, from the first joiner
+            joiner.members.add(name)
+    first.admit_state(*state_of(sim))          # its join: before any message of the others
+    first.joined = True
+    second.members.add("executive")
+    second.admit_state(*state_of(first))       # its join, from the first joiner
     assert second.stats.rejects == {}, second.stats.last_reject
     assert second.graph.get_node_by_name("ana") is not None

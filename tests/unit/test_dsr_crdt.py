@@ -205,7 +205,7 @@ def test_concurrent_same_name_resolves_deterministically():
     nb = b.insert_node("person", "alice")
     deliver(a, out_b)
     deliver(b, out_a)
-    first, second = sorted([na, nb], key=lambda n: (a._view[n.id].created, n.id))
+    first, second = sorted([na, nb], key=lambda n: (a.node_states[n.id].meta[0], n.id))  # created
     for graph in (a, b):
         assert graph.get_node_by_name("alice").id == first.id
         assert graph.get_node(second.id).name == f"alice#{second.id}"

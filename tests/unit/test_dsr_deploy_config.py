@@ -15,7 +15,7 @@ from tests.support import REPO_ROOT
 DEPLOY = REPO_ROOT / "deploy"
 
 
-def get(conf, key):  # noqa: ANN001, ANN201
+def get(conf, key):
     return json.loads(conf.get_json(key))
 
 

@@ -13,8 +13,7 @@ import orjson
 import pytest
 
 from dsr import DSRGraph, wire
-from dsr.transport import Member, Replica
-from tests.support import FakeSample
+from dsr.transport import Replica
 from tests.unit.test_dsr_protocol import POLICY
 
 TOOL = "agenda_tool-desk"
@@ -24,9 +23,9 @@ def run(state_kind: str, seconds: float = 60.0, digest_every: float = 0.5) -> tu
     """Fetches of the tool's state by one honest replica over `seconds` of simulated time."""
     clock = [0.0]
     honest = Replica(DSRGraph("executive"), policy=POLICY)
-    honest._now = lambda: clock[0]               # type: ignore[method-assign]
-    honest._joined = True
-    honest._members[TOOL] = Member(TOOL)
+    honest.anti_entropy.now = lambda: clock[0]               # type: ignore[method-assign]
+    honest.joined = True
+    honest.members.add(TOOL)
     tool = DSRGraph(TOOL)
     tool.insert_node("agenda_request", "agenda_request/1", {"state": "pending", "change": "{}"})
     fetches = 0
@@ -35,10 +34,9 @@ def run(state_kind: str, seconds: float = 60.0, digest_every: float = 0.5) -> tu
         digest = {"format": wire.FORMAT, "kind": "digest", "graph": "chronav", "agent": TOOL,
                   "replica": tool.replica_id, "clock": stamp,
                   "seen": {str(tool.replica_id): stamp}}
-        honest._on_delta(FakeSample(wire.delta_key("chronav", TOOL), orjson.dumps(digest)))
-        while not honest._sync_requests.empty():  # what the sync worker does
-            target = honest._sync_requests.get_nowait()
-            honest._pending_syncs.discard(target)
+        honest.admit_delta(wire.delta_key("chronav", TOOL), orjson.dumps(digest))
+        while not honest.anti_entropy.requests.empty():  # what the sync worker does
+            target = honest.anti_entropy.take(0)
             assert target == TOOL
             fetches += 1
             document = orjson.loads(tool.state_message())
@@ -48,7 +46,7 @@ def run(state_kind: str, seconds: float = 60.0, digest_every: float = 0.5) -> tu
             elif state_kind == "refused":        # a state the policy refuses whole
                 document["agent"] = "nobody"
             key = wire.state_key("chronav", document["agent"])
-            honest._merge_state(FakeSample(key, orjson.dumps(document)))
+            honest.admit_state(key, orjson.dumps(document))
         clock[0] += digest_every
     return fetches, honest
 

@@ -108,6 +108,30 @@ def test_transaction_is_one_delta_and_rolls_back(g):
     assert g.get_node_by_name("c") is None and g.get_edge(a.id, b.id, "connected") is not None
 
 
+def test_a_rolled_back_transaction_leaves_the_replicated_state_as_it_was(g):
+    """Undo restores the CRDT state itself (nodes and edges alike, created, changed or removed
+    in the block), not only what queries show: the replica equals one that never saw it."""
+    sent: list[bytes] = []
+    g.attach(sent.append)
+    a = g.insert_node("room", "a", {"area": 1.0})
+    b = g.insert_node("room", "b")
+    g.insert_or_assign_edge(a.id, b.id, "connected", {"door": "d1"})
+    reference = DSRGraph("reference")
+    for payload in sent:
+        reference.apply_message(wire.decode(payload))
+    assert g.state_equals(reference)
+    with pytest.raises(RuntimeError), g.transaction():
+        c = g.insert_node("room", "c")
+        g.insert_or_assign_edge(b.id, c.id, "connected")          # a new edge
+        g.insert_or_assign_edge(a.id, b.id, "connected", {"door": "d2"})
+        g.update_node(a.id, {"area": 2.0})
+        g.delete_edge(a.id, b.id, "connected")                      # an edge removed
+        raise RuntimeError("abort")
+    assert g.state_equals(reference) and g.tombstones() == 0
+    assert g.edges_from(b.id) == [] and g.edges_to(b.id)[0].attrs == {"door": "d1"}
+    assert g.get_node_by_name("c") is None and len(sent) == 3
+
+
 def test_signals_are_delivered_by_dispatch_only(g):
     seen: list[tuple] = []
     for signal in ("node_added", "node_updated", "node_deleted", "edge_added", "edge_updated",

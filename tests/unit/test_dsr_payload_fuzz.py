@@ -1,10 +1,10 @@
 """Fuzzing the receive path of a replica with hostile payloads (in-process, no network).
 
-Every payload goes through the transport's real handlers (`Replica._on_delta`,
-`Replica._merge_state`).  Invariants: the handler never raises, nothing is counted as an
-unexpected error, every message is either refused (counted, logged) or - only when it is a
-valid message of an agent allowed to write it - merged; with the shipped write policy, agent
-"fuzzer" holds no grant, so the guarded graph never changes.
+Every payload goes through the transport's admission API (`Replica.admit_delta`,
+`Replica.admit_state`: what the Zenoh callbacks call).  Invariants: the handler never raises,
+nothing is counted as an unexpected error, every message is either refused (counted, logged)
+or - only when it is a valid message of an agent allowed to write it - merged; with the
+shipped write policy, agent "fuzzer" holds no grant, so the guarded graph never changes.
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ from agents.world.write_policy import policy_from_env
 from dsr.policy import AllowAll
 from dsr.transport import Replica
 from tests.fuzz_payloads import FUZZER, VALID, mutated_messages, payloads
-from tests.support import FakeSample
 
 
 def guarded(policy: object) -> Replica:
@@ -56,10 +55,10 @@ def test_guarded_replica_refuses_every_hostile_payload(payload, on_state_key):
     digest = GUARD.graph.digest()
     before = GUARD.stats.as_dict()
     if on_state_key:
-        GUARD._merge_state(FakeSample(STATE_KEY, payload))
+        GUARD.admit_state(STATE_KEY, payload)
         refused_or_merged(GUARD, before, "state_merged")
     else:
-        GUARD._on_delta(FakeSample(DELTA_KEY, payload))
+        GUARD.admit_delta(DELTA_KEY, payload)
         refused_or_merged(GUARD, before, "applied")
     assert GUARD.stats.state_merged == 0 and GUARD.stats.applied == 0
     assert GUARD.graph.digest() == digest
@@ -74,10 +73,10 @@ def test_open_replica_survives_mutated_messages(kind_payload):
     kind, payload = kind_payload
     before = OPEN.stats.as_dict()
     if kind == "state":
-        OPEN._merge_state(FakeSample(STATE_KEY, payload))
+        OPEN.admit_state(STATE_KEY, payload)
         refused_or_merged(OPEN, before, "state_merged")
     else:
-        OPEN._on_delta(FakeSample(DELTA_KEY, payload))
+        OPEN.admit_delta(DELTA_KEY, payload)
         refused_or_merged(OPEN, before, "applied")
     graph = OPEN.graph
     graph.digest()
@@ -92,9 +91,9 @@ def test_valid_templates_do_merge_on_an_open_replica():
     for message in VALID:
         data = orjson.dumps(message)
         if message["kind"] == "state":
-            replica._merge_state(FakeSample(STATE_KEY, data))
+            replica.admit_state(STATE_KEY, data)
         else:
-            replica._on_delta(FakeSample(DELTA_KEY, data))
+            replica.admit_delta(DELTA_KEY, data)
     stats = replica.stats
     assert stats.rejected == 0 and stats.applied == len(VALID) - 1 and stats.state_merged == 1
 
@@ -102,7 +101,7 @@ def test_valid_templates_do_merge_on_an_open_replica():
 def test_refusals_are_logged(caplog):
     replica = guarded(policy_from_env({}))
     with caplog.at_level(logging.WARNING, logger="dsr.transport"):
-        replica._on_delta(FakeSample(DELTA_KEY, b"\xff not json"))
-        replica._merge_state(FakeSample(STATE_KEY, b'{"format": "chronav-dsr/1", "kind": "state"}'))
+        replica.admit_delta(DELTA_KEY, b"\xff not json")
+        replica.admit_state(STATE_KEY, b'{"format": "chronav-dsr/1", "kind": "state"}')
     assert replica.stats.rejected == 2
     assert sum("dropped message from chronav/chronav/" in r.message for r in caplog.records) == 2

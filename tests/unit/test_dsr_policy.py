@@ -1,8 +1,9 @@
 """The write policy (agents/world/write_policy.yaml) as every replica enforces it on receipt.
 
 Offline and in-process: each agent is a DSRGraph whose deltas are captured; a "guard" replica
-runs the real transport hook (`Replica._on_delta` / `_merge_state`, no network) with the shipped
-policy.  The multi-process version with real Zenoh is tests/integration/test_trust_policy.py.
+runs the transport's admission API (`Replica.admit_delta` / `admit_state`, no network) with
+the shipped policy.  The multi-process version with real Zenoh is
+tests/integration/test_trust_policy.py.
 """
 
 from __future__ import annotations
@@ -21,7 +22,6 @@ from agents.world.write_policy import load_policy, policy_from_env
 from dsr.policy import AllowAll, DenyTypes
 from dsr.policy_rules import RulePolicy
 from dsr.transport import Replica
-from tests.support import FakeSample
 
 POLICY = policy_from_env({})
 OWNERS = ("sim_robot", "human_observer", "object_recognition", "agenda", "executive",
@@ -36,14 +36,14 @@ class Guard:
         self.replica = Replica(self.graph, policy=policy)  # type: ignore[arg-type]
 
     def delta(self, agent: str, payload: bytes) -> None:
-        self.replica._on_delta(FakeSample(wire.delta_key("chronav", agent), payload))
+        self.replica.admit_delta(wire.delta_key("chronav", agent), payload)
 
     def state(self, source: DSRGraph) -> None:
-        self.replica._merge_state(FakeSample(wire.state_key("chronav", source.agent),
-                                             source.state_message()))
+        self.replica.admit_state(wire.state_key("chronav", source.agent),
+                                 source.state_message())
 
     @property
-    def stats(self):  # noqa: ANN201
+    def stats(self):
         return self.replica.stats
 
 
@@ -287,8 +287,8 @@ def test_relayed_removals_need_a_receipt_from_an_allowed_remover():
     relayed = world.graphs["executive"].state_message()
     without_receipts = relayed.replace(b'"~removed"', b'"~other"')
     assert without_receipts != relayed
-    laggard.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"),
-                                            without_receipts))
+    laggard.replica.admit_state(wire.state_key("chronav", "executive"),
+                                without_receipts)
     assert world.ids["activity"] in laggard.graph, "a removal without receipt was merged"
     assert "without a receipt" in laggard.stats.last_reject
     laggard.state(world.graphs["executive"])
@@ -297,8 +297,8 @@ def test_relayed_removals_need_a_receipt_from_an_allowed_remover():
     # A buggy object_recognition deletes a mission locally: refused as a delta, and its state,
     # which carries the removal, cannot delete it either.
     other = Guard(agent="other")
-    other.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"),
-                                          state_before_delete))
+    other.replica.admit_state(wire.state_key("chronav", "executive"),
+                              state_before_delete)
     buggy = world.agent("object_recognition", legit=False)
     buggy.delete_node(world.ids["mission"])
     assert world.guard.stats.rejected_policy == 1
@@ -315,7 +315,7 @@ def test_a_state_cannot_reassign_a_known_replica_to_another_agent():
                              f'"{sim.replica_id}":"executive"'.encode())
     assert forged != payload
     guard = world.guard
-    guard.replica._merge_state(FakeSample(wire.state_key("chronav", "executive"), forged))
+    guard.replica.admit_state(wire.state_key("chronav", "executive"), forged)
     assert guard.stats.rejected == 1 and "forged writer" in guard.stats.last_reject
 
 

@@ -1,9 +1,10 @@
 """The DSR protocol rules of docs/dsr_wire_format.md, through the real transport hooks.
 
-Each replica here is a `Replica` that is never opened: samples are handed to its Zenoh
-callbacks (`_on_delta`, `_merge_state`) directly, and its publisher is a function, so the rules
-(limits, clock offset, removals, trust in states, digests, compaction, per-reason counters,
-local policy checks) are exercised exactly as over Zenoh, without processes.
+Each replica here is a `Replica` that is never opened: received messages are handed to its
+admission API (`admit_delta`, `admit_state`: what its Zenoh callbacks call) directly, and its
+publisher is a function, so the rules (limits, clock offset, removals, trust in states,
+digests, compaction, per-reason counters, local policy checks) are exercised exactly as over
+Zenoh, without processes.
 """
 
 from __future__ import annotations
@@ -22,14 +23,15 @@ from dsr.hlc import pack
 from dsr.limits import LIMITS, Limits
 from agents.world.write_policy import policy_from_env
 from dsr.policy import AllowAll
-from dsr.transport import Member, Replica
-from tests.support import FakeSample
+from dsr.transport import Replica
 
 POLICY = policy_from_env({})
+#: a received message as `Replica.admit_delta` / `admit_state` take it: (key, payload)
+Received = tuple[str, bytes]
 
 
 class Publisher:
-    def __init__(self, deliver) -> None:  # noqa: ANN001
+    def __init__(self, deliver) -> None:
         self.deliver = deliver
 
     def put(self, payload: bytes) -> None:
@@ -38,7 +40,7 @@ class Publisher:
 
 class Net:
     """Replicas wired together in memory: every published delta or digest reaches the others'
-    `_on_delta`, in order (like one Zenoh publisher per replica).  A joiner merges one
+    `admit_delta`, in order (like one Zenoh publisher per replica).  A joiner merges one
     member's state, then every member's (the round after the join); every member merges the
     joiner's (its token appeared): as over Zenoh, each running writer's watermark starts from
     its own state."""
@@ -50,25 +52,25 @@ class Net:
     def add(self, agent: str, joined: bool = True) -> Replica:
         graph = DSRGraph(agent)
         replica = Replica(graph, policy=self.policy)  # type: ignore[arg-type]
-        replica._joined = joined
+        replica.joined = joined
         for other in self.replicas.values():   # a joiner starts from someone's state
-            replica._merge_state(state_sample(other))
+            replica.admit_state(*state_of(other))
             break
         replica._publisher = Publisher(lambda payload, a=agent: self._deliver(a, payload))
         graph.attach(replica._publish, linger_s=0.0)
         for name, other in self.replicas.items():
-            other._members[agent] = Member(agent)
-            replica._members[name] = Member(name)
+            other.members.add(agent)
+            replica.members.add(name)
         for other in self.replicas.values():
-            replica._merge_state(state_sample(other))
-            other._merge_state(state_sample(replica))
+            replica.admit_state(*state_of(other))
+            other.admit_state(*state_of(replica))
         self.replicas[agent] = replica
         return replica
 
     def _deliver(self, sender: str, payload: bytes) -> None:
         for name, replica in self.replicas.items():
             if name != sender:
-                replica._on_delta(FakeSample(wire.delta_key("chronav", sender), payload))
+                replica.admit_delta(wire.delta_key("chronav", sender), payload)
 
     def maintain(self) -> None:
         for replica in self.replicas.values():
@@ -78,18 +80,19 @@ class Net:
         """From now on ``sender``'s deltas reach only ``receivers`` (lost on the way to the rest)."""
         def deliver(payload: bytes) -> None:
             for name in receivers:
-                self.replicas[name]._on_delta(FakeSample(wire.delta_key("chronav", sender), payload))
+                self.replicas[name].admit_delta(wire.delta_key("chronav", sender), payload)
         self.replicas[sender]._publisher = Publisher(deliver)
 
 
-def state_sample(replica: Replica, payload: bytes | None = None) -> FakeSample:
+def state_of(replica: Replica, payload: bytes | None = None) -> Received:
+    """(key, payload) of `replica`'s state reply (or of `payload` on its state key)."""
     graph = replica.graph
-    return FakeSample(wire.state_key("chronav", graph.agent),
-                  payload if payload is not None else graph.state_message(replica.seen()))
+    return (wire.state_key("chronav", graph.agent),
+            payload if payload is not None else graph.state_message(replica.seen()))
 
 
-def delta_sample(agent: str, message: dict) -> FakeSample:
-    return FakeSample(wire.delta_key("chronav", agent), orjson.dumps(message))
+def delta_of(agent: str, message: dict) -> Received:
+    return wire.delta_key("chronav", agent), orjson.dumps(message)
 
 
 def raw_delta(graph: DSRGraph, nodes: list[dict], edges: list[dict] | None = None) -> dict:
@@ -135,7 +138,7 @@ def test_value_and_message_limits_on_local_writes_and_on_receipt():
         wire.decode(orjson.dumps(message))
     guard = Replica(DSRGraph("guard"))
     huge = orjson.dumps(raw_delta(graph, [])) + b" " * LIMITS.max_delta_bytes
-    guard._on_delta(FakeSample(wire.delta_key("chronav", "a"), huge))
+    guard.admit_delta(wire.delta_key("chronav", "a"), huge)
     assert guard.stats.rejects == {"too_large": 1}
 
 
@@ -154,17 +157,17 @@ def test_node_limits_count_attributes_and_bytes_locally_and_on_receipt():
             writer.update_node(node.id, {f"s{i}": chunk})
     writer.flush()
     for payload in sent:
-        guard._on_delta(FakeSample(wire.delta_key("chronav", "a"), payload))
+        guard.admit_delta(wire.delta_key("chronav", "a"), payload)
     assert guard.stats.rejects == {}
     held = len(guard.graph.get_node(node.id).attrs)
     # a foreign writer that does not check: the receivers count each limit under its reason
     stamp = writer.clock.tick()
     over = raw_delta(writer, [{"id": node.id, "attrs": {
         f"n{i}": [stamp, writer.replica_id, 0.0] for i in range(LIMITS.max_node_attrs)}}])
-    guard._on_delta(delta_sample("a", over))
+    guard.admit_delta(*delta_of("a", over))
     big = raw_delta(writer, [{"id": node.id, "attrs": {
         "s_last": [stamp, writer.replica_id, chunk]}}])
-    guard._on_delta(delta_sample("a", big))
+    guard.admit_delta(*delta_of("a", big))
     assert guard.stats.rejects == {"too_many_attrs": 1, "node_too_large": 1}
     assert len(guard.graph.get_node(node.id).attrs) == held
     # in a state reply, the node's entry is dropped and the rest merged
@@ -172,7 +175,7 @@ def test_node_limits_count_attributes_and_bytes_locally_and_on_receipt():
     document["nodes"][0]["attrs"].update(over["nodes"][0]["attrs"])
     document["nodes"].append({"id": 5, "add": [[writer.replica_id, stamp]],
                               "meta": [stamp, writer.replica_id, "object", "fine"]})
-    guard._merge_state(FakeSample(wire.state_key("chronav", "a"), orjson.dumps(document)))
+    guard.admit_state(wire.state_key("chronav", "a"), orjson.dumps(document))
     assert guard.stats.rejects["too_many_attrs"] == 2
     assert guard.graph.get_node_by_name("fine") is not None
     assert len(guard.graph.get_node(node.id).attrs) == held
@@ -212,13 +215,13 @@ def test_a_stamp_beyond_the_maximum_offset_is_refused_and_does_not_drag_the_cloc
     ahead = pack(now + 55_000)
     node = {"id": 77, "add": [[writer.replica_id, ahead]],
             "meta": [ahead, writer.replica_id, "object", "future"]}
-    guard._on_delta(delta_sample("w", raw_delta(writer, [node])))
+    guard.admit_delta(*delta_of("w", raw_delta(writer, [node])))
     assert guard.stats.rejects == {"clock_ahead": 1} and len(guard.graph) == 0
     assert guard.graph.clock.tick() >> 16 < now + 1000
     near = pack(now + LIMITS.max_clock_offset_ms // 2)
     node = {"id": 78, "add": [[writer.replica_id, near]],
             "meta": [near, writer.replica_id, "object", "soon"]}
-    guard._on_delta(delta_sample("w", raw_delta(writer, [node])))
+    guard.admit_delta(*delta_of("w", raw_delta(writer, [node])))
     assert guard.stats.applied == 1 and guard.graph.get_node_by_name("soon") is not None
 
 
@@ -233,13 +236,13 @@ def test_one_rule_for_removals_in_deltas_and_in_states():
     # A removal as a foreign client might write it, without the receipt: refused as a delta...
     hlc = tool.graph.clock.tick()
     bare = {"id": request.id, "rem": list(state.add.items()), "cleared": hlc}
-    other._on_delta(delta_sample(tool.graph.agent, raw_delta(tool.graph, [bare])))
+    other.admit_delta(*delta_of(tool.graph.agent, raw_delta(tool.graph, [bare])))
     assert other.stats.rejects == {"removal_receipt": 1}
     assert other.graph.get_node(request.id) is not None
     # ... and the same removal relayed in a state is refused for the same reason.
     document = orjson.loads(tool.graph.state_message())
     document["nodes"] = [{**n, "rem": bare["rem"], "cleared": hlc} for n in document["nodes"]]
-    other._merge_state(state_sample(tool, orjson.dumps(document)))
+    other.admit_state(*state_of(tool, orjson.dumps(document)))
     assert other.stats.rejects == {"removal_receipt": 2}
     assert other.graph.get_node(request.id) is not None
     # With the receipt (what DSRGraph.delete_node sends) it passes both ways, and an agent that
@@ -247,7 +250,7 @@ def test_one_rule_for_removals_in_deltas_and_in_states():
     tool.graph.delete_node(request.id)
     assert other.graph.get_node(request.id) is None and other.stats.rejected_policy == 0
     restarted = Replica(DSRGraph("executive"), policy=POLICY)
-    restarted._merge_state(state_sample(tool))
+    restarted.admit_state(*state_of(tool))
     assert restarted.graph.get_node(request.id) is None
     assert restarted.stats.rejected == restarted.stats.rejected_policy == 0
     assert restarted.graph.digest() == other.graph.digest()
@@ -276,14 +279,14 @@ def test_a_state_stamping_a_running_agents_replica_is_refused_and_logged(caplog)
     sim.graph.update_node(clock_id, {"mode": "running"})   # sim_robot has published past stamp
     entry["attrs"]["now_s"] = [stamp, sim.graph.replica_id, 0.0]
     with caplog.at_level(logging.WARNING):
-        guard._merge_state(state_sample(tool, orjson.dumps(document)))
+        guard.admit_state(*state_of(tool, orjson.dumps(document)))
     assert guard.graph.get_attr(clock_id, "now_s") == 100.0
     assert guard.stats.rejects.get("forged_stamp") == 1
     assert "never published" in guard.stats.last_reject
     assert any("forged_stamp" in r.message for r in caplog.records)
     # a stamp beyond what sim_robot has published yet is left for sim_robot itself
     entry["attrs"]["now_s"] = [guard.graph.clock.tick() + 10, sim.graph.replica_id, 0.0]
-    guard._merge_state(state_sample(tool, orjson.dumps(document)))
+    guard.admit_state(*state_of(tool, orjson.dumps(document)))
     assert guard.graph.get_attr(clock_id, "now_s") == 100.0 and guard.stats.deferred == 1
 
 
@@ -295,7 +298,7 @@ def test_a_lying_writers_table_cannot_lend_a_running_agents_rights():
     document["writers"][str(fake)] = "sim_robot"
     document["nodes"].append({"id": 99, "add": [[fake, hlc]], "meta": [hlc, fake, "laser", "laser"],
                               "attrs": {"ranges": [hlc, fake, [1.0, 2.0]]}})
-    guard._merge_state(state_sample(tool, orjson.dumps(document)))
+    guard.admit_state(*state_of(tool, orjson.dumps(document)))
     assert guard.graph.get_node_by_name("laser") is None
     assert guard.stats.rejects.get("forged_writer") == 1
     assert "never used or vouched" in guard.stats.last_reject
@@ -303,7 +306,7 @@ def test_a_lying_writers_table_cannot_lend_a_running_agents_rights():
     document = orjson.loads(sim.graph.state_message(sim.seen()))
     document["writers"][str(fake)] = "sim_robot"
     document["nodes"].append({"id": 98, "add": [[fake, hlc]], "meta": [hlc, fake, "room", "l2"]})
-    guard._merge_state(state_sample(sim, orjson.dumps(document)))
+    guard.admit_state(*state_of(sim, orjson.dumps(document)))
     assert guard.graph.get_node_by_name("l2") is not None
 
 
@@ -312,9 +315,9 @@ def test_refusals_are_counted_and_logged_per_reason(caplog):
     guard = Replica(DSRGraph("guard"), policy=POLICY)
     with caplog.at_level(logging.WARNING):
         for _ in range(30):
-            guard._on_delta(FakeSample(wire.delta_key("chronav", "x"), b"junk"))
+            guard.admit_delta(wire.delta_key("chronav", "x"), b"junk")
         rogue = DSRGraph("rogue")
-        rogue.attach(lambda p: guard._on_delta(FakeSample(wire.delta_key("chronav", "rogue"), p)))
+        rogue.attach(lambda p: guard.admit_delta(wire.delta_key("chronav", "rogue"), p))
         rogue.insert_node("robot", "robot")
     assert guard.stats.rejects == {"invalid": 30, "policy": 1}
     lines = [r.message for r in caplog.records]
@@ -389,11 +392,12 @@ def test_a_member_that_left_holds_compaction_back_until_its_retention_ends():
     net.maintain()
     node = a.graph.insert_node("object", "o")
     a.graph.delete_node(node.id)
-    a._members["b"].live, a._members["b"].gone_at = False, time.monotonic()   # b cut off
+    b_seen = a.members.members["b"]
+    b_seen.live, b_seen.gone_at = False, time.monotonic()              # b cut off
     b.graph.attach(None)                                             # its digests stop
     a.maintain()
     assert a.graph.tombstones() == 1
-    a.member_retention_s = -1.0
+    a.members.retention_s = -1.0
     a.maintain()
     assert a.graph.tombstones() == 0
 
@@ -407,15 +411,15 @@ def test_a_member_ahead_of_us_triggers_anti_entropy():
     c.graph.insert_node("object", "missed")
     b.publish_digest()
     b.publish_digest()
-    assert a._sync_requests.empty()           # a grace period for deltas in flight, backlogs
-    a.lag_grace_s = 0.0
+    assert a.anti_entropy.requests.empty()           # a grace period for deltas in flight, backlogs
+    a.anti_entropy.lag_grace_s = 0.0
     b.publish_digest()
     # the writer runs: its own state is fetched (only it is trusted for its writes)
-    assert a._sync_requests.get_nowait() == "c" and a.stats.anti_entropy == 1
-    assert b._sync_requests.empty()
-    a._members["c"].live = False       # a writer that is gone: the member holding its writes
+    assert a.anti_entropy.take(0) == "c" and a.stats.anti_entropy == 1
+    assert b.anti_entropy.requests.empty()
+    a.members.members["c"].live = False       # a writer that is gone: the member holding its writes
     b.publish_digest()
-    assert a._sync_requests.get_nowait() == "b"
+    assert a.anti_entropy.take(0) == "b"
 
 
 def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
@@ -425,18 +429,16 @@ def test_a_writer_whose_stream_had_a_gap_is_not_judged_by_stale_watermarks():
     a1, b1, b2 = net.add("a1"), net.add("b1"), net.add("b2")
     net.maintain()
     node = b1.graph.insert_node("object", "n", {"k": 0})
-    lost = Publisher(lambda payload: b2._on_delta(FakeSample(wire.delta_key("chronav", "b1"),
-                                                         payload)))
+    lost = Publisher(lambda payload: b2.admit_delta(wire.delta_key("chronav", "b1"), payload))
     b1._publisher = lost                       # partition: a1 gets none of these
     b1.graph.update_node(node.id, {"k": 1})
-    a1._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "b1"),
-                                 "kind": __import__("zenoh").SampleKind.DELETE})())
+    a1.member_seen("b1", live=False)
     b1._publisher = Publisher(lambda payload: net._deliver("b1", payload))   # healed
     b1.graph.update_node(node.id, {"other": 2})
     b1.publish_digest()
-    a1._merge_state(state_sample(b2))          # b2 relays k=1 before b1's own state arrives
+    a1.admit_state(*state_of(b2))          # b2 relays k=1 before b1's own state arrives
     assert a1.stats.rejects.get("forged_stamp") is None
-    a1._merge_state(state_sample(b1))
+    a1.admit_state(*state_of(b1))
     assert a1.graph.get_attr(node.id, "k") == 1 and a1.graph.digest() == b2.graph.digest()
 
 
@@ -447,39 +449,36 @@ def test_a_table_entry_for_an_agent_not_yet_heard_of_is_deferred_not_called_forg
     sim = net.add("sim_robot")
     newcomer = DSRGraph("executive")
     newcomer.insert_node("mission", "m1", {"state": "pending"})
-    sim._merge_state(FakeSample(wire.state_key("chronav", "executive"), newcomer.state_message()))
+    sim.admit_state(wire.state_key("chronav", "executive"), newcomer.state_message())
     guard = Replica(DSRGraph("agenda"))
-    guard._joined = True
-    guard._members["executive"] = Member("executive")                 # its token is up
-    guard._members["sim_robot"] = Member("sim_robot")
-    guard._merge_state(state_sample(sim))
+    guard.joined = True
+    guard.members.add("executive")                 # its token is up
+    guard.members.add("sim_robot")
+    guard.admit_state(*state_of(sim))
     assert guard.stats.rejects == {} and guard.stats.deferred >= 1
     assert guard.graph.get_node_by_name("m1") is None                 # left for executive
-    guard._merge_state(FakeSample(wire.state_key("chronav", "executive"),
-                              newcomer.state_message()))
+    guard.admit_state(wire.state_key("chronav", "executive"),
+                      newcomer.state_message())
     assert guard.graph.get_node_by_name("m1") is not None
 
 
 def test_anti_entropy_settles_for_a_writer_that_left():
     """Regression: the watermark of a writer that is gone must be restored from the member
     that relays its writes, or every digest of that member would trigger another state fetch."""
-    import zenoh
     net = Net()
     a, b, c = net.add("a"), net.add("b"), net.add("c")
     net.maintain()
     net.route("c", "b")
     c.graph.insert_node("object", "missed")
-    a._on_member(type("S", (), {"key_expr": wire.member_key("chronav", "c"),
-                                "kind": zenoh.SampleKind.DELETE})())
-    a.lag_grace_s = 0.0
+    a.member_seen("c", live=False)
+    a.anti_entropy.lag_grace_s = 0.0
     b.publish_digest()
-    assert a._sync_requests.get_nowait() == "b"
-    a._pending_syncs.discard("b")
-    a._merge_state(state_sample(b))                      # what the worker does
+    assert a.anti_entropy.take(0) == "b"
+    a.admit_state(*state_of(b))                      # what the worker does
     assert a.graph.get_node_by_name("missed") is not None
     b.publish_digest()
     b.publish_digest()
-    assert a._sync_requests.empty() and a.stats.anti_entropy == 1
+    assert a.anti_entropy.requests.empty() and a.stats.anti_entropy == 1
 
 
 def test_a_joiner_that_missed_a_delta_while_subscribing_does_not_call_it_forged():
@@ -494,19 +493,40 @@ def test_a_joiner_that_missed_a_delta_while_subscribing_does_not_call_it_forged(
     net.maintain()
     joiner = Replica(DSRGraph("a"))
     for name in ("b", "c"):
-        joiner._members[name] = Member(name)
-    joiner._merge_state(state_sample(c))          # the first state of the join: from c
-    joiner._joined = True
+        joiner.members.add(name)
+    joiner.admit_state(*state_of(c))          # the first state of the join: from c
+    joiner.joined = True
     missed = b.graph.insert_node("object", "missed")   # reaches c only
     net.replicas["a"] = joiner                         # now a's subscription is in place
     for name in ("b", "c"):
-        net.replicas[name]._members["a"] = Member("a")
+        net.replicas[name].members.add("a")
     b.graph.insert_node("object", "after")             # in order, after the missed one
     b.publish_digest()
-    joiner._merge_state(state_sample(c))               # c relays the missed write
+    joiner.admit_state(*state_of(c))               # c relays the missed write
     assert joiner.stats.rejects == {}, joiner.stats.last_reject
     assert joiner.graph.get_node(missed.id) is None    # left for b itself ...
-    joiner._merge_state(state_sample(b))               # ... whose own state brings it
+    joiner.admit_state(*state_of(b))               # ... whose own state brings it
     assert joiner.graph.get_node(missed.id) is not None
     assert joiner.graph.digest() == b.graph.digest() == c.graph.digest()
     assert joiner.seen()[b.graph.replica_id] >= b.graph.published_hlc()
+
+
+def test_the_admission_api_says_whether_a_message_was_merged():
+    """admit_delta / admit_state: the door every received message goes through (what the
+    Zenoh callbacks call); True only when the message reached the graph."""
+    writer = DSRGraph("w")
+    sent: list[bytes] = []
+    writer.attach(sent.append)
+    node = writer.insert_node("object", "cup", {"k": 1})
+    guard = Replica(DSRGraph("guard"))          # no write policy: only the admission checks
+    key = wire.delta_key("chronav", "w")
+    assert guard.admit_delta(wire.delta_key("chronav", "x"), sent[-1]) is False   # forged key
+    assert guard.graph.get_node(node.id) is None
+    assert guard.admit_delta(key, b"junk") is False
+    assert guard.admit_delta(key, sent[-1]) is True
+    assert guard.graph.get_node(node.id).attrs == {"k": 1}
+    assert guard.stats.applied == 1 and guard.stats.rejects == {"forged_writer": 1, "invalid": 1}
+    other = Replica(DSRGraph("other"))
+    assert other.admit_state(wire.state_key("chronav", "guard"), b"{}") is False
+    assert other.admit_state(*state_of(guard)) is True
+    assert other.graph.state_equals(guard.graph) and other.stats.state_merged == 1

@@ -65,7 +65,7 @@ class Pair:
         self.writer = DSRGraph("writer")
         self.graph = DSRGraph("agent", spin=spin)
         self.replica = Replica(self.graph)
-        self.replica._joined = True
+        self.replica.joined = True
         self.channel = Channel()
         self.handled_on: list[int] = []        # thread ident of each merge
         apply = self.graph.apply_message
@@ -244,7 +244,7 @@ def test_a_flood_of_received_deltas_does_not_hold_dispatch_beyond_its_window() -
 def test_closing_ends_the_receiver_thread_whether_it_waits_or_is_parked() -> None:
     for owned in (False, True):
         channel = Channel()
-        receiver = DeltaReceiver(channel.try_recv, lambda: _take_or_closed(channel),
+        receiver = DeltaReceiver(channel.try_recv, lambda c=channel: _take_or_closed(c),
                                  lambda item: None, park_s=0.001)
         receiver._agent_owns = owned
         receiver._last_poll = time.monotonic() + 60     # parked: never reclaims meanwhile

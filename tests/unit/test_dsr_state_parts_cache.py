@@ -14,15 +14,16 @@ from dsr import DSRGraph, wire
 def fresh_parts(graph: DSRGraph, per_part: int) -> list[bytes]:
     """What state_parts must return, encoded without any cache."""
     clock = graph.clock.last
-    node_ids, edge_keys = list(graph._nodes), list(graph._edges)
+    node_ids, edge_keys = list(graph.node_states), list(graph.edge_states)
     chunks = [(node_ids[i:i + per_part], []) for i in range(0, len(node_ids), per_part)]
     chunks += [([], edge_keys[i:i + per_part]) for i in range(0, len(edge_keys), per_part)]
     chunks = chunks or [([], [])]
     seen = {graph.replica_id: clock}
     return [wire.encode(kind="state", graph=graph.graph_name, agent=graph.agent,
                         replica=graph.replica_id,
-                        nodes=[(i, graph._nodes[i]) for i in ids],
-                        edges=[(k, graph._edges[k]) for k in keys], writers=dict(graph._bound),
+                        nodes=[(i, graph.node_states[i]) for i in ids],
+                        edges=[(k, graph.edge_states[k]) for k in keys],
+                        writers=graph.served_writers(),
                         clock=clock if n == len(chunks) - 1 else 0,
                         seen=seen if n == len(chunks) - 1 else None)
             for n, (ids, keys) in enumerate(chunks)]
@@ -88,9 +89,10 @@ def test_a_change_reencodes_only_that_element() -> None:
     graph = DSRGraph("me")
     ids = [graph.insert_node("object", f"n{i}", {"x": i}).id for i in range(50)]
     list(graph.state_parts())
-    cached = dict(graph._encoded_nodes)
+    table = graph._node_table         # the cache under test (dsr/table.py)
+    cached = {i: table.cached(i) for i in ids}
     graph.update_node(ids[7], {"x": -7})
     parts = list(graph.state_parts())
     assert parts == fresh_parts(graph, 2000)
-    changed = [i for i in ids if graph._encoded_nodes[i][2] is not cached[i][2]]
+    changed = [i for i in ids if table.cached(i)[2] is not cached[i][2]]
     assert changed == [ids[7]]

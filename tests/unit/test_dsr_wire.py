@@ -130,9 +130,8 @@ def _put(document: dict, path: tuple, value: object) -> None:
     try:
         for step in path[:-1]:
             target = target[step]
-        if isinstance(target, list) and isinstance(path[-1], int) and path[-1] < len(target):
-            target[path[-1]] = value
-        elif isinstance(target, dict):
+        if (isinstance(target, list) and isinstance(path[-1], int) and path[-1] < len(target)) \
+                or isinstance(target, dict):
             target[path[-1]] = value
     except (KeyError, IndexError, TypeError):
         pass

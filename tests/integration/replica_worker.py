@@ -1,6 +1,6 @@
-"""A scripted replica process for multi-process tests and demos.
+"""A scripted replica process for the multi-process DSR tests (tests/integration/dsr_support.py).
 
-`python -m dsr.replica_worker --connect tcp/127.0.0.1:PORT --agent a --status a.json
+`python -m tests.integration.replica_worker --connect tcp/127.0.0.1:PORT --agent a --status a.json
  [--ops 300 --seed 1] [--world 500]`
 
 It joins the graph, optionally inserts a world of N nodes, performs N random operations
@@ -111,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m dsr.replica_worker", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m tests.integration.replica_worker",
+                                     description=__doc__)
     parser.add_argument("--connect", required=True)
     parser.add_argument("--agent", required=True)
     parser.add_argument("--graph", default="chronav")
