@@ -3,17 +3,11 @@
 from __future__ import annotations
 
 import json
-import socket
 from pathlib import Path
 from typing import Any
 
 from tests.support import ProcessGroup, free_port, wait_until
-
-
-def port_open(port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.settimeout(0.2)
-        return sock.connect_ex(("127.0.0.1", port)) == 0
+from tools.ports import port_open
 
 
 def start_router(procs: ProcessGroup, log_dir: Path, port: int | None = None) -> tuple[str, Any]:

@@ -192,7 +192,7 @@ class Client:
         self.stop = threading.Event()
         threading.Thread(target=self.digests, daemon=True).start()
 
-    def answer(self, query: "zenoh.Query") -> None:
+    def answer(self, query: zenoh.Query) -> None:
         """"Writing as a foreign client", state replies: its own writes, `writers`, and
         `clock` / `seen` (everything it stamped up to `clock` is in this reply)."""
         if "stats" in str(query.parameters):

@@ -55,7 +55,7 @@ def dump(run: Path) -> dict:
     return {"nodes": document["nodes"], "edges": document["edges"]}
 
 
-def start_run(procs, tmp_path: Path) -> tuple[Path, object]:  # noqa: ANN001
+def start_run(procs, tmp_path: Path) -> tuple[Path, object]:
     """A run as `chronav launch` secures it: per-run users, ACL, connect.json (tools/system/runs.py)."""
     from tools.system.runs import prepare_run_security, write_connect_file
     run = tmp_path / "run"
@@ -149,7 +149,7 @@ def test_outside_client_mirror_equals_the_dump(procs, tmp_path):
     assert ("agenda_tool", "put", "chronav/chronav/delta/sim_robot") in denied, document["router"]
 
 
-def own_state(endpoint: str, reader) -> dict:  # noqa: ANN001
+def own_state(endpoint: str, reader) -> dict:
     """The client's state reply, fetched as a member does (here with the reader login)."""
     import zenoh
 

@@ -32,7 +32,7 @@ def settings(endpoint: str, identity: Identity | None) -> ZenohSettings:
     return ZenohSettings(connect=[endpoint], lease_ms=1000, **creds)
 
 
-def start_run_router(procs: ProcessGroup, run_dir: Path, security) -> str:  # noqa: ANN001
+def start_run_router(procs: ProcessGroup, run_dir: Path, security) -> str:
     port = free_port()
     log = run_dir / "router.log"
     proc = procs.spawn(["-m", "dsr.router", "--listen", f"tcp/127.0.0.1:{port}", *security.router_args()],
@@ -64,13 +64,14 @@ def test_each_agent_key_space_belongs_to_its_credentials(procs: ProcessGroup, tm
     security = prepare_run_security(tmp_path, GRAPH, AGENTS)
     endpoint = start_run_router(procs, tmp_path, security)
 
-    with pytest.raises(TransportError):     # no credentials, or a wrong password: no session at all
-        with join("sim_robot", graph=GRAPH, settings=settings(endpoint, None), sync_timeout=2):
-            pass
-    with pytest.raises(TransportError):
-        with join("sim_robot", graph=GRAPH, settings=settings(endpoint, Identity("sim_robot", "guess")),
-                  sync_timeout=2):
-            pass
+    # no credentials, or a wrong password: no session at all
+    with pytest.raises(TransportError), join("sim_robot", graph=GRAPH, settings=settings(endpoint, None),
+                                             sync_timeout=2):
+        pass
+    with pytest.raises(TransportError), join("sim_robot", graph=GRAPH,
+                                             settings=settings(endpoint, Identity("sim_robot", "guess")),
+                                             sync_timeout=2):
+        pass
 
     observer_settings = settings(endpoint, security.agents["agenda"])
     with join("agenda", graph=GRAPH, settings=observer_settings, policy=AllowAll()) as observer:

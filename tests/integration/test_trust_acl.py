@@ -35,7 +35,7 @@ CREDENTIALS = DEPLOY / "credentials.example.txt"
 PASSWORDS = dict(line.split(":", 1) for line in CREDENTIALS.read_text().split())
 
 
-def start_secure_router(procs, log_dir: Path, *extra: str) -> tuple[str, object]:  # noqa: ANN001
+def start_secure_router(procs, log_dir: Path, *extra: str) -> tuple[str, object]:
     port = free_port()
     log = log_dir / "router.log"
     proc = procs.spawn(["-m", "dsr.router", "--listen", f"tcp/127.0.0.1:{port}",

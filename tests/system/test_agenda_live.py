@@ -29,7 +29,6 @@ from agents.world.dsr_readers import dsr_objects
 from agents.world.offline import graph_at
 from agents.world.scene_world import load_world
 from dsr import ZenohSettings, join
-from scenes.loader import load_scene
 from scenes.clock import format_clock
 from tests.support import REPO_ROOT, ProcessGroup, wait_until
 from tools.system.runs import read_connect_file

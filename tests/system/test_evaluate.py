@@ -71,8 +71,8 @@ def test_both_executors_run_every_combination(sweeps: dict[str, dict[str, Any]])
 def test_table_and_report_are_chronav_metrics_of_the_runs(sweeps: dict[str, dict[str, Any]], tmp_path: Path) -> None:
     sweep = sweeps["local"]
     rows = read_table(Path(sweep["table"]["parquet"]))
-    summary = {(r["planner"], r["metric"]): float(r["mean"])
-               for r in csv.DictReader(open(Path(sweep["out"]) / "summary.csv", newline=""))}
+    with open(Path(sweep["out"]) / "summary.csv", newline="") as summary_file:
+        summary = {(r["planner"], r["metric"]): float(r["mean"]) for r in csv.DictReader(summary_file)}
     report = Path(sweep["report"]).read_text()
     for row in rows:
         # Cut the mission out of the run's trajectory ourselves, from the launcher's result.json.

@@ -123,7 +123,7 @@ def test_no_zone_is_drawn_where_no_person_was(run: dict[str, Any]) -> None:
 
 def test_time_columns_carry_the_scene_clock(run: dict[str, Any]) -> None:
     store = run["store"]
-    midnight_ns = int(dt.datetime(DATE.year, DATE.month, DATE.day, tzinfo=dt.timezone.utc).timestamp()) * 10**9
+    midnight_ns = int(dt.datetime(DATE.year, DATE.month, DATE.day, tzinfo=dt.UTC).timestamp()) * 10**9
     for entity, field in ((ZONES, "map_s"), ("/world/truth/robot/body", "Points2D:positions")):
         rows = _rows(store, entity, field)
         assert rows

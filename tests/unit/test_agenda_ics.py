@@ -51,8 +51,8 @@ def test_daily_therapy_keeps_local_time_across_dst(therapy: IcsAgenda) -> None:
     # Same wall clock, different instants: 09:00 UTC before the change, 08:00 UTC after it.
     occ_before = therapy.occurrences(dt.date(2025, 3, 28), before.zone)[0]
     occ_after = therapy.occurrences(dt.date(2025, 3, 31), after.zone)[0]
-    assert occ_before.start.astimezone(dt.timezone.utc).hour == 9
-    assert occ_after.start.astimezone(dt.timezone.utc).hour == 8
+    assert occ_before.start.astimezone(dt.UTC).hour == 9
+    assert occ_after.start.astimezone(dt.UTC).hour == 8
 
 
 def test_fields_follow_the_conventions(therapy: IcsAgenda) -> None:

@@ -136,7 +136,7 @@ def test_agenda_day_at_refreshes_states_without_touching_cancelled() -> None:
 def test_wall_seconds_counts_local_clock_even_on_dst_days() -> None:
     madrid = load_zone("Europe/Madrid")
     spring = dt.date(2025, 3, 30)
-    ten_local = dt.datetime(2025, 3, 30, 8, 0, tzinfo=dt.timezone.utc)  # 10:00 CEST
+    ten_local = dt.datetime(2025, 3, 30, 8, 0, tzinfo=dt.UTC)  # 10:00 CEST
     assert wall_seconds(ten_local, spring, madrid) == 10 * H
     next_day = dt.datetime(2025, 3, 31, 0, 30, tzinfo=madrid)
     assert wall_seconds(next_day, spring, madrid) == 24.5 * H

@@ -158,6 +158,6 @@ def test_closed_loop_follows_an_l_shaped_band_to_the_goal(drive: str) -> None:
     (lambda: omni_command((0.0, 0.0, 0.0), np.zeros((0, 2))), "band"),
     (lambda: omni_command((0.0, 0.0, 0.0), [[0.0, np.inf]]), "band"),
 ])
-def test_bad_input_names_the_argument(call, fragment: str) -> None:  # noqa: ANN001
+def test_bad_input_names_the_argument(call, fragment: str) -> None:
     with pytest.raises(ControlInputError, match=fragment):
         call()

@@ -26,12 +26,12 @@ WALL_CLEARANCE_M = 0.2      # a body's centre never closer to a wall than this (
 
 
 @pytest.fixture(scope="module")
-def world():  # noqa: ANN201
+def world():
     return load_world(SCENE)
 
 
 @pytest.fixture(scope="module")
-def day(world):  # noqa: ANN001, ANN201
+def day(world):
     """Every person every step from 09:00 to 10:20: {name: [(t, truth)]}."""
     crowd, feed = new_crowd(world), WorldFeed(world)
     t, end = world.scene.clock.start_s, parse_clock("10:20")
@@ -44,7 +44,7 @@ def day(world):  # noqa: ANN001, ANN201
     return samples
 
 
-def test_routes_pass_doors_in_the_middle_and_go_round_furniture(world) -> None:  # noqa: ANN001
+def test_routes_pass_doors_in_the_middle_and_go_round_furniture(world) -> None:
     building = building_of(world.scene)
     walls = list(building.walls)
     footprints = [t.footprint for t in building.things.values()]
@@ -65,7 +65,7 @@ def test_routes_pass_doors_in_the_middle_and_go_round_furniture(world) -> None: 
         closed.route((3.0, 5.0), (15.0, 5.0))
 
 
-def test_participants_arrive_before_the_start_take_places_facing_the_object_and_leave_at_the_end(world, day) -> None:  # noqa: ANN001
+def test_participants_arrive_before_the_start_take_places_facing_the_object_and_leave_at_the_end(world, day) -> None:
     agenda = {a.id: a for a in world.agenda.activities}
     for activity_id, names in (("game", ("ana", "dora")), ("therapy", ("ben", "eva"))):
         a = agenda[activity_id]
@@ -83,7 +83,7 @@ def test_participants_arrive_before_the_start_take_places_facing_the_object_and_
     assert ARRIVE_EARLY_S < 300.0
 
 
-def test_the_staff_fetches_the_escorted_resident(day) -> None:  # noqa: ANN001
+def test_the_staff_fetches_the_escorted_resident(day) -> None:
     ben = dict(day["ben"])
     marta = dict(day["marta"])
     leaving = next(t for t, p in day["ben"] if p.goal == "therapy" and p.moving)
@@ -94,7 +94,7 @@ def test_the_staff_fetches_the_escorted_resident(day) -> None:  # noqa: ANN001
     assert np.median(beside) < 1.6, "she walks with him"
 
 
-def test_speeds_are_realistic_and_nobody_overlaps_or_enters_a_wall(world, day) -> None:  # noqa: ANN001
+def test_speeds_are_realistic_and_nobody_overlaps_or_enters_a_wall(world, day) -> None:
     walls = shapely.MultiLineString([w for w in world.scene.walls])
     names = sorted(day)
     for name in names:
@@ -112,7 +112,7 @@ def test_speeds_are_realistic_and_nobody_overlaps_or_enters_a_wall(world, day) -
     assert gaps.min() >= 0.45, "bodies (0.25 m) never overlap by more than ORCA's few centimetres"
 
 
-def test_residents_wander_and_chat_in_pairs_facing_each_other(day) -> None:  # noqa: ANN001
+def test_residents_wander_and_chat_in_pairs_facing_each_other(day) -> None:
     rooms_visited = {name: set() for name in ("ana", "carla", "dora")}
     scene = load_scene(SCENE).scene
     for name in rooms_visited:
@@ -125,7 +125,7 @@ def test_residents_wander_and_chat_in_pairs_facing_each_other(day) -> None:  # n
     seen = 0
     for k in range(0, steps, 20):
         members: dict[str, list] = {}
-        for name, samples in day.items():
+        for samples in day.values():
             _, p = samples[k]
             if p.group.startswith("chat/"):
                 members.setdefault(p.group, []).append(p)
@@ -137,7 +137,7 @@ def test_residents_wander_and_chat_in_pairs_facing_each_other(day) -> None:  # n
     assert seen > 0
 
 
-def test_one_seed_gives_one_day_whatever_the_slicing_and_offline_going_back(world) -> None:  # noqa: ANN001
+def test_one_seed_gives_one_day_whatever_the_slicing_and_offline_going_back(world) -> None:
     times = [parse_clock(t) for t in ("09:41:10", "09:27:30", "10:05:00")]
     offline = {t: people_at(world, t) for t in times}          # out of order: restarts from a snapshot
     live, feed, robot = new_crowd(world), WorldFeed(world), resting_robot(world)   # the robot never drives
@@ -153,7 +153,7 @@ def test_one_seed_gives_one_day_whatever_the_slicing_and_offline_going_back(worl
     assert crowd.at(times[0]) != offline[times[0]], "another seed, another day"
 
 
-def test_an_agenda_change_changes_where_people_go_at_once(world) -> None:  # noqa: ANN001
+def test_an_agenda_change_changes_where_people_go_at_once(world) -> None:
     crowd = new_crowd(world)
     at = parse_clock("09:50")
     crowd.advance(at, WorldFeed(world))
@@ -170,7 +170,7 @@ def test_an_agenda_change_changes_where_people_go_at_once(world) -> None:  # noq
     assert {p.name: p.group for p in crowd.at(parse_clock("09:53"))}["ana"] == "activity/tea"
 
 
-def test_people_avoid_the_robot_only_while_it_drives(world) -> None:  # noqa: ANN001
+def test_people_avoid_the_robot_only_while_it_drives(world) -> None:
     """A robot halted on the corridor's walking line (its route corners at y = 1.9): people walking
     by give it room while it drives, and walk their usual line through where it stands when it does
     not (at rest nobody reacts to it, which keeps the offline world equal to the live one)."""
@@ -213,7 +213,7 @@ def test_nobody_walks_into_or_stands_at_the_resting_robot(reacts: bool) -> None:
         assert min(gaps) < 0.3, "without the robot in their world someone stands where it rests"
 
 
-def test_an_activity_place_the_robot_parks_on_is_drawn_again_clear_of_it(world) -> None:  # noqa: ANN001
+def test_an_activity_place_the_robot_parks_on_is_drawn_again_clear_of_it(world) -> None:
     """Issue 27: the robot came to rest by the table after its mission, on the place the therapy's
     formation had given eva; she walked there anyway and stood 0.65 m from the robot's centre, inside
     its intimate distance, while the idle clock skipped on.  Now the formation is drawn again clear

@@ -202,7 +202,7 @@ def test_is_connected_detects_a_blocked_band() -> None:
     (lambda: step(band_from_path([[0, 0], [1, 0]], ()), (), (np.inf, 0.0, 0.0)), "robot_pose"),
     (lambda: ElasticBand(np.zeros((1, 2)), np.zeros(1)), "band points"),
 ])
-def test_bad_input_raises_a_typed_error_naming_the_argument(call, fragment: str) -> None:  # noqa: ANN001
+def test_bad_input_raises_a_typed_error_naming_the_argument(call, fragment: str) -> None:
     with pytest.raises(BandInputError) as info:
         call()
     assert fragment in str(info.value)

@@ -59,7 +59,7 @@ class FakeLaunch:
         self.calls: list[dict[str, list[str]]] = []
         self.interrupt_planner = interrupt_planner
 
-    def __call__(self, scene, *, runs_dir, agent_options, **_kwargs):  # noqa: ANN001, ANN204
+    def __call__(self, scene, *, runs_dir, agent_options, **_kwargs):
         from tools.launch import RunResult
 
         self.calls.append(agent_options)

@@ -32,7 +32,7 @@ def _count_boxplots(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     calls: list[int] = []
     real = matplotlib.axes.Axes.boxplot
 
-    def spy(self, data, *args, **kwargs):  # noqa: ANN001, ANN202
+    def spy(self, data, *args, **kwargs):
         calls.append(len(data))
         return real(self, data, *args, **kwargs)
 

@@ -19,7 +19,7 @@ DATA = REPO_ROOT / "tests" / "data" / "aggl"
 runner = CliRunner()
 
 
-def run(*args: str, env: dict[str, str] | None = None):  # noqa: ANN201 - typer's Result
+def run(*args: str, env: dict[str, str] | None = None):
     return runner.invoke(app, list(args), env=env)
 
 
@@ -81,7 +81,7 @@ def test_an_include_after_a_definition_wins_and_one_file_twice_is_no_conflict(tm
     main = tmp_path / "main.aggl"
     main.write_text("name=main\n===\nchangeRoom : active(5) { { } => { } }\ninclude(nav.aggl)\ninclude(also.aggl)\n")
     grammar = load_grammar(main)
-    assert [(r.name, r.cost, r.pos.file) for r in grammar.rules] == [("changeRoom", 1.0, str((tmp_path / "nav.aggl")))]
+    assert [(r.name, r.cost, r.pos.file) for r in grammar.rules] == [("changeRoom", 1.0, str(tmp_path / "nav.aggl"))]
     assert len(grammar.warnings) == 1 and str(grammar.warnings[0]).startswith(f"{tmp_path / 'nav.aggl'}:3:1: warning")
     assert f"replaces the one at {main}:3:1" in str(grammar.warnings[0])
     # two definitions in one file stay an error: a mistake, not a reuse

@@ -22,7 +22,6 @@ import json
 import math
 from pathlib import Path
 
-import numpy as np
 import pytest
 import shapely
 import shapely.ops

@@ -21,17 +21,17 @@ GAME_S = 10 * 3600.0 + 60.0          # 10:01: the serious game on the TV runs, t
 
 
 @pytest.fixture(scope="module")
-def game_map():  # noqa: ANN201
+def game_map():
     return SceneMaps.load(TINY).at(GAME_S)
 
 
-def _cell(smap, x: float, y: float) -> tuple[int, int, float, float]:  # noqa: ANN001
+def _cell(smap, x: float, y: float) -> tuple[int, int, float, float]:
     row, col = smap.spec.cell_of(x, y)
     centre = smap.spec.centres(np.array([[row, col]]))[0]
     return row, col, float(centre[0]), float(centre[1])
 
 
-def test_inflation_follows_nav2s_formula_around_people(game_map) -> None:  # noqa: ANN001
+def test_inflation_follows_nav2s_formula_around_people(game_map) -> None:
     grid = planning_grid(game_map, "inflation")
     person = game_map.people[0]
     params = game_map.params
@@ -47,7 +47,7 @@ def test_inflation_follows_nav2s_formula_around_people(game_map) -> None:  # noq
     assert grid[row, col] == 1.0                                     # beyond the inflation radius
 
 
-def test_static_prices_every_space_at_r_min_whatever_the_agenda(game_map) -> None:  # noqa: ANN001
+def test_static_prices_every_space_at_r_min_whatever_the_agenda(game_map) -> None:
     tv = next(s for s in game_map.object_spaces if s.name == "tv")
     assert tv.active and tv.r == pytest.approx(game_map.params.chronemics.r_max)
     row, col, _, _ = _cell(game_map, 2.0, 1.9)      # in the TV's space, 1.6 m from the resident
@@ -57,13 +57,13 @@ def test_static_prices_every_space_at_r_min_whatever_the_agenda(game_map) -> Non
     assert planning_grid(game_map, "inflation")[row, col] == 1.0
 
 
-def test_every_planner_plans_and_the_baseline_is_shortest(game_map) -> None:  # noqa: ANN001
+def test_every_planner_plans_and_the_baseline_is_shortest(game_map) -> None:
     lengths = {name: plan(game_map, (0.8, 1.2), (5.2, 1.2), planner=name).length_m for name in PLANNERS}
     assert lengths["baseline"] == min(lengths.values())
     assert lengths["social"] > lengths["static"] > lengths["baseline"]   # the game makes the TV's space dear
 
 
-def test_plan_takes_one_planner_name(game_map) -> None:  # noqa: ANN001
+def test_plan_takes_one_planner_name(game_map) -> None:
     """plan() has one way to choose: ``planner`` (or the map's default); an unknown name is refused."""
     assert check_planner("social") == "social"
     assert game_map.params.planner.default_planner == "social"

@@ -128,7 +128,7 @@ def _center_day() -> tuple[SceneWorld, NavigationMaps]:
     return world, NavigationMaps.for_scene(world.scene)
 
 
-def _dora_map(clock: str, here: tuple[float, float], velocity: tuple[float, float]):  # noqa: ANN202
+def _dora_map(clock: str, here: tuple[float, float], velocity: tuple[float, float]):
     """The navigation's social map of center_day at ``clock`` with res_dora walking as given."""
     world, nav = _center_day()
     scene, t = world.scene, parse_clock(clock)

@@ -24,7 +24,7 @@ def test_dsr_example_runs_and_prints_what_it_says() -> None:
     expected = lines[-1].split("#", 1)[1].strip()
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code.group(1), "README.md", "exec"), {})  # noqa: S102 - our own README
+        exec(compile(code.group(1), "README.md", "exec"), {})
     assert out.getvalue().strip() == expected
 
 

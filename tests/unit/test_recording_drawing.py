@@ -37,7 +37,7 @@ def recorder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Recorder:
     return Recorder("social_navigation", tmp_path, "test-run", day=DAY)
 
 
-def _store(rec: Recorder):  # noqa: ANN202
+def _store(rec: Recorder):
     assert rec.path is not None
     path = rec.path
     rec.close()

@@ -56,7 +56,7 @@ def live_agents(scene_name: str, tmp_path: Path) -> OfflineAgents:
                          options={"human_observer": {"noise_xy": "0", "noise_theta": "0"}})
 
 
-def named(view) -> tuple[dict[str, dict], dict[tuple[str, str, str], dict]]:  # noqa: ANN001
+def named(view) -> tuple[dict[str, dict], dict[tuple[str, str, str], dict]]:
     """Nodes by name and edges by (source name, target name, type), attributes without ids."""
     names = {node: data["name"] for node, data in view.nodes(data=True)}
     nodes = {}
