@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 from dsr.state_review import review_state
-from dsr.writes import Write, delta_writes
+from dsr.writes import Write, delta_writes, explain
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
@@ -203,20 +203,3 @@ class RulePolicy:
             return None, f"{problem}: its state is not trusted"
         kept, dropped = review_state(message, graph, self.allowed, self.valued)
         return kept, None if dropped is None else f"{dropped} ({self.source})"
-
-
-def explain(write: Write) -> str:
-    """The refusal as a sentence an operator can match against the policy file."""
-    if write.writer is None:
-        return "a register stamped by a replica no agent vouches for"
-    what = f"{write.type!r} {write.element}" if write.type else f"{write.element} of unknown type"
-    if write.element == "edge":
-        what += f" ({write.src or '?'} -> {write.dst or '?'})"
-    if write.op == "attr":
-        return f"agent {write.writer!r} may not set {write.attr!r} on a {what}"
-    if write.op == "init":
-        if write.value is not None:
-            return (f"agent {write.writer!r} may not create a {what} with {write.attr!r} = "
-                    f"{write.value!r}")
-        return f"agent {write.writer!r} may not create a {what} with {write.attr!r}"
-    return f"agent {write.writer!r} may not {write.op} a {what}"

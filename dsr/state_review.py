@@ -25,7 +25,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from dsr.crdt import REMOVAL_RECEIPT, ElementState
-from dsr.writes import (Element, GraphLookup, Write, init_value, message_node_types,
+from dsr.writes import (Element, GraphLookup, Write, explain, init_value, message_node_types,
                         node_types, removes)
 
 if TYPE_CHECKING:
@@ -65,7 +65,6 @@ class _Review:
         """Memoised per stamping replica: a 10,000-node state repeats a few dozen questions."""
         key = (replica, element, types, op, attr, src, dst, value)
         if key not in self._memo:
-            from dsr.policy_rules import explain
             who = self.writer(replica)
             writes = [Write(who, element, t, op, attr, src, dst, value=value)  # type: ignore[arg-type]
                       for t in types]
@@ -107,7 +106,6 @@ class _Review:
 
     def _removal_allowed(self, state: ElementState, element: Element,
                          types: tuple[str | None, ...], src: str | None, dst: str | None) -> bool:
-        from dsr.policy_rules import explain
         receipt = state.attrs.get(REMOVAL_RECEIPT)
         horizon = max(state.cleared, max(state.rem.values(), default=0))
         what = f"{types[0]!r} {element}"

@@ -141,3 +141,20 @@ def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tu
         src, dst, edge_type = key
         yield from _element_writes(agent, state, "edge", edge_type, graph.node_type_of(src),
                                    graph.node_type_of(dst), cascade, valued)
+
+
+def explain(write: Write) -> str:
+    """The refusal as a sentence an operator can match against the policy file."""
+    if write.writer is None:
+        return "a register stamped by a replica no agent vouches for"
+    what = f"{write.type!r} {write.element}" if write.type else f"{write.element} of unknown type"
+    if write.element == "edge":
+        what += f" ({write.src or '?'} -> {write.dst or '?'})"
+    if write.op == "attr":
+        return f"agent {write.writer!r} may not set {write.attr!r} on a {what}"
+    if write.op == "init":
+        if write.value is not None:
+            return (f"agent {write.writer!r} may not create a {what} with {write.attr!r} = "
+                    f"{write.value!r}")
+        return f"agent {write.writer!r} may not create a {what} with {write.attr!r}"
+    return f"agent {write.writer!r} may not {write.op} a {what}"

@@ -19,7 +19,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.plan.nav_cli",         # chronav path / chronav metrics
     "tools.plan.grammar_cli",     # chronav grammar check / chronav plan
     "tools.agenda",               # chronav agenda ...
-    "tools.launch",               # chronav launch / chronav demo
+    "tools.system.launch_cli",    # chronav launch / chronav demo
     "tools.chaos.command",        # chronav chaos (fault injection)
     "tools.scene.map_cli",        # chronav map export / chronav scene from-map (after tools.scene.scene_cli)
     "tools.evaluate.command",     # chronav evaluate (planner studies)

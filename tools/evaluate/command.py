@@ -204,7 +204,8 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     """The whole study; returns what ``--json`` prints."""
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
-    from tools.evaluate.sweep import RunSpec, finished, parse_executor, plan_sweep, read_ledger
+    from tools.evaluate.executors import parse_executor
+    from tools.evaluate.sweep import RunSpec, finished, plan_sweep, read_ledger
     from tools.evaluate.table import write_table
     from tools.launch import check_timeout, LaunchError
 

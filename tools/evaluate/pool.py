@@ -24,7 +24,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from pathlib import Path
 from typing import Any
 
-from tools.evaluate.sweep import RunSpec, execute_run, failed_result
+from tools.evaluate.sweep import RunSpec, execute_run, failed_result, run_isolated
 
 _STOP: Any = None          # the pool's stop event, in a worker process
 _RUNS = 0                  # runs this worker process has done
@@ -129,8 +129,6 @@ def check_worker(expected: dict[str, Any], scene: str) -> None:
 def dask_task(spec_data: dict[str, Any], runs_dir: str, timeout_s: float, mode: str,
               expected: dict[str, Any], record: bool = True) -> dict[str, Any]:
     """One run on a Dask worker: checked, then in the worker itself (in-process) or as a launch."""
-    from tools.evaluate.sweep import run_isolated
-
     spec = RunSpec.from_dict(spec_data)
     check_worker(expected, spec.scene)
     if mode != "in-process":

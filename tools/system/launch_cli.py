@@ -1,0 +1,86 @@
+"""``chronav launch`` and ``chronav demo``: the command-line face of tools/launch.py.
+
+Why apart from the launcher: the commands show progress through tools/system/console.py, which
+runs the launcher (or the in-process runner); with the commands inside tools/launch.py the
+launcher and its console imported each other.  Now: launch_cli -> console -> launch.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+import typer
+
+from tools.launch import (DEFAULT_HANG_TIMEOUT_S, DEFAULT_SCENE, DEFAULT_STARTUP_TIMEOUT_S, LaunchError, check_rate,
+                          check_timeout)
+
+
+def _option_check(check: Callable[..., Any], option: str) -> Callable[[Any], Any]:
+    """A typer callback refusing a bad value at once, in the check's words (exit 2)."""
+    def callback(value: Any) -> Any:
+        if value is None:
+            return value
+        try:
+            return check(value, option)
+        except LaunchError as exc:
+            raise typer.BadParameter(str(exc).removeprefix(f"{option} ")) from None
+    return callback
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("launch")
+    def launch(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
+               rate: float = typer.Option(None, help="sim seconds per wall second, > 0 (default: the scene's)",
+                                          callback=_option_check(check_rate, "--rate")),
+               timeout: float = typer.Option(900.0, help="wall-clock limit in seconds, > 0",
+                                             callback=_option_check(check_timeout, "--timeout")),
+               hang_timeout: float = typer.Option(DEFAULT_HANG_TIMEOUT_S, help="restart an agent whose heartbeat "
+                                                  "stops for this many wall seconds",
+                                                  callback=_option_check(check_timeout, "--hang-timeout")),
+               startup_timeout: float = typer.Option(DEFAULT_STARTUP_TIMEOUT_S, help="restart an agent that writes "
+                                                     "no first heartbeat within this many wall seconds of its start",
+                                                     callback=_option_check(check_timeout, "--startup-timeout")),
+               no_record: bool = typer.Option(False, "--no-record", help="do not write a Rerun recording"),
+               restart_limit: int = typer.Option(3, min=0, help="restarts allowed per agent"),
+               ros: bool = typer.Option(False, "--ros", help="also start the ROS 2 bridge (topics over rmw_zenoh; "
+                                        "router endpoint from CHRONAV_ROS_ENDPOINT, default tcp/127.0.0.1:7447)"),
+               ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
+                                              help="ROS_DOMAIN_ID of --ros (default: $ROS_DOMAIN_ID or 0)"),
+               robot: str = typer.Option("sim", "--robot", help="sim: the simulated robot; ros: a ROS 2 robot "
+                                         "(its /odom and /scan in, /cmd_vel out; needs --ros)"),
+               in_process: bool = typer.Option(False, "--in-process",
+                                               help="every agent in this process, stepped in lockstep on one graph "
+                                                    "(no router, no restarts; as fast as the machine allows)"),
+               as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
+        """Run every agent as its own process on SCENE until the day's missions are done.
+
+        With --in-process the same agents run in this one process, stepped in lockstep (reproducible
+        run for run). The run goes to ./recordings/<run id>/ (or $CHRONAV_RUNS/<run id>/)."""
+        from tools.system.console import run_with_progress
+
+        domain = None
+        if in_process and (ros or ros_domain is not None or robot != "sim"):
+            raise typer.BadParameter("--in-process runs every agent on one graph without Zenoh, so the ROS 2 "
+                                     "bridge cannot join it: drop --in-process to use --ros or --robot ros")
+        if ros or ros_domain is not None or robot == "ros":
+            try:
+                domain = ros_domain if ros_domain is not None else int(os.environ.get("ROS_DOMAIN_ID") or 0)
+            except ValueError:
+                raise typer.BadParameter(f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')!r} is not a number; "
+                                         "set it to 0-232 or give --ros-domain N") from None
+        code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
+                                 restart_limit=restart_limit, as_json=as_json, with_report=False,
+                                 hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
+                                 robot=robot, in_process=in_process)
+        raise typer.Exit(code)
+
+    @app.command("demo")
+    def demo(scene: str = typer.Argument(DEFAULT_SCENE, help="scene file or name"),
+             as_json: bool = typer.Option(False, "--json")) -> None:
+        """The main job: launch the default scene, then print the social vs non-social metrics table."""
+        from tools.system.console import run_with_progress
+
+        raise typer.Exit(run_with_progress(scene, rate=None, timeout_s=600, record=True, restart_limit=3,
+                                           as_json=as_json, with_report=True))
