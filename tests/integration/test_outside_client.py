@@ -29,7 +29,7 @@ SIM = [{"op": "insert", "type": "world", "name": "world"},
        {"op": "edge", "src": "world", "dst": "robot", "type": "RT",
         "attrs": {"x": 1.0, "y": 1.0, "theta": 0.0}}]
 OBJECTS = [{"op": "wait", "names": ["world"]},
-           {"op": "insert", "type": "object", "name": "tv", "attrs": {"kind": "tv", "n": 3}}]
+           {"op": "insert", "type": "object", "name": "tv", "attrs": {"kind": "tv", "footprint_dims": [1.2, 0.4]}}]
 AGENDA = [{"op": "wait", "names": ["tv"]},
           {"op": "insert", "type": "activity", "name": "activity/game",
            "attrs": {"state": "scheduled", "participants": ["ana", "ben"]}},
