@@ -38,8 +38,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from agents.lib.perception import walker_model
+from agents.lib.perception.walker_model import WalkerModel
 from scenes.angles import wrap_angle
 
 GATE_CHI2 = 9.21            # 2 degrees of freedom, 99 %
@@ -50,14 +53,19 @@ STILL_MPS = 0.1             # an estimated speed below this is sensor noise on a
 MIN_SIGMA_M = 0.01          # the measurement noise the tracker assumes at least (a perfect sensor is never perfect)
 SMOOTHING_S = 1.2           # at most this many seconds of detections in the velocity's line fit
 VELOCITY_SIGMA_MPS = 0.04   # the velocity noise the fit aims at: as few detections as reach it (module doc)
+MODEL_WINDOW_S = (walker_model.LAGS - 0.5) * walker_model.GRID_S   # the detections the walker model reads
 
 
-def observer_tracker(noise_xy: float) -> Tracker:
-    """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise.
+def observer_tracker(noise_xy: float, model: WalkerModel | None = None, learned: bool = True) -> Tracker:
+    """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise,
+    with the shipped walker model (walker_model.py) unless ``model`` gives another (``chronav predict
+    evaluate --model``: a model trained on other files, for cross-file figures); ``learned=False``:
+    the line fit's velocity only (what the training script reads the model's inputs from).
 
     One definition: the observer and ``chronav predict evaluate`` build it here, so the benchmark
     measures what runs."""
-    return Tracker(measurement_sigma=max(noise_xy, MIN_SIGMA_M))
+    return Tracker(measurement_sigma=max(noise_xy, MIN_SIGMA_M),
+                   model=(model or walker_model.shipped()) if learned else None)
 
 
 @dataclass(frozen=True)
@@ -108,14 +116,17 @@ class Tracker:
     heading_smoothing: float = 0.5
     smoothing_s: float = SMOOTHING_S
     velocity_sigma: float = VELOCITY_SIGMA_MPS
+    model: WalkerModel | None = None          # the learned velocity correction (walker_model.py); None: the fit's
     tracks: dict[str, Track] = field(default_factory=dict)
     last_s: float | None = None
+    _corrected: dict[str, tuple[float, float]] | None = None   # the model's velocities at ``last_s``, computed once
 
     def update(self, t_s: float, detections: Sequence[Detection]) -> dict[str, Track]:
         """Predict every track to ``t_s``, associate the detections, correct; re-acquire or start
         tracks for the rest."""
         gap = math.inf if self.last_s is None else t_s - self.last_s
         self.last_s = t_s
+        self._corrected = None
         if gap > MAX_GAP_S or gap < 0:
             self.tracks = {d.name: self._new(d, t_s) for d in detections}
             return self.tracks
@@ -190,9 +201,13 @@ class Tracker:
         fitted to the fewest latest detections that reach ``velocity_sigma`` (module doc)."""
         history = track.history
         history.append((t_s, det.x, det.y))
-        while history and history[0][0] < t_s - self.smoothing_s - 1e-6:
+        keep_s = max(self.smoothing_s, MODEL_WINDOW_S)
+        while history and history[0][0] < t_s - keep_s - 1e-6:
             history.pop(0)
-        fit = line_fit(latest_enough(history, self.measurement_sigma, self.velocity_sigma), t_s)
+        recent = history
+        if history[0][0] < t_s - self.smoothing_s - 1e-6:
+            recent = [h for h in history if h[0] >= t_s - self.smoothing_s - 1e-6]
+        fit = line_fit(latest_enough(recent, self.measurement_sigma, self.velocity_sigma), t_s)
         if fit is not None:
             track.x, track.y, track.vx, track.vy = fit
         turn = wrap_angle(det.theta - track.theta)
@@ -205,11 +220,44 @@ class Tracker:
             return (0.0, 0.0)
         return track.velocity
 
+    def model_input(self, name: str, t_s: float) -> tuple[NDArray[np.float64], float, float] | None:
+        """The walker model's features for a track and the fit's velocity they are relative to, or
+        None where the model does not apply (a lost or standing track, a track younger
+        than the model's window): one definition for the live path and the training script."""
+        track = self.tracks[name]
+        if t_s - track.updated_s > LOST_S:
+            return None
+        vx, vy = track.vx, track.vy
+        if math.hypot(vx, vy) < max(self.model.min_speed_mps if self.model is not None else STILL_MPS, 1e-9):
+            return None
+        points = walker_model.window(track.history, t_s)
+        if points is None:
+            return None
+        return walker_model.features(points, vx, vy), vx, vy
+
+    def _learned(self, t_s: float) -> dict[str, tuple[float, float]]:
+        """Every applicable track's velocity corrected by the model, in one numpy pass per cycle
+        (the observer asks for everyone's estimate at the same time)."""
+        if self._corrected is not None and self.last_s == t_s:
+            return self._corrected
+        inputs = {name: found for name in self.tracks if (found := self.model_input(name, t_s)) is not None}
+        self._corrected = {}
+        if inputs and self.model is not None:
+            corrections = self.model.corrections(np.array([f for f, _, _ in inputs.values()]))
+            for (name, (_, vx, vy)), (along, across) in zip(inputs.items(), corrections.tolist(), strict=True):
+                speed = math.hypot(vx, vy)
+                c, s = vx / speed, vy / speed
+                self._corrected[name] = (vx + along * c - across * s, vy + along * s + across * c)
+        return self._corrected
+
     def estimate(self, name: str, t_s: float) -> tuple[float, float, float, float, float]:
-        """What the observer publishes of a track: x, y, heading, vx, vy (a speed below
-        ``STILL_MPS`` is reported as standing still)."""
+        """What the observer publishes of a track: x, y, heading, vx, vy; the velocity is the walker
+        model's where it applies (``model_input``), else the fit's; a speed below ``STILL_MPS`` is
+        reported as standing still."""
         track = self.tracks[name]
         vx, vy = self.velocity(name, t_s)
+        if self.model is not None and self.last_s == t_s:
+            vx, vy = self._learned(t_s).get(name, (vx, vy))
         if math.hypot(vx, vy) < STILL_MPS:
             vx = vy = 0.0
         return track.x, track.y, track.theta, vx, vy
