@@ -72,6 +72,15 @@ def examples(path: Path, noise: float, seed: int) -> tuple[NDArray[np.float64], 
     return np.array(feats), np.array(speeds), np.array(futures)
 
 
+def uncorrected(parts: Sequence[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]) -> float:
+    """The mean error of the fit's constant velocity on ``examples`` (the training's starting point,
+    recorded per file in the provenance: a fingerprint of the data and the noise draws)."""
+    futures = np.concatenate([u for _, _, u in parts]).copy()
+    speeds = np.concatenate([v for _, v, _ in parts])
+    futures[:, :, 0] -= speeds[:, None] * np.arange(1, PRED + 1) * DT
+    return round(float(np.sqrt((futures ** 2).sum(axis=2)).mean()), 5)
+
+
 def fit(features: NDArray[np.float64], speeds: NDArray[np.float64], futures: NDArray[np.float64], hidden: int,
         weight_decay: float, seed: int, iterations: int) -> tuple[dict[str, NDArray[np.float64]], dict[str, float]]:
     """The network's parameters (module doc) and the loss before (no correction) and after."""
@@ -124,6 +133,7 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
     from agents.lib.perception.walker_model import WalkerModel
 
     parts = [examples(path, noise, s) for path in files for s in noise_seeds]
+    per_file = [parts[i * len(noise_seeds):(i + 1) * len(noise_seeds)] for i in range(len(files))]
     features = np.concatenate([p[0] for p in parts])
     if len(features) == 0:
         raise SystemExit("no window to train on: the files hold no walker seen for 20 consecutive frames")
@@ -131,7 +141,9 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
                          hidden, weight_decay, seed, iterations)
     provenance = {
         "command": command,
-        "files": [{"name": p.name, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()} for p in files],
+        "files": [{"name": p.name, "sha256": hashlib.sha256(p.read_bytes()).hexdigest(),
+                   "examples": sum(len(f) for f, _, _ in mine), "ade_m_without_model": uncorrected(mine)}
+                  for p, mine in zip(files, per_file, strict=True)],
         "seed": seed, "noise_m": noise, "noise_seeds": list(noise_seeds), "hidden": hidden,
         "weight_decay": weight_decay, "iterations": iterations, "examples": int(len(features)),
         "question": f"observe {OBS} x {DT} s, predict {PRED} x {DT} s", **losses}
