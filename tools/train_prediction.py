@@ -7,7 +7,7 @@ window start gets a fresh ``observer_tracker(noise, learned=False)`` fed the obs
 everyone present, with ``--noise`` m of detection noise drawn per annotation for each of
 ``--noise-seeds`` (noise augmentation: the same walk seen through different noise; the benchmark's
 own seed is 0, so the default training seeds 1 and 2 never see the benchmark's noise).  For every
-window whose track the model applies to (``Tracker.model_input``: a walker seen over the whole
+window whose track the model applies to (``Tracker.model_inputs``: a walker seen over the whole
 3.2 s), the target is the true future in the walker's frame.  The network (one tanh layer) is
 fitted by L-BFGS (scipy) from a seeded start, minimising the mean Euclidean distance between the
 constant-velocity rollout of the corrected velocity and the true future at the 12 steps (the ADE
@@ -57,11 +57,11 @@ def examples(path: Path, noise: float, seed: int) -> tuple[NDArray[np.float64], 
         for k in range(start, start + OBS):
             tracker.update(k * DT, [Detection(str(pid), x, y, 0.0) for pid, (x, y) in sorted(noisy[k].items())])
         now = (start + OBS - 1) * DT
+        inputs = tracker.model_inputs([str(pid) for pid in pids], now)
         for pid in pids:
-            found = tracker.model_input(str(pid), now)
-            if found is None:
+            if str(pid) not in inputs:
                 continue
-            f, vx, vy = found
+            f, vx, vy = inputs[str(pid)]
             track = tracker.tracks[str(pid)]
             speed = float(np.hypot(vx, vy))
             c, s = vx / speed, vy / speed

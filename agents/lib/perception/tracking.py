@@ -33,6 +33,7 @@ tracks restart from the detections, named by the detector.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -204,9 +205,7 @@ class Tracker:
         keep_s = max(self.smoothing_s, MODEL_WINDOW_S)
         while history and history[0][0] < t_s - keep_s - 1e-6:
             history.pop(0)
-        recent = history
-        if history[0][0] < t_s - self.smoothing_s - 1e-6:
-            recent = [h for h in history if h[0] >= t_s - self.smoothing_s - 1e-6]
+        recent = history[bisect.bisect_left(history, t_s - self.smoothing_s - 1e-6, key=lambda h: h[0]):]
         fit = line_fit(latest_enough(recent, self.measurement_sigma, self.velocity_sigma), t_s)
         if fit is not None:
             track.x, track.y, track.vx, track.vy = fit
@@ -220,27 +219,30 @@ class Tracker:
             return (0.0, 0.0)
         return track.velocity
 
-    def model_input(self, name: str, t_s: float) -> tuple[NDArray[np.float64], float, float] | None:
-        """The walker model's features for a track and the fit's velocity they are relative to, or
-        None where the model does not apply (a lost or standing track, a track younger
-        than the model's window): one definition for the live path and the training script."""
-        track = self.tracks[name]
-        if t_s - track.updated_s > LOST_S:
-            return None
-        vx, vy = track.vx, track.vy
-        if math.hypot(vx, vy) < max(self.model.min_speed_mps if self.model is not None else STILL_MPS, 1e-9):
-            return None
-        points = walker_model.window(track.history, t_s)
-        if points is None:
-            return None
-        return walker_model.features(points, vx, vy), vx, vy
+    def model_inputs(self, names: Sequence[str], t_s: float) -> dict[str, tuple[NDArray[np.float64], float, float]]:
+        """The walker model's features of the named tracks it applies to, with the fit's velocity
+        they are relative to: not lost, walking (at least the model's ``min_speed_mps``, else
+        ``STILL_MPS``), seen over the model's whole window; the others keep the fit's velocity (the
+        constant-velocity fallback).  One definition for the live path and the training script."""
+        least = max(self.model.min_speed_mps if self.model is not None else STILL_MPS, 1e-9)
+        tracks = [self.tracks[n] for n in names]
+        chosen = [tr for tr in tracks if t_s - tr.updated_s <= LOST_S and math.hypot(tr.vx, tr.vy) >= least]
+        if not chosen:
+            return {}
+        points, full = walker_model.windows([tr.history for tr in chosen], t_s)
+        if not full.any():
+            return {}
+        velocity = np.array([(tr.vx, tr.vy) for tr in chosen])
+        found = walker_model.features(points[full], velocity[full])
+        kept = [tr for tr, ok in zip(chosen, full.tolist(), strict=True) if ok]
+        return {tr.name: (f, tr.vx, tr.vy) for tr, f in zip(kept, found, strict=True)}
 
     def _learned(self, t_s: float) -> dict[str, tuple[float, float]]:
         """Every applicable track's velocity corrected by the model, in one numpy pass per cycle
         (the observer asks for everyone's estimate at the same time)."""
-        if self._corrected is not None and self.last_s == t_s:
+        if self._corrected is not None:
             return self._corrected
-        inputs = {name: found for name in self.tracks if (found := self.model_input(name, t_s)) is not None}
+        inputs = self.model_inputs(list(self.tracks), t_s)
         self._corrected = {}
         if inputs and self.model is not None:
             corrections = self.model.corrections(np.array([f for f, _, _ in inputs.values()]))
@@ -252,7 +254,7 @@ class Tracker:
 
     def estimate(self, name: str, t_s: float) -> tuple[float, float, float, float, float]:
         """What the observer publishes of a track: x, y, heading, vx, vy; the velocity is the walker
-        model's where it applies (``model_input``), else the fit's; a speed below ``STILL_MPS`` is
+        model's where it applies (``model_inputs``), else the fit's; a speed below ``STILL_MPS`` is
         reported as standing still."""
         track = self.tracks[name]
         vx, vy = self.velocity(name, t_s)
