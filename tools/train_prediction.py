@@ -39,10 +39,11 @@ DEFAULT_FILES = sorted((REPO.parent / "shared" / "data" / "pedestrians").glob("*
 OBS, PRED, DT = 8, 12, 0.4
 
 
-def examples(path: Path, noise: float, seed: int) -> tuple[NDArray[np.float64], NDArray[np.float64],
+def examples(path: Path, noise: float, seed: int, leave_out: tuple[int, int] | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64],
                                                           NDArray[np.float64]]:
     """(features (N, F), fit speeds (N,), true futures in the walker's frame (N, PRED, 2)) of every
-    window of one file seen with one noise draw (module doc)."""
+    window of one file seen with one noise draw (module doc); ``leave_out`` (first, last frame index):
+    no window that shares a frame with that stretch (blocked evaluation, ``blocked``)."""
     from agents.lib.perception.tracking import Detection, observer_tracker
     from tools.prediction_eval import noisy_annotations, read_annotations, windows
 
@@ -50,7 +51,8 @@ def examples(path: Path, noise: float, seed: int) -> tuple[NDArray[np.float64], 
     noisy = noisy_annotations(data, noise, np.random.default_rng(seed))
     by_start: dict[int, list[int]] = {}
     for start, pid in windows(data, OBS + PRED):
-        by_start.setdefault(start, []).append(pid)
+        if leave_out is None or start + OBS + PRED - 1 < leave_out[0] or start > leave_out[1]:
+            by_start.setdefault(start, []).append(pid)
     feats, speeds, futures = [], [], []
     for start, pids in by_start.items():
         tracker = observer_tracker(noise, learned=False)
@@ -151,6 +153,45 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
     return model.to_json()
 
 
+def blocked(files: Sequence[Path], folds: int = 5, noise: float = 0.02, noise_seeds: Sequence[int] = (1, 2),
+            seed: int = 0, **options: float) -> dict[str, object]:
+    """In-file figures without the answers in the training set: each file cut into ``folds``
+    stretches of frames; each stretch is evaluated (``chronav predict evaluate``'s ``evaluate``, 2 cm
+    noise, seed 0, on the windows inside it) with a model trained on the other files and on the
+    windows of this file that share no frame with it.  Per file: the window-weighted ADE/FDE over
+    the window-weighted constant-velocity baseline, and the same without the model (the fit's
+    velocity: ``fit_only``) on the same windows."""
+    from agents.lib.perception.tracking import STILL_MPS
+    from agents.lib.perception.walker_model import WalkerModel
+    from tools.prediction_eval import Annotations, evaluate, read_annotations
+
+    out: dict[str, object] = {}
+    for path in files:
+        data = read_annotations(path, DT)
+        edges = np.linspace(0, len(data.frames), folds + 1).astype(int)
+        totals = np.zeros(7)
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            parts = [examples(p, noise, s, (a, b - 1) if p == path else None) for p in files for s in noise_seeds]
+            params, _ = fit(np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts]),
+                            np.concatenate([q[2] for q in parts]), int(options.get("hidden", 16)),
+                            float(options.get("weight_decay", 0.01)), seed, int(options.get("iterations", 400)))
+            model = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=float(options.get("max_correction", 0.4)),
+                                provenance={}, **params)
+            piece = Annotations(data.name, data.frames[a:b], data.people[a:b])
+            zero = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=0.0, provenance={}, **params)
+            try:
+                r = evaluate(piece, noise=noise, seed=0, model=model)
+                z = evaluate(piece, noise=noise, seed=0, model=zero)
+            except ValueError:
+                continue                     # a stretch too short for a window
+            totals += np.array([r.ade, r.fde, r.cv_ade, r.cv_fde, z.ade, z.fde, 1.0]) * r.tracks
+        ade, fde, cv_ade, cv_fde, z_ade, z_fde, n = totals
+        out[path.name] = {"ade_over_cv": round(ade / cv_ade, 4), "fde_over_cv": round(fde / cv_fde, 4),
+                          "fit_only_ade_over_cv": round(z_ade / cv_ade, 4),
+                          "fit_only_fde_over_cv": round(z_fde / cv_fde, 4), "windows": int(n)}
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("files", nargs="*", type=Path, default=DEFAULT_FILES)
@@ -162,10 +203,18 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--weight-decay", type=float, default=0.01)
     parser.add_argument("--iterations", type=int, default=400)
     parser.add_argument("--max-correction", type=float, default=0.4)
+    parser.add_argument("--blocked", type=int, default=0, metavar="K",
+                        help="instead of training: in-file figures, each file in K stretches, each evaluated "
+                             "by a model trained without it (blocked)")
     args = parser.parse_args(argv)
     if not args.files:
         raise SystemExit("no pedestrian files given and none in ../shared/data/pedestrians")
     sys.path.insert(0, str(REPO))
+    if args.blocked:
+        print(json.dumps(blocked(args.files, args.blocked, args.noise, args.noise_seeds, args.seed, hidden=args.hidden,
+                                 weight_decay=args.weight_decay, iterations=args.iterations,
+                                 max_correction=args.max_correction)))
+        return
     command = shlex.join(["tools/train_prediction.py", *(sys.argv[1:] if argv is None else argv)])
     model = train(args.files, args.noise, args.noise_seeds, args.seed, args.hidden, args.weight_decay,
                   args.iterations, args.max_correction, command)

@@ -24,6 +24,12 @@ the last 3 detections at 2.5 Hz, 0.8 s; 7 at the observer's 10 Hz, 0.6 s; 1 cm: 
 2.5 Hz, plain differencing), never more than ``smoothing_s``.  The Kalman filter keeps the
 covariance that sizes the gate; its state is re-seeded from the fit.
 
+Where the walker model applies (walker_model.py: a walker seen over the last 3.2 s), the velocity
+the tracker reports (``estimate``) is the fit's corrected by that tiny learned network: the
+constant velocity that best predicts the next 4.8 s, learned on real pedestrians with the
+observer's noise; elsewhere (young tracks, standing people) the fit's velocity stands.  The
+detections of the model's window are kept with the track (``MODEL_WINDOW_S``).
+
 A track whose detection falls outside its gate (a sudden turn or start) is *re-acquired* when the
 detector names it: it jumps to the detection and keeps its history, so its velocity comes from the
 fit (never reset to zero, which made 12 % of ETH tracks restart in 3.2 s).  After a gap longer than
