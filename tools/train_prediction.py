@@ -149,7 +149,8 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
         "seed": seed, "noise_m": noise, "noise_seeds": list(noise_seeds), "hidden": hidden,
         "weight_decay": weight_decay, "iterations": iterations, "examples": int(len(features)),
         "question": f"observe {OBS} x {DT} s, predict {PRED} x {DT} s", **losses}
-    model = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=max_correction, provenance=provenance, **params)
+    model = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=max_correction, noise_m=noise,
+                        provenance=provenance, **params)
     return model.to_json()
 
 
@@ -176,9 +177,9 @@ def blocked(files: Sequence[Path], folds: int = 5, noise: float = 0.02, noise_se
                             np.concatenate([q[2] for q in parts]), int(options.get("hidden", 16)),
                             float(options.get("weight_decay", 0.01)), seed, int(options.get("iterations", 400)))
             model = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=float(options.get("max_correction", 0.4)),
-                                provenance={}, **params)
+                                noise_m=noise, provenance={}, **params)
             piece = Annotations(data.name, data.frames[a:b], data.people[a:b])
-            zero = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=0.0, provenance={}, **params)
+            zero = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=0.0, noise_m=noise, provenance={}, **params)
             try:
                 r = evaluate(piece, noise=noise, seed=0, model=model)
                 z = evaluate(piece, noise=noise, seed=0, model=zero)

@@ -66,13 +66,15 @@ MODEL_WINDOW_S = (walker_model.LAGS - 0.5) * walker_model.GRID_S   # the detecti
 def observer_tracker(noise_xy: float, model: WalkerModel | None = None, learned: bool = True) -> Tracker:
     """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise,
     with the shipped walker model (walker_model.py) unless ``model`` gives another (``chronav predict
-    evaluate --model``: a model trained on other files, for cross-file figures); ``learned=False``:
-    the line fit's velocity only (what the training script reads the model's inputs from).
+    evaluate --model``: a model trained on other files, for cross-file figures) when it was trained
+    for this detector's noise (``WalkerModel.applies_to``); ``learned=False``: the line fit's
+    velocity only (what the training script reads the model's inputs from).
 
     One definition: the observer and ``chronav predict evaluate`` build it here, so the benchmark
     measures what runs."""
-    return Tracker(measurement_sigma=max(noise_xy, MIN_SIGMA_M),
-                   model=(model or walker_model.shipped()) if learned else None)
+    sigma = max(noise_xy, MIN_SIGMA_M)
+    model = (model or walker_model.shipped()) if learned else None
+    return Tracker(measurement_sigma=sigma, model=model if model is not None and model.applies_to(sigma) else None)
 
 
 @dataclass(frozen=True)

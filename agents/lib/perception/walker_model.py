@@ -20,7 +20,8 @@ velocities (m/s) and the tracker's speed.  **Output**: a correction (along, acro
 added to the tracker's velocity, bounded by ``max_correction_mps`` (outside the training data a
 network may say anything; the bound keeps a surprise small).  The model applies to walkers only
 (tracker speed at least ``min_speed_mps``) whose track covers the whole window; others keep the
-fit's velocity (constant-velocity fallback).
+fit's velocity (constant-velocity fallback); and only to a detector of about the noise it was
+trained for (``applies_to``).
 
 **Parameters** come from ``tools/train_prediction.py`` (seeded and deterministic: the command, the
 files with their sha256 and the seed are in the file's ``provenance``) and ship as
@@ -66,11 +67,20 @@ class WalkerModel:
     b2: NDArray[np.float64]          # (2,)
     min_speed_mps: float
     max_correction_mps: float
+    noise_m: float                   # the detection noise it was trained for (``applies_to``)
     provenance: dict[str, Any]
 
     @property
     def features(self) -> int:
         return len(self.mean)
+
+    def applies_to(self, noise_xy: float) -> bool:
+        """Whether a detector of ``noise_xy`` m is the one the model learned to correct (within a
+        factor of 1.5 of ``noise_m``).  Its corrections are learned from what that noise does to
+        the fit; with a much better detector the fit alone is better (on simulated center_day
+        people without noise the corrections cost 3 % of ADE: docs/prediction.md), so another
+        detector keeps the fit's velocity until a model is trained for it (``--noise``)."""
+        return self.noise_m / 1.5 <= noise_xy <= self.noise_m * 1.5
 
     def corrections(self, features: NDArray[np.float64]) -> NDArray[np.float64]:
         """(N, F) features -> (N, 2) velocity corrections (along, across), bounded (module doc)."""
@@ -84,6 +94,7 @@ class WalkerModel:
     def to_json(self) -> dict[str, Any]:
         return {"format": FORMAT, "version": VERSION, "lags": LAGS, "grid_s": GRID_S,
                 "min_speed_mps": self.min_speed_mps, "max_correction_mps": self.max_correction_mps,
+                "noise_m": self.noise_m,
                 "provenance": self.provenance,
                 "mean": _rounded(self.mean), "scale": _rounded(self.scale), "w1": _rounded(self.w1),
                 "b1": _rounded(self.b1), "w2": _rounded(self.w2), "b2": _rounded(self.b2)}
@@ -128,7 +139,7 @@ def from_json(raw: Any, path: Path) -> WalkerModel:
     if not isinstance(provenance, dict) or not {"command", "files", "seed"} <= set(provenance):
         raise WalkerModelError(f"{path}: key 'provenance' must name the 'command', 'files' and 'seed' it was trained with")
     limits = []
-    for key in ("min_speed_mps", "max_correction_mps"):
+    for key in ("min_speed_mps", "max_correction_mps", "noise_m"):
         value = raw.get(key)
         if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
             raise WalkerModelError(f"{path}: key {key!r} must be a number >= 0")
@@ -138,7 +149,7 @@ def from_json(raw: Any, path: Path) -> WalkerModel:
         raise WalkerModelError(f"{path}: key 'scale' must be positive")
     return WalkerModel(_array(path, raw, "mean", (features,)), scale, _array(path, raw, "w1", (features, hidden)),
                        _array(path, raw, "b1", (hidden,)), _array(path, raw, "w2", (hidden, 2)),
-                       _array(path, raw, "b2", (2,)), limits[0], limits[1], provenance)
+                       _array(path, raw, "b2", (2,)), limits[0], limits[1], limits[2], provenance)
 
 
 def load(path: Path | str | None = None) -> WalkerModel:
