@@ -58,9 +58,11 @@ def _evaluate(*args: str) -> dict:
 
 def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: Path) -> None:
     """Windows as the standard loader makes them (30 frames, present in all: 11 windows each of
-    the two walkers, none of the short-lived one).  Without noise the deployed tracker reads a
-    steady walker's last step exactly, so its errors are constant velocity's; with the observer's
-    2 cm noise they are larger, and the ratios are the file-averaged errors over the baseline's."""
+    the two walkers, none of the short-lived one).  Without noise the tracker's fit reads a
+    steady walker's last step exactly (the walker model, trained for 2 cm, stays out of a perfect
+    detector's way), so its errors are constant velocity's; with the observer's 2 cm noise they are
+    larger, the shipped walker model changes them (against one that corrects nothing, ``--model``
+    with all weights zero), and the ratios are the file-averaged errors over the baseline's."""
     data = tmp_path / "circles.txt"
     _write_walkers(data)
     clean = _evaluate(str(data))
@@ -69,15 +71,15 @@ def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: 
     assert set(row) == {"ade", "fde", "cv_ade", "cv_fde", "tracks"}
     assert row["tracks"] == 2 * (30 - 20 + 1)
     assert row["cv_ade"] > 0.05 and row["cv_fde"] > row["cv_ade"]
-    assert row["ade"] < row["cv_ade"] * 1.05, "the walker model bends the fit's velocity a little, never far"
-    fit_only = tmp_path / "zero.json"
-    fit_only.write_text(json.dumps(_zero_model()), encoding="utf-8")
-    bare = _evaluate(str(data), "--model", str(fit_only))["files"]["circles.txt"]
-    assert bare["ade"] == pytest.approx(row["cv_ade"], abs=1e-3) and bare["fde"] == pytest.approx(row["cv_fde"], abs=1e-3)
-    assert bare["ade"] != row["ade"], "the shipped model is on the path the benchmark measures"
+    assert row["ade"] == pytest.approx(row["cv_ade"], abs=1e-3) and row["fde"] == pytest.approx(row["cv_fde"], abs=1e-3)
     noisy = _evaluate(str(data), "--noise", "0.02", "--seed", "3")
     row = noisy["files"]["circles.txt"]
     assert row["ade"] > row["cv_ade"], "noise costs something"
+    fit_only = tmp_path / "zero.json"
+    fit_only.write_text(json.dumps(_zero_model()), encoding="utf-8")
+    bare = _evaluate(str(data), "--noise", "0.02", "--seed", "3", "--model", str(fit_only))["files"]["circles.txt"]
+    assert bare["cv_ade"] == row["cv_ade"] and bare["ade"] != row["ade"], \
+        "the shipped walker model is on the path the benchmark measures"
     assert noisy["ade_over_cv"] == pytest.approx(row["ade"] / row["cv_ade"], abs=2e-3)
     fast = _evaluate(str(data), "--noise", "0.02", "--seed", "3", "--detect-every", "4")["files"]["circles.txt"]
     assert fast["cv_ade"] == row["cv_ade"] and fast["ade"] < row["ade"], "the observer's 10 Hz averages the noise"
@@ -285,6 +287,7 @@ def test_the_shipped_walker_model_is_the_training_scripts_on_the_two_ucy_files()
     (lambda raw: raw["w1"][0].__setitem__(0, float("nan")), "key 'w1' holds a value that is not a finite number"),
     (lambda raw: raw.update(provenance={"seed": 0}), "key 'provenance' must name"),
     (lambda raw: raw.update(max_correction_mps=-1), "key 'max_correction_mps' must be a number >= 0"),
+    (lambda raw: raw.pop("noise_m"), "key 'noise_m' must be a number >= 0"),
 ])
 def test_a_bad_walker_model_file_is_a_clear_error(tmp_path: Path, edit, expected: str) -> None:  # noqa: ANN001
     from agents.lib.perception import walker_model
@@ -309,7 +312,8 @@ def test_a_bad_walker_model_file_is_a_clear_error(tmp_path: Path, edit, expected
 def test_the_observers_tracker_corrects_a_walkers_velocity_and_falls_back_on_young_tracks() -> None:
     """The observer's tracker reports the walker model's velocity for a walker seen over the whole
     3.2 s window, bounded by the model's ``max_correction_mps``; a track younger than that (and a
-    standing person) keeps the fit's velocity: the constant-velocity fallback."""
+    standing person) keeps the fit's velocity: the constant-velocity fallback; so does a detector
+    whose noise is not the one the model was trained for."""
     from agents.lib.perception.walker_model import shipped
 
     rng = np.random.default_rng(5)
@@ -334,3 +338,5 @@ def test_the_observers_tracker_corrects_a_walkers_velocity_and_falls_back_on_you
             elif name != "walker" or t < 2.8:
                 assert change == 0.0, (name, t)
     assert corrected >= 3, "the model applies to the walker once the window is full"
+    assert observer_tracker(0.0).model is None and observer_tracker(0.1).model is None, \
+        "a detector the model was not trained for keeps the fit's velocity"
