@@ -128,7 +128,7 @@ class Tracker:
     model: WalkerModel | None = None          # the learned velocity correction (walker_model.py); None: the fit's
     tracks: dict[str, Track] = field(default_factory=dict)
     last_s: float | None = None
-    _corrected: dict[str, tuple[float, float]] | None = None   # the model's velocities at ``last_s``, computed once
+    _corrected: dict[str, tuple[float, float]] | None = field(default=None, init=False, repr=False)  # at ``last_s``
 
     def update(self, t_s: float, detections: Sequence[Detection]) -> dict[str, Track]:
         """Predict every track to ``t_s``, associate the detections, correct; re-acquire or start
