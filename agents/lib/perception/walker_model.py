@@ -101,7 +101,7 @@ class WalkerModel:
 
 
 def _rounded(a: NDArray[np.float64]) -> list[Any]:
-    """Ten significant digits: the file is stable across runs and machines' last bits."""
+X
     return np.vectorize(lambda v: float(f"{v:.10g}"), otypes=[float])(a).tolist()
 
 
