@@ -101,7 +101,8 @@ class WalkerModel:
 
 
 def _rounded(a: NDArray[np.float64]) -> list[Any]:
-X
+    """Ten significant digits: enough for the network, short to read and diff.  (Training is
+    deterministic on one machine; another BLAS may differ in the last digits.)"""
     return np.vectorize(lambda v: float(f"{v:.10g}"), otypes=[float])(a).tolist()
 
 
