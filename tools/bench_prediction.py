@@ -10,7 +10,7 @@ Prints ONE flat JSON object:
   pred_clean_ade_over_cv / pred_clean_fde_over_cv     without detection noise
   pred_ade_m / pred_fde_m / cv_ade_m / cv_fde_m       the file-averaged errors, metres
   track_predict_ms_30    one observer cycle for 30 walking people at 10 Hz with 2 cm noise: the
-                         tracker's update, every person's estimate and the social map's
+                         tracker's update, every person's estimate (the walker model included) and the social map's
                          prediction against center_day's walls (median over cycles; goal < 2 ms)
   ref_assignment_ms_30   scipy's Hungarian assignment of a 30 x 30 cost matrix, timed in the same
                          run (a yardstick of the machine's load, not part of the goal)

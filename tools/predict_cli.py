@@ -46,6 +46,8 @@ def register(app: typer.Typer) -> None:
         detect_every: int = typer.Option(1, "--detect-every", min=1, max=100,
                                          help="detections per frame (interpolated between frames): 4 on "
                                               "0.4 s frames is the observer's 10 Hz"),
+        model: Path | None = typer.Option(None, "--model", help="a walker model file (tools/train_prediction.py) "
+                                                                "instead of the shipped one: cross-file figures"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
@@ -67,10 +69,13 @@ def register(app: typer.Typer) -> None:
             except (SourceError, OSError) as exc:
                 typer.echo(f"error: {exc}", err=True)
                 raise typer.Exit(2) from None
+        from agents.lib.perception.walker_model import WalkerModelError, load
+
         try:
+            walker = load(model) if model is not None else None
             results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context,
-                                     min_speed=min_speed, detect_every=detect_every)
-        except PedestrianFileError as exc:
+                                     min_speed=min_speed, detect_every=detect_every, model=walker)
+        except (PedestrianFileError, WalkerModelError) as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         report = summary(results)
@@ -80,6 +85,7 @@ def register(app: typer.Typer) -> None:
         known = "" if context is None else f"; context: {scene} walls{' + agenda' if agenda else ''}"
         known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
         known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
+        known += f"; walker model {model}" if model is not None else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
                    f"detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.perception.tracking import Detection, observer_tracker
+from agents.lib.perception.walker_model import WalkerModel
 from agents.lib.socialmap.motion import MotionParams, Prediction, predict_many
 from agents.lib.socialmap.types import Person
 from scenes.limits import TRAJECTORY_SAMPLES
@@ -212,24 +213,32 @@ class SceneContext:
         return [read.get(p.name, p) for p in people], self.nav.static((), closed_doors(graph)).walls
 
 
+def noisy_annotations(data: Annotations, noise: float, rng: np.random.Generator) -> list[dict[int, tuple[float, float]]]:
+    """Every annotation with ``noise`` m of Gaussian noise per axis, drawn once (module doc): the
+    detections the benchmark and the walker model's training (tools/train_prediction.py) feed the
+    tracker."""
+    return [{pid: (x + e[0], y + e[1]) for (pid, (x, y)), e in
+             zip(sorted(frame.items()), rng.normal(0.0, noise, (len(frame), 2)) if noise > 0
+                 else np.zeros((len(frame), 2)), strict=True)}
+            for frame in data.people]
+
+
 def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, noise: float = 0.0,
              seed: int = 0, motion: MotionParams | None = None, context: SceneContext | None = None,
-             min_speed: float = 0.0, detect_every: int = 1) -> FileResult:
+             min_speed: float = 0.0, detect_every: int = 1, model: WalkerModel | None = None) -> FileResult:
     """ADE/FDE of the deployed tracker + predictor on every window of ``data``, and of the
     constant-velocity baseline on the true positions (module doc).  ``min_speed`` > 0 keeps only
     windows whose person walked at least that fast on average over the observed steps (a simulated
     day's people mostly stand, where every predictor is right).  ``detect_every`` > 1 detects
     that many times per frame (positions interpolated linearly between the frames, each detection
-    with its own noise): the observer's 10 Hz on 2.5 Hz annotations is 4."""
+    with its own noise): the observer's 10 Hz on 2.5 Hz annotations is 4.  ``model``: another walker
+    model than the shipped one (a model trained on other files: cross-file figures)."""
     started = time.perf_counter()
     motion = (motion or MotionParams()).model_copy(update={"horizon_s": pred * dt, "step_s": dt})
     if context is not None and data.times is None:
         raise PedestrianFileError(f"{data.name}: --scene needs a simulator's people.csv (its clock times)")
     rng = np.random.default_rng(seed)
-    noisy = [{pid: (x + e[0], y + e[1]) for (pid, (x, y)), e in
-              zip(sorted(frame.items()), rng.normal(0.0, noise, (len(frame), 2)) if noise > 0
-                  else np.zeros((len(frame), 2)), strict=True)}
-             for frame in data.people]
+    noisy = noisy_annotations(data, noise, rng)
     m = max(1, int(detect_every))
     between = [rng.normal(0.0, noise, (m - 1, len(frame), 2)) if noise > 0 and m > 1
                else np.zeros((max(m - 1, 0), len(frame), 2)) for frame in data.people]
@@ -244,7 +253,7 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
         by_start.setdefault(start, []).append(pid)
     errors, cv_errors = [], []
     for start, pids in by_start.items():
-        tracker = observer_tracker(noise)
+        tracker = observer_tracker(noise, model)
         for k in range(start, start + obs):
             tracker.update(k * dt, [Detection(names[pid] if names else str(pid), x, y, 0.0)
                                     for pid, (x, y) in sorted(noisy[k].items())])

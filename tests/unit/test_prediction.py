@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +40,16 @@ def _write_walkers(path: Path, frames: int = 30) -> None:
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
+def _zero_model() -> dict:
+    """A walker model file that corrects nothing (the fit's velocity unchanged)."""
+    from agents.lib.perception import walker_model
+
+    raw = json.loads(walker_model.DEFAULT_PATH.read_text(encoding="utf-8"))
+    for key in ("w1", "b1", "w2", "b2"):
+        raw[key] = np.zeros_like(np.asarray(raw[key])).tolist()
+    return raw
+
+
 def _evaluate(*args: str) -> dict:
     result = runner.invoke(app, ["predict", "evaluate", *args, "--json"])
     assert result.exit_code == 0, result.output
@@ -47,9 +58,11 @@ def _evaluate(*args: str) -> dict:
 
 def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: Path) -> None:
     """Windows as the standard loader makes them (30 frames, present in all: 11 windows each of
-    the two walkers, none of the short-lived one).  Without noise the deployed tracker reads a
-    steady walker's last step exactly, so its errors are constant velocity's; with the observer's
-    2 cm noise they are larger, and the ratios are the file-averaged errors over the baseline's."""
+    the two walkers, none of the short-lived one).  Without noise the tracker's fit reads a
+    steady walker's last step exactly (the walker model, trained for 2 cm, stays out of a perfect
+    detector's way), so its errors are constant velocity's; with the observer's 2 cm noise they are
+    larger, the shipped walker model changes them (against one that corrects nothing, ``--model``
+    with all weights zero), and the ratios are the file-averaged errors over the baseline's."""
     data = tmp_path / "circles.txt"
     _write_walkers(data)
     clean = _evaluate(str(data))
@@ -62,6 +75,11 @@ def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: 
     noisy = _evaluate(str(data), "--noise", "0.02", "--seed", "3")
     row = noisy["files"]["circles.txt"]
     assert row["ade"] > row["cv_ade"], "noise costs something"
+    fit_only = tmp_path / "zero.json"
+    fit_only.write_text(json.dumps(_zero_model()), encoding="utf-8")
+    bare = _evaluate(str(data), "--noise", "0.02", "--seed", "3", "--model", str(fit_only))["files"]["circles.txt"]
+    assert bare["cv_ade"] == row["cv_ade"] and bare["ade"] != row["ade"], \
+        "the shipped walker model is on the path the benchmark measures"
     assert noisy["ade_over_cv"] == pytest.approx(row["ade"] / row["cv_ade"], abs=2e-3)
     fast = _evaluate(str(data), "--noise", "0.02", "--seed", "3", "--detect-every", "4")["files"]["circles.txt"]
     assert fast["cv_ade"] == row["cv_ade"] and fast["ade"] < row["ade"], "the observer's 10 Hz averages the noise"
@@ -96,7 +114,7 @@ def test_the_tracker_does_not_amplify_detection_noise() -> None:
     rng = np.random.default_rng(4)
     for dt, bound in ((0.4, 0.8), (0.1, 0.5)):
         tracker_err, diff_err = [], []
-        for trial in range(40):
+        for _ in range(40):
             tracker = observer_tracker(0.02)
             heading = rng.uniform(0, 2 * math.pi)
             v = 1.3 * np.array([math.cos(heading), math.sin(heading)])
@@ -227,3 +245,98 @@ def test_door_graph_routes_through_the_doors_of_the_shortest_way() -> None:
         assert graph.way(a, b) == nx.dijkstra_path(reference, a, b)
     assert graph.via((1.0, 1.0), (9.0, 1.0)) == (doors["d0"][:2], doors["d1"][:2])
     assert graph.via((1.0, 1.0), (2.0, 3.0)) == ()
+
+
+def test_the_shipped_walker_model_is_the_training_scripts_on_the_two_ucy_files() -> None:
+    """The shipped parameters name their provenance (format, version, the training command, the two
+    UCY tuning files by sha256, the seeds), and the training script's data pipeline (the observer's
+    tracker on the noisy windows) gives exactly the examples and the uncorrected error recorded in
+    it for uni_examples (the smaller file: a fast check); training is deterministic (the same small run twice gives the same file)."""
+    from agents.lib.perception import walker_model
+    from tools import train_prediction
+
+    raw = json.loads(walker_model.DEFAULT_PATH.read_text(encoding="utf-8"))
+    model = walker_model.shipped()
+    assert raw["format"] == walker_model.FORMAT and raw["version"] == walker_model.VERSION
+    provenance = model.provenance
+    assert provenance["command"].startswith("tools/train_prediction.py")
+    assert [f["name"] for f in provenance["files"]] == ["crowds_zara03.txt", "uni_examples.txt"]
+    assert provenance["seed"] == 0 and provenance["noise_m"] == 0.02 and 0 not in provenance["noise_seeds"], \
+        "the benchmark's noise seed 0 is never trained on"
+    shared = REPO_ROOT.parent / "shared" / "data" / "pedestrians"
+    if not all((shared / f["name"]).exists() for f in provenance["files"]):
+        pytest.skip("the UCY tuning files are not next to this checkout (../shared/data/pedestrians)")
+    import hashlib
+
+    paths = [shared / f["name"] for f in provenance["files"]]
+    assert [hashlib.sha256(p.read_bytes()).hexdigest() for p in paths] == [f["sha256"] for f in provenance["files"]]
+    uni = [train_prediction.examples(paths[1], provenance["noise_m"], s) for s in provenance["noise_seeds"]]
+    assert sum(len(f) for f, _, _ in uni) == provenance["files"][1]["examples"]
+    assert train_prediction.uncorrected(uni) == provenance["files"][1]["ade_m_without_model"]
+    assert sum(f["examples"] for f in provenance["files"]) == provenance["examples"]
+    small = [train_prediction.train(paths[1:], noise_seeds=(1,), iterations=20, command="test") for _ in range(2)]
+    assert small[0] == small[1]
+    assert walker_model.from_json(small[0], Path("small.json")).provenance["examples"] > 100
+
+
+@pytest.mark.parametrize(("edit", "expected"), [
+    (lambda raw: raw.update(version=99), "key 'version' is 99"),
+    (lambda raw: raw.update(format="other"), "key 'format' must be"),
+    (lambda raw: raw.pop("w2"), "key 'w2' is missing"),
+    (lambda raw: raw.update(b2=[0.0]), "key 'b2' has shape [1], expected [2]"),
+    (lambda raw: raw["w1"][0].__setitem__(0, float("nan")), "key 'w1' holds a value that is not a finite number"),
+    (lambda raw: raw.update(provenance={"seed": 0}), "key 'provenance' must name"),
+    (lambda raw: raw.update(max_correction_mps=-1), "key 'max_correction_mps' must be a number >= 0"),
+    (lambda raw: raw.pop("noise_m"), "key 'noise_m' must be a number >= 0"),
+])
+def test_a_bad_walker_model_file_is_a_clear_error(tmp_path: Path, edit, expected: str) -> None:
+    from agents.lib.perception import walker_model
+
+    raw = json.loads(walker_model.DEFAULT_PATH.read_text(encoding="utf-8"))
+    edit(raw)
+    bad = tmp_path / "model.json"
+    bad.write_text(json.dumps(raw), encoding="utf-8")
+    with pytest.raises(walker_model.WalkerModelError, match=re.escape(f"{bad}: {expected}")):
+        walker_model.load(bad)
+    data = tmp_path / "circles.txt"
+    _write_walkers(data)
+    result = runner.invoke(app, ["predict", "evaluate", str(data), "--model", str(bad)])
+    assert result.exit_code == 2 and expected in result.stderr and "Traceback" not in result.output
+    with pytest.raises(walker_model.WalkerModelError, match="no such file"):
+        walker_model.load(tmp_path / "missing.json")
+    (tmp_path / "broken.json").write_text("{", encoding="utf-8")
+    with pytest.raises(walker_model.WalkerModelError, match="cannot be read as JSON"):
+        walker_model.load(tmp_path / "broken.json")
+
+
+def test_the_observers_tracker_corrects_a_walkers_velocity_and_falls_back_on_young_tracks() -> None:
+    """The observer's tracker reports the walker model's velocity for a walker seen over the whole
+    3.2 s window, bounded by the model's ``max_correction_mps``; a track younger than that (and a
+    standing person) keeps the fit's velocity: the constant-velocity fallback; so does a detector
+    whose noise is not the one the model was trained for."""
+    from agents.lib.perception.walker_model import shipped
+
+    rng = np.random.default_rng(5)
+    learned, fit = observer_tracker(0.02), observer_tracker(0.02, learned=False)
+    corrected = 0
+    for k in range(12):
+        t = 0.4 * k
+        detections = [Detection("walker", 1.2 * t + rng.normal(0, 0.02), 0.3 * t ** 1.5 + rng.normal(0, 0.02), 0.0),
+                      Detection("late", 5.0 + (1.0 * (t - 3.0) if t >= 3.0 else 0.0), 5.0, 0.0),
+                      Detection("still", 9.0, 9.0, 0.0)]
+        if t < 3.0:
+            detections.pop(1)
+        learned.update(t, detections)
+        fit.update(t, detections)
+        for name in learned.tracks:
+            a, b = np.array(learned.estimate(name, t)), np.array(fit.estimate(name, t))
+            assert a[:3] == pytest.approx(b[:3]), "position and heading are the fit's"
+            change = float(np.hypot(*(a[3:] - b[3:])))
+            assert change <= shipped().max_correction_mps + 1e-9
+            if name == "walker" and t >= 2.8:
+                corrected += change > 1e-6
+            elif name != "walker" or t < 2.8:
+                assert change == 0.0, (name, t)
+    assert corrected >= 3, "the model applies to the walker once the window is full"
+    assert observer_tracker(0.0).model is None and observer_tracker(0.1).model is None, \
+        "a detector the model was not trained for keeps the fit's velocity"

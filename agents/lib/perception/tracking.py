@@ -24,6 +24,12 @@ the last 3 detections at 2.5 Hz, 0.8 s; 7 at the observer's 10 Hz, 0.6 s; 1 cm: 
 2.5 Hz, plain differencing), never more than ``smoothing_s``.  The Kalman filter keeps the
 covariance that sizes the gate; its state is re-seeded from the fit.
 
+Where the walker model applies (walker_model.py: a walker seen over the last 3.2 s), the velocity
+the tracker reports (``estimate``) is the fit's corrected by that tiny learned network: the
+constant velocity that best predicts the next 4.8 s, learned on real pedestrians with the
+observer's noise; elsewhere (young tracks, standing people) the fit's velocity stands.  The
+detections of the model's window are kept with the track (``MODEL_WINDOW_S``).
+
 A track whose detection falls outside its gate (a sudden turn or start) is *re-acquired* when the
 detector names it: it jumps to the detection and keeps its history, so its velocity comes from the
 fit (never reset to zero, which made 12 % of ETH tracks restart in 3.2 s).  After a gap longer than
@@ -33,13 +39,17 @@ tracks restart from the detections, named by the detector.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from agents.lib.perception import walker_model
+from agents.lib.perception.walker_model import WalkerModel
 from scenes.angles import wrap_angle
 
 GATE_CHI2 = 9.21            # 2 degrees of freedom, 99 %
@@ -50,14 +60,21 @@ STILL_MPS = 0.1             # an estimated speed below this is sensor noise on a
 MIN_SIGMA_M = 0.01          # the measurement noise the tracker assumes at least (a perfect sensor is never perfect)
 SMOOTHING_S = 1.2           # at most this many seconds of detections in the velocity's line fit
 VELOCITY_SIGMA_MPS = 0.04   # the velocity noise the fit aims at: as few detections as reach it (module doc)
+MODEL_WINDOW_S = (walker_model.LAGS - 0.5) * walker_model.GRID_S   # the detections the walker model reads
 
 
-def observer_tracker(noise_xy: float) -> Tracker:
-    """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise.
+def observer_tracker(noise_xy: float, model: WalkerModel | None = None, learned: bool = True) -> Tracker:
+    """The tracker as the human observer deploys it for a detector of ``noise_xy`` m position noise,
+    with the shipped walker model (walker_model.py) unless ``model`` gives another (``chronav predict
+    evaluate --model``: a model trained on other files, for cross-file figures) when it was trained
+    for this detector's noise (``WalkerModel.applies_to``); ``learned=False``: the line fit's
+    velocity only (what the training script reads the model's inputs from).
 
     One definition: the observer and ``chronav predict evaluate`` build it here, so the benchmark
     measures what runs."""
-    return Tracker(measurement_sigma=max(noise_xy, MIN_SIGMA_M))
+    sigma = max(noise_xy, MIN_SIGMA_M)
+    model = (model or walker_model.shipped()) if learned else None
+    return Tracker(measurement_sigma=sigma, model=model if model is not None and model.applies_to(sigma) else None)
 
 
 @dataclass(frozen=True)
@@ -108,14 +125,17 @@ class Tracker:
     heading_smoothing: float = 0.5
     smoothing_s: float = SMOOTHING_S
     velocity_sigma: float = VELOCITY_SIGMA_MPS
+    model: WalkerModel | None = None          # the learned velocity correction (walker_model.py); None: the fit's
     tracks: dict[str, Track] = field(default_factory=dict)
     last_s: float | None = None
+    _corrected: dict[str, tuple[float, float]] | None = field(default=None, init=False, repr=False)  # at ``last_s``
 
     def update(self, t_s: float, detections: Sequence[Detection]) -> dict[str, Track]:
         """Predict every track to ``t_s``, associate the detections, correct; re-acquire or start
         tracks for the rest."""
         gap = math.inf if self.last_s is None else t_s - self.last_s
         self.last_s = t_s
+        self._corrected = None
         if gap > MAX_GAP_S or gap < 0:
             self.tracks = {d.name: self._new(d, t_s) for d in detections}
             return self.tracks
@@ -190,9 +210,11 @@ class Tracker:
         fitted to the fewest latest detections that reach ``velocity_sigma`` (module doc)."""
         history = track.history
         history.append((t_s, det.x, det.y))
-        while history and history[0][0] < t_s - self.smoothing_s - 1e-6:
+        keep_s = max(self.smoothing_s, MODEL_WINDOW_S)
+        while history and history[0][0] < t_s - keep_s - 1e-6:
             history.pop(0)
-        fit = line_fit(latest_enough(history, self.measurement_sigma, self.velocity_sigma), t_s)
+        recent = history[bisect.bisect_left(history, t_s - self.smoothing_s - 1e-6, key=lambda h: h[0]):]
+        fit = line_fit(latest_enough(recent, self.measurement_sigma, self.velocity_sigma), t_s)
         if fit is not None:
             track.x, track.y, track.vx, track.vy = fit
         turn = wrap_angle(det.theta - track.theta)
@@ -205,11 +227,47 @@ class Tracker:
             return (0.0, 0.0)
         return track.velocity
 
+    def model_inputs(self, names: Sequence[str], t_s: float) -> dict[str, tuple[NDArray[np.float64], float, float]]:
+        """The walker model's features of the named tracks it applies to, with the fit's velocity
+        they are relative to: not lost, walking (at least the model's ``min_speed_mps``, else
+        ``STILL_MPS``), seen over the model's whole window; the others keep the fit's velocity (the
+        constant-velocity fallback).  One definition for the live path and the training script."""
+        least = max(self.model.min_speed_mps if self.model is not None else STILL_MPS, 1e-9)
+        tracks = [self.tracks[n] for n in names]
+        chosen = [tr for tr in tracks if t_s - tr.updated_s <= LOST_S and math.hypot(tr.vx, tr.vy) >= least]
+        if not chosen:
+            return {}
+        points, full = walker_model.windows([tr.history for tr in chosen], t_s)
+        if not full.any():
+            return {}
+        velocity = np.array([(tr.vx, tr.vy) for tr in chosen])
+        found = walker_model.features(points[full], velocity[full])
+        kept = [tr for tr, ok in zip(chosen, full.tolist(), strict=True) if ok]
+        return {tr.name: (f, tr.vx, tr.vy) for tr, f in zip(kept, found, strict=True)}
+
+    def _learned(self, t_s: float) -> dict[str, tuple[float, float]]:
+        """Every applicable track's velocity corrected by the model, in one numpy pass per cycle
+        (the observer asks for everyone's estimate at the same time)."""
+        if self._corrected is not None:
+            return self._corrected
+        inputs = self.model_inputs(list(self.tracks), t_s)
+        self._corrected = {}
+        if inputs and self.model is not None:
+            corrections = self.model.corrections(np.array([f for f, _, _ in inputs.values()]))
+            for (name, (_, vx, vy)), (along, across) in zip(inputs.items(), corrections.tolist(), strict=True):
+                speed = math.hypot(vx, vy)
+                c, s = vx / speed, vy / speed
+                self._corrected[name] = (vx + along * c - across * s, vy + along * s + across * c)
+        return self._corrected
+
     def estimate(self, name: str, t_s: float) -> tuple[float, float, float, float, float]:
-        """What the observer publishes of a track: x, y, heading, vx, vy (a speed below
-        ``STILL_MPS`` is reported as standing still)."""
+        """What the observer publishes of a track: x, y, heading, vx, vy; the velocity is the walker
+        model's where it applies (``model_inputs``), else the fit's; a speed below ``STILL_MPS`` is
+        reported as standing still."""
         track = self.tracks[name]
         vx, vy = self.velocity(name, t_s)
+        if self.model is not None and self.last_s == t_s:
+            vx, vy = self._learned(t_s).get(name, (vx, vy))
         if math.hypot(vx, vy) < STILL_MPS:
             vx = vy = 0.0
         return track.x, track.y, track.theta, vx, vy
