@@ -22,7 +22,7 @@ import shapely.ops
 from scenes.clock import parse_clock
 from scenes.geometry import posed_polygon
 
-from scenes.model import Scene
+from scenes.model import PersonSpec, Scene
 from scenes.occupancy import OccupancyMap, load_occupancy
 from scenes.raster import cells_in_polygon
 from scenes.yamlio import KeyPath, LocatedYaml, SourceError, load_located_file, validate_located
@@ -72,8 +72,41 @@ class _Named(Protocol):
     def name(self) -> str: ...
 
 
+@dataclass(frozen=True)
+class _Names:
+    """The names a scene declares, by kind: what its references may point at."""
+
+    rooms: set[str]
+    objects: set[str]
+    people: set[str]
+    doors: set[str]
+
+    @classmethod
+    def of(cls, scene: Scene) -> _Names:
+        return cls(rooms={r.name for r in scene.rooms}, objects={o.name for o in scene.objects},
+                   people={p.name for p in scene.people}, doors={d.name for d in scene.doors})
+
+
+def _unknown(kind: str, value: str, known: set[str]) -> str:
+    """The message for a reference to no known name: the closest name, then all of that kind."""
+    close = difflib.get_close_matches(value, sorted(known), n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    return f"no {kind} named {value!r}; {hint}{kind}s: {', '.join(sorted(known)) or 'none'}"
+
+
 def _check_references(scene: Scene, located: LocatedYaml) -> None:
     """Names unique, references resolved: located at the key that is wrong, not at the file's start."""
+    _check_unique_names(scene, located)
+    names = _Names.of(scene)
+    _check_door_references(scene, located, names)
+    for i, person in enumerate(scene.people):
+        _check_waypoint_order(i, person, located)
+        _check_person_references(i, person, located, names)
+    _check_mission_references(scene, located, names)
+
+
+def _check_unique_names(scene: Scene, located: LocatedYaml) -> None:
+    """No two rooms, objects, people or doors share a name."""
     named: tuple[tuple[str, str, Sequence[_Named]], ...] = (
         ("room", "rooms", scene.rooms), ("object", "objects", scene.objects),
         ("person", "people", scene.people), ("door", "doors", scene.doors))
@@ -85,52 +118,58 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
                 raise located.error((section, index, "name"), f"duplicate {kind} name {item.name!r} (first on line "
                                     f"{line}); give each {kind} its own name")
             seen[item.name] = index
-    rooms = {r.name for r in scene.rooms}
-    objects = {o.name for o in scene.objects}
-    people = {p.name for p in scene.people}
-    doors = {d.name for d in scene.doors}
 
-    def unknown(kind: str, value: str, known: set[str]) -> str:
-        close = difflib.get_close_matches(value, sorted(known), n=1)
-        hint = f"did you mean {close[0]!r}? " if close else ""
-        return f"no {kind} named {value!r}; {hint}{kind}s: {', '.join(sorted(known)) or 'none'}"
 
+def _check_door_references(scene: Scene, located: LocatedYaml, names: _Names) -> None:
+    """Each door joins two different known rooms; each door change names a known door."""
     for i, door in enumerate(scene.doors):
         for j, room in enumerate(door.between):
-            if room not in rooms:
-                raise located.error(("doors", i, "between", j), unknown("room", room, rooms))
+            if room not in names.rooms:
+                raise located.error(("doors", i, "between", j), _unknown("room", room, names.rooms))
         if door.between[0] == door.between[1]:
             raise located.error(("doors", i, "between", 1), f"door {door.name!r} joins room {door.between[0]!r} "
                                 "to itself; name the two rooms it connects")
     for i, change in enumerate(scene.door_changes):
-        if change.door not in doors:
-            raise located.error(("door_changes", i, "door"), unknown("door", change.door, doors))
-    for i, person in enumerate(scene.people):
-        times = [parse_clock(w.time) for w in person.waypoints]
-        for j in range(1, len(times)):
-            if times[j] <= times[j - 1]:
-                raise located.error(("people", i, "waypoints", j, "time"),
-                                    f"{person.waypoints[j].time} is not after the previous waypoint's "
-                                    f"{person.waypoints[j - 1].time}; waypoints go in time order")
-        if person.home is not None and person.home not in rooms:
-            raise located.error(("people", i, "home"), unknown("room", person.home, rooms))
-        for j, room in enumerate(person.rooms):
-            if room not in rooms:
-                raise located.error(("people", i, "rooms", j), unknown("room", room, rooms))
-        if person.visits is not None:
-            if person.visits == person.name:
-                raise located.error(("people", i, "visits"), f"{person.name!r} cannot visit themself")
-            if person.visits not in people:
-                raise located.error(("people", i, "visits"), unknown("person", person.visits, people))
-        for j, other in enumerate(person.interacting_with):
-            key: KeyPath = ("people", i, "interacting_with", j)
-            if other in objects:
-                raise located.error(key, f"{other!r} is an object; links to objects come from the agenda: add "
-                                    f"an activity on it with {person.name!r} among its participants")
-            if other == person.name:
-                raise located.error(key, f"{person.name!r} cannot interact with themself")
-            if other not in people:
-                raise located.error(key, unknown("person", other, people))
+        if change.door not in names.doors:
+            raise located.error(("door_changes", i, "door"), _unknown("door", change.door, names.doors))
+
+
+def _check_waypoint_order(i: int, person: PersonSpec, located: LocatedYaml) -> None:
+    """A person's waypoints go in strictly increasing time."""
+    times = [parse_clock(w.time) for w in person.waypoints]
+    for j in range(1, len(times)):
+        if times[j] <= times[j - 1]:
+            raise located.error(("people", i, "waypoints", j, "time"),
+                                f"{person.waypoints[j].time} is not after the previous waypoint's "
+                                f"{person.waypoints[j - 1].time}; waypoints go in time order")
+
+
+def _check_person_references(i: int, person: PersonSpec, located: LocatedYaml, names: _Names) -> None:
+    """A person's home and rooms are known rooms; whom they visit or interact with, known other people."""
+    people = names.people
+    if person.home is not None and person.home not in names.rooms:
+        raise located.error(("people", i, "home"), _unknown("room", person.home, names.rooms))
+    for j, room in enumerate(person.rooms):
+        if room not in names.rooms:
+            raise located.error(("people", i, "rooms", j), _unknown("room", room, names.rooms))
+    if person.visits is not None:
+        if person.visits == person.name:
+            raise located.error(("people", i, "visits"), f"{person.name!r} cannot visit themself")
+        if person.visits not in people:
+            raise located.error(("people", i, "visits"), _unknown("person", person.visits, people))
+    for j, other in enumerate(person.interacting_with):
+        key: KeyPath = ("people", i, "interacting_with", j)
+        if other in names.objects:
+            raise located.error(key, f"{other!r} is an object; links to objects come from the agenda: add "
+                                f"an activity on it with {person.name!r} among its participants")
+        if other == person.name:
+            raise located.error(key, f"{person.name!r} cannot interact with themself")
+        if other not in people:
+            raise located.error(key, _unknown("person", other, people))
+
+
+def _check_mission_references(scene: Scene, located: LocatedYaml, names: _Names) -> None:
+    """Mission ids unique; each goal names a known room, object or person, a group known people once each."""
     seen_ids: dict[str, int] = {}
     for i, mission in enumerate(scene.missions):
         if mission.id in seen_ids:
@@ -138,14 +177,14 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
             raise located.error(("missions", i, "id"), f"duplicate mission id {mission.id!r} (first on line {line})")
         seen_ids[mission.id] = i
         goal = mission.goal
-        for kind, known in (("room", rooms), ("object", objects), ("person", people)):
+        for kind, known in (("room", names.rooms), ("object", names.objects), ("person", names.people)):
             target = getattr(goal, kind, None)
             if isinstance(target, str) and target not in known:
-                raise located.error(("missions", i, "goal", kind), unknown(kind, target, known))
+                raise located.error(("missions", i, "goal", kind), _unknown(kind, target, known))
         members = getattr(goal, "group", None) or []
         for j, member in enumerate(members):
-            if member not in people:
-                raise located.error(("missions", i, "goal", "group", j), unknown("person", member, people))
+            if member not in names.people:
+                raise located.error(("missions", i, "goal", "group", j), _unknown("person", member, names.people))
             if member in members[:j]:
                 raise located.error(("missions", i, "goal", "group", j), f"{member!r} is named twice in the group")
 
