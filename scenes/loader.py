@@ -205,60 +205,86 @@ def _room_areas(scene: Scene) -> dict[str, shapely.geometry.base.BaseGeometry]:
     return areas
 
 
+class _Solids:
+    """The scene's building (rooms' union), walls and object footprints, and the two questions the
+    geometry checks ask of a point: inside the building? clear of walls and objects?"""
+
+    def __init__(self, scene: Scene, located: LocatedYaml) -> None:
+        self.located = located
+        self.building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+        self.walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
+        self.footprints = [(obj.name, posed_polygon(obj.footprint, obj.pose.x, obj.pose.y, obj.pose.theta))
+                           for obj in scene.objects]
+
+    def inside(self, key: tuple[str | int, ...], x: float, y: float, what: str) -> None:
+        if not self.building.covers(shapely.Point(x, y)):
+            raise self.located.error(key, f"{what} at ({x:g}, {y:g}) is outside every room")
+
+    def clear(self, key: tuple[str | int, ...], x: float, y: float, what: str, radius: float,
+              body: str) -> None:
+        """Nothing solid within ``radius`` of (x, y): not on a wall, not in an object's footprint."""
+        point = shapely.Point(x, y)
+        walls = self.walls
+        if not walls.is_empty and walls.distance(point) < radius:
+            near = shapely.ops.nearest_points(walls, point)[0]
+            raise self.located.error(key, f"{what} at ({x:g}, {y:g}) is on a wall: the wall at ({near.x:.2f}, "
+                                     f"{near.y:.2f}) is {walls.distance(point):.2f} m away, closer than {body} "
+                                     f"({radius:g} m); move it into the room")
+        for name, footprint in self.footprints:
+            if footprint.distance(point) < radius or footprint.covers(point):
+                raise self.located.error(key, f"{what} at ({x:g}, {y:g}) is inside object {name!r} (its "
+                                         f"footprint is {footprint.distance(point):.2f} m away, closer than "
+                                         f"{body}, {radius:g} m); move one of them")
+
+
 def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
     for index, room in enumerate(scene.rooms):  # before the union: GEOS fails on invalid polygons
         if not shapely.Polygon(room.polygon).is_valid:
             raise located.error(("rooms", index, "polygon"), f"room {room.name!r} polygon self-intersects")
-    building = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
-    walls = shapely.MultiLineString([wall for wall in scene.walls if len(wall) >= 2])
-    footprints = [(obj.name, posed_polygon(obj.footprint, obj.pose.x, obj.pose.y, obj.pose.theta))
-                  for obj in scene.objects]
+    solids = _Solids(scene, located)
+    _check_placements(scene, solids)
+    _check_bodies_apart(scene, located)
+    _check_routes_clear_of_walls(scene, located, solids.walls)
+    _check_doors_on_walls(scene, located, solids)
+    _check_goal_poses(scene, solids)
 
-    def inside(key: tuple[str | int, ...], x: float, y: float, what: str) -> None:
-        if not building.covers(shapely.Point(x, y)):
-            raise located.error(key, f"{what} at ({x:g}, {y:g}) is outside every room")
 
-    def clear(key: tuple[str | int, ...], x: float, y: float, what: str, radius: float,
-              body: str) -> None:
-        """Nothing solid within ``radius`` of (x, y): not on a wall, not in an object's footprint."""
-        point = shapely.Point(x, y)
-        if not walls.is_empty and walls.distance(point) < radius:
-            near = shapely.ops.nearest_points(walls, point)[0]
-            raise located.error(key, f"{what} at ({x:g}, {y:g}) is on a wall: the wall at ({near.x:.2f}, "
-                                f"{near.y:.2f}) is {walls.distance(point):.2f} m away, closer than {body} "
-                                f"({radius:g} m); move it into the room")
-        for name, footprint in footprints:
-            if footprint.distance(point) < radius or footprint.covers(point):
-                raise located.error(key, f"{what} at ({x:g}, {y:g}) is inside object {name!r} (its footprint "
-                                    f"is {footprint.distance(point):.2f} m away, closer than {body}, "
-                                    f"{radius:g} m); move one of them")
-
+def _check_placements(scene: Scene, solids: _Solids) -> None:
+    """The robot, objects, people and waypoints inside the building; bodies clear of walls and objects."""
     robot = scene.robot
-    inside(("robot", "pose"), robot.pose.x, robot.pose.y, "robot")
-    clear(("robot", "pose"), robot.pose.x, robot.pose.y, "robot", robot.radius, "its radius")
+    solids.inside(("robot", "pose"), robot.pose.x, robot.pose.y, "robot")
+    solids.clear(("robot", "pose"), robot.pose.x, robot.pose.y, "robot", robot.radius, "its radius")
     for i, obj in enumerate(scene.objects):
-        inside(("objects", i, "pose"), obj.pose.x, obj.pose.y, f"object {obj.name!r}")
+        solids.inside(("objects", i, "pose"), obj.pose.x, obj.pose.y, f"object {obj.name!r}")
     for i, person in enumerate(scene.people):
-        inside(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
-        clear(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}",
-              PERSON_BODY_RADIUS_M, "a person's body")
+        solids.inside(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
+        solids.clear(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}",
+                     PERSON_BODY_RADIUS_M, "a person's body")
         for j, waypoint in enumerate(person.waypoints):
             key: KeyPath = ("people", i, "waypoints", j, "pose")
-            inside(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}")
-            clear(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}", PERSON_BODY_RADIUS_M,
-                  "a person's body")
-    _check_bodies_apart(scene, located)
+            solids.inside(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}")
+            solids.clear(key, waypoint.pose.x, waypoint.pose.y, f"waypoint of {person.name!r}",
+                         PERSON_BODY_RADIUS_M, "a person's body")
+
+
+def _check_routes_clear_of_walls(scene: Scene, located: LocatedYaml, walls: shapely.MultiLineString) -> None:
+    """No person's straight walk from one waypoint to the next crosses a wall."""
     for i, person in enumerate(scene.people):
         route = [person.pose, *(w.pose for w in person.waypoints)]
         for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
             if (a.x, a.y) != (b.x, b.y) and shapely.LineString([(a.x, a.y), (b.x, b.y)]).crosses(walls):
                 raise located.error(("people", i, "waypoints", j), f"{person.name!r} would walk through a "
                                     f"wall from ({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint at the door")
+
+
+def _check_doors_on_walls(scene: Scene, located: LocatedYaml, solids: _Solids) -> None:
+    """Each door inside the building, on the outline of both its rooms, and in a gap of the walls."""
+    walls = solids.walls
     areas = _room_areas(scene)
     for i, door in enumerate(scene.doors):
         x, y = door.position
         key = ("doors", i, "position")
-        inside(key, x, y, f"door {door.name!r}")
+        solids.inside(key, x, y, f"door {door.name!r}")
         point = shapely.Point(x, y)
         for room_name in door.between:
             gap = areas[room_name].boundary.distance(point)
@@ -266,18 +292,22 @@ def _check_geometry(scene: Scene, located: LocatedYaml) -> None:
                 raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is not on the outline of room "
                                     f"{room_name!r} ({gap:.2f} m from it); a door sits on the wall between its two "
                                     f"rooms {door.between[0]!r} and {door.between[1]!r}")
-        clearance = min(door.width / 2, robot.radius) - 0.01
+        clearance = min(door.width / 2, scene.robot.radius) - 0.01
         if not walls.is_empty and walls.distance(point) < clearance:
             raise located.error(key, f"door {door.name!r} at ({x:g}, {y:g}) is on solid wall: a wall passes "
                                 f"{walls.distance(point):.2f} m from its centre; leave a gap of the door's width "
                                 f"({door.width:g} m) in the wall there")
+
+
+def _check_goal_poses(scene: Scene, solids: _Solids) -> None:
+    """A mission's goal pose inside the building and clear for the robot's body."""
     for i, mission in enumerate(scene.missions):
         pose = getattr(mission.goal, "pose", None)
         if pose is not None:
             key = ("missions", i, "goal", "pose")
             what = f"goal of mission {mission.id!r}"
-            inside(key, pose.x, pose.y, what)
-            clear(key, pose.x, pose.y, what, robot.radius, "the robot's radius")
+            solids.inside(key, pose.x, pose.y, what)
+            solids.clear(key, pose.x, pose.y, what, scene.robot.radius, "the robot's radius")
 
 
 def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
