@@ -22,7 +22,7 @@ import shapely.ops
 from scenes.clock import parse_clock
 from scenes.geometry import posed_polygon
 
-from scenes.model import PersonSpec, Scene
+from scenes.model import PersonSpec, Pose, Room, Scene
 from scenes.occupancy import OccupancyMap, load_occupancy
 from scenes.raster import cells_in_polygon
 from scenes.yamlio import KeyPath, LocatedYaml, SourceError, load_located_file, validate_located
@@ -360,76 +360,108 @@ def _load_map(scene: Scene, located: LocatedYaml, path: Path) -> Scene:
     return scene.with_occupancy(occupancy)
 
 
-def _check_on_map(scene: Scene, located: LocatedYaml) -> None:
-    """Rooms lie on the map and mostly on its floor; nobody stands or walks on its walls."""
-    occupancy: OccupancyMap = scene.occupancy
-    assert scene.map is not None
-    unknown_is_wall = scene.map.unknown == "wall"
-    blocked = occupancy.blocked(unknown_is_wall)
-    xmin, ymin, xmax, ymax = occupancy.extent
-    res = occupancy.resolution
-    name = Path(scene.map.file).name
+class _MapCells:
+    """A scene's occupancy map as its checks read it: which cells block, why a cell does, and
+    whether a point stands on free floor of the map."""
 
-    def why(row: int, col: int) -> str:
-        kind = "an unknown" if occupancy.values[row, col] < 0 else "an occupied"
+    def __init__(self, scene: Scene, located: LocatedYaml) -> None:
+        occupancy: OccupancyMap = scene.occupancy
+        assert scene.map is not None
+        self.located = located
+        self.occupancy = occupancy
+        self.blocked = occupancy.blocked(scene.map.unknown == "wall")
+        self.xmin, self.ymin, self.xmax, self.ymax = occupancy.extent
+        self.res = occupancy.resolution
+        self.name = Path(scene.map.file).name
+
+    def extent_text(self) -> str:
+        return f"(x {self.xmin:g}..{self.xmax:g}, y {self.ymin:g}..{self.ymax:g})"
+
+    def why(self, row: int, col: int) -> str:
+        kind = "an unknown" if self.occupancy.values[row, col] < 0 else "an occupied"
         hint = (" (unknown cells are walls; write map: {file: ..., unknown: free} to treat them as floor)"
                 if kind == "an unknown" else "")
-        return f"{kind} cell of the map: {occupancy.describe_cell(row, col)}{hint}"
+        return f"{kind} cell of the map: {self.occupancy.describe_cell(row, col)}{hint}"
 
-    def free_at(key: KeyPath, x: float, y: float, what: str) -> None:
-        cell = occupancy.cell_of(x, y)
+    def free_at(self, key: KeyPath, x: float, y: float, what: str) -> None:
+        cell = self.occupancy.cell_of(x, y)
         if cell is None:
-            raise located.error(key, f"{what} at ({x:g}, {y:g}) is outside the map {name} "
-                                     f"(x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g})")
-        if blocked[cell]:
-            raise located.error(key, f"{what} at ({x:g}, {y:g}) is on {why(*cell)}")
+            raise self.located.error(key, f"{what} at ({x:g}, {y:g}) is outside the map {self.name} "
+                                          f"{self.extent_text()}")
+        if self.blocked[cell]:
+            raise self.located.error(key, f"{what} at ({x:g}, {y:g}) is on {self.why(*cell)}")
 
+    def first_blocked(self, a: Pose, b: Pose) -> tuple[int, int] | None:
+        """The first blocked cell on the straight walk from ``a`` to ``b`` (sampled every quarter
+        cell; off-map samples skipped), or None."""
+        res = self.res
+        steps = max(1, math.ceil(math.hypot(b.x - a.x, b.y - a.y) / (res / 4)))
+        f = np.linspace(0.0, 1.0, steps + 1)
+        cols = np.floor((a.x + f * (b.x - a.x) - self.xmin) / res).astype(np.int64)
+        rows = np.floor((a.y + f * (b.y - a.y) - self.ymin) / res).astype(np.int64)
+        on_map = (rows >= 0) & (rows < self.occupancy.rows) & (cols >= 0) & (cols < self.occupancy.cols)
+        hits = np.nonzero(self.blocked[rows[on_map], cols[on_map]])[0]
+        if len(hits):
+            return int(rows[on_map][hits[0]]), int(cols[on_map][hits[0]])
+        return None
+
+
+def _check_on_map(scene: Scene, located: LocatedYaml) -> None:
+    """Rooms lie on the map and mostly on its floor; nobody stands or walks on its walls."""
+    cells = _MapCells(scene, located)
     for i, room in enumerate(scene.rooms):
-        polygon = shapely.Polygon(room.polygon)
-        rxmin, rymin, rxmax, rymax = polygon.bounds
-        if rxmin < xmin - 1e-9 or rymin < ymin - 1e-9 or rxmax > xmax + 1e-9 or rymax > ymax + 1e-9:
-            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} reaches beyond the map {name} "
-                                                        f"(x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g})")
-        c0, c1 = max(0, math.floor((rxmin - xmin) / res)), min(occupancy.cols, math.ceil((rxmax - xmin) / res))
-        r0, r1 = max(0, math.floor((rymin - ymin) / res)), min(occupancy.rows, math.ceil((rymax - ymin) / res))
-        stride = max(1, math.ceil(math.sqrt(max(1, (c1 - c0) * (r1 - r0)) / ROOM_SAMPLES)))
-        cols, rows = np.arange(c0, c1, stride), np.arange(r0, r1, stride)
-        inside = cells_in_polygon(polygon, xmin + (cols + 0.5) * res, ymin + (rows + 0.5) * res)
-        walls = blocked[np.ix_(rows, cols)] & inside
-        if not inside.any():
-            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} covers no cell of the map")
-        if walls.sum() > ROOM_MAX_BLOCKED * inside.sum():
-            centre = polygon.representative_point()
-            wr, wc = np.nonzero(walls)
-            nearest = np.argmin((cols[wc] - (centre.x - xmin) / res) ** 2 + (rows[wr] - (centre.y - ymin) / res) ** 2)
-            raise located.error(("rooms", i, "polygon"), f"room {room.name!r} lies on walls of the map: "
-                                f"{100 * walls.sum() / inside.sum():.0f}% of its cells are, e.g. "
-                                f"{why(int(rows[wr[nearest]]), int(cols[wc[nearest]]))}")
-    free_at(("robot", "pose"), scene.robot.pose.x, scene.robot.pose.y, "robot")
+        _check_room_on_map(i, room, cells)
+    cells.free_at(("robot", "pose"), scene.robot.pose.x, scene.robot.pose.y, "robot")
     for i, person in enumerate(scene.people):
-        free_at(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
-        route = [person.pose, *(w.pose for w in person.waypoints)]
-        for j, waypoint in enumerate(person.waypoints):
-            free_at(("people", i, "waypoints", j, "pose"), waypoint.pose.x, waypoint.pose.y,
-                    f"waypoint of {person.name!r}")
-        for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
-            steps = max(1, math.ceil(math.hypot(b.x - a.x, b.y - a.y) / (res / 4)))
-            f = np.linspace(0.0, 1.0, steps + 1)
-            cols = np.floor((a.x + f * (b.x - a.x) - xmin) / res).astype(np.int64)
-            rows = np.floor((a.y + f * (b.y - a.y) - ymin) / res).astype(np.int64)
-            on_map = (rows >= 0) & (rows < occupancy.rows) & (cols >= 0) & (cols < occupancy.cols)
-            hits = np.nonzero(blocked[rows[on_map], cols[on_map]])[0]
-            if len(hits):
-                cell = (int(rows[on_map][hits[0]]), int(cols[on_map][hits[0]]))
-                raise located.error(("people", i, "waypoints", j),
-                                    f"{person.name!r} would walk through {why(*cell)}, going from "
-                                    f"({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint around it")
+        _check_person_on_map(i, person, cells)
     for i, door in enumerate(scene.doors):
-        free_at(("doors", i, "position"), door.position[0], door.position[1], f"door {door.name!r}")
+        cells.free_at(("doors", i, "position"), door.position[0], door.position[1], f"door {door.name!r}")
     for i, mission in enumerate(scene.missions):
         pose = getattr(mission.goal, "pose", None)
         if pose is not None:
-            free_at(("missions", i, "goal", "pose"), pose.x, pose.y, f"goal of mission {mission.id!r}")
+            cells.free_at(("missions", i, "goal", "pose"), pose.x, pose.y, f"goal of mission {mission.id!r}")
+
+
+def _check_room_on_map(i: int, room: Room, cells: _MapCells) -> None:
+    """A room within the map's extent, covering some of its cells, at most ROOM_MAX_BLOCKED of them
+    walls (measured on up to ROOM_SAMPLES cell centres)."""
+    occupancy, blocked, res = cells.occupancy, cells.blocked, cells.res
+    xmin, ymin = cells.xmin, cells.ymin
+    polygon = shapely.Polygon(room.polygon)
+    rxmin, rymin, rxmax, rymax = polygon.bounds
+    if rxmin < xmin - 1e-9 or rymin < ymin - 1e-9 or rxmax > cells.xmax + 1e-9 or rymax > cells.ymax + 1e-9:
+        raise cells.located.error(("rooms", i, "polygon"), f"room {room.name!r} reaches beyond the map "
+                                                          f"{cells.name} {cells.extent_text()}")
+    c0, c1 = max(0, math.floor((rxmin - xmin) / res)), min(occupancy.cols, math.ceil((rxmax - xmin) / res))
+    r0, r1 = max(0, math.floor((rymin - ymin) / res)), min(occupancy.rows, math.ceil((rymax - ymin) / res))
+    stride = max(1, math.ceil(math.sqrt(max(1, (c1 - c0) * (r1 - r0)) / ROOM_SAMPLES)))
+    cols, rows = np.arange(c0, c1, stride), np.arange(r0, r1, stride)
+    inside = cells_in_polygon(polygon, xmin + (cols + 0.5) * res, ymin + (rows + 0.5) * res)
+    walls = blocked[np.ix_(rows, cols)] & inside
+    if not inside.any():
+        raise cells.located.error(("rooms", i, "polygon"), f"room {room.name!r} covers no cell of the map")
+    if walls.sum() > ROOM_MAX_BLOCKED * inside.sum():
+        centre = polygon.representative_point()
+        wr, wc = np.nonzero(walls)
+        nearest = np.argmin((cols[wc] - (centre.x - xmin) / res) ** 2 + (rows[wr] - (centre.y - ymin) / res) ** 2)
+        raise cells.located.error(("rooms", i, "polygon"), f"room {room.name!r} lies on walls of the map: "
+                                  f"{100 * walls.sum() / inside.sum():.0f}% of its cells are, e.g. "
+                                  f"{cells.why(int(rows[wr[nearest]]), int(cols[wc[nearest]]))}")
+
+
+def _check_person_on_map(i: int, person: PersonSpec, cells: _MapCells) -> None:
+    """A person and their waypoints on free cells, and no walk between them through a blocked one."""
+    cells.free_at(("people", i, "pose"), person.pose.x, person.pose.y, f"person {person.name!r}")
+    route = [person.pose, *(w.pose for w in person.waypoints)]
+    for j, waypoint in enumerate(person.waypoints):
+        cells.free_at(("people", i, "waypoints", j, "pose"), waypoint.pose.x, waypoint.pose.y,
+                      f"waypoint of {person.name!r}")
+    for j, (a, b) in enumerate(zip(route, route[1:], strict=False)):
+        cell = cells.first_blocked(a, b)
+        if cell is not None:
+            raise cells.located.error(("people", i, "waypoints", j),
+                                      f"{person.name!r} would walk through {cells.why(*cell)}, going from "
+                                      f"({a.x:g}, {a.y:g}) to ({b.x:g}, {b.y:g}); add a waypoint around it")
 
 
 def load_scene(name_or_path: str | Path) -> LoadedScene:
