@@ -21,10 +21,15 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.world.vocabulary import MissionState, NodeType
 from tools.launch import AGENTS, LaunchError, RunResult, check_rate, check_timeout
+
+if TYPE_CHECKING:
+    from agents.runtime.lockstep import Lockstep
+    from agents.runtime.recording import Recorder
+    from scenes.model import Scene
 
 #: the order of a round: the clock first, then who perceives the tick, then who acts on it
 ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
@@ -127,7 +132,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
 class _InProcessRun:
     """One in-process run: where it writes, its graph, and the missions its watch last saw."""
 
-    def __init__(self, *, spec: Any, scene_path: Path, run_id: str, run_dir: Path, record: bool, started: float,
+    def __init__(self, *, spec: Scene, scene_path: Path, run_id: str, run_dir: Path, record: bool, started: float,
                  on_tick: Callable[[dict[str, object]], None] | None) -> None:
         from dsr import DSRGraph
 
@@ -157,7 +162,8 @@ class _InProcessRun:
         """The scheduler's stop test after each round: the clock finished or every mission ended
         (``on_tick`` gets the status every 50 rounds)."""
         current = self.status()
-        missions = self.missions = current["missions"]  # type: ignore[assignment]
+        self.missions = current["missions"]  # type: ignore[assignment]
+        missions = self.missions
         if self.on_tick is not None and rounds % 50 == 0:
             self.on_tick(current)
         return bool(current["clock_finished"]) or (
@@ -165,7 +171,7 @@ class _InProcessRun:
             and all(m.get("state") in MissionState.TERMINAL for m in missions.values()))
 
 
-def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> tuple[Any, Any]:
+def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> tuple[Lockstep, Recorder]:
     """The agents, one recorder each, the lockstep scheduler over them, and the launcher's recorder."""
     from agents.runtime.lockstep import Lockstep
     from agents.runtime.recording import Recorder

@@ -23,16 +23,19 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 
 from tools.ports import free_port, wait_for_port
 from tools.system.runs import RunSecurity, prepare_run_security, runs_dir as default_runs_dir, write_connect_file
 from tools.system.supervisor import ManagedProcess, ProgressWatch, Supervisor
+
+if TYPE_CHECKING:
+    from agents.runtime.recording import Recorder
 
 AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
                            "executive")
@@ -327,7 +330,7 @@ def _start_processes(run: _Run, stop: _StopRequest) -> bool:
     return True
 
 
-def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recorder: Any, *,
+def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recorder: Recorder, *,
                       timeout_s: float, on_tick: Callable[[dict[str, object]], None] | None) -> None:
     """Join the graph read-only and, until the run is over, poll the processes, restart hung agents,
     log the graph and hand the status to ``on_tick``."""
@@ -361,7 +364,7 @@ def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recor
         graph_logger.maybe_log(graph, status.get("now_s"), force=True)
 
 
-def _run_over(run: _Run, stop: _StopRequest, status: dict[str, Any], timeout_s: float) -> bool:
+def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeout_s: float) -> bool:
     """Whether the watch ends now: a stop, every mission terminal, the clock finished, the timeout
     (noted on ``run``), or an agent the supervisor gave up on."""
     from agents.world.vocabulary import MissionState
@@ -381,7 +384,7 @@ def _run_over(run: _Run, stop: _StopRequest, status: dict[str, Any], timeout_s: 
     return bool(run.supervisor.given_up())
 
 
-def _finish(run: _Run, recorder: Any) -> RunResult:
+def _finish(run: _Run, recorder: Recorder) -> RunResult:
     """Stop every process, close and merge the recordings, write ``result.json``; the run's result."""
     run.supervisor.stop_all(order=[*reversed(run.agents), "router"])
     recorder.close()

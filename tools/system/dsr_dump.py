@@ -15,11 +15,14 @@ from __future__ import annotations
 import os
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 
-from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
+from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP, Target
+
+if TYPE_CHECKING:
+    from dsr import DSRGraph
 
 dsr_app = typer.Typer(help="Inspect the replicated DSR graph.", no_args_is_help=True)
 
@@ -147,7 +150,7 @@ def _dump_json_output(output_format: str, follow: bool, json_output: bool) -> bo
     return json_output or output_format == "json"
 
 
-def _dump_target(connect: list[str], graph_name: str | None, run: str | None, timeout: float) -> Any:
+def _dump_target(connect: list[str], graph_name: str | None, run: str | None, timeout: float) -> Target:
     """The graph to read, from --connect/--graph/--run (exit 2 with the reason if none fits)."""
     from tools.system.connection import ConnectionProblem, check_timeout, resolve_target
 
@@ -159,7 +162,7 @@ def _dump_target(connect: list[str], graph_name: str | None, run: str | None, ti
         raise typer.Exit(2) from None
 
 
-def _print_snapshot(graph: Any, name: str, output_format: str, json_output: bool) -> None:
+def _print_snapshot(graph: DSRGraph, name: str, output_format: str, json_output: bool) -> None:
     """The whole graph once: AGM world XML, one JSON document, or the rich tables."""
     import orjson
 
@@ -176,7 +179,7 @@ def _print_snapshot(graph: Any, name: str, output_format: str, json_output: bool
     sys.stdout.flush()
 
 
-def _follow(graph: Any, json_output: bool, duration: float) -> None:
+def _follow(graph: DSRGraph, json_output: bool, duration: float) -> None:
     """Print every change as it arrives (a JSON object or a line of text each), for ``duration``
     seconds or, with 0, until interrupted."""
     import orjson
