@@ -252,9 +252,14 @@ def stats(
     if json_output:
         sys.stdout.write(orjson.dumps(document).decode() + "\n")
         return
+    _print_stats(target.graph, document)
+
+
+def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
+    """The members' counters as a table, then what the router's ACL denied."""
     from rich.console import Console
     from rich.table import Table
-    table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
+    table = Table(title=f"DSR graph {graph_name!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
                    "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
         table.add_column(column, overflow="fold")
