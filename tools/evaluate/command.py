@@ -21,9 +21,12 @@ import sys
 import time
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
+
+if TYPE_CHECKING:
+    from tools.evaluate.sweep import RunSpec
 
 SWEEP_FILE = "sweep.json"
 
@@ -205,20 +208,12 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
     from tools.evaluate.executors import parse_executor
-    from tools.evaluate.sweep import RunSpec, finished, plan_sweep, read_ledger
+    from tools.evaluate.sweep import plan_sweep, read_ledger
     from tools.evaluate.table import write_table
-    from tools.launch import check_timeout, LaunchError
 
     _check_extras()
     chosen = parse_planners(planners)
-    if seeds < 1:
-        raise EvaluateError("--seeds: give at least 1")
-    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
-        raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
-    try:
-        check_timeout(timeout_s)
-    except LaunchError as exc:
-        raise EvaluateError(str(exc)) from None
+    _check_seeds_and_timeout(seeds, timeout_s)
     scene_paths = resolve_scenes(scenes)
     out_dir = prepare_out_dir(out, resume)
     seed_list = list(range(first_seed, first_seed + seeds))
@@ -241,6 +236,44 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
         if close is not None:
             close()
     sweep_wall_s = time.monotonic() - started
+    ordered, rows, pending = _merge_runs(specs, earlier, new)
+    parquet, csv = write_table(rows, out_dir)
+    from agents.world.offline import SceneMaps
+
+    maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
+    figures = all_figures(rows, maps, out_dir, chosen)
+    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
+    launched = [r for r in new if not r.get("interrupted")]
+    wanted = {s.key for s in specs}
+    return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
+            "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
+            "ok": sum(1 for r in ordered if r.get("ok")), "failed": _failures(ordered), "pending": pending,
+            "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
+            "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
+            "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
+            "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
+
+
+def _check_seeds_and_timeout(seeds: int, timeout_s: float) -> None:
+    """--seeds within 1..MAX_SEEDS and a valid --timeout, before anything is planned or written."""
+    from tools.launch import check_timeout, LaunchError
+
+    if seeds < 1:
+        raise EvaluateError("--seeds: give at least 1")
+    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
+        raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
+    try:
+        check_timeout(timeout_s)
+    except LaunchError as exc:
+        raise EvaluateError(str(exc)) from None
+
+
+def _merge_runs(specs: list[RunSpec], earlier: dict[str, dict[str, Any]], new: list[dict[str, Any]]
+                ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], int]:
+    """The study's runs in sweep order (a finished new result replaces a resumed one, an unfinished
+    one only fills a gap), their metric rows, and how many runs are not finished."""
+    from tools.evaluate.sweep import finished
+
     wanted = {s.key for s in specs}
     runs = {key: r for key, r in earlier.items() if key in wanted}
     for result in new:
@@ -249,22 +282,15 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     ordered = [runs[s.key] for s in specs if s.key in runs]
     rows = [row for run in ordered if finished(run) for row in run["rows"]]
     pending = sum(1 for s in specs if s.key not in runs or not finished(runs[s.key]))
-    parquet, csv = write_table(rows, out_dir)
-    from agents.world.offline import SceneMaps
+    return ordered, rows, pending
 
-    maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
-    figures = all_figures(rows, maps, out_dir, chosen)
-    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
-    launched = [r for r in new if not r.get("interrupted")]
-    failed = [{"run": RunSpec.from_dict(r["spec"]).label, "outcome": r.get("outcome"), "error": r.get("error")}
-              for r in ordered if not r.get("ok")]
-    return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
-            "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
-            "ok": sum(1 for r in ordered if r.get("ok")), "failed": failed, "pending": pending,
-            "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
-            "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
-            "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
-            "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
+
+def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Each run that did not complete every mission: its label, outcome and error."""
+    from tools.evaluate.sweep import RunSpec
+
+    return [{"run": RunSpec.from_dict(r["spec"]).label, "outcome": r.get("outcome"), "error": r.get("error")}
+            for r in ordered if not r.get("ok")]
 
 
 def register(app: typer.Typer) -> None:
