@@ -293,51 +293,53 @@ def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
             for r in ordered if not r.get("ok")]
 
 
+def evaluate_command(
+        scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
+        planners: str = typer.Option(None, "--planners", show_default=False,
+                                     help="comma-separated, of social, departure, static, baseline, inflation "
+                                          "(default: all of them)"),
+        seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
+        first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
+        jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,
+                                 help="runs at once on this machine (--executor local; default: every core)"),
+        mode: str = typer.Option("in-process", "--mode",
+                                 help="in-process: the agents in one process, in lockstep (fast); launch: each "
+                                      "run a full launch of the agents as processes (the reference)"),
+        no_record: bool = typer.Option(False, "--no-record",
+                                       help="no Rerun recording per run (faster; the report then links none)"),
+        out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
+        executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
+        resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
+        timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
+        as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+    """Run every SCENE x planner x seed, then write the table and DIR/report.html.
+
+    Each run is isolated (own graph and run directory under DIR/runs; in launch mode its own
+    router and credentials too); both modes compute the same runs. Exit 0 when
+    every run completed every mission, 1 when some did not (the report says which), 2 on bad
+    input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
+    from rich.console import Console
+
+    err = Console(stderr=True)
+    command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    try:
+        summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
+                           executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
+                           command=command, mode=mode, record=not no_record)
+    except EvaluateError as exc:
+        err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+        raise typer.Exit(2) from None
+    if as_json:
+        typer.echo(json.dumps(summary))
+    else:
+        _print_summary(summary, Console())
+    if summary["interrupted"]:
+        raise typer.Exit(130)
+    raise typer.Exit(0 if not summary["failed"] and not summary["pending"] else 1)
+
+
 def register(app: typer.Typer) -> None:
-    @app.command("evaluate")
-    def evaluate_command(
-            scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
-            planners: str = typer.Option(None, "--planners", show_default=False,
-                                         help="comma-separated, of social, departure, static, baseline, inflation "
-                                              "(default: all of them)"),
-            seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
-            first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
-            jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,
-                                     help="runs at once on this machine (--executor local; default: every core)"),
-            mode: str = typer.Option("in-process", "--mode",
-                                     help="in-process: the agents in one process, in lockstep (fast); launch: each "
-                                          "run a full launch of the agents as processes (the reference)"),
-            no_record: bool = typer.Option(False, "--no-record",
-                                           help="no Rerun recording per run (faster; the report then links none)"),
-            out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
-            executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
-            resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
-            timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
-            as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """Run every SCENE x planner x seed, then write the table and DIR/report.html.
-
-        Each run is isolated (own graph and run directory under DIR/runs; in launch mode its own
-        router and credentials too); both modes compute the same runs. Exit 0 when
-        every run completed every mission, 1 when some did not (the report says which), 2 on bad
-        input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
-        from rich.console import Console
-
-        err = Console(stderr=True)
-        command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-        try:
-            summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
-                               executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                               command=command, mode=mode, record=not no_record)
-        except EvaluateError as exc:
-            err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        if as_json:
-            typer.echo(json.dumps(summary))
-        else:
-            _print_summary(summary, Console())
-        if summary["interrupted"]:
-            raise typer.Exit(130)
-        raise typer.Exit(0 if not summary["failed"] and not summary["pending"] else 1)
+    app.command("evaluate")(evaluate_command)
 
 
 def _print_summary(summary: dict[str, Any], out: Any) -> None:
