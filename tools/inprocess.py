@@ -21,10 +21,15 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from agents.world.vocabulary import MissionState, NodeType
 from tools.launch import AGENTS, LaunchError, RunResult, check_rate, check_timeout
+
+if TYPE_CHECKING:
+    from agents.runtime.lockstep import Lockstep
+    from agents.runtime.recording import Recorder
+    from scenes.model import Scene
 
 #: the order of a round: the clock first, then who perceives the tick, then who acts on it
 ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
@@ -89,61 +94,29 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     """Run one scene with every agent in this process; the same result a launch returns.
 
     ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
-    from agents.runtime.lockstep import AgentError, Lockstep
-    from agents.runtime.recording import Recorder
+    from agents.runtime.lockstep import AgentError
     from agents.world.scene_world import load_world
-    from agents.world.write_policy import policy_from_env
-    from dsr import DSRGraph
-    from tools.launch import _make_run_dir, _write_result, log_scene_static, scene_missions
+    from tools.launch import _make_run_dir, log_scene_static
     from tools.system.runs import runs_dir as default_runs_dir
 
     check_rate(rate)
     check_timeout(timeout_s)
     loaded = load_world(scene)
     spec = loaded.scene
-    scene_path = loaded.path.resolve()
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}-{threading.get_ident() % 10000}"
     run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     options = merged_options(agent_options, rate)
     record = record and os.environ.get("RERUN", "on") != "off"   # what the agents' Recorders honour too
-    recording_id = run_id if record else None
-    started = time.monotonic()
-    graph = DSRGraph(agent="lockstep", graph=run_id.replace(".", "_"))
-    agents = build_agents(scene_path, ROUND_ORDER, graph_name=graph.graph_name, run_dir=run_dir,
-                          recording_id=recording_id, options=options)
-    recorders = [Recorder(name, run_dir if record else None, recording_id, day=spec.clock.date)
-                 for name in ROUND_ORDER]
-    scheduler = Lockstep(graph, agents, recorders, policy=policy_from_env())
-    launcher = Recorder("launcher", run_dir if record else None, recording_id, day=spec.clock.date)
-    missions: dict[str, dict[str, object]] = {}
+    run = _InProcessRun(spec=spec, scene_path=loaded.path, run_id=run_id, run_dir=run_dir, record=record,
+                        started=time.monotonic(), on_tick=on_tick)
+    scheduler, launcher = _build_scheduler(run, options)
     error: str | None = None
     reason = "done"
     try:
         if record:
             log_scene_static(launcher, spec)
         scheduler.setup()
-
-        def status() -> dict[str, object]:
-            clock = graph.get_node_by_name("clock")
-            found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type(NodeType.MISSION)}
-            return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
-                    "clock_mode": None if clock is None else clock.attrs.get("mode"),
-                    "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
-                    "missions": found, "agents": {name: ("up", 0) for name in AGENTS},
-                    "wall_s": time.monotonic() - started,
-                    "run": {"run_dir": str(run_dir), "endpoint": "in-process", "graph": graph.graph_name}}
-
-        def done() -> bool:
-            nonlocal missions
-            current = status()
-            missions = current["missions"]  # type: ignore[assignment]
-            if on_tick is not None and scheduler.rounds % 50 == 0:
-                on_tick(current)
-            return bool(current["clock_finished"]) or (
-                len(missions) == len(spec.missions) and bool(missions)
-                and all(m.get("state") in MissionState.TERMINAL for m in missions.values()))
-
-        outcome = scheduler.run(done, timeout_s=timeout_s, stop=stop)
+        outcome = scheduler.run(lambda: run.done(scheduler.rounds), timeout_s=timeout_s, stop=stop)
         reason = outcome.reason
         if reason == "stalled":
             error = (f"the agents stopped making progress at round {outcome.rounds} (nothing changed in the graph "
@@ -153,15 +126,80 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     finally:
         scheduler.teardown()
         launcher.close()
-    rrd_path = None
-    if record:
-        from tools.launch import merge_recordings
+    return _finish(run, reason, error)
 
-        rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")), run_dir.parent / f"{run_id}.rrd")
-    result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path,
-                       missions={**scene_missions(spec), **missions}, events=[], restarts={name: 0 for name in AGENTS},
-                       wall_s=time.monotonic() - started, interrupted=reason == "interrupted",
-                       timed_out=reason == "timed_out", scene_path=loaded.path, error=error)
+
+class _InProcessRun:
+    """One in-process run: where it writes, its graph, and the missions its watch last saw."""
+
+    def __init__(self, *, spec: Scene, scene_path: Path, run_id: str, run_dir: Path, record: bool, started: float,
+                 on_tick: Callable[[dict[str, object]], None] | None) -> None:
+        from dsr import DSRGraph
+
+        self.spec = spec
+        self.scene_path = scene_path
+        self.run_id = run_id
+        self.run_dir = run_dir
+        self.record = record
+        self.started = started
+        self.on_tick = on_tick
+        self.graph = DSRGraph(agent="lockstep", graph=run_id.replace(".", "_"))
+        self.missions: dict[str, dict[str, object]] = {}
+
+    def status(self) -> dict[str, object]:
+        """What a launch hands ``on_tick``: clock, missions, agents, wall time, where the run is."""
+        graph = self.graph
+        clock = graph.get_node_by_name("clock")
+        found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type(NodeType.MISSION)}
+        return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
+                "clock_mode": None if clock is None else clock.attrs.get("mode"),
+                "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
+                "missions": found, "agents": {name: ("up", 0) for name in AGENTS},
+                "wall_s": time.monotonic() - self.started,
+                "run": {"run_dir": str(self.run_dir), "endpoint": "in-process", "graph": graph.graph_name}}
+
+    def done(self, rounds: int) -> bool:
+        """The scheduler's stop test after each round: the clock finished or every mission ended
+        (``on_tick`` gets the status every 50 rounds)."""
+        current = self.status()
+        self.missions = current["missions"]  # type: ignore[assignment]
+        missions = self.missions
+        if self.on_tick is not None and rounds % 50 == 0:
+            self.on_tick(current)
+        return bool(current["clock_finished"]) or (
+            len(missions) == len(self.spec.missions) and bool(missions)
+            and all(m.get("state") in MissionState.TERMINAL for m in missions.values()))
+
+
+def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> tuple[Lockstep, Recorder]:
+    """The agents, one recorder each, the lockstep scheduler over them, and the launcher's recorder."""
+    from agents.runtime.lockstep import Lockstep
+    from agents.runtime.recording import Recorder
+    from agents.world.write_policy import policy_from_env
+
+    recording_id = run.run_id if run.record else None
+    recording_dir = run.run_dir if run.record else None
+    agents = build_agents(run.scene_path.resolve(), ROUND_ORDER, graph_name=run.graph.graph_name,
+                          run_dir=run.run_dir, recording_id=recording_id, options=options)
+    recorders = [Recorder(name, recording_dir, recording_id, day=run.spec.clock.date) for name in ROUND_ORDER]
+    scheduler = Lockstep(run.graph, agents, recorders, policy=policy_from_env())
+    launcher = Recorder("launcher", recording_dir, recording_id, day=run.spec.clock.date)
+    return scheduler, launcher
+
+
+def _finish(run: _InProcessRun, reason: str, error: str | None) -> RunResult:
+    """Merge the recordings, write ``result.json`` in the launch's format; the run's result."""
+    from tools.launch import _write_result, merge_recordings, scene_missions
+
+    rrd_path = None
+    if run.record:
+        rrd_path = merge_recordings(sorted((run.run_dir / "rrd").glob("*.rrd")),
+                                    run.run_dir.parent / f"{run.run_id}.rrd")
+    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path,
+                       missions={**scene_missions(run.spec), **run.missions}, events=[],
+                       restarts={name: 0 for name in AGENTS}, wall_s=time.monotonic() - run.started,
+                       interrupted=reason == "interrupted", timed_out=reason == "timed_out",
+                       scene_path=run.scene_path, error=error)
     _write_result(result)
     return result
 

@@ -23,16 +23,19 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 
 from tools.ports import free_port, wait_for_port
-from tools.system.runs import prepare_run_security, runs_dir as default_runs_dir, write_connect_file
-from tools.system.supervisor import ProgressWatch, Supervisor
+from tools.system.runs import RunSecurity, prepare_run_security, runs_dir as default_runs_dir, write_connect_file
+from tools.system.supervisor import ManagedProcess, ProgressWatch, Supervisor
+
+if TYPE_CHECKING:
+    from agents.runtime.recording import Recorder
 
 AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
                            "executive")
@@ -170,6 +173,49 @@ def log_scene_static(recorder: Any, spec: Any) -> None:
     log_legend(recorder, spec)
 
 
+@dataclass
+class _Run:
+    """One launch: what is prepared before any process starts, then what the watch finds."""
+    spec: Any
+    scene_path: Path
+    policy: Any
+    run_id: str
+    graph_name: str
+    run_dir: Path
+    port: int
+    endpoint: str
+    agents: tuple[str, ...]
+    security: RunSecurity
+    env: dict[str, str]
+    supervisor: Supervisor
+    router: ManagedProcess
+    record: bool
+    started: float = 0.0
+    missions: dict[str, dict[str, object]] = field(default_factory=dict)
+    metrics: dict[str, object] = field(default_factory=dict)
+    interrupted: bool = False
+    timed_out: bool = False
+    error: str | None = None
+
+
+class _StopRequest:
+    """Ctrl-C, or SIGTERM (a supervisor stopping the launcher), asks the watch loop to end; the run
+    then cleans up.  Installed on creation, the previous handlers put back by ``restore``."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous_sigint = signal.getsignal(signal.SIGINT)
+        signal.signal(signal.SIGINT, self._on_signal)
+        self._previous_sigterm = signal.signal(signal.SIGTERM, self._on_signal)
+
+    def _on_signal(self, _signum: int, _frame: object) -> None:
+        self.requested = True
+
+    def restore(self) -> None:
+        signal.signal(signal.SIGINT, self._previous_sigint)
+        signal.signal(signal.SIGTERM, self._previous_sigterm)
+
+
 def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path | None = None,
                timeout_s: float = 900.0, record: bool = True, restart_limit: int = 3,
                hang_timeout_s: float = DEFAULT_HANG_TIMEOUT_S,
@@ -183,15 +229,38 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
     the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
     instead of the simulated one (docs/ros2.md)."""
-    from agents.world.vocabulary import MissionState
-    from agents.runtime.heartbeat import read_stamp
     from agents.runtime.recording import Recorder
-    from dsr import DSRError, join
-    from dsr.config import ZenohSettings
-    from agents.world.write_policy import policy_from_env
-    from agents.world.scene_world import load_world
-    from agents.runtime.drawing.dsr_graph import GraphLogger
+    from dsr import DSRError
 
+    _check_options(rate=rate, robot=robot, ros_domain=ros_domain, timeout_s=timeout_s,
+                   hang_timeout_s=hang_timeout_s, startup_timeout_s=startup_timeout_s)
+    run = _prepare_run(scene, rate=rate, runs_dir=runs_dir, record=record, restart_limit=restart_limit,
+                       agent_options=agent_options, ros_domain=ros_domain, robot=robot)
+    watch = ProgressWatch(hang_s=hang_timeout_s, startup_s=startup_timeout_s)
+    run.started = time.monotonic()
+    stop = _StopRequest()
+    recorder = Recorder("launcher", run.run_dir if record else None, run.run_id, day=run.spec.clock.date)
+    try:
+        log_scene_static(recorder, run.spec)
+        if _start_processes(run, stop):
+            _watch_until_over(run, stop, watch, recorder, timeout_s=timeout_s, on_tick=on_tick)
+        run.interrupted = run.interrupted or stop.requested
+        if record and metrics_report and not run.interrupted:
+            run.metrics = _report(run.scene_path, run.run_dir, run.missions, recorder)
+    except (LaunchError, DSRError) as exc:    # e.g. the launcher could not join its own router
+        run.error = str(exc)
+    finally:
+        # Still under our handlers: a second Ctrl-C must not cut the clean-up short.
+        try:
+            result = _finish(run, recorder)
+        finally:
+            stop.restore()
+    return result
+
+
+def _check_options(*, rate: float | None, robot: str, ros_domain: int | None, timeout_s: float,
+                   hang_timeout_s: float, startup_timeout_s: float) -> None:
+    """Refuse bad options before anything is read or started."""
     check_rate(rate)
     if robot not in ("sim", "ros"):
         raise LaunchError(f"--robot {robot!r}: give sim (the simulated robot) or ros (a ROS 2 robot through --ros)")
@@ -200,6 +269,16 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     check_timeout(timeout_s)
     check_timeout(hang_timeout_s, "--hang-timeout")
     check_timeout(startup_timeout_s, "--startup-timeout")
+
+
+def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None, record: bool,
+                 restart_limit: int, agent_options: dict[str, list[str]] | None, ros_domain: int | None,
+                 robot: str) -> _Run:
+    """Load the scene and the write policy, make the run directory, credentials and environment,
+    and register the router and the agents with a supervisor (none started yet)."""
+    from agents.world.write_policy import policy_from_env
+    from agents.world.scene_world import load_world
+
     loaded = load_world(scene)
     spec = loaded.scene
     policy = policy_from_env()  # fail before any process starts if the write policy is broken
@@ -216,96 +295,110 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]
     for name in agents:
-        options = [*(["-o", f"rate={rate}"] if rate is not None and name == "sim_robot" else [])]
-        options += ["-o", f"ros_domain={ros_domain}"] if name == ROS_BRIDGE else []
-        options += ["-o", "robot=ros"] if robot == "ros" and name in ("sim_robot", ROS_BRIDGE) else []
-        for opt in (agent_options or {}).get(name, []):
-            options += ["-o", opt]
+        options = _agent_options(name, rate=rate, ros_domain=ros_domain, robot=robot,
+                                 extra=(agent_options or {}).get(name, []))
         supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
-    watch = ProgressWatch(hang_s=hang_timeout_s, startup_s=startup_timeout_s)
+    return _Run(spec=spec, scene_path=loaded.path, policy=policy, run_id=run_id, graph_name=graph_name,
+                run_dir=run_dir, port=port, endpoint=endpoint, agents=agents, security=security, env=env,
+                supervisor=supervisor, router=router, record=record)
 
-    started = time.monotonic()
-    interrupted = timed_out = False
-    error: str | None = None
-    previous_sigint = signal.getsignal(signal.SIGINT)
-    stop_requested = {"flag": False}
 
-    def on_sigint(_signum: int, _frame: object) -> None:
-        stop_requested["flag"] = True
+def _agent_options(name: str, *, rate: float | None, ros_domain: int | None, robot: str,
+                   extra: list[str]) -> list[str]:
+    """One agent's ``-o key=value`` arguments: the run's rate, ROS domain and robot, then ``extra``."""
+    options = [*(["-o", f"rate={rate}"] if rate is not None and name == "sim_robot" else [])]
+    options += ["-o", f"ros_domain={ros_domain}"] if name == ROS_BRIDGE else []
+    options += ["-o", "robot=ros"] if robot == "ros" and name in ("sim_robot", ROS_BRIDGE) else []
+    for opt in extra:
+        options += ["-o", opt]
+    return options
 
-    signal.signal(signal.SIGINT, on_sigint)
-    previous_sigterm = signal.signal(signal.SIGTERM, on_sigint)  # stopped by a supervisor: clean up too
-    missions: dict[str, dict[str, object]] = {}
-    metrics: dict[str, object] = {}
-    recorder = Recorder("launcher", run_dir if record else None, run_id, day=spec.clock.date)
+
+def _start_processes(run: _Run, stop: _StopRequest) -> bool:
+    """The router, then (once it listens) the connect file and the agents; False if a stop came
+    before the router listened, LaunchError if it never did."""
+    run.supervisor.start("router")
+    if not wait_for_port(run.port, 15, give_up=lambda: stop.requested or not run.router.alive):
+        if not stop.requested:
+            raise LaunchError(f"the Zenoh router did not listen on {run.endpoint}; see {run.router.log_path}")
+        return False
+    write_connect_file(run.run_dir, run_id=run.run_id, endpoint=run.endpoint, graph=run.graph_name,
+                       security=run.security)
+    for name in run.agents:
+        run.supervisor.start(name)
+    write_pids(run.run_dir, run.supervisor, run.router.pid)
+    return True
+
+
+def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recorder: Recorder, *,
+                      timeout_s: float, on_tick: Callable[[dict[str, object]], None] | None) -> None:
+    """Join the graph read-only and, until the run is over, poll the processes, restart hung agents,
+    log the graph and hand the status to ``on_tick``."""
+    from agents.runtime.drawing.dsr_graph import GraphLogger
+    from agents.runtime.heartbeat import read_stamp
+    from dsr import join
+    from dsr.config import ZenohSettings
+
+    supervisor = run.supervisor
+    settings = ZenohSettings.from_env({**run.env, "CHRONAV_ZENOH_USER": run.security.reader.user,
+                                       "CHRONAV_ZENOH_PASSWORD": run.security.reader.password})
+    # Read-only: the launcher only watches; it enforces the agents' write policy too.
+    with join(agent="launcher", graph=run.graph_name, settings=settings, read_only=True,
+              policy=run.policy) as graph:
+        graph_logger = GraphLogger(recorder)
+        status: dict[str, Any] = {}
+        while True:
+            graph.dispatch(timeout=0.1)
+            changed = bool(supervisor.poll())
+            changed |= _restart_stuck(graph, supervisor, watch, read_stamp)
+            if changed:
+                write_pids(run.run_dir, supervisor, run.router.pid)
+            status = _status(graph, supervisor, run.started)
+            status["run"] = {"run_dir": str(run.run_dir), "endpoint": run.endpoint, "graph": run.graph_name}
+            run.missions = status["missions"]
+            graph_logger.maybe_log(graph, status.get("now_s"))
+            if on_tick is not None:
+                on_tick(status)
+            if _run_over(run, stop, status, timeout_s):
+                break
+        graph_logger.maybe_log(graph, status.get("now_s"), force=True)
+
+
+def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeout_s: float) -> bool:
+    """Whether the watch ends now: a stop, every mission terminal, the clock finished, the timeout
+    (noted on ``run``), or an agent the supervisor gave up on."""
+    from agents.world.vocabulary import MissionState
+
+    missions = run.missions
+    if stop.requested:
+        run.interrupted = True
+        return True
+    if len(missions) == len(run.spec.missions) and missions and all(
+            m.get("state") in MissionState.TERMINAL for m in missions.values()):
+        return True
+    if status.get("clock_finished"):
+        return True
+    if time.monotonic() - run.started > timeout_s:
+        run.timed_out = True
+        return True
+    return bool(run.supervisor.given_up())
+
+
+def _finish(run: _Run, recorder: Recorder) -> RunResult:
+    """Stop every process, close and merge the recordings, write ``result.json``; the run's result."""
+    run.supervisor.stop_all(order=[*reversed(run.agents), "router"])
+    recorder.close()
     rrd_path: Path | None = None
-    try:
-        log_scene_static(recorder, spec)
-        supervisor.start("router")
-        if not wait_for_port(port, 15, give_up=lambda: stop_requested["flag"] or not router.alive):
-            if not stop_requested["flag"]:
-                raise LaunchError(f"the Zenoh router did not listen on {endpoint}; see {router.log_path}")
-        else:
-            write_connect_file(run_dir, run_id=run_id, endpoint=endpoint, graph=graph_name, security=security)
-            for name in agents:
-                supervisor.start(name)
-            write_pids(run_dir, supervisor, router.pid)
-            settings = ZenohSettings.from_env({**env, "CHRONAV_ZENOH_USER": security.reader.user,
-                                               "CHRONAV_ZENOH_PASSWORD": security.reader.password})
-            # Read-only: the launcher only watches; it enforces the agents' write policy too.
-            with join(agent="launcher", graph=graph_name, settings=settings, read_only=True,
-                      policy=policy) as graph:
-                graph_logger = GraphLogger(recorder)
-                status: dict[str, Any] = {}
-                while True:
-                    graph.dispatch(timeout=0.1)
-                    changed = bool(supervisor.poll())
-                    changed |= _restart_stuck(graph, supervisor, watch, read_stamp)
-                    if changed:
-                        write_pids(run_dir, supervisor, router.pid)
-                    status = _status(graph, supervisor, started)
-                    status["run"] = {"run_dir": str(run_dir), "endpoint": endpoint, "graph": graph_name}
-                    missions = status["missions"]
-                    graph_logger.maybe_log(graph, status.get("now_s"))
-                    if on_tick is not None:
-                        on_tick(status)
-                    if stop_requested["flag"]:
-                        interrupted = True
-                        break
-                    if len(missions) == len(spec.missions) and missions and all(
-                            m.get("state") in MissionState.TERMINAL for m in missions.values()):
-                        break
-                    if status.get("clock_finished"):
-                        break
-                    if time.monotonic() - started > timeout_s:
-                        timed_out = True
-                        break
-                    if supervisor.given_up():
-                        break
-                graph_logger.maybe_log(graph, status.get("now_s"), force=True)
-        interrupted = interrupted or stop_requested["flag"]
-        if record and metrics_report and not interrupted:
-            metrics = _report(loaded.path, run_dir, missions, recorder)
-    except (LaunchError, DSRError) as exc:    # e.g. the launcher could not join its own router
-        error = str(exc)
-    finally:
-        # Still under our handlers: a second Ctrl-C must not cut the clean-up short.
-        try:
-            supervisor.stop_all(order=[*reversed(agents), "router"])
-            recorder.close()
-            if record:
-                rrd_path = merge_recordings(sorted((run_dir / "rrd").glob("*.rrd")),
-                                            run_dir.parent / f"{run_id}.rrd")
-            missions = {**scene_missions(spec), **missions}
-            result = RunResult(scene=spec.name, run_dir=run_dir, rrd_path=rrd_path, missions=missions,
-                               events=list(supervisor.events),
-                               restarts={n: m.restarts for n, m in supervisor.processes.items()},
-                               wall_s=time.monotonic() - started, interrupted=interrupted, timed_out=timed_out,
-                               metrics=metrics, scene_path=loaded.path, error=error)
-            _write_result(result)
-        finally:
-            signal.signal(signal.SIGINT, previous_sigint)
-            signal.signal(signal.SIGTERM, previous_sigterm)
+    if run.record:
+        rrd_path = merge_recordings(sorted((run.run_dir / "rrd").glob("*.rrd")),
+                                    run.run_dir.parent / f"{run.run_id}.rrd")
+    missions = {**scene_missions(run.spec), **run.missions}
+    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path, missions=missions,
+                       events=list(run.supervisor.events),
+                       restarts={n: m.restarts for n, m in run.supervisor.processes.items()},
+                       wall_s=time.monotonic() - run.started, interrupted=run.interrupted,
+                       timed_out=run.timed_out, metrics=run.metrics, scene_path=run.scene_path, error=run.error)
+    _write_result(result)
     return result
 
 

@@ -21,9 +21,12 @@ import sys
 import time
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
+
+if TYPE_CHECKING:
+    from tools.evaluate.sweep import RunSpec
 
 SWEEP_FILE = "sweep.json"
 
@@ -205,20 +208,12 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
     from tools.evaluate.executors import parse_executor
-    from tools.evaluate.sweep import RunSpec, finished, plan_sweep, read_ledger
+    from tools.evaluate.sweep import plan_sweep, read_ledger
     from tools.evaluate.table import write_table
-    from tools.launch import check_timeout, LaunchError
 
     _check_extras()
     chosen = parse_planners(planners)
-    if seeds < 1:
-        raise EvaluateError("--seeds: give at least 1")
-    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
-        raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
-    try:
-        check_timeout(timeout_s)
-    except LaunchError as exc:
-        raise EvaluateError(str(exc)) from None
+    _check_seeds_and_timeout(seeds, timeout_s)
     scene_paths = resolve_scenes(scenes)
     out_dir = prepare_out_dir(out, resume)
     seed_list = list(range(first_seed, first_seed + seeds))
@@ -241,6 +236,44 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
         if close is not None:
             close()
     sweep_wall_s = time.monotonic() - started
+    ordered, rows, pending = _merge_runs(specs, earlier, new)
+    parquet, csv = write_table(rows, out_dir)
+    from agents.world.offline import SceneMaps
+
+    maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
+    figures = all_figures(rows, maps, out_dir, chosen)
+    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
+    launched = [r for r in new if not r.get("interrupted")]
+    wanted = {s.key for s in specs}
+    return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
+            "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
+            "ok": sum(1 for r in ordered if r.get("ok")), "failed": _failures(ordered), "pending": pending,
+            "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
+            "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
+            "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
+            "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
+
+
+def _check_seeds_and_timeout(seeds: int, timeout_s: float) -> None:
+    """--seeds within 1..MAX_SEEDS and a valid --timeout, before anything is planned or written."""
+    from tools.launch import check_timeout, LaunchError
+
+    if seeds < 1:
+        raise EvaluateError("--seeds: give at least 1")
+    if seeds > MAX_SEEDS:   # the sweep is planned up front: 10^12 seeds filled memory
+        raise EvaluateError(f"--seeds {seeds:,}: give 1 to {MAX_SEEDS:,} (docs/limits.md)")
+    try:
+        check_timeout(timeout_s)
+    except LaunchError as exc:
+        raise EvaluateError(str(exc)) from None
+
+
+def _merge_runs(specs: list[RunSpec], earlier: dict[str, dict[str, Any]], new: list[dict[str, Any]]
+                ) -> tuple[list[dict[str, Any]], list[dict[str, Any]], int]:
+    """The study's runs in sweep order (a finished new result replaces a resumed one, an unfinished
+    one only fills a gap), their metric rows, and how many runs are not finished."""
+    from tools.evaluate.sweep import finished
+
     wanted = {s.key for s in specs}
     runs = {key: r for key, r in earlier.items() if key in wanted}
     for result in new:
@@ -249,69 +282,64 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     ordered = [runs[s.key] for s in specs if s.key in runs]
     rows = [row for run in ordered if finished(run) for row in run["rows"]]
     pending = sum(1 for s in specs if s.key not in runs or not finished(runs[s.key]))
-    parquet, csv = write_table(rows, out_dir)
-    from agents.world.offline import SceneMaps
+    return ordered, rows, pending
 
-    maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
-    figures = all_figures(rows, maps, out_dir, chosen)
-    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
-    launched = [r for r in new if not r.get("interrupted")]
-    failed = [{"run": RunSpec.from_dict(r["spec"]).label, "outcome": r.get("outcome"), "error": r.get("error")}
-              for r in ordered if not r.get("ok")]
-    return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
-            "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
-            "ok": sum(1 for r in ordered if r.get("ok")), "failed": failed, "pending": pending,
-            "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
-            "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
-            "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
-            "figures": {k: [str(p) for p in v] for k, v in figures.items()}}
+
+def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Each run that did not complete every mission: its label, outcome and error."""
+    from tools.evaluate.sweep import RunSpec
+
+    return [{"run": RunSpec.from_dict(r["spec"]).label, "outcome": r.get("outcome"), "error": r.get("error")}
+            for r in ordered if not r.get("ok")]
+
+
+def evaluate_command(
+        scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
+        planners: str = typer.Option(None, "--planners", show_default=False,
+                                     help="comma-separated, of social, departure, static, baseline, inflation "
+                                          "(default: all of them)"),
+        seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
+        first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
+        jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,
+                                 help="runs at once on this machine (--executor local; default: every core)"),
+        mode: str = typer.Option("in-process", "--mode",
+                                 help="in-process: the agents in one process, in lockstep (fast); launch: each "
+                                      "run a full launch of the agents as processes (the reference)"),
+        no_record: bool = typer.Option(False, "--no-record",
+                                       help="no Rerun recording per run (faster; the report then links none)"),
+        out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
+        executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
+        resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
+        timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
+        as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+    """Run every SCENE x planner x seed, then write the table and DIR/report.html.
+
+    Each run is isolated (own graph and run directory under DIR/runs; in launch mode its own
+    router and credentials too); both modes compute the same runs. Exit 0 when
+    every run completed every mission, 1 when some did not (the report says which), 2 on bad
+    input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
+    from rich.console import Console
+
+    err = Console(stderr=True)
+    command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    try:
+        summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
+                           executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
+                           command=command, mode=mode, record=not no_record)
+    except EvaluateError as exc:
+        err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
+        raise typer.Exit(2) from None
+    if as_json:
+        typer.echo(json.dumps(summary))
+    else:
+        _print_summary(summary, Console())
+    if summary["interrupted"]:
+        raise typer.Exit(130)
+    raise typer.Exit(0 if not summary["failed"] and not summary["pending"] else 1)
 
 
 def register(app: typer.Typer) -> None:
-    @app.command("evaluate")
-    def evaluate_command(
-            scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
-            planners: str = typer.Option(None, "--planners", show_default=False,
-                                         help="comma-separated, of social, departure, static, baseline, inflation "
-                                              "(default: all of them)"),
-            seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
-            first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
-            jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,
-                                     help="runs at once on this machine (--executor local; default: every core)"),
-            mode: str = typer.Option("in-process", "--mode",
-                                     help="in-process: the agents in one process, in lockstep (fast); launch: each "
-                                          "run a full launch of the agents as processes (the reference)"),
-            no_record: bool = typer.Option(False, "--no-record",
-                                           help="no Rerun recording per run (faster; the report then links none)"),
-            out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
-            executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
-            resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
-            timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
-            as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """Run every SCENE x planner x seed, then write the table and DIR/report.html.
-
-        Each run is isolated (own graph and run directory under DIR/runs; in launch mode its own
-        router and credentials too); both modes compute the same runs. Exit 0 when
-        every run completed every mission, 1 when some did not (the report says which), 2 on bad
-        input, 130 when interrupted (the finished runs are kept: continue with --resume)."""
-        from rich.console import Console
-
-        err = Console(stderr=True)
-        command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-        try:
-            summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
-                               executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                               command=command, mode=mode, record=not no_record)
-        except EvaluateError as exc:
-            err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        if as_json:
-            typer.echo(json.dumps(summary))
-        else:
-            _print_summary(summary, Console())
-        if summary["interrupted"]:
-            raise typer.Exit(130)
-        raise typer.Exit(0 if not summary["failed"] and not summary["pending"] else 1)
+    app.command("evaluate")(evaluate_command)
 
 
 def _print_summary(summary: dict[str, Any], out: Any) -> None:

@@ -235,7 +235,6 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                  prov: Mapping[str, Any], figures: Mapping[str, Sequence[Path]], planner_order: Sequence[str],
                  pending: int = 0) -> Path:
     """The report, ``summary.csv`` and ``tests.csv`` under ``out_dir``; returns the report's path."""
-    from agents.lib.socialmap.planners import PLANNER_HELP
     from tools.evaluate.table import metric_columns
 
     from tools.evaluate.figures import METADATA_COLUMNS
@@ -247,10 +246,29 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     write_tests(tests, out_dir / TESTS)
     planners = planners_of(rows, planner_order) if rows else list(planner_order)
     metrics = metric_columns(rows)
-    esc = html.escape
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>chronav evaluate</title>"
              f"<style>{_STYLE}</style></head><body>",
              "<h1>chronav evaluate: planners across scenes and seeds</h1>"]
+    parts += _provenance_html(runs, prov, pending)
+    main = main_figure(figures, rows)
+    if main is not None:
+        parts.append(f"<h2>Main figure</h2>{_img(main)}")
+    parts.append("<h2>Summary</h2>" + _summary_table(summaries, rows, planners, metrics))
+    parts += _per_mission_html(summaries, rows, planners, metrics)
+    parts += _tests_html(tests)
+    parts += _figures_html(figures, main)
+    parts += _runs_html(runs, out_dir)
+    path = out_dir / REPORT
+    path.write_text("\n".join(parts), encoding="utf-8")
+    return path
+
+
+def _provenance_html(runs: Sequence[Mapping[str, Any]], prov: Mapping[str, Any], pending: int) -> list[str]:
+    """How many runs succeeded, what made them (command, executor, seeds, planners, scene files) and how."""
+    from agents.lib.socialmap.planners import PLANNER_HELP
+
+    esc = html.escape
+    parts = []
     ok = sum(1 for r in runs if r.get("ok"))
     status = f"{len(runs)} runs, {ok} with every mission done"
     if pending:
@@ -273,11 +291,14 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                  "(<code>missions/&lt;mission&gt;.csv</code> in the run directory), against the world at its "
                  "first sample. Table: <code>table.parquet</code> / <code>table.csv</code>; the numbers of the "
                  "tables below: <code>summary.csv</code>, <code>tests.csv</code>.</p>")
-    main = main_figure(figures, rows)
-    if main is not None:
-        parts.append(f"<h2>Main figure</h2>{_img(main)}")
-    parts.append("<h2>Summary</h2>" + _summary_table(summaries, rows, planners, metrics))
-    parts.append("<h2>Per mission: mean &plusmn; std over the seeds</h2>")
+    return parts
+
+
+def _per_mission_html(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any]], planners: Sequence[str],
+                      metrics: Sequence[str]) -> list[str]:
+    """One folded table per scene and mission: mean and std over the seeds."""
+    esc = html.escape
+    parts = ["<h2>Per mission: mean &plusmn; std over the seeds</h2>"]
     for scene, mission in missions_of(rows):
         done = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission) and r.get("state") == MissionState.DONE)
         total = sum(1 for r in rows if (r["scene"], r["mission"]) == (scene, mission))
@@ -285,21 +306,36 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
         parts.append(f"<details><summary><b>{esc(scene)} / {esc(mission)}</b> <span class='note'>({done} of "
                      f"{total} runs completed it)</span></summary>")
         parts.append(_mission_table(summaries, scene, mission, planners, metrics) + "</details>")
-    parts.append(f"<h2>Is {REFERENCE} different? Paired tests per metric</h2>"
-                 "<p class='note'>Wilcoxon signed-rank test (two-sided, scipy.stats.wilcoxon, zero differences "
-                 f"dropped), pairs = the same scene, mission and seed; green: p &lt; {SIGNIFICANCE}. With few "
-                 "pairs the smallest attainable p is large (6 pairs: 0.031).</p>")
-    parts.append(_tests_table(tests))
-    parts.append("<h2>R(t) over the day</h2>" + "".join(_img(p) for p in figures.get("r_of_t", [])))
+    return parts
+
+
+def _tests_html(tests: Sequence[PairedTest]) -> list[str]:
+    """The paired tests against the reference planner, with how to read them."""
+    return [f"<h2>Is {REFERENCE} different? Paired tests per metric</h2>"
+            "<p class='note'>Wilcoxon signed-rank test (two-sided, scipy.stats.wilcoxon, zero differences "
+            f"dropped), pairs = the same scene, mission and seed; green: p &lt; {SIGNIFICANCE}. With few "
+            "pairs the smallest attainable p is large (6 pairs: 0.031).</p>",
+            _tests_table(tests)]
+
+
+def _figures_html(figures: Mapping[str, Sequence[Path]], main: Path | None) -> list[str]:
+    """R(t), the trajectories other than the main figure's, and the metrics by planner."""
+    parts = ["<h2>R(t) over the day</h2>" + "".join(_img(p) for p in figures.get("r_of_t", []))]
     others = [p for p in figures.get("paths", []) if p != main]   # the main figure is shown once, above
     if others:
         parts.append("<h2>Trajectories of the other missions</h2>" + "".join(_img(p) for p in others))
     parts.append("<h2>Metrics by planner across seeds</h2><p class='note'>Every seed is a dot; box plots need at "
                  "least 5 seeds per planner, below that a bar marks the mean.</p>"
                  + "".join(_img(p) for p in figures.get("boxes", [])))
-    parts.append(f"<h2>Runs</h2><details><summary>{len(runs)} runs (click to show)</summary>"
-                 "<table><tr><th>scene</th><th>planner</th><th>seed</th><th>outcome</th>"
-                 "<th>wall s</th><th>host</th><th>recording</th><th>run directory</th></tr>")
+    return parts
+
+
+def _runs_html(runs: Sequence[Mapping[str, Any]], out_dir: Path) -> list[str]:
+    """Every run, folded: outcome (the error on hover), wall time, host, links to recording and directory."""
+    esc = html.escape
+    parts = [f"<h2>Runs</h2><details><summary>{len(runs)} runs (click to show)</summary>"
+             "<table><tr><th>scene</th><th>planner</th><th>seed</th><th>outcome</th>"
+             "<th>wall s</th><th>host</th><th>recording</th><th>run directory</th></tr>"]
     for run in sorted(runs, key=lambda r: (r["spec"]["scene"], r["spec"]["planner"], r["spec"]["seed"])):
         spec = run["spec"]
         outcome = esc(str(run.get("outcome")))
@@ -311,6 +347,4 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
                      f"<td>{_link(run.get('run_dir'), out_dir)}</td></tr>")
     parts.append("</table></details><p class='note'>Open a recording with <code>rerun FILE.rrd</code>.</p>"
                  "</body></html>")
-    path = out_dir / REPORT
-    path.write_text("\n".join(parts), encoding="utf-8")
-    return path
+    return parts

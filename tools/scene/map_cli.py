@@ -117,98 +117,112 @@ def export_masks(scene: str, times: list[float], out: Path) -> dict[str, Any]:
     return {"out": str(out), **index}
 
 
+def export(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
+           at: str = typer.Option(..., "--at", help="first time slice HH:MM"),
+           until: str | None = typer.Option(None, "--until", help="last time slice HH:MM (with --every)"),
+           every: float | None = typer.Option(None, "--every", help="minutes between slices (with --until)"),
+           out: Path = typer.Option(..., "--out", help="directory for the masks (created)"),
+           as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+    """The social map as Nav2 keepout and speed masks (map_server images + filter-info yaml) per time."""
+    from agents.world.offline import OfflineError
+
+    times = slice_times(_clock(at, "--at"), None if until is None else _clock(until, "--until"), every)
+    if out.exists() and not out.is_dir():
+        _fail(f"--out {out} exists and is not a directory")
+    try:
+        result = export_masks(scene, times, out)
+    except OfflineError as exc:
+        _fail(str(exc))
+        return
+    except OSError as exc:
+        _fail(f"cannot write to {out}: {exc.strerror or exc}")
+        return
+    if as_json:
+        typer.echo(json.dumps(result))
+        return
+    typer.echo(f"{len(result['slices'])} time slice(s) of {result['scene']} in {out} "
+               f"({result['width']} x {result['height']} cells at {result['resolution']:g} m): "
+               + ", ".join(s["time"] for s in result["slices"]))
+
+
+def from_map(map_file: Path = typer.Argument(..., help="map_server .yaml (naming a .pgm/.png image)"),
+             out: Path = typer.Option(..., "--out", help="scene file to write"),
+             name: str | None = typer.Option(None, "--name", help="scene name (default: the output file's stem)"),
+             door_width: float = typer.Option(1.4, "--door-width", help="passages narrower than this (m) "
+                                              "separate rooms and become candidate doors"),
+             min_room_area: float = typer.Option(2.0, "--min-room-area", help="smaller free areas (m2) are "
+                                                 "left out"),
+             unknown: str = typer.Option("wall", "--unknown", help="the map's unknown cells: wall or free"),
+             force: bool = typer.Option(False, "--force", help="overwrite --out"),
+             as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
+    """Write a starting scene on a building map: candidate rooms and doors, the robot at a free pose."""
+    from scenes.from_map import LayoutError, layout_from_map, scene_text
+    from scenes.occupancy import load_occupancy
+    from scenes.yamlio import SourceError
+
+    _check_from_map_options(out, name, door_width, min_room_area, unknown, force)
+    try:
+        occupancy = load_occupancy(map_file)
+        layout = layout_from_map(occupancy, unknown_is_wall=unknown == "wall", door_width_m=door_width,
+                                 min_room_area_m2=min_room_area)
+    except SourceError as exc:
+        _fail(str(exc))
+        return
+    except LayoutError as exc:
+        _fail(f"{map_file}: {exc}", 1)
+        return
+    text = scene_text(layout, map_file, out, name or out.stem, unknown == "wall", door_width)
+    _write_checked_scene(text, out)
+    result = {"out": str(out), "map": str(map_file), "rooms": [r.name for r in layout.rooms],
+              "doors": [{"name": d.name, "between": list(d.between)} for d in layout.doors],
+              "robot": list(layout.robot)}
+    if as_json:
+        typer.echo(json.dumps(result))
+        return
+    typer.echo(f"{out}: {len(layout.rooms)} candidate rooms, {len(layout.doors)} doors, robot at "
+               f"({layout.robot[0]:g}, {layout.robot[1]:g}); review them, then `chronav scene check {out}`")
+
+
+def _check_from_map_options(out: Path, name: str | None, door_width: float, min_room_area: float, unknown: str,
+                            force: bool) -> None:
+    """Refuse options ``scene from-map`` cannot honour, and an existing --out without --force."""
+    if unknown not in ("wall", "free"):
+        raise typer.BadParameter("use wall or free", param_hint="--unknown")
+    for option, value in (("--door-width", door_width), ("--min-room-area", min_room_area)):
+        if not (math.isfinite(value) and value > 0):
+            raise typer.BadParameter("must be a positive number", param_hint=option)
+    from scenes.names import check_name
+
+    try:   # the scene's name as `scene check` will read it (it is written by the YAML emitter too)
+        check_name(name or out.stem)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--name" if name is not None else "--out") from None
+    if out.exists() and not force:
+        _fail(f"{out} exists; pass --force to overwrite it")
+
+
+def _write_checked_scene(text: str, out: Path) -> None:
+    """Write the scene, then load it as `chronav scene check` does: what is written must pass it."""
+    from agents.world.scene_world import load_world
+    from scenes.yamlio import SourceError
+
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        _fail(f"cannot write {out}: {exc.strerror or exc}")
+    try:
+        load_world(out)   # what `chronav scene check` runs: the output must pass it as written
+    except SourceError as exc:
+        _fail(f"the scene written to {out} does not pass the scene check ({exc}); please report this map", 1)
+
+
 def register(app: typer.Typer) -> None:
     map_app = typer.Typer(help="Building maps and Nav2 costmap-filter masks.", no_args_is_help=True)
-
-    @map_app.command("export")
-    def export(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
-               at: str = typer.Option(..., "--at", help="first time slice HH:MM"),
-               until: str | None = typer.Option(None, "--until", help="last time slice HH:MM (with --every)"),
-               every: float | None = typer.Option(None, "--every", help="minutes between slices (with --until)"),
-               out: Path = typer.Option(..., "--out", help="directory for the masks (created)"),
-               as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """The social map as Nav2 keepout and speed masks (map_server images + filter-info yaml) per time."""
-        from agents.world.offline import OfflineError
-
-        times = slice_times(_clock(at, "--at"), None if until is None else _clock(until, "--until"), every)
-        if out.exists() and not out.is_dir():
-            _fail(f"--out {out} exists and is not a directory")
-        try:
-            result = export_masks(scene, times, out)
-        except OfflineError as exc:
-            _fail(str(exc))
-            return
-        except OSError as exc:
-            _fail(f"cannot write to {out}: {exc.strerror or exc}")
-            return
-        if as_json:
-            typer.echo(json.dumps(result))
-            return
-        typer.echo(f"{len(result['slices'])} time slice(s) of {result['scene']} in {out} "
-                   f"({result['width']} x {result['height']} cells at {result['resolution']:g} m): "
-                   + ", ".join(s["time"] for s in result["slices"]))
-
+    map_app.command("export")(export)
     app.add_typer(map_app, name="map")
 
     scene_group = next((g.typer_instance for g in app.registered_groups if g.name == "scene"), None)
     if scene_group is None:
         raise RuntimeError("tools.scene.map_cli must be registered after tools.scene.scene_cli (COMMAND_MODULES)")
-
-    @scene_group.command("from-map")
-    def from_map(map_file: Path = typer.Argument(..., help="map_server .yaml (naming a .pgm/.png image)"),
-                 out: Path = typer.Option(..., "--out", help="scene file to write"),
-                 name: str | None = typer.Option(None, "--name", help="scene name (default: the output file's stem)"),
-                 door_width: float = typer.Option(1.4, "--door-width", help="passages narrower than this (m) "
-                                                  "separate rooms and become candidate doors"),
-                 min_room_area: float = typer.Option(2.0, "--min-room-area", help="smaller free areas (m2) are "
-                                                     "left out"),
-                 unknown: str = typer.Option("wall", "--unknown", help="the map's unknown cells: wall or free"),
-                 force: bool = typer.Option(False, "--force", help="overwrite --out"),
-                 as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """Write a starting scene on a building map: candidate rooms and doors, the robot at a free pose."""
-        from agents.world.scene_world import load_world
-        from scenes.from_map import LayoutError, layout_from_map, scene_text
-        from scenes.occupancy import load_occupancy
-        from scenes.yamlio import SourceError
-
-        if unknown not in ("wall", "free"):
-            raise typer.BadParameter("use wall or free", param_hint="--unknown")
-        for option, value in (("--door-width", door_width), ("--min-room-area", min_room_area)):
-            if not (math.isfinite(value) and value > 0):
-                raise typer.BadParameter("must be a positive number", param_hint=option)
-        from scenes.names import check_name
-
-        try:   # the scene's name as `scene check` will read it (it is written by the YAML emitter too)
-            check_name(name or out.stem)
-        except ValueError as exc:
-            raise typer.BadParameter(str(exc), param_hint="--name" if name is not None else "--out") from None
-        if out.exists() and not force:
-            _fail(f"{out} exists; pass --force to overwrite it")
-        try:
-            occupancy = load_occupancy(map_file)
-            layout = layout_from_map(occupancy, unknown_is_wall=unknown == "wall", door_width_m=door_width,
-                                     min_room_area_m2=min_room_area)
-        except SourceError as exc:
-            _fail(str(exc))
-            return
-        except LayoutError as exc:
-            _fail(f"{map_file}: {exc}", 1)
-            return
-        text = scene_text(layout, map_file, out, name or out.stem, unknown == "wall", door_width)
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            out.write_text(text, encoding="utf-8")
-        except OSError as exc:
-            _fail(f"cannot write {out}: {exc.strerror or exc}")
-        try:
-            load_world(out)   # what `chronav scene check` runs: the output must pass it as written
-        except SourceError as exc:
-            _fail(f"the scene written to {out} does not pass the scene check ({exc}); please report this map", 1)
-        result = {"out": str(out), "map": str(map_file), "rooms": [r.name for r in layout.rooms],
-                  "doors": [{"name": d.name, "between": list(d.between)} for d in layout.doors],
-                  "robot": list(layout.robot)}
-        if as_json:
-            typer.echo(json.dumps(result))
-            return
-        typer.echo(f"{out}: {len(layout.rooms)} candidate rooms, {len(layout.doors)} doors, robot at "
-                   f"({layout.robot[0]:g}, {layout.robot[1]:g}); review them, then `chronav scene check {out}`")
+    scene_group.command("from-map")(from_map)

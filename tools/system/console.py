@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.live import Live
@@ -17,6 +17,9 @@ from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
+
+if TYPE_CHECKING:
+    from tools.launch import RunResult
 
 
 def _status_table(status: dict[str, Any]) -> Table:
@@ -53,19 +56,9 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         restart_limit = 0
     err = Console(stderr=True)
     interactive = sys.stderr.isatty() and not as_json
-    last_print = {"t": 0.0}
     limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
                                 ("ros_domain", ros_domain), ("robot", robot)) if v is not None and not in_process}
-
-    def plain_tick(status: dict[str, Any]) -> None:
-        if time.monotonic() - last_print["t"] >= 5.0:
-            last_print["t"] = time.monotonic()
-            now = status.get("now_s")
-            missions = status.get("missions", {})
-            done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
-            err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
-                      f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False)
-
+    plain_tick = _PlainProgress(err)
     try:
         if interactive:
             with Live(_status_table({}), console=err, refresh_per_second=4) as live:
@@ -83,13 +76,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         err.print("interrupted before the run started; nothing was launched", highlight=False, soft_wrap=True)
         return 130
 
-    report: dict[str, Any] | None = None
-    if with_report and not result.interrupted:
-        from tools.system.report import build_report, render_report
-
-        report = result.metrics or build_report(result.scene_path or result.scene, result.run_dir, result.missions)
-        if not as_json:
-            render_report(report, Console())
+    report = _metrics_report(result, as_json) if with_report and not result.interrupted else None
     if as_json:
         print(json.dumps({"scene": result.scene, "ok": result.ok, "outcome": outcome(result),
                           "missions": result.missions, "events": result.events, "restarts": result.restarts,
@@ -102,6 +89,33 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     if result.interrupted:
         return 130
     return 0 if result.ok else 1
+
+
+class _PlainProgress:
+    """The progress of a run on a terminal that is not interactive: one line every 5 s at most."""
+
+    def __init__(self, err: Console) -> None:
+        self.err = err
+        self.last_print = 0.0
+
+    def __call__(self, status: dict[str, Any]) -> None:
+        if time.monotonic() - self.last_print >= 5.0:
+            self.last_print = time.monotonic()
+            now = status.get("now_s")
+            missions = status.get("missions", {})
+            done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
+            self.err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
+                           f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False)
+
+
+def _metrics_report(result: RunResult, as_json: bool) -> dict[str, Any]:
+    """The run's metrics report: the one logged during the run, else built now; shown unless JSON."""
+    from tools.system.report import build_report, render_report
+
+    report = result.metrics or build_report(result.scene_path or result.scene, result.run_dir, result.missions)
+    if not as_json:
+        render_report(report, Console())
+    return report
 
 
 def _supervision(restart_limit: int, in_process: bool) -> dict[str, Any]:

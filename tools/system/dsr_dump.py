@@ -15,11 +15,14 @@ from __future__ import annotations
 import os
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 
-from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP
+from tools.system.connection import CONNECT_HELP, GRAPH_HELP, RUN_HELP, Target
+
+if TYPE_CHECKING:
+    from dsr import DSRGraph
 
 dsr_app = typer.Typer(help="Inspect the replicated DSR graph.", no_args_is_help=True)
 
@@ -114,63 +117,87 @@ def dump(
                                            "tools; not with --follow)."),
 ) -> None:
     """Join a running graph read-only and print it (table or JSON), or follow changes live."""
-    import orjson
+    json_output = _dump_json_output(output_format, follow, json_output)
 
+    from dsr.process import exit_on_sigterm
+    from tools.system.connection import ConnectionProblem, open_replica, require_system
+
+    target = _dump_target(connect, graph_name, run, timeout)
+    exit_on_sigterm()
+    try:
+        with open_replica(target, agent=f"dump-{os.getpid()}", read_only=True,
+                          timeout_s=timeout) as graph:
+            require_system(graph, target)
+            _print_snapshot(graph, target.graph, output_format, json_output)
+            if not follow:
+                return
+            _follow(graph, json_output, duration)
+    except ConnectionProblem as exc:
+        typer.echo(f"chronav dsr dump: {exc}", err=True)
+        raise typer.Exit(1) from None
+    except KeyboardInterrupt:
+        raise typer.Exit(130) from None
+
+
+def _dump_json_output(output_format: str, follow: bool, json_output: bool) -> bool:
+    """Whether the dump prints JSON (``--json`` or ``--format json``); exit 2 on a format it cannot do."""
     if output_format not in ("table", "json", "agm-xml"):
         typer.echo(f"chronav dsr dump: --format {output_format!r}: use table, json or agm-xml", err=True)
         raise typer.Exit(2)
     if output_format == "agm-xml" and (follow or json_output):
         typer.echo("chronav dsr dump: --format agm-xml writes one snapshot: drop --follow and --json", err=True)
         raise typer.Exit(2)
-    json_output = json_output or output_format == "json"
+    return json_output or output_format == "json"
 
-    from dsr import SIGNALS
-    from dsr.process import exit_on_sigterm
-    from tools.system.connection import (ConnectionProblem, check_timeout, open_replica, require_system,
-                                  resolve_target)
+
+def _dump_target(connect: list[str], graph_name: str | None, run: str | None, timeout: float) -> Target:
+    """The graph to read, from --connect/--graph/--run (exit 2 with the reason if none fits)."""
+    from tools.system.connection import ConnectionProblem, check_timeout, resolve_target
 
     try:
         check_timeout(timeout)
-        target = resolve_target(connect, graph_name, run, role="reader")
+        return resolve_target(connect, graph_name, run, role="reader")
     except ConnectionProblem as exc:
         typer.echo(f"chronav dsr dump: {exc}", err=True)
         raise typer.Exit(2) from None
-    exit_on_sigterm()
-    name = target.graph
-    try:
-        with open_replica(target, agent=f"dump-{os.getpid()}", read_only=True,
-                          timeout_s=timeout) as graph:
-            require_system(graph, target)
-            document = {"graph": name, **graph.to_document(),
-                        "stats": graph.replica.stats.as_dict()}
-            if output_format == "agm-xml":
-                from grammar.agm_world import agm_world_xml
 
-                sys.stdout.write(agm_world_xml(graph.to_networkx()))
-            elif json_output:
-                sys.stdout.write(orjson.dumps(document).decode() + "\n")
+
+def _print_snapshot(graph: DSRGraph, name: str, output_format: str, json_output: bool) -> None:
+    """The whole graph once: AGM world XML, one JSON document, or the rich tables."""
+    import orjson
+
+    document = {"graph": name, **graph.to_document(),
+                "stats": graph.replica.stats.as_dict()}
+    if output_format == "agm-xml":
+        from grammar.agm_world import agm_world_xml
+
+        sys.stdout.write(agm_world_xml(graph.to_networkx()))
+    elif json_output:
+        sys.stdout.write(orjson.dumps(document).decode() + "\n")
+    else:
+        _print_tables(graph)
+    sys.stdout.flush()
+
+
+def _follow(graph: DSRGraph, json_output: bool, duration: float) -> None:
+    """Print every change as it arrives (a JSON object or a line of text each), for ``duration``
+    seconds or, with 0, until interrupted."""
+    import orjson
+
+    from dsr import SIGNALS
+
+    for signal in SIGNALS:
+        def emit(*args: Any, _signal: str = signal) -> None:
+            if json_output:
+                line = orjson.dumps(_event_json(_signal, args)).decode()
             else:
-                _print_tables(graph)
+                line = _event_text(graph, _signal, args)
+            sys.stdout.write(line + "\n")
             sys.stdout.flush()
-            if not follow:
-                return
-            for signal in SIGNALS:
-                def emit(*args: Any, _signal: str = signal) -> None:
-                    if json_output:
-                        line = orjson.dumps(_event_json(_signal, args)).decode()
-                    else:
-                        line = _event_text(graph, _signal, args)
-                    sys.stdout.write(line + "\n")
-                    sys.stdout.flush()
-                graph.connect(signal, emit)
-            deadline = time.monotonic() + duration if duration > 0 else None
-            while deadline is None or time.monotonic() < deadline:
-                graph.dispatch(timeout=0.2)
-    except ConnectionProblem as exc:
-        typer.echo(f"chronav dsr dump: {exc}", err=True)
-        raise typer.Exit(1) from None
-    except KeyboardInterrupt:
-        raise typer.Exit(130) from None
+        graph.connect(signal, emit)
+    deadline = time.monotonic() + duration if duration > 0 else None
+    while deadline is None or time.monotonic() < deadline:
+        graph.dispatch(timeout=0.2)
 
 
 def collect_stats(target: Any, timeout: float) -> dict[str, Any]:
@@ -225,9 +252,14 @@ def stats(
     if json_output:
         sys.stdout.write(orjson.dumps(document).decode() + "\n")
         return
+    _print_stats(target.graph, document)
+
+
+def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
+    """The members' counters as a table, then what the router's ACL denied."""
     from rich.console import Console
     from rich.table import Table
-    table = Table(title=f"DSR graph {target.graph!r}: {len(document['members'])} members")
+    table = Table(title=f"DSR graph {graph_name!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
                    "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
         table.add_column(column, overflow="fold")
