@@ -105,7 +105,8 @@ class _PlainProgress:
             missions = status.get("missions", {})
             done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
             self.err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
-                           f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False)
+                           f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False,
+                           markup=False)   # "[chronav]" is text, not a rich style tag
 
 
 def _metrics_report(result: RunResult, as_json: bool) -> dict[str, Any]:
