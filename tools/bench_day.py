@@ -11,7 +11,7 @@ Prints ONE flat JSON object:
 - ``crowd_day_replay_s``: wall time to replay the crowd's whole day offline (agents/world/people.py:
   what `chronav path --at 17:59` pays once per scene before it can plan);
 - ``collisions``, ``robot_intimate_entries``: summed over the missions from the run's trajectory.csv
-  and people.csv (agents/lib/socialmap/dynamic_metrics.py).
+  and people.csv (agents/lib/metrics/dynamic_metrics.py).
 
 Run: ``.venv/bin/python tools/bench_day.py [--scene center_day] [--rate R]`` (it launches the
 system in a temporary directory; the run's recording is kept there if ``--keep`` is given).
@@ -109,7 +109,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
     report.update({f"cpu_s_{name}": round(cpu, 1) for name, cpu in sorted(per_agent.items())})
     run_dir = Path(result.get("run_dir", ""))
     if (run_dir / "trajectory.csv").exists() and (run_dir / "people.csv").exists():
-        from agents.lib.socialmap.metrics import read_people_csv, read_trajectory_csv
+        from agents.lib.metrics.metrics import read_people_csv, read_trajectory_csv
         from agents.world.offline import SceneMaps
 
         maps = SceneMaps.load(world)

@@ -155,7 +155,7 @@ def median_ms_after(setup: Callable[[], Any], fn: Callable[[Any], Any], repeats:
 def numba_compile_seconds() -> float:
     """Compile the kernels in a subprocess with an empty numba cache directory."""
     code = ("import time; t = time.perf_counter(); "
-            "from agents.lib.socialmap import arrival, replan, search; "
+            "from agents.lib.socialmap import arrival; from agents.lib.planning import replan, search; "
             "search.warm_up(); replan.warm_up(); arrival.warm_up(); "
             "print(time.perf_counter() - t)")
     with tempfile.TemporaryDirectory() as cache_dir:
@@ -169,8 +169,8 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
     import pyastar2d
     from scipy.sparse.csgraph import dijkstra
 
-    from agents.lib.socialmap.reference_graph import grid_graph
-    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.planning.reference_graph import grid_graph
+    from agents.lib.planning.search import SearchWorkspace
     from agents.lib.socialmap.grid import GridParams
     from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map, plan
 
@@ -249,8 +249,8 @@ def replan_changes(scene: dict[str, Any], path: Any) -> tuple[list[Any], list[An
 def bench_replan(n: int, repeats: int, scene: dict[str, Any], params: Any, static: Any, path: Any,
                  results: dict[str, Any]) -> None:
     """replan_* keys: plan on the old map (untimed), then time the replan on the changed one."""
-    from agents.lib.socialmap.replan import Replanner
-    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.planning.replan import Replanner
+    from agents.lib.planning.search import SearchWorkspace
     from agents.lib.socialmap.social_map import build_social_map, plan
 
     people, activities, robot = replan_changes(scene, path)
@@ -378,7 +378,7 @@ def start_seconds(code: str, repeats: int) -> float:
 
 
 def bench_map(repeats: int, results: dict[str, Any]) -> None:
-    from agents.lib.socialmap.search import SearchWorkspace
+    from agents.lib.planning.search import SearchWorkspace
     from agents.lib.socialmap.social_map import plan
     from agents.world.building import _occupancy_layer
     from agents.world.navigation import NavigationMaps
@@ -413,7 +413,7 @@ def bench_map(repeats: int, results: dict[str, Any]) -> None:
         cli_icra = cli_seconds(["path", "icra_usecase", "--at", "11:15", "--from", "12,2", "--to", "1,1", "--json"], 3)[1]
         python_s = start_seconds("pass", 5)
         numpy_s = start_seconds("import numpy", 5)
-        search_s = start_seconds("from agents.lib.socialmap import search; search.warm_up()", 5)
+        search_s = start_seconds("from agents.lib.planning import search; search.warm_up()", 5)
     results.update({"map_cells": int(smap.spec.rows * smap.spec.cols), "map_load_ms": round(load_ms, 1),
                     "scene_yaml_ms_map": round(yaml_ms, 1), "map_image_ms_map": round(image_ms, 1),
                     "static_map_ms_map": round(static_ms, 1),
@@ -436,7 +436,8 @@ def main(argv: list[str] | None = None) -> None:
     if not options.skip_compile:
         results["numba_compile_s"] = round(numba_compile_seconds(), 2)
     start = time.perf_counter()
-    from agents.lib.socialmap import arrival, replan, search
+    from agents.lib.planning import replan, search
+    from agents.lib.socialmap import arrival
     search.warm_up()
     replan.warm_up()
     arrival.warm_up()

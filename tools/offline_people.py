@@ -27,7 +27,7 @@ def main() -> None:
     parser.add_argument("--every", type=float, default=0.4, help="seconds between samples")
     args = parser.parse_args()
     sys.path.insert(0, str(REPO))
-    from agents.lib.socialmap.metrics import PEOPLE_HEADER
+    from agents.lib.metrics.metrics import PEOPLE_HEADER
     from agents.world.people import people_at
     from agents.world.scene_world import load_world
     from scenes.clock import parse_clock

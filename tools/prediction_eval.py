@@ -125,7 +125,7 @@ def read_people_csv_frames(path: Path, dt: float) -> Annotations:
     """A run's people.csv (read by chronav metrics' reader, same checks) on a grid of ``dt`` s from
     its first sample: frame k holds the first sample within dt/5 of t0 + k dt (the simulator samples
     every 0.1 s: a quarter of 0.4 s off the grid is another sample, not this one)."""
-    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv
+    from agents.lib.metrics.metrics import TrajectoryFormatError, read_people_csv
 
     try:
         tracks = read_people_csv(path)

@@ -13,7 +13,7 @@ adoption is logged to the recording.
 
 Why replanning does not stall control: each step first answers the pending pose (the simulator
 can integrate the next 0.1 s while this agent plans), and the search reuses the previous ones
-through a ``Replanner`` (agents/lib/socialmap/replan.py: same optimal path, a fraction of the
+through a ``Replanner`` (agents/lib/planning/replan.py: same optimal path, a fraction of the
 work when the map changed locally); a new goal or a far-reaching change makes it search afresh.
 """
 
@@ -27,13 +27,14 @@ import numpy as np
 from agents.runtime.base import Agent
 from agents.world.freshness import LOCKSTEP, observed_s, observed_up_to
 from agents.runtime.recording import Recorder
-from agents.lib.socialmap import elastic_band as eb
-from agents.lib.socialmap.control import BandFollower, ControlParams, DiffCommand
+from agents.lib.control import elastic_band as eb
+from agents.lib.control.control_law import BandFollower, ControlParams, DiffCommand
 from agents.lib.socialmap.grid import blocked_core
-from agents.lib.socialmap.paths import densify, nearest_free, nearest_free_where, path_cost
-from agents.lib.socialmap import arrival, replan
-from agents.lib.socialmap.replan import Replanner
-from agents.lib.socialmap.search import GoalOccupied, PlanningError, StartOccupied
+from agents.lib.planning.paths import densify, nearest_free, nearest_free_where, path_cost
+from agents.lib.planning import replan
+from agents.lib.socialmap import arrival
+from agents.lib.planning.replan import Replanner
+from agents.lib.planning.search import GoalOccupied, PlanningError, StartOccupied
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.runtime.drawing.social_map import DecisionLogger, DecisionStamp
 from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
@@ -78,7 +79,7 @@ class SocialNavigationAgent(Agent):
         robot = self.scene.robot
         # Plan with a clearance margin beyond the body: the controller cuts corners a little.
         margin = float(self.config.option("clearance_margin", str(PLANNING_MARGIN_M)))
-        # The run's planner (-o planner=NAME, agents/lib/socialmap/planners.py): plan() and the maps use it.
+        # The run's planner (-o planner=NAME, agents/lib/planning/planners.py): plan() and the maps use it.
         self.maps = NavigationMaps.for_scene(self.scene, margin, self.config.option("planner", DEFAULT_PLANNER))
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,

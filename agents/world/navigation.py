@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall
-from agents.lib.socialmap.planners import DEFAULT_PLANNER, check_planner
+from agents.lib.planning.planners import DEFAULT_PLANNER, check_planner
 from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMapParams, StaticMap, build_social_map,
                                              build_static_map)
 from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_occupancy, scene_rooms, scene_walls
@@ -39,7 +39,7 @@ class NavigationMaps:
     @classmethod
     def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M,
                   planner: str = DEFAULT_PLANNER) -> NavigationMaps:
-        """``planner`` (agents/lib/socialmap/planners.py) is the one navigation parameter a study
+        """``planner`` (agents/lib/planning/planners.py) is the one navigation parameter a study
         varies: maps built here plan with it by default (``plan(smap, ...)``) and judge paths on
         its grid (``smap.planning_grid``); UnknownPlannerError names the choices."""
         robot = scene.robot

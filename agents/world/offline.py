@@ -21,9 +21,9 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.agenda.chronemics import ChronemicsParams
-from agents.lib.socialmap.dynamic_metrics import PeopleTracks
-from agents.lib.socialmap.metrics import MetricsReport, compute_metrics, read_people_csv, read_trajectory_csv
-from agents.lib.socialmap.search import PlanningError
+from agents.lib.metrics.dynamic_metrics import PeopleTracks
+from agents.lib.metrics.metrics import MetricsReport, compute_metrics, read_people_csv, read_trajectory_csv
+from agents.lib.planning.search import PlanningError
 from agents.lib.socialmap.social_map import SocialMap, plan
 from agents.world.building import footprint_polygons
 from agents.world.dsr_readers import running_activities, symbolic_view
@@ -151,7 +151,7 @@ def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.
 
 def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal: tuple[float, float], *,
                  planner: str = "social", method: str = "astar") -> dict[str, Any]:
-    """One plan with ``planner`` (agents/lib/socialmap/planners.py) plus its metrics, as a JSON-ready dict."""
+    """One plan with ``planner`` (agents/lib/planning/planners.py) plus its metrics, as a JSON-ready dict."""
     maps = SceneMaps.load(scene)
     smap = maps.at(t_s)
     try:
@@ -195,7 +195,7 @@ def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
     people's trajectories when known (``people_csv``, by default the run's people.csv beside it).
     ``goal_xy``: the target (completed, distances to target); radii default to the scene's robot and
     0.25 m people (published) or HuNavSim's 0.35 m for both (hunav)."""
-    from agents.lib.socialmap.dynamic_metrics import HUNAV_RADIUS_M, PERSON_RADIUS_M, hunav_metrics
+    from agents.lib.metrics.dynamic_metrics import HUNAV_RADIUS_M, PERSON_RADIUS_M, hunav_metrics
 
     if definitions not in ("published", "hunav"):
         raise OfflineError(f"--definitions: expected published or hunav, got {definitions!r}")
@@ -225,7 +225,7 @@ def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
     maps = SceneMaps.load(world)
     report = maps.measure(traj, at_s, tracks, goal_xy=goal_xy)
     if tracks is not None and (robot_radius_m is not None or person_radius_m is not None):
-        from agents.lib.socialmap.dynamic_metrics import dynamic_metrics
+        from agents.lib.metrics.dynamic_metrics import dynamic_metrics
 
         report = report.model_copy(update={"dynamic": dynamic_metrics(
             traj, tracks, robot_radius_m or maps.world.scene.robot.radius, maps.obstacles,
@@ -235,7 +235,7 @@ def metrics_offline(scene: str | Path, trajectory_csv: Path, at_s: float | None,
 
 def hunav_table(values: dict[str, Any], missing: dict[str, str]) -> list[tuple[str, str]]:
     """(HuNavSim metric name with chronav's label and unit, value) rows for `--definitions hunav`."""
-    from agents.lib.socialmap.metric_catalog import BY_HUNAV
+    from agents.lib.metrics.metric_catalog import BY_HUNAV
 
     rows = []
     for key, value in values.items():

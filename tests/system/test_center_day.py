@@ -10,7 +10,7 @@ trajectory and the people's trajectories beside it (people.csv): every mission d
 kind means - the pose reached, the room entered, the wait over only after its activity, the table
 reached only once its therapy had ended, the group faced from outside, the walking nurse approached
 where she stood when the robot arrived - and among the moving people no collision and no entry of
-the robot into anyone's intimate zone (HuNavSim's metrics, agents/lib/socialmap/dynamic_metrics.py).
+the robot into anyone's intimate zone (HuNavSim's metrics, agents/lib/metrics/dynamic_metrics.py).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import pytest
 import shapely
 import yaml
 
-from agents.lib.socialmap.metrics import read_people_csv, read_trajectory_csv
+from agents.lib.metrics.metrics import read_people_csv, read_trajectory_csv
 from agents.missions.goals import SOCIAL_DISTANCE_M
 from agents.world.offline import SceneMaps
 from agents.world.people import people_at

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.metrics import flatten, read_trajectory_csv
+from agents.lib.metrics.metrics import flatten, read_trajectory_csv
 from tests.support import REPO_ROOT
 from tests.system.launch_helpers import EvaluateRuns
 from tools.cli import app

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.lib.metrics.metrics import read_trajectory_csv
 from dsr import DSRGraph
 from agents.world.scene_world import load_world
 from scenes.loader import load_scene

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shapely
 
-from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.lib.metrics.metrics import read_trajectory_csv
 from agents.world.offline import SceneMaps
 from scenes.clock import parse_clock
 from tests.system.launch_helpers import launch_json

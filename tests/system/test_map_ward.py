@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.lib.socialmap.metrics import read_trajectory_csv
+from agents.lib.metrics.metrics import read_trajectory_csv
 from agents.world.building import scene_occupancy
 from scenes.loader import load_scene
 from tests.system.launch_helpers import launch_json

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from agents.lib.socialmap.control import (
+from agents.lib.control.control_law import (
     BandFollower,
     ControlInputError,
     ControlParams,
@@ -20,7 +20,7 @@ from agents.lib.socialmap.control import (
     omni_command,
     wrap_angle,
 )
-from agents.lib.socialmap.elastic_band import band_from_path, step
+from agents.lib.control.elastic_band import band_from_path, step
 
 PARAMS = ControlParams()
 STRAIGHT = np.array([[0.0, 0.0], [5.0, 0.0]])

@@ -1,4 +1,4 @@
-"""HuNavSim's dynamic metrics (agents/lib/socialmap/dynamic_metrics.py) against values worked out by
+"""HuNavSim's dynamic metrics (agents/lib/metrics/dynamic_metrics.py) against values worked out by
 hand, and `chronav metrics` reading a run's people.csv."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pytest
 import shapely
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.dynamic_metrics import tracks_from_rows
-from agents.lib.socialmap.metrics import compute_metrics, read_people_csv
+from agents.lib.metrics.dynamic_metrics import tracks_from_rows
+from agents.lib.metrics.metrics import compute_metrics, read_people_csv
 from tools.cli import app
 
 ROBOT_R = 0.3

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agents.lib.socialmap.elastic_band import (
+from agents.lib.control.elastic_band import (
     BandInputError,
     ElasticBand,
     ElasticBandParams,

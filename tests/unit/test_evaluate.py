@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.metrics import flatten
+from agents.lib.metrics.metrics import flatten
 from tests.support import REPO_ROOT
 from tools.cli import app
 from tools.evaluate import sweep as evaluate_sweep

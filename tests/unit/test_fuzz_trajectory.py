@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from agents.lib.socialmap.metrics import TrajectoryFormatError, read_trajectory_csv
+from agents.lib.metrics.metrics import TrajectoryFormatError, read_trajectory_csv
 from tests.unit.fuzz_mutations import fuzz_settings, mutated_bytes, token_soup
 
 # What the simulator writes (agents/sim_robot/agent.py), with a restart's blank line and a pause.

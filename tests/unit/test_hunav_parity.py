@@ -254,7 +254,7 @@ def test_hunav_definitions_match_a_transcription_of_hunav_metrics_on_a_recorded_
 
 
 def test_metrics_help_gives_the_people_header_the_reader_wants() -> None:
-    from agents.lib.socialmap.metrics import PEOPLE_HEADER
+    from agents.lib.metrics.metrics import PEOPLE_HEADER
 
     result = CliRunner().invoke(app, ["metrics", "--help"], env={"COLUMNS": "400"})
     assert ",".join(PEOPLE_HEADER) in " ".join(result.output.split())

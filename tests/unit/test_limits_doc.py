@@ -9,7 +9,7 @@ import pytest
 
 from scenes import model
 from scenes.limits import LIMITS, LimitConfigError, Limit
-from agents.lib.socialmap import metrics
+from agents.lib.metrics import metrics
 from tests.support import REPO_ROOT
 
 DOC = (REPO_ROOT / "docs" / "limits.md").read_text(encoding="utf-8")

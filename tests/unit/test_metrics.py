@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon, box
 
-from agents.lib.socialmap.metrics import (
+from agents.lib.metrics.metrics import (
     MetricsInputError,
     TrajectoryFormatError,
     compute_metrics,
@@ -161,7 +161,7 @@ def test_missing_csv_file_is_a_clear_error(tmp_path: Path) -> None:
 
 def test_every_metric_has_its_row_in_docs_metrics_md_with_unit_and_source() -> None:
     """One vocabulary: metric_catalog.py and docs/metrics.md list the same metrics, units and sources."""
-    from agents.lib.socialmap.metric_catalog import CATALOG, SOURCES
+    from agents.lib.metrics.metric_catalog import CATALOG, SOURCES
 
     doc = (Path(__file__).resolve().parents[2] / "docs" / "metrics.md").read_text()
     rows = {line.split("|")[1].strip().strip("`"): [c.strip() for c in line.split("|")[1:-1]]

@@ -1,4 +1,4 @@
-"""The planners a run can choose (agents/lib/socialmap/planners.py), offline and through `chronav path`."""
+"""The planners a run can choose (agents/lib/planning/planners.py), offline and through `chronav path`."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, check_planner, planning_grid
+from agents.lib.planning.planners import PLANNERS, UnknownPlannerError, check_planner, planning_grid
 from agents.lib.socialmap.social_map import plan
 from agents.world.offline import SceneMaps
 from tests.support import REPO_ROOT

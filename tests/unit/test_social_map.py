@@ -10,7 +10,7 @@ import shapely
 
 from agents.lib.agenda.chronemics import ChronemicsParams
 from agents.lib.socialmap.grid import GridParams
-from agents.lib.socialmap.search import GoalOccupied, NoPathFound, SearchWorkspace, StartOccupied, warm_up
+from agents.lib.planning.search import GoalOccupied, NoPathFound, SearchWorkspace, StartOccupied, warm_up
 from agents.lib.socialmap.social_map import (
     PlannerParams,
     SocialMapParams,

@@ -1,4 +1,4 @@
-"""Path helpers of the socialmap library (agents/lib/socialmap/paths.py): the cost of a polyline
+"""Path helpers of the socialmap library (agents/lib/planning/paths.py): the cost of a polyline
 by the planner's own step rule, its sampling, and the nearest free cell."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from agents.lib.socialmap.grid import GridSpec
-from agents.lib.socialmap.paths import densify, nearest_free, nearest_free_where, path_cost
-from agents.lib.socialmap.search import SQRT2, StartOccupied, plan_on_grid, step_cost, warm_up
+from agents.lib.planning.paths import densify, nearest_free, nearest_free_where, path_cost
+from agents.lib.planning.search import SQRT2, StartOccupied, plan_on_grid, step_cost, warm_up
 
 SPEC = GridSpec(x0=0.0, y0=0.0, resolution=0.1, rows=30, cols=40)
 

@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agents.lib.socialmap.reference_graph import reference_cost
-from agents.lib.socialmap.replan import Replanner, truncate_down, warm_up
-from agents.lib.socialmap.search import GridPath, NoPathFound, TimeCosts, search_cells
+from agents.lib.planning.reference_graph import reference_cost
+from agents.lib.planning.replan import Replanner, truncate_down, warm_up
+from agents.lib.planning.search import GridPath, NoPathFound, TimeCosts, search_cells
 
 SQRT2 = math.sqrt(2.0)
 VALUES = (1.0, 1.5, 2.0, 3.5, 4.0)

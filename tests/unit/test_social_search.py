@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from agents.lib.socialmap.grid import GridSpec
-from agents.lib.socialmap.reference_graph import grid_graph, reference_cost
-from agents.lib.socialmap.search import (
+from agents.lib.planning.reference_graph import grid_graph, reference_cost
+from agents.lib.planning.search import (
     GoalOccupied,
     NoPathFound,
     OutsideMap,

@@ -11,8 +11,8 @@ import pytest
 import shapely
 from pydantic import ValidationError
 
-from agents.lib.socialmap.elastic_band import ElasticBandParams
-from agents.lib.socialmap.tuning import (
+from agents.lib.control.elastic_band import ElasticBandParams
+from agents.lib.control.tuning import (
     CostTerms,
     CostWeights,
     Scenario,

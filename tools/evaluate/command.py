@@ -46,7 +46,7 @@ def _check_extras() -> None:
 
 
 def parse_planners(text: str | None) -> list[str]:
-    from agents.lib.socialmap.planners import PLANNERS, UnknownPlannerError, check_planner
+    from agents.lib.planning.planners import PLANNERS, UnknownPlannerError, check_planner
 
     if text is None:
         return list(PLANNERS)

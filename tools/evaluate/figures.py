@@ -37,7 +37,7 @@ BOX_MIN_SEEDS = 5
 METADATA_COLUMNS = frozenset({"samples"})
 
 def _catalogue_label(metric: str) -> str:
-    from agents.lib.socialmap.metric_catalog import column_label
+    from agents.lib.metrics.metric_catalog import column_label
 
     return column_label(metric)
 
@@ -195,7 +195,7 @@ def _circle(xy: tuple[float, float], radius: float, **style: Any) -> Any:
 def _read_xy(path: str | None) -> np.ndarray | None:
     if not path or not Path(path).exists():
         return None
-    from agents.lib.socialmap.metrics import MetricsInputError, read_trajectory_csv
+    from agents.lib.metrics.metrics import MetricsInputError, read_trajectory_csv
 
     try:
         return read_trajectory_csv(path)[:, 1:3]

@@ -265,7 +265,7 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
 
 def _provenance_html(runs: Sequence[Mapping[str, Any]], prov: Mapping[str, Any], pending: int) -> list[str]:
     """How many runs succeeded, what made them (command, executor, seeds, planners, scene files) and how."""
-    from agents.lib.socialmap.planners import PLANNER_HELP
+    from agents.lib.planning.planners import PLANNER_HELP
 
     esc = html.escape
     parts = []

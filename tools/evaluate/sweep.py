@@ -12,7 +12,7 @@ Two modes run the same agents (``--mode``):
   handlers, which Python allows only in a main thread, and the pools run tasks in threads, so each
   task starts one ``python -m tools.evaluate.sweep`` process and waits for it.
 
-The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/socialmap/planners.py).  The
+The planner is the navigation agent's ``-o planner=NAME`` (agents/lib/planning/planners.py).  The
 seed goes to every agent as ``-o seed=N``: each agent that draws random numbers (today the human
 observer's sensor noise; the people simulation of issue 15 next) seeds its generator with it, so
 one seed is one simulated world.  The simulator gets ``-o busy_rate=0``: its clock waits while the

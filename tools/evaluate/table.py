@@ -48,7 +48,7 @@ def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dic
 
     The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
     too (issue 15's ``people.csv``), pass the mission's slice of them here."""
-    from agents.lib.socialmap.metrics import flatten
+    from agents.lib.metrics.metrics import flatten
     from agents.world.offline import metrics_offline
 
     report = metrics_offline(scene, trajectory_csv, None)
@@ -58,7 +58,7 @@ def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dic
 def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, rrd: str | None,
                  missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float) -> list[dict[str, Any]]:
     """One row per mission of a finished run: its state, times and (when done) its metrics."""
-    from agents.lib.socialmap.metrics import MetricsInputError, read_trajectory_csv
+    from agents.lib.metrics.metrics import MetricsInputError, read_trajectory_csv
 
     traj_path = Path(run_dir) / "trajectory.csv"
     try:

@@ -3,7 +3,7 @@
 Why offline commands: a care-home engineer tuning a scene wants to see, in a second, which route
 the robot would take at 11:15 and how it scores, without launching six processes.  Both commands
 build the social map exactly as the navigation agent does (agents/world/offline.py), and plan
-with the same planners (``--planner``, agents/lib/socialmap/planners.py).
+with the same planners (``--planner``, agents/lib/planning/planners.py).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ def _clock(text: str | None, option: str) -> float | None:
 
 def _planner(name: str | None, baseline: bool, departure_time: bool) -> str:
     """--planner NAME, or its older spellings --baseline / --departure-time (not both kinds at once)."""
-    from agents.lib.socialmap.planners import DEFAULT_PLANNER, UnknownPlannerError, check_planner
+    from agents.lib.planning.planners import DEFAULT_PLANNER, UnknownPlannerError, check_planner
 
     if baseline and departure_time:
         raise typer.BadParameter("give one of --baseline and --departure-time (or --planner NAME)",
@@ -105,7 +105,7 @@ def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:
     table.add_column("value", justify="right")
     table.add_row("cost (cost-weighted m)", f"{result['cost']:.2f}")
     table.add_row("length (m)", f"{result['length_m']:.2f}")
-    from agents.lib.socialmap.metric_catalog import column_label
+    from agents.lib.metrics.metric_catalog import column_label
 
     for key, value in result["metrics"]["psi_percent"].items():
         table.add_row(column_label(f"psi_zone_percent.{key}"), f"{value:.1f}")
@@ -140,7 +140,7 @@ def metrics_command(scene: str = typer.Argument(..., help="scene file or name in
     """Social-navigation metrics of a trajectory, each with its unit and source (docs/metrics.md): the
     seeds' d_t, tau, CHC, d_min and Psi, and with the people's trajectories the metrics among moving
     people (distances, intrusions, forces, social work, collisions, speeds, target)."""
-    from agents.lib.socialmap.metrics import MetricsInputError
+    from agents.lib.metrics.metrics import MetricsInputError
     from agents.world.offline import OfflineError, metrics_offline
 
     if definitions not in ("published", "hunav"):

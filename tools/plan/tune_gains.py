@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import typer
 
 if TYPE_CHECKING:
-    from agents.lib.socialmap.tuning import TuningResult
+    from agents.lib.control.tuning import TuningResult
 
 if __package__ in (None, ""):  # run as a script: make the repo root importable
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
@@ -39,7 +39,7 @@ def main(
     d: float = typer.Option(-1.0, help="weight of P, per m (negative: keeping away is good)"),
     as_json: bool = typer.Option(False, "--json", help="print only the JSON object"),
 ) -> None:
-    from agents.lib.socialmap.tuning import CostWeights, TuningError, default_scenarios, tune_gains
+    from agents.lib.control.tuning import CostWeights, TuningError, default_scenarios, tune_gains
 
     started = time.perf_counter()
     try:

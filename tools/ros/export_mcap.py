@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.lib.socialmap.metrics import MetricsInputError, read_people_csv, read_trajectory_csv
+from agents.lib.metrics.metrics import MetricsInputError, read_people_csv, read_trajectory_csv
 from agents.ros_bridge import messages as msgs
 from agents.ros_bridge.config import Frames, Topics
 from agents.ros_bridge.maps import RosMaps

@@ -25,9 +25,9 @@ def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -
 
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
-    from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv, read_trajectory_csv
+    from agents.lib.metrics.metrics import TrajectoryFormatError, read_people_csv, read_trajectory_csv
     from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
-    from agents.lib.socialmap.search import PlanningError
+    from agents.lib.planning.search import PlanningError
     from agents.lib.socialmap.social_map import plan
 
     traj_path = Path(run_dir) / "trajectory.csv"
@@ -109,7 +109,7 @@ def log_report(recorder: Any, report: dict[str, Any], missions: dict[str, dict[s
 
 
 def _rows(metrics: dict[str, Any]) -> list[tuple[str, str]]:
-    from agents.lib.socialmap.metrics import MetricsReport
+    from agents.lib.metrics.metrics import MetricsReport
 
     return MetricsReport(**metrics).to_table()
 

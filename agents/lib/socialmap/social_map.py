@@ -101,11 +101,11 @@ from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, pred
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
-from agents.lib.socialmap.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, check_planner,
+from agents.lib.planning.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, check_planner,
                                            cheapest_cell, planning_grid)
 from agents.lib.socialmap.roles import RoleParams, role_scale
-from agents.lib.socialmap.replan import Replanner
-from agents.lib.socialmap.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
+from agents.lib.planning.replan import Replanner
+from agents.lib.planning.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
 from agents.lib.agenda.model import ActivityWindow
 from agents.lib.socialmap.types import Person, Room, SocialMapInputError, SocialObject, Wall
 from agents.lib.socialmap.zones import (

@@ -70,7 +70,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from agents.lib.socialmap.incremental import IncrementalTimeCosts
-from agents.lib.socialmap.search import (
+from agents.lib.planning.search import (
     _TIE_BREAK,
     SQRT2,
     GridPath,

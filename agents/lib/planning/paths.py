@@ -15,9 +15,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.lib.socialmap.elastic_band import split_gaps
+from agents.lib.control.elastic_band import split_gaps
 from agents.lib.socialmap.grid import GridSpec
-from agents.lib.socialmap.search import StartOccupied, step_cost
+from agents.lib.planning.search import StartOccupied, step_cost
 
 
 def densify(points: NDArray[np.float64], step_m: float) -> NDArray[np.float64]:

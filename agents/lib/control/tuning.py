@@ -54,15 +54,15 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 from shapely.geometry.base import BaseGeometry
 
-from agents.lib.socialmap.control import DEFAULT_CONTROL, BandFollower, ControlParams, Drive, integrate
-from agents.lib.socialmap.elastic_band import (
+from agents.lib.control.control_law import DEFAULT_CONTROL, BandFollower, ControlParams, Drive, integrate
+from agents.lib.control.elastic_band import (
     DEFAULT_PARAMS,
     ElasticBandParams,
     ObstacleField,
     band_from_path,
     step,
 )
-from agents.lib.socialmap.metrics import cumulative_heading_change, distance_travelled
+from agents.lib.metrics.metrics import cumulative_heading_change, distance_travelled
 
 FloatArray = NDArray[np.float64]
 GAINS: tuple[str, str] = ("k_c", "k_r")

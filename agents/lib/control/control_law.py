@@ -34,7 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from scenes.geometry import project_on_segments, wrap_angle
 
 if TYPE_CHECKING:   # a band is given as its points or as the ElasticBand itself (`_band`)
-    from agents.lib.socialmap.elastic_band import ElasticBand
+    from agents.lib.control.elastic_band import ElasticBand
 
 FloatArray = NDArray[np.float64]
 Drive = Literal["differential", "omni"]

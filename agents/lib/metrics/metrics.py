@@ -43,9 +43,9 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
-from agents.lib.socialmap.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetrics, PeopleTracks, dynamic_metrics,
+from agents.lib.metrics.dynamic_metrics import (PERSON_RADIUS_M, DynamicMetrics, PeopleTracks, dynamic_metrics,
                                                   tracks_from_rows)
-from agents.lib.socialmap.metric_catalog import CATALOG, column_label
+from agents.lib.metrics.metric_catalog import CATALOG, column_label
 from scenes.angles import wrap_angle
 from scenes.limits import TRAJECTORY_SAMPLES
 from scenes.yamlio import SourceError, read_text_file

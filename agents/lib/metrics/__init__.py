@@ -1,0 +1,3 @@
+"""Navigation quality metrics of a run: the catalogue (names, units, sources), the seeds' path
+metrics and the metrics among moving people.
+"""
