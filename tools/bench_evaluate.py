@@ -40,7 +40,16 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "tests" / "data" / "eval_tiny.yaml"
-PLANNERS = "social,departure,static,baseline,inflation"
+
+def _chronav_planners() -> str:
+    """chronav's own planners (the registry's entries from the chronav package): the benchmark
+    measures those, whatever else is installed."""
+    from agents.lib.registry import extensions
+
+    return ",".join(name for name, ext in extensions("planner").items() if ext.package == "chronav")
+
+
+PLANNERS = _chronav_planners()
 #: columns that say where and how fast a run ran, not what it computed
 WHERE = {"run_dir", "rrd", "host", "run_wall_s", "trajectory_csv"}
 

@@ -172,7 +172,8 @@ def bench_size(n_cells: int, repeats: int, results: dict[str, Any]) -> None:
     from agents.lib.planning.reference_graph import grid_graph
     from agents.lib.planning.search import SearchWorkspace
     from agents.lib.socialmap.grid import GridParams
-    from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map, plan
+    from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map
+    from agents.lib.planning.plan import plan
 
     scene = bench_scene()
     params = SocialMapParams(grid=GridParams(resolution_m=WORLD_M / n_cells))
@@ -251,7 +252,8 @@ def bench_replan(n: int, repeats: int, scene: dict[str, Any], params: Any, stati
     """replan_* keys: plan on the old map (untimed), then time the replan on the changed one."""
     from agents.lib.planning.replan import Replanner
     from agents.lib.planning.search import SearchWorkspace
-    from agents.lib.socialmap.social_map import build_social_map, plan
+    from agents.lib.socialmap.social_map import build_social_map
+    from agents.lib.planning.plan import plan
 
     people, activities, robot = replan_changes(scene, path)
     goal = scene["goal"]
@@ -379,7 +381,7 @@ def start_seconds(code: str, repeats: int) -> float:
 
 def bench_map(repeats: int, results: dict[str, Any]) -> None:
     from agents.lib.planning.search import SearchWorkspace
-    from agents.lib.socialmap.social_map import plan
+    from agents.lib.planning.plan import plan
     from agents.world.building import _occupancy_layer
     from agents.world.navigation import NavigationMaps
     from agents.world.offline import SceneMaps

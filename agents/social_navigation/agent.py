@@ -35,7 +35,9 @@ from agents.lib.planning import replan
 from agents.lib.socialmap import arrival
 from agents.lib.planning.replan import Replanner
 from agents.lib.planning.search import GoalOccupied, PlanningError, StartOccupied
-from agents.lib.socialmap.social_map import SocialMap, plan
+from agents.lib.socialmap.social_map import SocialMap
+from agents.lib.planning.plan import PlannerFailed, plan
+from agents.lib.planning.planners import planner as planner_by_name
 from agents.runtime.drawing.social_map import DecisionLogger, DecisionStamp
 from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
@@ -81,6 +83,8 @@ class SocialNavigationAgent(Agent):
         margin = float(self.config.option("clearance_margin", str(PLANNING_MARGIN_M)))
         # The run's planner (-o planner=NAME, agents/lib/planning/planners.py): plan() and the maps use it.
         self.maps = NavigationMaps.for_scene(self.scene, margin, self.config.option("planner", DEFAULT_PLANNER))
+        self.planner = planner_by_name(self.maps.planner)
+        self.refusals = 0   # plug-in answers refused (raised, NaN or infinite, a path off the map)
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
         self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
                                      max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
@@ -218,6 +222,9 @@ class SocialNavigationAgent(Agent):
                         or not self._take_stand_in(self.map, now_s):
                     raise
                 path = self._plan_from(self.map, pose)
+        except PlannerFailed as exc:
+            self._refuse(str(exc))
+            return False
         except PlanningError as exc:
             if self.blocked_since is None:
                 self.blocked_since = now_s
@@ -296,12 +303,14 @@ class SocialNavigationAgent(Agent):
         start, goal = (pose[0], pose[1]), (self.goal[0], self.goal[1])
         for _ in range(3):
             try:
-                return plan(smap, start, goal, cruise_speed_mps=self.cruise, replanner=self.replanner)
+                return plan(smap, start, goal, planner=self.maps.planner, params=self.maps.planner_params,
+                            replanner=self.replanner)
             except StartOccupied:
                 start = nearest_free(smap.cost, smap.spec, start)
             except GoalOccupied:
                 goal = nearest_free(smap.cost, smap.spec, goal, max_m=GOAL_TOLERANCE_M)
-        return plan(smap, start, goal, cruise_speed_mps=self.cruise, replanner=self.replanner)
+        return plan(smap, start, goal, planner=self.maps.planner, params=self.maps.planner_params,
+                    replanner=self.replanner)
 
     def _replan(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         del intention
@@ -312,11 +321,15 @@ class SocialNavigationAgent(Agent):
         try:
             new_map = self._build_map(now_s)
             new_path = self._plan_from(new_map, pose)
+        except PlannerFailed as exc:
+            self._refuse(str(exc))
+            return
         except PlanningError:
             return  # keep the current band; the goal may be momentarily blocked by a passer-by
         self.map = new_map
-        old_cost = path_cost(new_map.planning_grid, new_map.spec, self._remaining_global(pose))
-        new_cost = path_cost(new_map.planning_grid, new_map.spec, new_path.points_m)
+        grid = self.planner.grid(new_map)
+        old_cost = path_cost(grid, new_map.spec, self._remaining_global(pose))
+        new_cost = path_cost(grid, new_map.spec, new_path.points_m)
         if math.isinf(old_cost) or (old_cost > REPLAN_GAIN * new_cost and old_cost - new_cost > REPLAN_MIN_GAIN):
             why = "current path blocked" if math.isinf(old_cost) else f"cost {old_cost:.1f} -> {new_cost:.1f}"
             points = self._route(pose, new_path)
@@ -377,6 +390,9 @@ class SocialNavigationAgent(Agent):
                 if not self._take_stand_in(smap, now_s):   # stalled: people stand on the goal?
                     raise
                 path = self._plan_from(smap, pose)
+        except PlannerFailed as exc:
+            self._refuse(str(exc))
+            return
         except PlanningError as exc:
             self.rec.event(f"{format_clock(now_s)} stalled and cannot replan: {exc}", level="WARN")
             return
@@ -429,6 +445,15 @@ class SocialNavigationAgent(Agent):
         self.route_rooms = ()
         self._planned_s = None
         self.decision.clear()
+
+    def _refuse(self, reason: str) -> None:
+        """A plug-in (planner or controller) raised or answered something unusable: the robot gets
+        a zero command, the mission fails naming the plug-in (its reason starts "plug-in refused",
+        what ``chronav evaluate`` counts), and the agent counts it.  Nothing else stops: the next
+        mission runs."""
+        self.refusals += 1
+        self.log.error("plug-in refused (%d so far): %s", self.refusals, reason)
+        self._fail(f"plug-in refused: {reason}")
 
     def _fail(self, reason: str) -> None:
         robot = self._robot()

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall
 from agents.lib.planning.planners import DEFAULT_PLANNER, check_planner
-from agents.lib.socialmap.social_map import (PlannerParams, SocialMap, SocialMapParams, StaticMap, build_social_map,
-                                             build_static_map)
+from agents.lib.planning.protocol import PlannerParams
+from agents.lib.socialmap.social_map import SocialMap, SocialMapParams, StaticMap, build_social_map, build_static_map
 from agents.world.building import PLANNING_MARGIN_M, closed_door_walls, scene_occupancy, scene_rooms, scene_walls
 from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_objects, dsr_people
 from dsr.protocols import GraphReader
@@ -34,18 +34,24 @@ class NavigationMaps:
     scene: Scene
     params: SocialMapParams
     cruise_speed_mps: float
+    #: the run's planner (a registered name): what the navigation plans with and judges paths on
+    planner: str = DEFAULT_PLANNER
     _statics: dict[tuple[tuple[str, ...], tuple[str, ...]], StaticMap] = field(default_factory=dict, repr=False)
 
     @classmethod
     def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M,
                   planner: str = DEFAULT_PLANNER) -> NavigationMaps:
-        """``planner`` (agents/lib/planning/planners.py) is the one navigation parameter a study
-        varies: maps built here plan with it by default (``plan(smap, ...)``) and judge paths on
-        its grid (``smap.planning_grid``); UnknownPlannerError names the choices."""
+        """``planner`` (a registered name, agents/lib/planning/planners.py) is the one navigation
+        parameter a study varies: the navigation plans with it and judges paths on its grid;
+        registry.UnknownExtension names the choices and their packages."""
         robot = scene.robot
-        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m),
-                                 planner=PlannerParams(mode=check_planner(planner)))
-        return cls(scene, params, CRUISE_FRACTION * robot.max_speed)
+        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m))
+        return cls(scene, params, CRUISE_FRACTION * robot.max_speed, check_planner(planner))
+
+    @property
+    def planner_params(self) -> PlannerParams:
+        """The planning parameters of this scene's navigation (its cruise speed)."""
+        return PlannerParams(cruise_speed_mps=self.cruise_speed_mps)
 
     def __post_init__(self) -> None:
         self._walls = scene_walls(self.scene)

@@ -24,7 +24,8 @@ from agents.lib.agenda.chronemics import ChronemicsParams
 from agents.lib.metrics.dynamic_metrics import PeopleTracks
 from agents.lib.metrics.metrics import MetricsReport, compute_metrics, read_people_csv, read_trajectory_csv
 from agents.lib.planning.search import PlanningError
-from agents.lib.socialmap.social_map import SocialMap, plan
+from agents.lib.socialmap.social_map import SocialMap
+from agents.lib.planning.plan import plan
 from agents.world.building import footprint_polygons
 from agents.world.dsr_readers import running_activities, symbolic_view
 from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_interactions,

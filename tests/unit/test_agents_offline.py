@@ -81,7 +81,7 @@ def test_agenda_request_round_trip(tmp_path: Path) -> None:
 
 
 def test_a_closed_door_is_a_wall_for_the_laser_and_the_map(tmp_path: Path) -> None:
-    from agents.lib.socialmap.social_map import plan
+    from agents.lib.planning.plan import plan
 
     text = (SCENES_DIR / "center_b.yaml").read_text()
     scene = tmp_path / "center_b_door.yaml"
@@ -119,7 +119,7 @@ def test_navigation_replans_at_5_hz_reusing_its_search(tmp_path: Path) -> None:
     searches again through its Replanner: the replans reuse the first search (no refresh, a
     fraction of its work), update the arrival-time grid of the previous one where the map
     changed (incremental.py), and find what a fresh plan on the same map finds."""
-    from agents.lib.socialmap.social_map import plan
+    from agents.lib.planning.plan import plan
     from agents.social_navigation.agent import REPLAN_PERIOD_S
 
     assert REPLAN_PERIOD_S <= 0.2

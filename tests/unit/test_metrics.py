@@ -180,7 +180,8 @@ def test_psi_is_measured_on_the_adapted_zones_the_planner_used() -> None:
     The adaptation moves her personal contour in front of her to the room a robot passing at the far
     wall leaves; the planned path passes there: 0 % in her (adapted) personal and social zones, while
     the same path on the unadapted spaces crosses her personal zone."""
-    from agents.lib.socialmap.social_map import build_social_map, plan
+    from agents.lib.socialmap.social_map import build_social_map
+    from agents.lib.planning.plan import plan
     from agents.lib.socialmap.types import Person, Wall
     from agents.world.offline import path_as_trajectory
 

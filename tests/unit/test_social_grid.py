@@ -11,7 +11,8 @@ import shapely
 from agents.lib.socialmap.adaptive import AdaptiveParams
 from agents.lib.socialmap.grid import CostPatch, GridParams, GridSpec, compose, static_grid
 from agents.lib.planning.search import NoPathFound, warm_up
-from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, plan
+from agents.lib.socialmap.social_map import SocialMapParams, build_social_map
+from agents.lib.planning.plan import plan
 from agents.lib.socialmap.types import Person, Room, Wall
 
 RES = 0.05

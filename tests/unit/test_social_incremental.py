@@ -15,8 +15,10 @@ from agents.lib.planning import replan, search
 from agents.lib.socialmap import arrival
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.planning.replan import Replanner, truncate_down
-from agents.lib.planning.search import PlanningError, TimeCosts
-from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map, plan
+from agents.lib.planning.search import PlanningError
+from agents.lib.socialmap.grid import TimeCosts
+from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map
+from agents.lib.planning.plan import plan
 from agents.lib.socialmap.types import Person, SocialObject, Wall
 from scenes.geometry import Circle, Rectangle, Trapezoid
 

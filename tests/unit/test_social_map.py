@@ -11,13 +11,9 @@ import shapely
 from agents.lib.agenda.chronemics import ChronemicsParams
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.planning.search import GoalOccupied, NoPathFound, SearchWorkspace, StartOccupied, warm_up
-from agents.lib.socialmap.social_map import (
-    PlannerParams,
-    SocialMapParams,
-    build_social_map,
-    build_static_map,
-    plan,
-)
+from agents.lib.planning.plan import plan
+from agents.lib.planning.protocol import PlannerParams
+from agents.lib.socialmap.social_map import SocialMapParams, build_social_map, build_static_map
 from agents.lib.agenda.model import ActivityWindow
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject, Wall
 from scenes.geometry import Rectangle, Trapezoid
@@ -182,8 +178,9 @@ def test_start_in_intimate_zone_is_refused() -> None:
         plan(walled, (1.0, 2.0), (5.0, 2.0))
 
 
-def test_planner_params_defaults_are_used() -> None:
-    slow = SocialMapParams(planner=PlannerParams(arrival_time=False))
-    smap = tv_room(9 * H, slow)
-    assert plan(smap, (1.0, 3.0), (11.0, 3.0)).cost == pytest.approx(
+def test_planner_params_are_used() -> None:
+    """arrival_time False makes the social planner price R at departure (the seeds' setting)."""
+    smap = tv_room(9 * H)
+    slow = PlannerParams(arrival_time=False)
+    assert plan(smap, (1.0, 3.0), (11.0, 3.0), params=slow).cost == pytest.approx(
         plan(smap, (1.0, 3.0), (11.0, 3.0), planner="departure").cost)

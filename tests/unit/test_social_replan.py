@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 
 from agents.lib.planning.reference_graph import reference_cost
 from agents.lib.planning.replan import Replanner, truncate_down, warm_up
-from agents.lib.planning.search import GridPath, NoPathFound, TimeCosts, search_cells
+from agents.lib.planning.search import GridPath, NoPathFound, search_cells
+from agents.lib.socialmap.grid import TimeCosts
 
 SQRT2 = math.sqrt(2.0)
 VALUES = (1.0, 1.5, 2.0, 3.5, 4.0)
@@ -221,7 +222,8 @@ def test_social_map_replans_through_plan() -> None:
     R(t) rising before a TV therapy, the robot advancing): the same costs as fresh plans, with the
     arrival-time costs (the default) and at departure time, and less work after the first."""
     from agents.lib.agenda.model import ActivityWindow
-    from agents.lib.socialmap.social_map import build_social_map, build_static_map, plan
+    from agents.lib.socialmap.social_map import build_social_map, build_static_map
+    from agents.lib.planning.plan import plan
     from agents.lib.socialmap.types import Person, SocialObject, Wall
     from scenes.geometry import Rectangle, Trapezoid
 

@@ -21,6 +21,7 @@ import sys
 import time
 from datetime import datetime
 from pathlib import Path
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 import typer
@@ -46,19 +47,36 @@ def _check_extras() -> None:
 
 
 def parse_planners(text: str | None) -> list[str]:
-    from agents.lib.planning.planners import PLANNERS, UnknownPlannerError, check_planner
+    """--planners A,B (default: every installed planner), each checked now: an unknown name is an
+    error listing the known ones; a plug-in that cannot be loaded is refused with a warning naming
+    it, its package and why, and the study runs without it."""
+    from agents.lib.planning.planners import planner, planner_names
 
-    if text is None:
-        return list(PLANNERS)
-    names = [name.strip() for name in text.split(",") if name.strip()]
+    return _axis("--planners", "planner", text, planner_names(), planner, "social,baseline")
+
+
+def _axis(option: str, kind: str, text: str | None, installed: tuple[str, ...], load: Callable[[str], object],
+          example: str) -> list[str]:
+    from agents.lib.registry import RefusedExtension, UnknownExtension
+
+    names = list(installed) if text is None else [name.strip() for name in text.split(",") if name.strip()]
     if not names:
-        raise EvaluateError("--planners: name at least one planner, e.g. social,baseline")
+        raise EvaluateError(f"{option}: name at least one {kind}, e.g. {example}")
     if len(set(names)) != len(names):
-        raise EvaluateError(f"--planners {text}: a planner is named twice")
-    try:
-        return [check_planner(name) for name in names]
-    except UnknownPlannerError as exc:
-        raise EvaluateError(f"--planners: {exc}") from None
+        raise EvaluateError(f"{option} {text}: a {kind} is named twice")
+    usable = []
+    for name in names:
+        try:
+            load(name)
+        except UnknownExtension as exc:
+            raise EvaluateError(f"{option}: {exc}") from None
+        except RefusedExtension as exc:
+            print(f"warning: {exc}; the study runs without it", file=sys.stderr)
+            continue
+        usable.append(name)
+    if not usable:
+        raise EvaluateError(f"{option}: every {kind} named was refused (see the warnings above)")
+    return usable
 
 
 def resolve_scenes(names: list[str]) -> list[Path]:
@@ -296,8 +314,8 @@ def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def evaluate_command(
         scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
         planners: str = typer.Option(None, "--planners", show_default=False,
-                                     help="comma-separated, of social, departure, static, baseline, inflation "
-                                          "(default: all of them)"),
+                                     help="comma-separated registered planners, e.g. social,baseline "
+                                          "(default: every installed one; `chronav plugins` lists them)"),
         seeds: int = typer.Option(3, "--seeds", help="seeds per scene and planner (1, 2, ... N)"),
         first_seed: int = typer.Option(1, "--first-seed", help="the first seed"),
         jobs: int = typer.Option(None, "--jobs", "-j", min=1, show_default=False,

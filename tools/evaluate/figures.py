@@ -26,10 +26,9 @@ import numpy as np
 from agents.world.vocabulary import MissionState
 from tools.evaluate.stats import MissionKey, done_rows, missions_of, planners_of
 
-#: one colour per planner, the same in every figure (colour-blind safe: Okabe-Ito)
-PLANNER_COLOURS = {"social": "#0072B2", "departure": "#56B4E9", "static": "#009E73", "baseline": "#D55E00",
-                   "inflation": "#CC79A7"}
-OTHER_COLOURS = ("#E69F00", "#F0E442", "#000000", "#999999")
+#: planner colours by the planner's place in the study (colour-blind safe: Okabe-Ito), so every
+#: figure of a report gives a planner the same colour and any installed planner gets one
+PALETTE = ("#0072B2", "#D55E00", "#009E73", "#56B4E9", "#CC79A7", "#E69F00", "#F0E442", "#000000", "#999999")
 ZONE_COLOURS = {"social": "#FFF3B0", "personal": "#FFC971", "intimate": "#E4572E"}
 DPI = 110
 BOX_MIN_SEEDS = 5
@@ -64,10 +63,8 @@ def slug(text: str) -> str:
 
 
 def planner_colour(planner: str, planners: Sequence[str]) -> str:
-    if planner in PLANNER_COLOURS:
-        return PLANNER_COLOURS[planner]
-    extra = [p for p in planners if p not in PLANNER_COLOURS]
-    return OTHER_COLOURS[extra.index(planner) % len(OTHER_COLOURS)] if planner in extra else "#444444"
+    """The colour of ``planner`` among the study's ``planners`` (their order is the study's)."""
+    return PALETTE[list(planners).index(planner) % len(PALETTE)] if planner in planners else "#444444"
 
 
 def _clock(t_s: float) -> str:

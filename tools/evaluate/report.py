@@ -265,7 +265,7 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
 
 def _provenance_html(runs: Sequence[Mapping[str, Any]], prov: Mapping[str, Any], pending: int) -> list[str]:
     """How many runs succeeded, what made them (command, executor, seeds, planners, scene files) and how."""
-    from agents.lib.planning.planners import PLANNER_HELP
+    from agents.lib.registry import describe
 
     esc = html.escape
     parts = []
@@ -278,7 +278,7 @@ def _provenance_html(runs: Sequence[Mapping[str, Any]], prov: Mapping[str, Any],
                  f"<tr><td>command</td><td><code>{esc(str(prov['command']))}</code></td></tr>"
                  f"<tr><td>executor</td><td>{esc(str(prov['executor']))} (jobs {prov['jobs']})</td></tr>"
                  f"<tr><td>seeds</td><td>{esc(', '.join(map(str, prov['seeds'])))}</td></tr>"
-                 + "".join(f"<tr><td>planner <b>{esc(p)}</b></td><td>{esc(PLANNER_HELP.get(p, ''))}</td></tr>"
+                 + "".join(f"<tr><td>planner <b>{esc(p)}</b></td><td>{esc(describe('planner', p))}</td></tr>"
                            for p in prov["planners"])
                  + "".join(f"<tr><td>scene {esc(name)}</td><td><code>{esc(f['file'])}</code><br>sha256 "
                            f"<code>{f['sha256']}</code></td></tr>"

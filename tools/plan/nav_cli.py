@@ -40,15 +40,17 @@ def _clock(text: str | None, option: str) -> float | None:
 
 def _planner(name: str | None, baseline: bool, departure_time: bool) -> str:
     """--planner NAME, or its older spellings --baseline / --departure-time (not both kinds at once)."""
-    from agents.lib.planning.planners import DEFAULT_PLANNER, UnknownPlannerError, check_planner
+    from agents.lib.planning.planners import DEFAULT_PLANNER, planner
+    from agents.lib.registry import RefusedExtension, UnknownExtension
 
     if baseline and departure_time:
         raise typer.BadParameter("give one of --baseline and --departure-time (or --planner NAME)",
                                  param_hint="--baseline")
     alias = "baseline" if baseline else "departure" if departure_time else None
     try:
-        chosen = check_planner(name if name is not None else alias or DEFAULT_PLANNER)
-    except UnknownPlannerError as exc:
+        chosen = name if name is not None else alias or DEFAULT_PLANNER
+        planner(chosen)
+    except (UnknownExtension, RefusedExtension) as exc:
         raise typer.BadParameter(str(exc), param_hint="--planner") from None
     if alias is not None and alias != chosen:
         flag = "--baseline" if baseline else "--departure-time"
@@ -70,9 +72,9 @@ def path_command(scene: str = typer.Argument(..., help="scene file or name in sc
                                                      help="price interaction spaces at --at (the seeds), "
                                                           "not at the time the robot reaches them"),
                  planner: str = typer.Option(None, "--planner",
-                                             help="social (default), departure, static, baseline or inflation "
-                                                  "(docs/evaluate.md); --baseline and --departure-time are "
-                                                  "the same as baseline and departure"),
+                                             help="a registered planner (`chronav plugins` lists them; social by "
+                                                  "default; docs/evaluate.md); --baseline and --departure-time "
+                                                  "are the same as baseline and departure"),
                  method: str = typer.Option("astar", help="astar or dijkstra"),
                  as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
     """Plan one path on SCENE's social map at a given time and score it."""

@@ -28,7 +28,7 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
     from agents.lib.metrics.metrics import TrajectoryFormatError, read_people_csv, read_trajectory_csv
     from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
     from agents.lib.planning.search import PlanningError
-    from agents.lib.socialmap.social_map import plan
+    from agents.lib.planning.plan import plan
 
     traj_path = Path(run_dir) / "trajectory.csv"
     report: dict[str, Any] = {"scene": Path(scene).stem, "missions": {}}

@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from scipy.spatial import cKDTree
 
+from agents.lib.planning.paths import split_gaps
 from scenes.geometry import project_on_segments
 
 FloatArray = NDArray[np.float64]
@@ -286,17 +287,6 @@ def resample(points: FloatArray, spacing_m: float, min_spacing_m: float) -> Floa
         gaps = np.hypot(*np.diff(points, axis=0).T)
     return split_gaps(points, np.maximum(np.ceil(gaps / spacing_m - 1e-9), 1).astype(np.int64))
 
-
-def split_gaps(points: FloatArray, pieces: NDArray[np.int64]) -> FloatArray:
-    """The polyline with gap i split evenly into ``pieces[i]`` (>= 1) parts; the vertices stay.
-    (Shared by ``resample`` and paths.densify, which count the pieces their own way.)"""
-    if np.all(pieces == 1):
-        return points
-    segment = np.repeat(np.arange(len(pieces)), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    frac = (np.arange(len(segment)) - first) / np.repeat(pieces, pieces)
-    inner = points[segment] + frac[:, None] * (points[segment + 1] - points[segment])
-    return np.vstack([inner, points[-1:]])
 
 
 def _drop_close_points(points: FloatArray, min_spacing_m: float) -> FloatArray:

@@ -3,7 +3,7 @@
 Why here and not in the navigation agent: the agent judges its current path against a new one
 (``path_cost``) and moves a blocked start or goal to free floor (``nearest_free``); both must mean
 what the planner means by cost and by a cell, so they are written once, on the planner's own
-step rule (search.step_cost), the band's polyline splitting (elastic_band.split_gaps) and its cells
+step rule (search.step_cost), the polyline splitting the band shares (split_gaps) and its cells
 (GridSpec.cell_of / GridSpec.centres).
 """
 
@@ -15,7 +15,6 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.lib.control.elastic_band import split_gaps
 from agents.lib.socialmap.grid import GridSpec
 from agents.lib.planning.search import StartOccupied, step_cost
 
@@ -73,3 +72,15 @@ def nearest_free_where(grid: NDArray[np.floating], spec: GridSpec, xy: tuple[flo
         if inside(float(x), float(y)):
             return float(x), float(y)
     return None
+
+
+def split_gaps(points: NDArray[np.float64], pieces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """The polyline with gap i split evenly into ``pieces[i]`` (>= 1) parts; the vertices stay.
+    (Shared by ``densify`` and elastic_band.resample, which count the pieces their own way.)"""
+    if np.all(pieces == 1):
+        return points
+    segment = np.repeat(np.arange(len(pieces)), pieces)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    frac = (np.arange(len(segment)) - first) / np.repeat(pieces, pieces)
+    inner = points[segment] + frac[:, None] * (points[segment + 1] - points[segment])
+    return np.vstack([inner, points[-1:]])

@@ -1,9 +1,11 @@
-"""The global planners a run can use: one name each, and the cost grid each one plans on.
+"""chronav's global planners, and the lookup of any installed planner by name.
 
 Why one navigation parameter: a study (``chronav evaluate``) compares planners on the same scenes
 and seeds, so the planner must be chosen per run without touching anything else.  The live
 navigation agent (``-o planner=NAME``), ``chronav path --planner NAME`` and the evaluation all
-resolve the name here and plan with ``social_map.plan``, so a name means the same grid everywhere.
+resolve the name here (``planner(name)``, through the ``chronav.planners`` entry points, where
+chronav registers the five below exactly as an outside package registers its own) and plan with
+``plan.plan``, so a name means the same planner everywhere.
 
 =============  ===================================================================================
 planner        cost grid (walls, bodies and footprints are obstacles for all of them)
@@ -38,35 +40,23 @@ margin), and 1.2 m reaches as far as chronav's personal zone extends in front of
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal, get_args
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from agents.lib.socialmap.grid import COST_DTYPE, CostArray, CostPatch, GridParams, GridSpec, compose
+from agents.lib import registry
+from agents.lib.planning.protocol import GlobalPlanner, PlanRequest
+from agents.lib.planning.search import Path, plan_on_grid
+from agents.lib.socialmap.grid import COST_DTYPE, CostArray, CostPatch, GridParams, GridSpec, TimeCosts, compose
 from agents.lib.socialmap.layers import interaction_patches
 from agents.lib.socialmap.types import Person
-from scenes.names import shown
 
 if TYPE_CHECKING:
     from agents.lib.socialmap.social_map import SocialMap
 
-PlannerName = Literal["social", "departure", "static", "baseline", "inflation"]
-PLANNERS: tuple[str, ...] = get_args(PlannerName)
-DEFAULT_PLANNER: PlannerName = "social"
-#: what each planner is, for help texts and reports
-PLANNER_HELP: dict[str, str] = {
-    "social": "people's zones + interaction spaces priced by R(t) at arrival (chronav)",
-    "departure": "people's zones + interaction spaces at R(t) of the departure (the seeds)",
-    "static": "people's zones + interaction spaces at a fixed R = r_min (no agenda)",
-    "baseline": "non-social shortest path (walls, bodies, footprints)",
-    "inflation": "Nav2 inflation layer around people (exponential decay), no agenda",
-}
+DEFAULT_PLANNER = "social"
 NAV2_INSCRIBED_MINUS_ONE = 252.0   # INSCRIBED_INFLATED_OBSTACLE - 1: Nav2's highest traversable cost
-
-
-class UnknownPlannerError(ValueError):
-    """A planner name that is not one of PLANNERS; the message lists them."""
 
 
 class InflationParams(BaseModel):
@@ -78,11 +68,135 @@ class InflationParams(BaseModel):
     inflation_radius_m: float = Field(1.2, gt=0, description="from the body's edge (ours, module doc)")
 
 
-def check_planner(name: str) -> PlannerName:
-    """``name`` if it is a planner, else UnknownPlannerError saying which exist."""
-    if name not in PLANNERS:
-        raise UnknownPlannerError(f"unknown planner {shown(name, 40)!r}; choose one of {', '.join(PLANNERS)}")
-    return name  # type: ignore[return-value]  # checked in PLANNERS above; mypy does not narrow str to the Literal
+_INSTANCES: dict[str, GlobalPlanner] = {}
+
+
+def planner_names() -> tuple[str, ...]:
+    """Every installed planner's name (entry point metadata only: imports nothing)."""
+    return registry.names("planner")
+
+
+def check_planner(name: str) -> str:
+    """``name`` if a package registers a planner of that name, else registry.UnknownExtension
+    listing the known ones and their packages (metadata only: imports nothing)."""
+    registry.entry("planner", name)
+    return name
+
+
+def planner(name: str) -> GlobalPlanner:
+    """The planner ``name``, built once per process by its factory and checked against the
+    protocol; UnknownExtension or RefusedExtension (plug-in, package, reason) otherwise."""
+    found = _INSTANCES.get(name)
+    if found is None:
+        factory = registry.load("planner", name, registry.check_callable)
+        ext = registry.entry("planner", name)
+        try:
+            found = factory()
+        except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
+            raise registry.RefusedExtension("planner", name, ext.package,
+                                            f"its factory raised {type(exc).__name__}: {exc}") from None
+        if not isinstance(found, GlobalPlanner):
+            raise registry.RefusedExtension("planner", name, ext.package,
+                                            f"its factory returned a {type(found).__name__} without grid() and plan()")
+        _INSTANCES[name] = found
+    return found
+
+
+class GridPlanner:
+    """A planner that says which cost grid to search; chronav's A* (or Dijkstra) searches it.
+
+    Subclasses define ``grid``; ``cheapest`` (A*'s heuristic must not exceed any traversable
+    cell's cost) defaults to the grid's smallest traversable cost, exact for any grid; override
+    it with a known bound to skip that pass.  ``search_costs`` is what is searched (the social
+    planner's arrival-time table); it defaults to ``grid``."""
+
+    def grid(self, smap: SocialMap) -> CostArray:
+        raise NotImplementedError
+
+    def cheapest(self, smap: SocialMap) -> float:
+        grid = self.grid(smap)
+        traversable = grid[np.isfinite(grid) & (grid > 0)]
+        return float(traversable.min()) if traversable.size else smap.params.grid.free_cost
+
+    def search_costs(self, smap: SocialMap, request: PlanRequest) -> CostArray | TimeCosts:
+        return self.grid(smap)
+
+    def plan(self, smap: SocialMap, request: PlanRequest) -> Path:
+        return plan_on_grid(self.search_costs(smap, request), smap.spec, request.start_xy, request.goal_xy,
+                            method=request.method, c_min=self.cheapest(smap), workspace=request.workspace,
+                            searcher=request.replanner)
+
+
+def _social_cheapest(smap: SocialMap) -> float:
+    grid = smap.params.grid
+    return min(grid.free_cost, grid.social_cost, grid.personal_cost, smap.params.chronemics.r_min)
+
+
+class DeparturePlanner(GridPlanner):
+    """People's zones + interaction spaces at R(t) of the departure (the seeds)."""
+
+    def grid(self, smap: SocialMap) -> CostArray:
+        return smap.cost
+
+    def cheapest(self, smap: SocialMap) -> float:
+        return _social_cheapest(smap)
+
+
+class SocialPlanner(DeparturePlanner):
+    """People's zones + interaction spaces priced by R(t) at arrival (chronav).
+
+    Its ``grid`` (what a current path is judged on) is the departure-time one; its search prices
+    each interaction space at the time the robot would reach it (``params.arrival_time`` False:
+    at departure, as ``departure``)."""
+
+    def search_costs(self, smap: SocialMap, request: PlanRequest) -> CostArray | TimeCosts:
+        if not request.params.arrival_time:
+            return smap.cost
+        # A replanner composes the arrival-time grid itself, from the one it searched last (replan.py).
+        costs = smap.time_costs(request.cruise_speed_mps, time_step_s=request.params.time_step_s,
+                                horizon_factor=request.params.horizon_factor,
+                                incremental=request.replanner.costs if request.replanner is not None else None)
+        return smap.cost if costs is None else costs
+
+
+class StaticPlanner(GridPlanner):
+    """People's zones + interaction spaces at a fixed R = r_min (no agenda)."""
+
+    def grid(self, smap: SocialMap) -> CostArray:
+        def compose_grid() -> CostArray:
+            fixed = [smap.params.chronemics.r_min] * len(smap.interaction_cells)
+            return compose(smap.static, (*smap.obstacle_patches, *smap.zone_patches,
+                                         *interaction_patches(smap.interaction_cells, fixed)))
+        return smap.cached(("planning_grid", "static"), compose_grid)
+
+    def cheapest(self, smap: SocialMap) -> float:
+        return _social_cheapest(smap)
+
+
+class BaselinePlanner(GridPlanner):
+    """Non-social shortest path (walls, bodies, footprints)."""
+
+    def grid(self, smap: SocialMap) -> CostArray:
+        return smap.physical
+
+    def cheapest(self, smap: SocialMap) -> float:
+        return smap.params.grid.free_cost
+
+
+class InflationPlanner(GridPlanner):
+    """Nav2 inflation layer around people (exponential decay), no agenda."""
+
+    def __init__(self, params: InflationParams | None = None) -> None:
+        self.params = params or InflationParams()
+
+    def grid(self, smap: SocialMap) -> CostArray:
+        def compose_grid() -> CostArray:
+            return compose(smap.static, (*smap.obstacle_patches,
+                                         *inflation_patches(smap.spec, smap.people, smap.params.grid, self.params)))
+        return smap.cached(("planning_grid", "inflation", self.params), compose_grid)
+
+    def cheapest(self, smap: SocialMap) -> float:
+        return smap.params.grid.free_cost
 
 
 def inflation_patches(spec: GridSpec, people: Sequence[Person], grid: GridParams,
@@ -107,34 +221,3 @@ def inflation_patches(spec: GridSpec, people: Sequence[Person], grid: GridParams
         inside = (d > inscribed) & (d <= params.inflation_radius_m)
         patches.append(CostPatch(rows, cols, np.where(inside, cost, 0.0).astype(COST_DTYPE)))
     return patches
-
-
-def planning_grid(smap: SocialMap, planner: str) -> CostArray:
-    """The grid ``planner`` plans on at the map's time (``social``: R at the map's time, i.e. the
-    grid the agent judges a current path on; its search prices R at arrival, see social_map.plan)."""
-    name = check_planner(planner)
-    if name in ("social", "departure"):
-        return smap.cost
-    if name == "baseline":
-        return smap.physical
-
-    def compose_grid() -> CostArray:
-        if name == "static":
-            fixed = [smap.params.chronemics.r_min] * len(smap.interaction_cells)
-            layers = (*smap.obstacle_patches, *smap.zone_patches,
-                      *interaction_patches(smap.interaction_cells, fixed))
-        else:
-            layers = (*smap.obstacle_patches,
-                      *inflation_patches(smap.spec, smap.people, smap.params.grid, smap.params.planner.inflation))
-        return compose(smap.static, layers)
-
-    return smap.cached(("planning_grid", name), compose_grid)
-
-
-def cheapest_cell(smap: SocialMap, planner: str) -> float:
-    """The lowest traversable cost on ``planner``'s grid: A*'s heuristic must not exceed it."""
-    grid = smap.params.grid
-    if check_planner(planner) in ("baseline", "inflation"):
-        return grid.free_cost
-    return min(grid.free_cost, grid.social_cost, grid.personal_cost, smap.params.chronemics.r_min)
-

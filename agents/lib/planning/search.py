@@ -35,7 +35,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from agents.lib.socialmap.grid import GridSpec
+from agents.lib.socialmap.grid import GridSpec, TimeCosts
 
 SQRT2 = math.sqrt(2.0)
 _TIE_BREAK = 1e-9   # A* key g + (1 + 1e-9) c_min h: among equal f, the larger g (closer to the goal) first
@@ -67,19 +67,6 @@ class GoalOccupied(PlanningError):
 
 class NoPathFound(PlanningError):
     """Start and goal are traversable but not connected."""
-
-
-@dataclass(frozen=True, slots=True)
-class TimeCosts:
-    """A cost grid in which some cells have arrival-time costs.
-
-    ``grid[r, c]`` > 0 is an ordinary cost (inf: blocked); < 0 is ``-(k + 1)``: the cell costs
-    ``table[k, j]`` when reached after travelling between ``j`` and ``j + 1`` bins of
-    ``cells_per_bin`` cells (the last column holds for longer trips)."""
-
-    grid: NDArray[np.float32]
-    table: NDArray[np.float64]
-    cells_per_bin: float
 
 
 @dataclass(frozen=True, slots=True)

@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from agents.lib.socialmap.grid import CostArray
 from agents.lib.socialmap.layers import CellMask
-from agents.lib.planning.search import TimeCosts
+from agents.lib.socialmap.grid import TimeCosts
 
 # times (n,) -> every space's cost at those times, shape (spaces, n)
 CostProfiles = Callable[[NDArray[np.float64]], NDArray[np.float64]]

@@ -292,3 +292,16 @@ def blocked_core(static: CostArray, spec: GridSpec, depth_m: float) -> NDArray[n
     if cells <= 0:
         return blocked
     return ndimage.binary_erosion(blocked, iterations=cells, border_value=1)
+
+
+@dataclass(frozen=True, slots=True)
+class TimeCosts:
+    """A cost grid in which some cells have arrival-time costs.
+
+    ``grid[r, c]`` > 0 is an ordinary cost (inf: blocked); < 0 is ``-(k + 1)``: the cell costs
+    ``table[k, j]`` when reached after travelling between ``j`` and ``j + 1`` bins of
+    ``cells_per_bin`` cells (the last column holds for longer trips)."""
+
+    grid: NDArray[np.float32]
+    table: NDArray[np.float64]
+    cells_per_bin: float

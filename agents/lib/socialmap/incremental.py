@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from agents.lib.socialmap.arrival import CostProfiles, cost_table, encode_spaces
 from agents.lib.socialmap.grid import CostArray, CostPatch, compose_into
 from agents.lib.socialmap.layers import CellMask
-from agents.lib.planning.search import TimeCosts
+from agents.lib.socialmap.grid import TimeCosts
 
 Window = tuple[int, int, int, int]   # rows r0:r1, cols c0:c1
 

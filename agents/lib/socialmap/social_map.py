@@ -1,12 +1,10 @@
-"""The time-dependent social map and the global planner: one entry point for the agent, the tools
-and the tests.
+"""The time-dependent social map: one entry point for the agent, the tools and the tests.
 
     static = build_static_map(bounds, walls, rooms, params)          # once per building
     smap = build_social_map(bounds, walls, people, objects, activities, t_s, params, static=static)
-    path = plan(smap, start_xy, goal_xy)                               # the map's planner (social)
-    base = plan(smap, start_xy, goal_xy, planner="baseline")           # non-social baseline
-                                     # (planners.py: social, departure, static, baseline, inflation)
-    path = plan(smap, robot_xy, goal_xy, replanner=replanner)          # again, reusing earlier searches
+
+Planning on it is agents.lib.planning (``plan(smap, start_xy, goal_xy, planner="social")``); the
+map holds no planner parameters, so one map serves every planner of a study.
 
 Layers (Nav2 style, composed by cell-wise maximum, grid.py):
   static  walls inflated by the robot radius, outside the rooms          -> ``static``
@@ -44,17 +42,6 @@ chronemics.r_min / r_max                       1.5 / 3.5   seed 5.2.2, Fig. 8; a
 chronemics.ramp_before_s / ramp_after_s        2700 s      seed 5.2.2 (45 minutes, same after the end)
 chronemics.band_edges                          1.5 2 2.5 3 3.5  affordance V-B (four colour intervals)
 forbidden_while_active (per object)            False       affordance IV-A ("cannot use this space")
-planner.cruise_speed_mps                       0.25 m/s    ours: mean speeds (d_t / tau) in seed
-                                                           Tables 1-2 are 0.13-0.26 m/s
-planner.arrival_time                           True        ours (beyond the seeds; False = seed)
-planner.mode                                   social      planners.py (social, departure, static, baseline,
-                                                           inflation: one name per run)
-planner.inflation.cost_scaling_factor          3.0 /m      Nav2 nav2_params.yaml (planners.py)
-planner.inflation.inflation_radius_m           1.2 m       ours (planners.py; Nav2's default is 0.55 m)
-planner.time_step_s                            1 s         ours (R changes over minutes)
-planner.horizon_factor                         3           ours: arrival table covers 3 (width + height)
-search: 8-connected, step L (c_a + c_b) / 2    -           /work/shared/notes/planner.md (seed: Dijkstra,
-                                                           sum of node costs)
 =============================================  ==========  ==============================================
 """
 
@@ -67,7 +54,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 import shapely
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.socialmap.adaptive import Adaptation, AdaptiveParams, adapt_spaces
@@ -84,6 +71,7 @@ from agents.lib.socialmap.grid import (
     CostPatch,
     GridParams,
     GridSpec,
+    TimeCosts,
     compose,
     static_grid,
     walls_geometry,
@@ -101,11 +89,7 @@ from agents.lib.socialmap.motion import MotionParams, Prediction, oriented, pred
 from agents.lib.socialmap.objects import ObjectGeometry, object_geometry
 from agents.lib.socialmap.personal_space import PersonalSpace, PersonalSpaceParams
 from agents.lib.socialmap.occupancy import OccupancyLayer
-from agents.lib.planning.planners import (DEFAULT_PLANNER, InflationParams, PlannerName, check_planner,
-                                           cheapest_cell, planning_grid)
 from agents.lib.socialmap.roles import RoleParams, role_scale
-from agents.lib.planning.replan import Replanner
-from agents.lib.planning.search import GoalOccupied, Path, SearchWorkspace, StartOccupied, TimeCosts, plan_on_grid
 from agents.lib.agenda.model import ActivityWindow
 from agents.lib.socialmap.types import Person, Room, SocialMapInputError, SocialObject, Wall
 from agents.lib.socialmap.zones import (
@@ -122,25 +106,9 @@ from agents.lib.socialmap.zones import (
 T = TypeVar("T")
 
 
-class PlannerParams(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    cruise_speed_mps: float = Field(0.25, gt=0, description="converts distance travelled to arrival time")
-    arrival_time: bool = Field(True, description="R at arrival time (False: at departure, as the seeds)")
-    time_step_s: float = Field(1.0, gt=0, description="time resolution of the arrival-time table")
-    horizon_factor: float = Field(3.0, gt=0, description="table covers trips up to this x (width + height)")
-    mode: PlannerName = Field(DEFAULT_PLANNER, description="which planner plan() uses by default (planners.py)")
-    inflation: InflationParams = InflationParams()
-
-    @property
-    def default_planner(self) -> PlannerName:
-        """The planner plan() uses when the call names none: ``mode``, except that ``arrival_time``
-        False turns the ``social`` mode into ``departure`` (the seeds' setting)."""
-        return self.mode if self.arrival_time or self.mode != "social" else "departure"
-
-
 class SocialMapParams(BaseModel):
-    """Every tunable of the social map and planner (defaults: table in the module doc)."""
+    """Every tunable of the social map (defaults: table in the module doc; the planner's own are
+    agents.lib.planning.plan.PlannerParams: a map does not carry a planner's parameters)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -151,7 +119,6 @@ class SocialMapParams(BaseModel):
     groups: GroupParams = GroupParams()
     adaptive: AdaptiveParams = AdaptiveParams()
     chronemics: ChronemicsParams = ChronemicsParams()
-    planner: PlannerParams = PlannerParams()
     motion: MotionParams = MotionParams()
 
 
@@ -242,12 +209,6 @@ class SocialMap:
             self._cache["cost"] = compose(self.static, (*self.people_layers, *self.interaction_patches))
         return self._cache["cost"]
 
-    @property
-    def planning_grid(self) -> CostArray:
-        """The grid of this map's planner (``params.planner.mode``) at ``t_s``: what a current path
-        is judged on (for ``social`` the departure-time grid, as ``cost``)."""
-        return planning_grid(self, self.params.planner.mode)
-
     def cached(self, key: Hashable, build: Callable[[], T]) -> T:
         """The value derived from this map under ``key``, built by ``build()`` on first use.
         Why public: the planners (planners.py) derive further grids from a map and keep them with
@@ -315,14 +276,15 @@ class SocialMap:
             return compose(free, self.interaction_patches)
         raise ValueError(f"unknown layer {name!r}; expected walls, people or objects")
 
-    def time_costs(self, cruise_speed_mps: float, *,
+    def time_costs(self, cruise_speed_mps: float, *, time_step_s: float = 1.0, horizon_factor: float = 3.0,
                    incremental: IncrementalTimeCosts | None = None) -> TimeCosts | None:
-        """``people_cost`` with the interaction spaces priced at arrival time (None without any).
+        """``people_cost`` with the interaction spaces priced at arrival time (None without any): bins
+        of ``time_step_s``, covering trips up to ``horizon_factor`` x (width + height) of the map.
         With ``incremental`` (a replanner's), that builder's grid updated from the map it built
         before (incremental.py: the same values), valid until its next use and not cached here."""
         if not any(m is not None for m in self.interaction_cells):
             return None
-        key = ("time_costs", cruise_speed_mps)
+        key = ("time_costs", cruise_speed_mps, time_step_s, horizon_factor)
         if incremental is None and key in self._cache:
             return self._cache[key]
         by_object: dict[str, list[ActivityWindow]] = {}
@@ -336,8 +298,8 @@ class SocialMap:
             return interaction_cost_profiles(times, windows, chron, forbidden)
 
         xmin, ymin, xmax, ymax = self.spec.bounds
-        horizon = self.params.planner.horizon_factor * ((xmax - xmin) + (ymax - ymin))
-        timing = (self.t_s, cruise_speed_mps, self.spec.resolution, self.params.planner.time_step_s, horizon)
+        horizon = horizon_factor * ((xmax - xmin) + (ymax - ymin))
+        timing = (self.t_s, cruise_speed_mps, self.spec.resolution, time_step_s, horizon)
         if incremental is not None:
             return incremental.time_costs(self.static, self.people_layers, self.interaction_cells, profiles, *timing)
         cached = "people_cost" in self._cache
@@ -441,100 +403,3 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
                      interaction_patches=tuple(interaction_patches(masks, [s.cost for s in object_spaces])),
                      density=tuple(windows), interaction_cells=tuple(masks),
                      predictions=tuple(found for found, _, _ in predicted), prediction_patches=tuple(ahead))
-
-
-def plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *,
-         method: str = "astar", planner: str | None = None, cruise_speed_mps: float | None = None,
-         workspace: SearchWorkspace | None = None, replanner: Replanner | None = None) -> Path:
-    """Plan on the social map (A* or Dijkstra) with one of the planners of planners.py.
-
-    ``planner`` (one of planners.PLANNERS) defaults to the map's ``params.planner.default_planner``.
-    ``social`` prices each interaction space at the time the robot would reach it at
-    ``cruise_speed_mps``; ``departure`` at the map's time (the seeds); ``baseline`` plans on the
-    physical grid (walls, bodies, footprints).
-    Pass the same ``workspace`` to repeated plans to reuse the search buffers (search.py), or the
-    same ``replanner`` to repeated A* plans to one goal on successive maps to reuse what the earlier
-    searches learned (replan.py: same optimal costs, far fewer cells expanded; keep one replanner
-    per planner)."""
-    params = social_map.params.planner
-    name = check_planner(params.default_planner if planner is None else planner)
-    speed = params.cruise_speed_mps if cruise_speed_mps is None else cruise_speed_mps
-    if not speed > 0.0:
-        raise ValueError(f"cruise speed must be > 0, got {speed}")
-    try:
-        try:
-            return _plan(social_map, start_xy, goal_xy, method=method, planner=name, speed=speed,
-                         workspace=workspace, replanner=replanner)
-        except StartOccupied:
-            exit_xy = dock_exit(social_map, planning_grid(social_map, name), start_xy)
-            if exit_xy is None:
-                raise
-            rest = _plan(social_map, exit_xy, goal_xy, method=method, planner=name, speed=speed,
-                         workspace=workspace, replanner=replanner)
-            first = np.asarray([social_map.spec.cell_of(*start_xy)], dtype=rest.cells.dtype)
-            step = math.hypot(exit_xy[0] - start_xy[0], exit_xy[1] - start_xy[1])
-            return Path(cells=np.vstack([first, rest.cells]),
-                        points_m=np.vstack([np.asarray([start_xy], dtype=float), rest.points_m]),
-                        cost=rest.cost + step * social_map.params.grid.free_cost, expanded=rest.expanded)
-    except (StartOccupied, GoalOccupied) as exc:
-        xy = start_xy if isinstance(exc, StartOccupied) else goal_xy
-        raise type(exc)(f"{exc}: {blocked_reason(social_map, xy)}") from None
-
-
-def dock_exit(social_map: SocialMap, grid: np.ndarray, xy: tuple[float, float]) -> tuple[float, float] | None:
-    """Where a robot that starts inside the planning margin of a wall (docked: collision-free
-    but nearer a wall than its radius plus the margin) leaves the margin: of the traversable cells
-    within the robot's inflated radius, the one with the least distance x cost to step onto (the
-    cheapest way out, straight off the wall as from a charging dock).  None when the start is not
-    in a wall's margin (a body, an object or a forbidden space blocks it) or no cell is near."""
-    spec = social_map.spec
-    row, col = spec.cell_of(*xy)
-    if not (0 <= row < grid.shape[0] and 0 <= col < grid.shape[1]) or np.isfinite(social_map.static[row, col]):
-        return None
-    reach = int(math.ceil(social_map.params.grid.robot_radius_m / spec.resolution))
-    r0, r1 = max(0, row - reach), min(grid.shape[0], row + reach + 1)
-    c0, c1 = max(0, col - reach), min(grid.shape[1], col + reach + 1)
-    window = np.asarray(grid[r0:r1, c0:c1], dtype=float)
-    rows, cols = np.nonzero(np.isfinite(window) & (window > 0))
-    if not rows.size:
-        return None
-    xs = spec.x0 + (cols + c0 + 0.5) * spec.resolution
-    ys = spec.y0 + (rows + r0 + 0.5) * spec.resolution
-    distance = np.hypot(xs - xy[0], ys - xy[1])
-    score = np.where(distance <= social_map.params.grid.robot_radius_m, distance * window[rows, cols], np.inf)
-    best = int(np.argmin(score))
-    return None if not np.isfinite(score[best]) else (float(xs[best]), float(ys[best]))
-
-
-def blocked_reason(social_map: SocialMap, xy: tuple[float, float]) -> str:
-    """Why a point is not traversable, in metres and in the map's own terms."""
-    x, y = xy
-    grid = social_map.params.grid
-    point = shapely.Point(x, y)
-    static = social_map.static[social_map.spec.cell_of(x, y)]
-    if not np.isfinite(static):
-        return (f"it is outside every room or within {grid.robot_radius_m:.2f} m (the robot's radius plus "
-                "margin) of a wall")
-    for space in social_map.object_spaces:
-        if space.footprint.distance(point) <= grid.robot_radius_m:
-            return f"it is {space.footprint.distance(point):.2f} m from the footprint of object {space.name!r}"
-    for person in social_map.people:
-        distance = math.hypot(person.x - x, person.y - y)
-        if distance <= grid.person_radius_m + grid.robot_radius_m + 0.5:
-            return f"it is {distance:.2f} m from {person.name!r} (a body or intimate zone)"
-    for space in social_map.object_spaces:
-        if space.interaction.covers(point):
-            return f"it is in the interaction space of {space.name!r}, forbidden while its activity runs"
-    return "a person's or an object's space covers it"
-
-
-def _plan(social_map: SocialMap, start_xy: tuple[float, float], goal_xy: tuple[float, float], *, method: str,
-          planner: str, speed: float, workspace: SearchWorkspace | None, replanner: Replanner | None) -> Path:
-    # The heuristic's c_min must not exceed any traversable cell's cost, or A* loses optimality.
-    c_min = cheapest_cell(social_map, planner)
-    # A replanner composes the arrival-time grid itself, from the one it searched last (replan.py).
-    costs = social_map.time_costs(speed, incremental=replanner.costs if replanner is not None else None) \
-        if planner == "social" else None
-    grid = planning_grid(social_map, planner) if costs is None else costs
-    return plan_on_grid(grid, social_map.spec, start_xy, goal_xy, method=method, c_min=c_min, workspace=workspace,
-                        searcher=replanner)

@@ -1,0 +1,172 @@
+"""Extensions found through Python entry points: chronav's own planners, controllers, predictors
+and metrics, and any installed package's, by one mechanism.
+
+Why entry points: a researcher's package registers a planner in its own pyproject.toml
+(``[project.entry-points."chronav.planners"] mine = "pkg.module:factory"``) and chronav finds it
+once installed, without an edit to chronav; chronav registers its own the same way, so nothing
+lists names by hand.  Why cached: the metadata scan reads every installed distribution's
+``entry_points.txt`` (a few ms), done at most once per kind and process; a loaded object is
+imported at most once.  Why no chronav import here: every layer (agents, tools) reads the
+registry, so it sits below them all.
+
+Each kind's own module says what an entry must be and checks it (``check`` below): planning's
+planners, control's controllers, the perception predictors, the metrics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+from importlib.metadata import EntryPoint, entry_points
+from typing import Any
+
+#: kind -> entry point group
+GROUPS: dict[str, str] = {
+    "planner": "chronav.planners",
+    "controller": "chronav.controllers",
+    "predictor": "chronav.predictors",
+    "metric": "chronav.metrics",
+}
+
+
+class UnknownExtension(LookupError):
+    """A name no installed package registers for that kind; the message lists the known ones."""
+
+
+class RefusedExtension(RuntimeError):
+    """An extension that failed to import or broke its kind's protocol (``str`` names the plug-in,
+    its package and the reason); every other extension still works."""
+
+    def __init__(self, kind: str, name: str, package: str, reason: str) -> None:
+        super().__init__(f"{kind} plug-in {name!r} from package {package!r} refused: {reason}")
+        self.kind, self.name, self.package, self.reason = kind, name, package, reason
+
+
+@dataclass(frozen=True)
+class Extension:
+    """One registered entry: kind, name, the distribution that registers it and where it lives."""
+
+    kind: str
+    name: str
+    package: str
+    version: str
+    target: str          # "module:attribute", the entry point's value
+    entry_point: EntryPoint
+
+
+@cache
+def extensions(kind: str) -> dict[str, Extension]:
+    """Every entry of ``kind`` by name (metadata only: nothing is imported).  Two packages
+    registering one name: the first found wins and the other is listed by ``shadowed``."""
+    found: dict[str, Extension] = {}
+    for ep in entry_points(group=_group(kind)):
+        dist = ep.dist
+        package = dist.metadata["Name"] if dist is not None else "?"
+        version = dist.version if dist is not None else "?"
+        if ep.name in found:
+            _SHADOWED.setdefault(kind, []).append(
+                Extension(kind, ep.name, package, version, ep.value, ep))
+            continue
+        found[ep.name] = Extension(kind, ep.name, package, version, ep.value, ep)
+    return dict(sorted(found.items()))
+
+
+_SHADOWED: dict[str, list[Extension]] = {}
+_LOADED: dict[tuple[str, str], Any] = {}
+
+
+def shadowed(kind: str) -> list[Extension]:
+    """Entries of ``kind`` hidden by another package's entry of the same name."""
+    extensions(kind)
+    return list(_SHADOWED.get(kind, ()))
+
+
+def names(kind: str) -> tuple[str, ...]:
+    """The registered names of ``kind``, sorted (metadata only)."""
+    return tuple(extensions(kind))
+
+
+def known(kind: str) -> str:
+    """``name (package), ...`` for messages."""
+    return ", ".join(f"{e.name} ({e.package})" for e in extensions(kind).values()) or "none"
+
+
+def entry(kind: str, name: str) -> Extension:
+    """The entry ``name`` of ``kind``, or UnknownExtension listing the known ones and their packages."""
+    found = extensions(kind).get(name)
+    if found is None:
+        shown = name if len(name) <= 40 else name[:37] + "..."
+        raise UnknownExtension(f"unknown {kind} {shown!r}; known: {known(kind)}")
+    return found
+
+
+def load(kind: str, name: str, check: Callable[[Any], None] | None = None) -> Any:
+    """The object ``name`` of ``kind`` registers, imported once and checked once by ``check``
+    (which raises TypeError or ValueError saying what is wrong).  Raises UnknownExtension, or
+    RefusedExtension when the import or the check fails (the reason in the user's words)."""
+    key = (kind, name)
+    if key in _LOADED:
+        return _LOADED[key]
+    ext = entry(kind, name)
+    try:
+        obj = ext.entry_point.load()
+    except Exception as exc:  # noqa: BLE001 - any import error of a plug-in is its refusal, reported
+        raise RefusedExtension(kind, name, ext.package,
+                               f"cannot import {ext.target}: {type(exc).__name__}: {exc}") from None
+    if check is not None:
+        try:
+            check(obj)
+        except (TypeError, ValueError) as exc:
+            raise RefusedExtension(kind, name, ext.package, str(exc)) from None
+    _LOADED[key] = obj
+    return obj
+
+
+def load_all(kind: str, check: Callable[[Any], None] | None = None
+             ) -> tuple[dict[str, Any], list[RefusedExtension]]:
+    """Every entry of ``kind`` loaded and checked: the good ones by name, and the refusals (so a
+    broken plug-in is reported at start and the rest run)."""
+    good: dict[str, Any] = {}
+    refused: list[RefusedExtension] = []
+    for name in extensions(kind):
+        try:
+            good[name] = load(kind, name, check)
+        except RefusedExtension as exc:
+            refused.append(exc)
+    return good, refused
+
+
+def summary(obj: Any) -> str:
+    """The first line of ``obj``'s docstring: what an extension does, for ``chronav plugins``."""
+    doc = getattr(obj, "__doc__", None) or ""
+    return doc.strip().splitlines()[0].strip() if doc.strip() else ""
+
+
+def describe(kind: str, name: str) -> str:
+    """What the extension ``name`` does (its docstring's first line), or "" when it is not
+    installed or cannot be loaded (a report made elsewhere still renders)."""
+    try:
+        return summary(load(kind, name))
+    except (UnknownExtension, RefusedExtension):
+        return ""
+
+
+def check_callable(obj: Any) -> None:
+    """The shared first check: an entry point must name a factory (a class or a function)."""
+    if not callable(obj):
+        raise TypeError(f"the entry point names a {type(obj).__name__}, not a factory (a class or a function)")
+
+
+def clear() -> None:
+    """Forget the scanned metadata and loaded objects (tests that register entries at run time)."""
+    extensions.cache_clear()
+    _SHADOWED.clear()
+    _LOADED.clear()
+
+
+def _group(kind: str) -> str:
+    try:
+        return GROUPS[kind]
+    except KeyError:
+        raise ValueError(f"unknown extension kind {kind!r}; kinds: {', '.join(GROUPS)}") from None
