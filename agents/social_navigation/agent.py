@@ -1,4 +1,9 @@
-"""The social navigation agent: social map -> global path -> elastic band -> velocity commands.
+"""The social navigation agent: social map -> global path -> local controller -> velocity commands.
+
+The global planner (``-o planner=NAME``) and the local controller (``-o controller=NAME``: chronav's
+elastic band by default, navground's behaviours or a plug-in's) are chosen by name through the
+registry (agents/lib/registry.py).  A plug-in that raises, answers NaN or infinite commands or a
+path off the map is refused: the robot gets a zero command and the mission fails naming it.
 
 It executes ``navigate`` intentions written by the executive.  Why lockstep with the simulator:
 it answers every published pose (``pose_stamp``) with one command (``cmd_stamp``), so control runs
@@ -27,8 +32,9 @@ import numpy as np
 from agents.runtime.base import Agent
 from agents.world.freshness import LOCKSTEP, observed_s, observed_up_to
 from agents.runtime.recording import Recorder
-from agents.lib.control import elastic_band as eb
-from agents.lib.control.control_law import BandFollower, ControlParams, DiffCommand
+from agents.lib.control import controllers
+from agents.lib.control.protocol import ControlInput, LocalController, RobotLimits
+from agents.lib.registry import RefusedExtension, UnknownExtension
 from agents.lib.socialmap.grid import blocked_core
 from agents.lib.planning.paths import densify, nearest_free, nearest_free_where, path_cost
 from agents.lib.planning import replan
@@ -39,6 +45,8 @@ from agents.lib.socialmap.social_map import SocialMap
 from agents.lib.planning.plan import PlannerFailed, plan
 from agents.lib.planning.planners import planner as planner_by_name
 from agents.runtime.drawing.social_map import DecisionLogger, DecisionStamp
+from agents.world.control_view import obstacle_segments, tracked_people
+from agents.world.dsr_readers import closed_doors
 from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
@@ -85,10 +93,25 @@ class SocialNavigationAgent(Agent):
         self.maps = NavigationMaps.for_scene(self.scene, margin, self.config.option("planner", DEFAULT_PLANNER))
         self.planner = planner_by_name(self.maps.planner)
         self.refusals = 0   # plug-in answers refused (raised, NaN or infinite, a path off the map)
-        self.band_params = eb.ElasticBandParams(robot_length_m=2 * robot.radius)
-        self.control = ControlParams(max_speed_mps=robot.max_speed, max_angular_speed_radps=robot.max_angular_speed,
-                                     max_accel_mps2=robot.max_acceleration, lookahead_m=0.45)
-        self.drive = "omni" if robot.kinematics == "omnidirectional" else "differential"
+        self.limits = RobotLimits(radius_m=robot.radius, max_speed_mps=robot.max_speed,
+                                  max_angular_speed_radps=robot.max_angular_speed,
+                                  max_accel_mps2=robot.max_acceleration,
+                                  drive="omni" if robot.kinematics == "omnidirectional" else "differential")
+        # The run's local controller (-o controller=NAME, agents/lib/control/controllers.py); the
+        # launcher checked the name, so a refusal here is a plug-in broken since: the error says so.
+        self.controller_name = self.config.option("controller", controllers.DEFAULT_CONTROLLER)
+        self.controller: LocalController | None = None
+        self.controller_error = ""
+        try:
+            self.controller = controllers.controller(self.controller_name, self.limits)
+        except (RefusedExtension, UnknownExtension) as exc:   # every mission fails naming it; the rest runs
+            self.controller_error = str(exc)
+            self.log.error("%s", exc)
+        wall_hook = getattr(self.controller, "use_wall_check", None)
+        if callable(wall_hook):   # a controller that wants the map's word on its band (the elastic band)
+            wall_hook(self._cuts_walls)
+        self.last_cmd = (0.0, 0.0, 0.0)   # the command last written (the controller's velocity input)
+        self._segments: tuple[tuple[str, ...], np.ndarray] | None = None
         self.cruise = self.maps.cruise_speed_mps
         self.control_dt = float(self.config.option("control_dt", "0.1"))
         # -o perception_lockstep=1 (chronav evaluate, in-process runs): answer a pose only once the
@@ -96,7 +119,7 @@ class SocialNavigationAgent(Agent):
         # intention) of that very tick.
         self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.intention_id: int | None = None
-        self.band: eb.ElasticBand | None = None
+        self.following = False   # a path is adopted and the controller follows it
         self.blocked_since: float | None = None   # sim time since when no path exists (people in the way)
         self.global_points = np.empty((0, 2))
         self._best_distance, self._progress_s = math.inf, 0.0
@@ -109,7 +132,6 @@ class SocialNavigationAgent(Agent):
         #: the longest path adopted for the intention (m): its time budget is
         #: STALL_TIMEOUT_S + 4 x this at cruise speed (the band itself shrinks as the robot advances)
         self.budget_m = 0.0
-        self.follower = BandFollower(self.drive, self.control)
         self.map: SocialMap | None = None
         self._wall_core: tuple[np.ndarray, np.ndarray] | None = None   # (static grid, blocked_core of it)
         self.replanner = Replanner()   # reuses earlier searches to the same goal (and their buffers)
@@ -135,7 +157,7 @@ class SocialNavigationAgent(Agent):
         return smap
 
     def _stamp(self, map_s: float) -> DecisionStamp:
-        return DecisionStamp(map_s=map_s, planned_s=self._planned_s if self.band is not None else None,
+        return DecisionStamp(map_s=map_s, planned_s=self._planned_s if self.following else None,
                              seen_s=observed_s(self.graph, "human_observer"))
 
     def _active_intention(self) -> IntentionView | None:
@@ -178,11 +200,11 @@ class SocialNavigationAgent(Agent):
         # processes' timing decides (a run would not repeat itself).
         pose_stamp = RobotView.from_node(robot).pose_stamp
         if self.perception_lockstep and self._replan_due(intention, now_s):
-            if self.band is None:
+            if not self.following:
                 self._plan(self.graph.world_pose(robot.id), now_s, reason="the way cleared")
             else:
                 self._replan(intention, robot, now_s)
-        if self.band is None:   # people block the way: stand still and try again (_wait_for_way)
+        if not self.following:   # people block the way: stand still and try again (_wait_for_way)
             self._wait_for_way(robot, now_s, pose_stamp)
             return
         if pose_stamp > self.last_answered:
@@ -201,9 +223,11 @@ class SocialNavigationAgent(Agent):
         self.route_rooms = intention.rooms
         self.started_s = now_s
         self.budget_m = 0.0
-        self.follower.reset()
-        self.band = None
+        self.following = False
         self.blocked_since = None
+        if self.controller is None:
+            self._refuse(self.controller_error)
+            return
         pose = self.graph.world_pose(robot.id)
         self._plan(pose, now_s, reason=f"intention {intention.name}")
         if self.intention_id is not None:   # planned, or waiting for people to clear the way
@@ -279,8 +303,10 @@ class SocialNavigationAgent(Agent):
     def _adopt(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool = True) -> None:
         self.global_points = points
         self._best_distance, self._progress_s = math.inf, now_s  # a new path: measure progress afresh
-        self.band = eb.band_from_path(points, (), self.band_params)
-        self.budget_m = max(self.budget_m, self.band.length_m)
+        self.following = True
+        if self.controller is not None:
+            self.controller.reset()   # a new path: the controller starts from it
+        self.budget_m = max(self.budget_m, float(np.hypot(*np.diff(points, axis=0).T).sum()))
         self.last_replan_s = now_s
         self._publish_path(points, now_s, reason, cost, replan)
 
@@ -314,7 +340,7 @@ class SocialNavigationAgent(Agent):
 
     def _replan(self, intention: IntentionView, robot: Any, now_s: float) -> None:
         del intention
-        if self.band is None or self.goal is None:
+        if not self.following or self.goal is None:
             return
         self.last_replan_s = now_s
         pose = self.graph.world_pose(robot.id)
@@ -336,19 +362,21 @@ class SocialNavigationAgent(Agent):
             self._adopt(points, now_s, f"replanned ({why})", new_path.cost)
 
     def _control(self, intention: IntentionView, robot: Any, now_s: float, pose_stamp: float) -> None:
-        assert self.band is not None and self.goal is not None
+        assert self.following and self.goal is not None
         pose = self.graph.world_pose(robot.id)
-        obstacles = self._laser_points(robot, pose)
+        control_input = ControlInput(pose=pose, velocity=self.last_cmd, path=self._ahead(pose),
+                                     goal_theta=self.goal[2], limits=self.limits, dt_s=self.control_dt, now_s=now_s,
+                                     people=tracked_people(self.graph, self.maps.params.grid.person_radius_m),
+                                     obstacles=self._obstacles(), scan=self._laser_points(robot, pose))
+        assert self.controller is not None   # _start refuses an intention without one
         try:
-            band = eb.step(self.band, obstacles, robot_pose=pose, params=self.band_params)
-        except eb.BandInputError:
-            band = self.band
-        self.band = band if not self._cuts_walls(band.points, pose) else \
-            eb.band_from_path(np.vstack([[pose[0], pose[1]], self._remaining_global(pose)]), (), self.band_params)
-        out = self.follower.command(pose, self.band.points, self.control_dt, goal_theta=self.goal[2])
-        cmd = out.command
-        vx, vy = (cmd.v, 0.0) if isinstance(cmd, DiffCommand) else (cmd.vx, cmd.vy)
-        omega = float(cmd.omega)
+            out = controllers.command(self.controller, self.controller_name, control_input)
+        except controllers.ControllerFailed as exc:
+            self.last_answered = pose_stamp
+            self.last_cmd = (0.0, 0.0, 0.0)
+            self._refuse(str(exc))   # _stop answers this pose with a zero command
+            return
+        vx, vy, omega = out.vx, out.vy, out.omega
         scale, contact = self._clearance_scale(robot, vx, vy)
         vx, vy = vx * scale, vy * scale
         if contact:  # pressed against something ahead: back off slowly while turning to the path
@@ -363,7 +391,7 @@ class SocialNavigationAgent(Agent):
         if now_s - self.started_s > STALL_TIMEOUT_S + 4 * self.budget_m / max(self.cruise, 0.05):
             self._fail("timed out before reaching the goal")
             return
-        remaining = self.band.length_m  # the band is cut behind the robot: it shrinks as it advances
+        remaining = out.distance_to_goal_m
         if remaining < self._best_distance - PROGRESS_M:
             self._best_distance, self._progress_s = remaining, now_s
         elif now_s - self._progress_s > STALL_S:
@@ -373,15 +401,31 @@ class SocialNavigationAgent(Agent):
             self._progress_s = now_s
             self._recover(robot, now_s)
             vx = vy = omega = 0.0
+        self.last_cmd = (vx, vy, omega)
         self.graph.update_node(robot.id, attrs={"cmd_vx": vx, "cmd_vy": vy, "cmd_omega": omega,
                                                 "cmd_stamp": pose_stamp})
         if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:
-            self.decision.log_band(self.band.points.tolist())
+            band = getattr(self.controller, "band_points", None)   # what the controller follows, if it says
+            self.decision.log_band((band if band is not None else control_input.path).tolist())
+
+    def _ahead(self, pose: tuple[float, float, float]) -> np.ndarray:
+        """The adopted global path from the point nearest the robot to the goal."""
+        points = self.global_points
+        nearest = int(np.argmin(np.hypot(points[:, 0] - pose[0], points[:, 1] - pose[1])))
+        return points[nearest:] if len(points) - nearest >= 2 else points[-2:]
+
+    def _obstacles(self) -> np.ndarray:
+        """Walls, closed doors' leaves and object footprints as segments (rebuilt when a door's
+        state changes)."""
+        closed = tuple(closed_doors(self.graph))
+        if self._segments is None or self._segments[0] != closed:
+            self._segments = (closed, obstacle_segments(self.scene, self.maps.walls(self.graph)))
+        return self._segments[1]
 
     def _recover(self, robot: Any, now_s: float) -> None:
         assert self.goal is not None
         pose = self.graph.world_pose(robot.id)
-        self.follower.reset()
+        self.last_cmd = (0.0, 0.0, 0.0)   # the robot is stopped this cycle: the controller restarts from rest
         try:
             smap = self._build_map(now_s)
             try:
@@ -440,7 +484,8 @@ class SocialNavigationAgent(Agent):
             if intention_id is not None and state is not None and g.get_node(intention_id) is not None:
                 g.update_node(intention_id, attrs={"state": state, "reason": reason})
         self.intention_id = None
-        self.band = None
+        self.following = False
+        self.last_cmd = (0.0, 0.0, 0.0)
         self.goal = self.asked_goal = None
         self.route_rooms = ()
         self._planned_s = None

@@ -70,6 +70,14 @@ class NavigationMaps:
                                                   occupancy=self._occupancy)
         return self._statics[key]
 
+    def walls_of_scene(self) -> list[Wall]:
+        """The scene's walls (doors open)."""
+        return list(self._walls)
+
+    def walls(self, graph: GraphReader) -> list[Wall]:
+        """The walls now: the scene's and the closed doors' leaves (what a local controller avoids)."""
+        return self._layout((), closed_doors(graph))[0]
+
     def build(self, graph: GraphReader, now_s: float, route_rooms: Sequence[str] = ()) -> SocialMap:
         """The social map at ``now_s`` from the DSR: people, objects, activities and closed doors
         (a closed door is a wall).  With ``route_rooms`` (the symbolic plan's rooms) other rooms are

@@ -25,7 +25,7 @@ from agents.lib.metrics.dynamic_metrics import PeopleTracks
 from agents.lib.metrics.metrics import MetricsReport, compute_metrics, read_people_csv, read_trajectory_csv
 from agents.lib.planning.search import PlanningError
 from agents.lib.socialmap.social_map import SocialMap
-from agents.lib.planning.plan import plan
+from agents.lib.planning.plan import PlannerFailed, plan
 from agents.world.building import footprint_polygons
 from agents.world.dsr_readers import running_activities, symbolic_view
 from agents.world.dsr_writers import (write_activities, write_building, write_clock, write_interactions,
@@ -151,8 +151,9 @@ def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.
 
 
 def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal: tuple[float, float], *,
-                 planner: str = "social", method: str = "astar") -> dict[str, Any]:
-    """One plan with ``planner`` (agents/lib/planning/planners.py) plus its metrics, as a JSON-ready dict."""
+                 planner: str = "social", method: str = "astar", controller: str | None = None) -> dict[str, Any]:
+    """One plan with ``planner`` (agents/lib/planning/planners.py) plus its metrics, as a JSON-ready
+    dict; with ``controller``, that local controller driven along it (offline_drive.py)."""
     maps = SceneMaps.load(scene)
     smap = maps.at(t_s)
     try:
@@ -160,6 +161,8 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
     except PlanningError as exc:
         raise OfflineError(f"no path from ({start[0]:g}, {start[1]:g}) to ({goal[0]:g}, {goal[1]:g}) m at "
                            f"{format_clock(t_s)}: {exc}", no_path=True) from None
+    except PlannerFailed as exc:
+        raise OfflineError(f"plug-in refused: {exc}", no_path=True) from None
     points = np.vstack([path.points_m])
     report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
     return {
@@ -170,7 +173,15 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
         "objects": {s.name: {"R": s.r, "band": s.band, "active": s.active} for s in smap.object_spaces},
         "metrics": {"psi_percent": report.psi_zone_percent, "psi_interaction_percent": report.psi_object_percent,
                     "d_min_person_m": report.d_min_person_m, "d_min_object_m": report.d_min_object_m},
+        **({} if controller is None else
+           {"controller": {"name": controller, **_driven(controller, maps, smap, points, t_s)}}),
     }
+
+
+def _driven(controller: str, maps: SceneMaps, smap: SocialMap, points: np.ndarray, t_s: float) -> dict[str, Any]:
+    from agents.world.offline_drive import drive   # only `chronav path --controller` needs it
+
+    return drive(controller, maps.nav, smap, points, t_s).as_dict()
 
 
 def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:

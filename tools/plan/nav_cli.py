@@ -76,8 +76,12 @@ def path_command(scene: str = typer.Argument(..., help="scene file or name in sc
                                                   "default; docs/evaluate.md); --baseline and --departure-time "
                                                   "are the same as baseline and departure"),
                  method: str = typer.Option("astar", help="astar or dijkstra"),
+                 controller: str = typer.Option(None, "--controller",
+                                                help="also drive this local controller along the path, offline "
+                                                     "(people stand where the map has them; `chronav plugins` "
+                                                     "lists the controllers)"),
                  as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-    """Plan one path on SCENE's social map at a given time and score it."""
+    """Plan one path on SCENE's social map at a given time and score it (and drive a controller along it)."""
     from agents.world.offline import OfflineError, plan_offline
 
     t_s = _clock(at, "--at")
@@ -85,16 +89,27 @@ def path_command(scene: str = typer.Argument(..., help="scene file or name in sc
     if method not in ("astar", "dijkstra"):
         raise typer.BadParameter("use astar or dijkstra", param_hint="--method")
     chosen = _planner(planner, baseline, departure_time)
+    if controller is not None:
+        from tools.system.launch_cli import check_controller
+
+        check_controller(controller, "--controller")
     try:
         result = plan_offline(scene, t_s, _xy(start, "--from"), _xy(goal, "--to"), planner=chosen,
-                              method=method)
+                              method=method, controller=controller)
     except OfflineError as exc:
         _fail(str(exc), 1 if exc.no_path else 2)
         return
+    driven = result.get("controller")
     if as_json:
         typer.echo(json.dumps(result))
-        return
-    _print_path(result, chosen, at)
+    else:
+        _print_path(result, chosen, at)
+        if driven is not None:
+            typer.echo(f"controller {driven['name']}: " + (f"refused: {driven['refused']}" if driven["refused"] else
+                       f"{'reached the goal' if driven['reached'] else 'did not reach the goal'} in "
+                       f"{driven['time_s']:.1f} s over {driven['length_m']:.2f} m"))
+    if driven is not None and (driven["refused"] or not driven["reached"]):
+        raise typer.Exit(1)
 
 
 def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:

@@ -41,8 +41,9 @@ def _status_table(status: dict[str, Any]) -> Table:
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
                       as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
                       startup_timeout_s: float | None = None, ros_domain: int | None = None,
-                      robot: str = "sim", in_process: bool = False) -> int:
+                      robot: str = "sim", in_process: bool = False, controller: str | None = None) -> int:
     """Run the system with a progress display; print the result (and the metrics report); exit code.
+    ``controller`` names the navigation's local controller (checked by the caller).
 
     Exit codes: 0 every mission done; 1 a mission not done, a timeout or an agent given up;
     2 the run could not start (bad scene, option or environment); 130 interrupted (Ctrl-C)."""
@@ -58,6 +59,8 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     interactive = sys.stderr.isatty() and not as_json
     limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
                                 ("ros_domain", ros_domain), ("robot", robot)) if v is not None and not in_process}
+    if controller is not None:
+        limits["agent_options"] = {"social_navigation": [f"controller={controller}"]}
     plain_tick = _PlainProgress(err)
     try:
         if interactive:

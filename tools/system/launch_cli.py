@@ -29,6 +29,20 @@ def _option_check(check: Callable[..., Any], option: str) -> Callable[[Any], Any
     return callback
 
 
+def check_controller(name: str, option: str) -> str:
+    """``name`` if an installed controller loads, else a usage error naming the known ones (and
+    their packages) or the plug-in, its package and why it is refused."""
+    from agents.lib.control.controllers import controller
+    from agents.lib.control.protocol import RobotLimits
+    from agents.lib.registry import RefusedExtension, UnknownExtension
+
+    try:   # built once for a generic robot: its factory and protocol are checked before anything starts
+        controller(name, RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2))
+    except (UnknownExtension, RefusedExtension) as exc:
+        raise typer.BadParameter(str(exc), param_hint=option) from None
+    return name
+
+
 def register(app: typer.Typer) -> None:
     @app.command("launch")
     def launch(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
@@ -53,6 +67,9 @@ def register(app: typer.Typer) -> None:
                in_process: bool = typer.Option(False, "--in-process",
                                                help="every agent in this process, stepped in lockstep on one graph "
                                                     "(no router, no restarts; as fast as the machine allows)"),
+               controller: str = typer.Option(None, "--controller",
+                                              help="the robot's local controller, a registered one (`chronav "
+                                                   "plugins` lists them; default elastic_band)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -70,10 +87,12 @@ def register(app: typer.Typer) -> None:
             except ValueError:
                 raise typer.BadParameter(f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')!r} is not a number; "
                                          "set it to 0-232 or give --ros-domain N") from None
+        if controller is not None:
+            check_controller(controller, "--controller")
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
-                                 robot=robot, in_process=in_process)
+                                 robot=robot, in_process=in_process, controller=controller)
         raise typer.Exit(code)
 
     @app.command("demo")
