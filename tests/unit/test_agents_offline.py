@@ -231,7 +231,7 @@ def test_people_talking_on_the_goal_get_a_stand_in_next_to_them(tmp_path: Path) 
     sim = centre.sim
     sim.rate = 1e6
     centre.tick("social_navigation")
-    assert nav.intention_id is not None and nav.band is None     # waiting: the goal is taken
+    assert nav.intention_id is not None and not nav.following    # waiting: the goal is taken
     stand_in = None
     for _ in range(3000):
         centre.tick("sim_robot")
