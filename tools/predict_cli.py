@@ -48,6 +48,8 @@ def register(app: typer.Typer) -> None:
                                               "0.4 s frames is the observer's 10 Hz"),
         model: Path | None = typer.Option(None, "--model", help="a walker model file (tools/train_prediction.py) "
                                                                 "instead of the shipped one: cross-file figures"),
+        predictor: str = typer.Option("chronav", "--predictor",
+                                      help="a registered people predictor (`chronav plugins` lists them)"),
         as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
@@ -70,12 +72,19 @@ def register(app: typer.Typer) -> None:
                 typer.echo(f"error: {exc}", err=True)
                 raise typer.Exit(2) from None
         from agents.lib.perception.walker_model import WalkerModelError, load
+        from agents.lib.registry import RefusedExtension, UnknownExtension
+        from agents.lib.socialmap.predictors import predictor as lookup_predictor
 
+        try:
+            lookup_predictor(predictor)
+        except (UnknownExtension, RefusedExtension) as exc:
+            raise typer.BadParameter(str(exc), param_hint="--predictor") from None
         try:
             walker = load(model) if model is not None else None
             results = evaluate_files(files, obs=obs, pred=pred, dt=dt, noise=noise, seed=seed, context=context,
-                                     min_speed=min_speed, detect_every=detect_every, model=walker)
-        except (PedestrianFileError, WalkerModelError) as exc:
+                                     min_speed=min_speed, detect_every=detect_every, model=walker,
+                                     predictor=predictor)
+        except (PedestrianFileError, WalkerModelError, ValueError) as exc:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         report = summary(results)
@@ -86,6 +95,7 @@ def register(app: typer.Typer) -> None:
         known += f"; walkers at {min_speed:g} m/s or more" if min_speed > 0 else ""
         known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
         known += f"; walker model {model}" if model is not None else ""
+        known += f"; predictor {predictor}" if predictor != "chronav" else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
                    f"detection noise {noise:g} m (seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "

@@ -36,7 +36,9 @@ from shapely.geometry.base import BaseGeometry
 
 from agents.lib.perception.tracking import Detection, observer_tracker
 from agents.lib.perception.walker_model import WalkerModel
-from agents.lib.socialmap.motion import MotionParams, Prediction, predict_many
+from agents.lib.socialmap.motion import MotionParams
+from agents.lib.socialmap.predictors import DEFAULT_PREDICTOR, ChronavPredictor, checked_prediction
+from agents.lib.socialmap.predictors import predictor as lookup_predictor
 from agents.lib.socialmap.types import Person
 from scenes.limits import TRAJECTORY_SAMPLES
 
@@ -164,17 +166,6 @@ def constant_velocity(observed: NDArray[np.float64], steps: int) -> NDArray[np.f
     return observed[-1] + step[None, :] * np.arange(1, steps + 1)[:, None]
 
 
-def interpolated(person: Person, found: Prediction | None, times: NDArray[np.float64]) -> NDArray[np.float64]:
-    """A prediction at ``times`` (s ahead): where it says nothing (a standing person) or stops short
-    (a wall, an arrival) the person stays at their last predicted place."""
-    here = np.array([[person.x, person.y]])
-    if found is None or len(found.times) == 0:
-        return np.repeat(here, len(times), axis=0)
-    known_t = np.concatenate([[0.0], found.times])
-    known = np.concatenate([here, found.points])
-    return np.stack([np.interp(times, known_t, known[:, 0]), np.interp(times, known_t, known[:, 1])], axis=1)
-
-
 @dataclass
 class SceneContext:
     """What chronav knows beyond the tracks, for a simulator's people.csv: the scene's walls (and
@@ -225,14 +216,17 @@ def noisy_annotations(data: Annotations, noise: float, rng: np.random.Generator)
 
 def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, noise: float = 0.0,
              seed: int = 0, motion: MotionParams | None = None, context: SceneContext | None = None,
-             min_speed: float = 0.0, detect_every: int = 1, model: WalkerModel | None = None) -> FileResult:
+             min_speed: float = 0.0, detect_every: int = 1, model: WalkerModel | None = None,
+             predictor: str = DEFAULT_PREDICTOR) -> FileResult:
     """ADE/FDE of the deployed tracker + predictor on every window of ``data``, and of the
     constant-velocity baseline on the true positions (module doc).  ``min_speed`` > 0 keeps only
     windows whose person walked at least that fast on average over the observed steps (a simulated
     day's people mostly stand, where every predictor is right).  ``detect_every`` > 1 detects
     that many times per frame (positions interpolated linearly between the frames, each detection
     with its own noise): the observer's 10 Hz on 2.5 Hz annotations is 4.  ``model``: another walker
-    model than the shipped one (a model trained on other files: cross-file figures)."""
+    model than the shipped one (a model trained on other files: cross-file figures).  ``predictor``:
+    a registered people predictor (agents/lib/socialmap/predictors.py; chronav's by default)."""
+    predicts = lookup_predictor(predictor)
     started = time.perf_counter()
     motion = (motion or MotionParams()).model_copy(update={"horizon_s": pred * dt, "step_s": dt})
     if context is not None and data.times is None:
@@ -275,10 +269,14 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
         walls = None
         if context is not None:
             people, walls = context.people_and_walls(float(data.times[start + obs - 1]), people)
-        for pid, person, found in zip(pids, people, predict_many(people, motion, walls), strict=True):
+        if predictor == DEFAULT_PREDICTOR:   # chronav's, with this evaluation's motion parameters
+            predicted = ChronavPredictor(motion).predict(people, times, walls)
+        else:
+            predicted = checked_prediction(predictor, predicts.predict(people, times, walls), len(people), pred)
+        for pid, ahead in zip(pids, predicted, strict=True):
             truth = np.array([data.people[k][pid] for k in range(start, start + obs + pred)])
             future = truth[obs:]
-            errors.append(np.linalg.norm(interpolated(person, found, times) - future, axis=1))
+            errors.append(np.linalg.norm(ahead - future, axis=1))
             cv_errors.append(np.linalg.norm(constant_velocity(truth[:obs], pred) - future, axis=1))
     if not errors:
         raise PedestrianFileError(f"{data.name}: no person is present in {obs + pred} consecutive frames "

@@ -99,14 +99,15 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     monkeypatch.setattr(tools.evaluate.figures, "all_figures", lambda *a, **k: {})   # the system test draws them
     stopped = _evaluate(tmp_path, resume=False)
     assert stopped["interrupted"] and stopped["pending"] == 1 and stopped["launched"] == 1
-    assert first.calls[0]["social_navigation"] == ["seed=4", "perception_lockstep=1", "planner=social"]
+    assert first.calls[0]["social_navigation"] == ["seed=4", "perception_lockstep=1", "planner=social",
+                                                   "controller=elastic_band"]
     assert first.calls[0]["human_observer"] == ["seed=4", "perception_lockstep=1"]
     assert {"busy_rate=0", "perception_lockstep=1"} <= set(first.calls[0]["sim_robot"])
 
     second = FakeLaunch()
     monkeypatch.setattr("tools.launch.run_system", second)
     resumed = _evaluate(tmp_path, resume=True)
-    assert [c["social_navigation"][-1] for c in second.calls] == ["planner=baseline"]   # only what was missing
+    assert [c["social_navigation"][-2] for c in second.calls] == ["planner=baseline"]   # only what was missing
     assert (resumed["launched"], resumed["resumed"], resumed["pending"], resumed["interrupted"]) == (1, 1, 0, False)
     rows = read_table(Path(resumed["table"]["parquet"]))
     assert sorted(r["planner"] for r in rows) == ["baseline", "social"]

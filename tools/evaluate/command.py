@@ -55,6 +55,18 @@ def parse_planners(text: str | None) -> list[str]:
     return _axis("--planners", "planner", text, planner_names(), planner, "social,baseline")
 
 
+def parse_controllers(text: str | None) -> list[str]:
+    """--controllers A,B (default: chronav's elastic band alone), each checked now as --planners are:
+    built once for a generic robot, so a factory that fails or breaks the protocol is refused."""
+    from agents.lib.control.controllers import controller
+    from agents.lib.control.protocol import RobotLimits
+    from tools.evaluate.sweep import DEFAULT_CONTROLLER
+
+    generic = RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2)
+    return _axis("--controllers", "controller", text, (DEFAULT_CONTROLLER,), lambda name: controller(name, generic),
+                 "elastic_band,orca")
+
+
 def _axis(option: str, kind: str, text: str | None, installed: tuple[str, ...], load: Callable[[str], object],
           example: str) -> list[str]:
     from agents.lib.registry import RefusedExtension, UnknownExtension
@@ -152,7 +164,7 @@ class _Progress:
         self.done = 0
         self.planned: dict[str, int] = {}
         for spec in specs:
-            self.planned[spec.planner] = self.planned.get(spec.planner, 0) + 1
+            self.planned[spec.method] = self.planned.get(spec.method, 0) + 1
         self.finished: dict[str, int] = dict.fromkeys(self.planned, 0)
         self.busy_s: dict[str, float] = dict.fromkeys(self.planned, 0.0)
         self.console = Console(stderr=True)
@@ -198,20 +210,20 @@ class _Progress:
         self.done += 1
         spec = RunSpec.from_dict(result["spec"])
         wall = float(result.get("wall_s", 0.0))
-        if spec.planner in self.finished:
-            self.finished[spec.planner] += 1
-            self.busy_s[spec.planner] += wall
+        if spec.method in self.finished:
+            self.finished[spec.method] += 1
+            self.busy_s[spec.method] += wall
         what = f"{spec.label}: {result.get('outcome')} ({wall:.1f} s)"
         if self.bar is not None:
-            if spec.planner in self.tasks:
-                self.bar.update(self.tasks[spec.planner], advance=1, description=what)
+            if spec.method in self.tasks:
+                self.bar.update(self.tasks[spec.method], advance=1, description=what)
             return
         if self.quiet:
             return
         elapsed = time.monotonic() - self.started
-        planner_eta = self.eta_s(spec.planner) if spec.planner in self.planned else math.nan
-        self.console.print(f"[evaluate] {self.done}/{self.total} {what}; {spec.planner} "
-                           f"{self.finished.get(spec.planner, 0)}/{self.planned.get(spec.planner, 0)}, "
+        planner_eta = self.eta_s(spec.method) if spec.method in self.planned else math.nan
+        self.console.print(f"[evaluate] {self.done}/{self.total} {what}; {spec.method} "
+                           f"{self.finished.get(spec.method, 0)}/{self.planned.get(spec.method, 0)}, "
                            f"ETA {planner_eta / 60:.1f} min; all: elapsed {elapsed / 60:.1f} min, "
                            f"ETA {self.eta_s() / 60:.1f} min", highlight=False, markup=False, soft_wrap=True)
 
@@ -221,27 +233,30 @@ MAX_SEEDS = 10_000   # seeds per scene and planner in one study (docs/limits.md)
 
 def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int | None,
              out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
-             mode: str = "in-process", record: bool = True) -> dict[str, Any]:
+             mode: str = "in-process", record: bool = True, controllers: str | None = None) -> dict[str, Any]:
     """The whole study; returns what ``--json`` prints."""
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
     from tools.evaluate.executors import parse_executor
-    from tools.evaluate.sweep import plan_sweep, read_ledger
+    from tools.evaluate.sweep import DEFAULT_CONTROLLER, method_label, plan_sweep, read_ledger
     from tools.evaluate.table import write_table
 
     _check_extras()
     chosen = parse_planners(planners)
+    drivers = parse_controllers(controllers)
+    _warn_refused_metrics()
     _check_seeds_and_timeout(seeds, timeout_s)
     scene_paths = resolve_scenes(scenes)
     out_dir = prepare_out_dir(out, resume)
     seed_list = list(range(first_seed, first_seed + seeds))
-    specs = plan_sweep(scene_paths, chosen, seed_list)
+    specs = plan_sweep(scene_paths, chosen, seed_list, drivers)
     try:
         executor = parse_executor(executor_text, jobs, mode, record)
     except ValueError as exc:
         raise EvaluateError(str(exc)) from None
     jobs = getattr(executor, "jobs", jobs)
-    prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode, "record": record}
+    prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode, "record": record,
+            "controllers": drivers}
     (out_dir / SWEEP_FILE).write_text(json.dumps({**prov, "runs": [s.to_dict() for s in specs]}, indent=2))
     earlier = read_ledger(out_dir) if resume else {}
     todo = [s for s in specs if s.key not in earlier]
@@ -259,13 +274,19 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     from agents.world.offline import SceneMaps
 
     maps = {path.stem: SceneMaps.load(path) for path in scene_paths}
-    figures = all_figures(rows, maps, out_dir, chosen)
-    report = write_report(out_dir, rows, ordered, prov, figures, chosen, pending=pending)
+    # The report groups by planner x controller: each pair is one method, named by method_label
+    # (the planner alone with the default controller, so a study without --controllers reads as before).
+    methods = [method_label(p, c) for p in chosen for c in drivers]
+    shown = [{**row, "planner": method_label(row["planner"], row.get("controller") or DEFAULT_CONTROLLER)}
+             for row in rows]
+    figures = all_figures(shown, maps, out_dir, methods)
+    report = write_report(out_dir, shown, ordered, prov, figures, methods, pending=pending)
     launched = [r for r in new if not r.get("interrupted")]
     wanted = {s.key for s in specs}
     return {"out": str(out_dir), "report": str(report), "table": {"parquet": str(parquet), "csv": str(csv)},
             "runs": len(specs), "launched": len(launched), "resumed": len(earlier.keys() & wanted),
             "ok": sum(1 for r in ordered if r.get("ok")), "failed": _failures(ordered), "pending": pending,
+            "refused_missions": int(sum(r.get("refused") or 0 for r in rows)),
             "interrupted": interrupted, "sweep_wall_s": round(sweep_wall_s, 2),
             "runs_per_min": round(len(launched) / (sweep_wall_s / 60.0), 3) if launched and sweep_wall_s > 0 else None,
             "mode": mode, "jobs": jobs, "requeued": list(getattr(executor, "requeued", [])),
@@ -303,6 +324,14 @@ def _merge_runs(specs: list[RunSpec], earlier: dict[str, dict[str, Any]], new: l
     return ordered, rows, pending
 
 
+def _warn_refused_metrics() -> None:
+    """A metric plug-in that cannot be loaded is named now; the study measures without it."""
+    from agents.lib.metrics.registered import usable_metrics
+
+    for refused in usable_metrics()[1]:
+        print(f"warning: {refused}; the study measures without it", file=sys.stderr)
+
+
 def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Each run that did not complete every mission: its label, outcome and error."""
     from tools.evaluate.sweep import RunSpec
@@ -313,6 +342,9 @@ def _failures(ordered: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def evaluate_command(
         scenes: list[str] = typer.Argument(..., help="scene files or names in scenes/"),
+        controllers: str = typer.Option(None, "--controllers", show_default=False,
+                                        help="comma-separated registered local controllers, an axis beside "
+                                             "--planners (default: elastic_band; `chronav plugins` lists them)"),
         planners: str = typer.Option(None, "--planners", show_default=False,
                                      help="comma-separated registered planners, e.g. social,baseline "
                                           "(default: every installed one; `chronav plugins` lists them)"),
@@ -341,7 +373,7 @@ def evaluate_command(
     err = Console(stderr=True)
     command = "chronav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     try:
-        summary = evaluate(scenes, planners=planners, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
+        summary = evaluate(scenes, planners=planners, controllers=controllers, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
                            executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
                            command=command, mode=mode, record=not no_record)
     except EvaluateError as exc:

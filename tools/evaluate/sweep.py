@@ -57,37 +57,56 @@ LOCKSTEP_WATCHDOG_S = 30.0
 CLEANUP_GRACE_S = 180.0
 
 
+#: the local controller of a run that names none (agents/lib/control/controllers.py); its runs keep
+#: the keys, labels and report names they had before controllers were an axis
+DEFAULT_CONTROLLER = "elastic_band"
+
+
+def method_label(planner: str, controller: str) -> str:
+    """The report's name of a planner x controller pair: the planner alone with the default controller."""
+    return planner if controller == DEFAULT_CONTROLLER else f"{planner}+{controller}"
+
+
 @dataclass(frozen=True, order=True)
 class RunSpec:
-    """One run of a sweep: a scene file, a planner and a seed."""
+    """One run of a sweep: a scene file, a planner, a seed and a local controller."""
 
     scene: str     # absolute path of the scene file
     planner: str
     seed: int
+    controller: str = DEFAULT_CONTROLLER
+
+    @property
+    def method(self) -> str:
+        return method_label(self.planner, self.controller)
 
     @property
     def key(self) -> str:
-        return f"{self.scene}|{self.planner}|{self.seed}"
+        extra = "" if self.controller == DEFAULT_CONTROLLER else f"|{self.controller}"
+        return f"{self.scene}|{self.planner}|{self.seed}{extra}"
 
     @property
     def label(self) -> str:
-        return f"{Path(self.scene).stem}/{self.planner}/seed {self.seed}"
+        return f"{Path(self.scene).stem}/{self.method}/seed {self.seed}"
 
     @property
     def slug(self) -> str:
-        return f"{Path(self.scene).stem}-{self.planner}-s{self.seed}"
+        return f"{Path(self.scene).stem}-{self.method}-s{self.seed}"
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunSpec:
-        return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]))
+        return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]),
+                   str(data.get("controller", DEFAULT_CONTROLLER)))
 
 
-def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int]) -> list[RunSpec]:
+def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int],
+               controllers: Sequence[str] = (DEFAULT_CONTROLLER,)) -> list[RunSpec]:
     """Every combination, seed by seed: a sweep stopped half way already holds whole seeds."""
-    return [RunSpec(str(scene), planner, seed) for seed in seeds for scene in scenes for planner in planners]
+    return [RunSpec(str(scene), planner, seed, controller) for seed in seeds for scene in scenes
+            for planner in planners for controller in controllers]
 
 
 def agent_options(spec: RunSpec) -> dict[str, list[str]]:
@@ -96,7 +115,7 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
     from tools.launch import AGENTS
 
     options = {name: [f"seed={spec.seed}", *LOCKSTEP_OPTIONS.get(name, [])] for name in AGENTS}
-    options["social_navigation"].append(f"planner={spec.planner}")
+    options["social_navigation"] += [f"planner={spec.planner}", f"controller={spec.controller}"]
     # Lockstep without wall-clock escapes: sim time waits while the agents plan and perceive, and a
     # late command (a slow replan on a loaded machine) is waited for instead of braking after 1 wall s.
     options["sim_robot"] += [f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]
@@ -128,7 +147,7 @@ def execute_run(spec: RunSpec, runs_dir: Path, timeout_s: float, mode: str = "la
     host = socket.gethostname()
     (result.run_dir / "evaluate.json").write_text(json.dumps({**spec.to_dict(), "host": host}))
     rows = [] if result.interrupted else mission_rows(
-        scene=spec.scene, planner=spec.planner, seed=spec.seed, run_dir=result.run_dir, rrd=rrd,
+        scene=spec.scene, planner=spec.planner, controller=spec.controller, seed=spec.seed, run_dir=result.run_dir, rrd=rrd,
         missions=result.missions, host=host, run_wall_s=result.wall_s)
     return {"key": spec.key, "spec": spec.to_dict(), "ok": result.ok, "outcome": outcome(result),
             "error": result.error, "interrupted": result.interrupted, "run_dir": str(result.run_dir), "rrd": rrd,

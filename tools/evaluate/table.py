@@ -13,6 +13,7 @@ plot and a line of the report's tables without a change here.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ from agents.world.vocabulary import MissionState
 
 #: columns that describe a row; every other column is a metric
 META_COLUMNS: tuple[str, ...] = (
-    "scene", "planner", "seed", "mission", "state", "mission_time_s", "started_s", "finished_s", "at_s",
+    "scene", "planner", "controller", "seed", "mission", "state", "reason", "refused", "mission_time_s", "started_s", "finished_s", "at_s",
     "trajectory_csv", "run_dir", "rrd", "host", "run_wall_s",
 )
 MISSIONS_DIR = "missions"
@@ -55,9 +56,25 @@ def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dic
     return float(report["at_s"]), flatten(report["metrics"])
 
 
+AT_S_COLUMN = "at_s"
+REFUSED_PREFIX = "plug-in refused"   # the navigation agent's failure reason for a refused plug-in
+
+
+class ChronavMetrics:
+    """chronav's catalogue: the seeds' path metrics, HuNavSim's and the dynamic ones (docs/metrics.md)."""
+
+    def measure(self, run: Any) -> dict[str, float]:
+        at_s, metrics = measure_mission(run.scene_file, run.trajectory_csv)
+        return {AT_S_COLUMN: at_s, **metrics}
+
+
 def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, rrd: str | None,
-                 missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float) -> list[dict[str, Any]]:
-    """One row per mission of a finished run: its state, times and (when done) its metrics."""
+                 missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float,
+                 controller: str = "elastic_band") -> list[dict[str, Any]]:
+    """One row per mission of a finished run: its state, times and (when done) every installed
+    metric's columns (agents/lib/metrics/registered.py; chronav's own catalogue is one of them)."""
+    from agents.lib.metrics.registered import MissionRun, measure_all
+
     from agents.lib.metrics.metrics import MetricsInputError, read_trajectory_csv
 
     traj_path = Path(run_dir) / "trajectory.csv"
@@ -68,8 +85,12 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
     rows = []
     for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0.0))):
         row: dict[str, Any] = {
-            "scene": Path(scene).stem, "planner": planner, "seed": int(seed), "mission": mission_id,
-            "state": str(mission.get("state")), "mission_time_s": _num(mission.get("time_s")),
+            "scene": Path(scene).stem, "planner": planner, "controller": controller, "seed": int(seed),
+            "mission": mission_id,
+            "state": str(mission.get("state")), "reason": str(mission.get("reason") or ""),
+            # a plug-in (planner or controller) refused during the mission: counted by the study
+            "refused": float(REFUSED_PREFIX in str(mission.get("reason") or "")),
+            "mission_time_s": _num(mission.get("time_s")),
             "started_s": _num(mission.get("started_s")), "finished_s": _num(mission.get("finished_s")),
             "at_s": math.nan, "trajectory_csv": None, "run_dir": str(run_dir), "rrd": rrd, "host": host,
             "run_wall_s": float(run_wall_s),
@@ -79,8 +100,13 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
             csv_path = Path(run_dir) / MISSIONS_DIR / f"{mission_id}.csv"
             if write_mission_trajectory(trajectory, row["started_s"], row["finished_s"], csv_path) >= 2:
                 row["trajectory_csv"] = str(csv_path)
-                row["at_s"], metrics = measure_mission(scene, csv_path)
+                run = MissionRun(scene_file=Path(scene), trajectory=read_trajectory_csv(csv_path),
+                                 trajectory_csv=csv_path, mission=mission_id, planner=planner, controller=controller)
+                metrics, problems = measure_all(run)
+                row["at_s"] = metrics.pop(AT_S_COLUMN, math.nan)
                 row.update(metrics)
+                for problem in problems:
+                    print(f"warning: {problem}", file=sys.stderr)
         rows.append(row)
     return rows
 
@@ -112,8 +138,8 @@ def to_arrow(rows: Sequence[Mapping[str, Any]]) -> Any:
         for name in columns:
             value = row.get(name)
             data[name].append(None if isinstance(value, float) and math.isnan(value) else value)
-    types = {name: pa.string() for name in ("scene", "planner", "mission", "state", "trajectory_csv", "run_dir",
-                                            "rrd", "host")}
+    types = {name: pa.string() for name in ("scene", "planner", "controller", "mission", "state", "reason",
+                                            "trajectory_csv", "run_dir", "rrd", "host")}
     types["seed"] = pa.int64()
     arrays = [pa.array(data[name], type=types.get(name, pa.float64())) for name in columns]
     return pa.Table.from_arrays(arrays, names=columns)
