@@ -112,3 +112,31 @@ def test_path_drives_a_controller_offline_and_reports_a_refusal(broken) -> None:
     bad = CliRunner().invoke(app, [*base, "raising_ctrl"])
     assert bad.exit_code == 1
     assert "raised RuntimeError: boom" in json.loads(bad.stdout)["controller"]["refused"]
+
+
+def test_plugins_lists_every_extension_and_says_why_one_is_refused(broken) -> None:
+    import json
+
+    from typer.testing import CliRunner
+
+    from tools.cli import app
+
+    result = CliRunner().invoke(app, ["plugins", "--json"])
+    assert result.exit_code == 0, result.output
+    listed = json.loads(result.stdout)
+    rows = {(r["kind"], r["name"]): r for r in listed["plugins"]}
+    social = rows[("planner", "social")]
+    assert (social["package"], social["status"]) == ("chronav", "ok")
+    assert social["summary"].startswith("People's zones + interaction spaces priced by R(t) at arrival")
+    assert rows[("controller", "elastic_band")]["status"] == "ok"
+    assert {("predictor", "chronav"), ("predictor", "constant_velocity"), ("metric", "chronav")} <= set(rows)
+    nan = rows[("controller", "nan_ctrl")]
+    assert (nan["package"], nan["version"], nan["status"]) == ("chronav-test-plugins", "0.1", "ok")
+    assert nan["summary"] == "Answers NaN: the navigation must refuse it."
+    missing = rows[("controller", "missing_module")]
+    assert missing["status"] == "refused" and "ModuleNotFoundError" in missing["reason"]
+    assert rows[("controller", "no_command")]["reason"].endswith("without reset() and command()")
+    assert listed["refused"] == 3
+    assert "controller plug-in 'missing_module' from package 'chronav-test-plugins' refused" in result.stderr
+    table = CliRunner().invoke(app, ["plugins"])
+    assert table.exit_code == 0 and "REFUSED" in table.stdout and "nan_ctrl" in table.stdout
