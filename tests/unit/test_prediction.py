@@ -340,3 +340,15 @@ def test_the_observers_tracker_corrects_a_walkers_velocity_and_falls_back_on_you
     assert corrected >= 3, "the model applies to the walker once the window is full"
     assert observer_tracker(0.0).model is None and observer_tracker(0.1).model is None, \
         "a detector the model was not trained for keeps the fit's velocity"
+
+
+def test_predict_evaluate_scores_any_registered_predictor(tmp_path: Path) -> None:
+    """--predictor NAME reads the registry (agents/lib/socialmap/predictors.py): chronav's constant
+    velocity predictor on the tracker's (noise-free) velocities is the baseline itself, and an
+    unknown name is refused listing the installed ones with their packages."""
+    data = tmp_path / "circles.txt"
+    _write_walkers(data)
+    row = _evaluate(str(data), "--predictor", "constant_velocity")["files"]["circles.txt"]
+    assert (row["ade"], row["fde"]) == pytest.approx((row["cv_ade"], row["cv_fde"]), abs=1e-4)
+    bad = runner.invoke(app, ["predict", "evaluate", str(data), "--predictor", "nope"])
+    assert bad.exit_code == 2 and "constant_velocity (chronav)" in " ".join(bad.output.replace("│", " ").split())
