@@ -58,6 +58,20 @@ class NotAController:
 
 
 NOT_A_FACTORY = 42
+
+
+class RaisingMetric:
+    """Raises on every mission."""
+
+    def measure(self, run):
+        raise ValueError("no such column")
+
+
+class ClashingMetric:
+    """Gives a column chronav's catalogue gives too, and one of its own."""
+
+    def measure(self, run):
+        return {"duration_s": -1.0, "clash_own": 2.0}
 '''
 
 DEFAULT_ENTRIES: dict[str, dict[str, str]] = {
@@ -66,7 +80,10 @@ DEFAULT_ENTRIES: dict[str, dict[str, str]] = {
                             "no_command": "chronav_test_plugins:NotAController",
                             "missing_module": "chronav_no_such_module:Factory"},
     "chronav.planners": {"off_map": "chronav_test_plugins:OffMapPlanner",
-                         "not_a_factory": "chronav_test_plugins:NOT_A_FACTORY"},
+                         "not_a_factory": "chronav_test_plugins:NOT_A_FACTORY",
+                         "social": "chronav_test_plugins:OffMapPlanner"},     # chronav's name, taken
+    "chronav.metrics": {"raising_metric": "chronav_test_plugins:RaisingMetric",
+                        "zz_clash": "chronav_test_plugins:ClashingMetric"},
 }
 
 

@@ -30,6 +30,9 @@ GROUPS: dict[str, str] = {
 }
 
 
+OWN_PACKAGE = "chronav"
+
+
 class UnknownExtension(LookupError):
     """A name no installed package registers for that kind; the message lists the known ones."""
 
@@ -58,17 +61,20 @@ class Extension:
 @cache
 def extensions(kind: str) -> dict[str, Extension]:
     """Every entry of ``kind`` by name (metadata only: nothing is imported).  Two packages
-    registering one name: the first found wins and the other is listed by ``shadowed``."""
+    registering one name: chronav's own keeps it (a plug-in cannot replace ``social`` behind a
+    study's back), else the first found on sys.path; the other is listed by ``shadowed``."""
     found: dict[str, Extension] = {}
     for ep in entry_points(group=_group(kind)):
         dist = ep.dist
         package = dist.metadata["Name"] if dist is not None else "?"
         version = dist.version if dist is not None else "?"
+        ext = Extension(kind, ep.name, package, version, ep.value, ep)
         if ep.name in found:
-            _SHADOWED.setdefault(kind, []).append(
-                Extension(kind, ep.name, package, version, ep.value, ep))
+            if package == OWN_PACKAGE and found[ep.name].package != OWN_PACKAGE:
+                ext, found[ep.name] = found[ep.name], ext
+            _SHADOWED.setdefault(kind, []).append(ext)
             continue
-        found[ep.name] = Extension(kind, ep.name, package, version, ep.value, ep)
+        found[ep.name] = ext
     return dict(sorted(found.items()))
 
 

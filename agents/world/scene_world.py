@@ -127,7 +127,7 @@ def _check_navigable(loaded: LoadedScene) -> tuple[str, ...]:
     if start is None and parts and not walls.is_empty and walls.distance(here) >= scene.robot.radius \
             and building.covers(here):
         # Docked: collision-free but inside the planning margin. The planner leaves the margin the
-        # cheapest way (social_map.dock_exit), as a robot backs off its charging dock.
+        # cheapest way (planning/plan.py dock_exit), as a robot backs off its charging dock.
         nearest = min(parts, key=lambda part: part.distance(here))
         if nearest.distance(here) <= PLANNING_MARGIN_M + scene.resolution:
             start = nearest

@@ -124,7 +124,9 @@ def test_plugins_lists_every_extension_and_says_why_one_is_refused(broken) -> No
     result = CliRunner().invoke(app, ["plugins", "--json"])
     assert result.exit_code == 0, result.output
     listed = json.loads(result.stdout)
-    rows = {(r["kind"], r["name"]): r for r in listed["plugins"]}
+    rows: dict = {}
+    for r in listed["plugins"]:
+        rows.setdefault((r["kind"], r["name"]), r)     # the used entry first, then a shadowed one
     social = rows[("planner", "social")]
     assert (social["package"], social["status"]) == ("chronav", "ok")
     assert social["summary"].startswith("People's zones + interaction spaces priced by R(t) at arrival")
@@ -136,7 +138,23 @@ def test_plugins_lists_every_extension_and_says_why_one_is_refused(broken) -> No
     missing = rows[("controller", "missing_module")]
     assert missing["status"] == "refused" and "ModuleNotFoundError" in missing["reason"]
     assert rows[("controller", "no_command")]["reason"].endswith("without reset() and command()")
-    assert listed["refused"] == 3
+    assert listed["refused"] == 4    # and the test package's "social", a name chronav keeps
     assert "controller plug-in 'missing_module' from package 'chronav-test-plugins' refused" in result.stderr
     table = CliRunner().invoke(app, ["plugins"])
     assert table.exit_code == 0 and "REFUSED" in table.stdout and "nan_ctrl" in table.stdout
+
+
+def test_a_taken_name_keeps_its_first_package_and_a_failing_metric_is_reported(broken, tmp_path) -> None:
+    from agents.lib.metrics.registered import MissionRun, measure_all
+    from tools.plugins_cli import inventory
+
+    assert registry.entry("planner", "social").package == "chronav"      # chronav keeps its names
+    shadowed = [r for r in inventory() if r["name"] == "social" and r["package"] == "chronav-test-plugins"]
+    assert shadowed and shadowed[0]["reason"] == "the name is taken by package 'chronav'"
+    trajectory = np.array([[0.0, 0.8, 1.2, 0.0], [10.0, 5.2, 1.2, 0.0]])
+    csv = tmp_path / "m.csv"
+    csv.write_text("t,x,y,theta\n0,0.8,1.2,0\n10,5.2,1.2,0\n", encoding="utf-8")
+    columns, problems = measure_all(MissionRun(TINY, trajectory, csv, "cross", "social", "elastic_band"))
+    assert columns["duration_s"] == 10.0 and columns["clash_own"] == 2.0     # chronav's value kept
+    assert any("metric 'raising_metric' failed on mission cross: ValueError: no such column" in p for p in problems)
+    assert any("metric 'zz_clash': column(s) duration_s already given" in p for p in problems)

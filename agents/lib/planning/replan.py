@@ -245,7 +245,7 @@ class Replanner:
         self._backward = SearchWorkspace()   # its g and closed marks are X's stored values
         self._key: tuple[int, int, int, float] | None = None
         self._bounds = np.empty(0, dtype=np.float32)
-        # Builds the arrival-time grids of the maps it searches (social_map.plan), so that the
+        # Builds the arrival-time grids of the maps it searches (plan.plan), so that the
         # bounds' pass covers only the windows that changed (incremental.py).
         self.costs = IncrementalTimeCosts()
         self._seeds = np.empty(0, dtype=np.int32)
