@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from agents.lib.metrics.registered import MissionRun
+
 
 class PathEfficiency:
     """Path efficiency: straight-line distance from start to end over the distance driven (1 = straight)."""
 
-    def measure(self, run) -> dict[str, float]:   # noqa: ANN001 - the protocol's type, see the module doc
+    def measure(self, run: MissionRun) -> dict[str, float]:
         xy = np.asarray(run.trajectory, dtype=float)[:, 1:3]
         driven = float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
         straight = float(np.hypot(*(xy[-1] - xy[0]))) if len(xy) else 0.0

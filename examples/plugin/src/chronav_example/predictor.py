@@ -7,8 +7,12 @@ Implements chronav's PeoplePredictor protocol (agents/lib/socialmap/predictors.p
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
+from shapely.geometry.base import BaseGeometry
+
+from agents.lib.socialmap.types import Person
 
 HALF_LIFE_S = 2.0
 
@@ -16,7 +20,7 @@ HALF_LIFE_S = 2.0
 class SlowingWalkers:
     """Constant heading, speed halving every 2 s (people tend to stop): a damped constant velocity."""
 
-    def predict(self, people, times_s, walls):   # noqa: ANN001 - the protocol's types, see the module doc
+    def predict(self, people: Sequence[Person], times_s: np.ndarray, walls: BaseGeometry | None) -> np.ndarray:
         times = np.asarray(times_s, dtype=float)
         rate = math.log(2.0) / HALF_LIFE_S
         travelled = (1.0 - np.exp(-rate * times)) / rate          # integral of exp(-rate t)
