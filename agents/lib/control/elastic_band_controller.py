@@ -24,6 +24,7 @@ from agents.lib.control.protocol import ControlCommand, ControlInput, FloatArray
 
 #: (band points (N, 2), robot pose) -> does the band cut a wall?  The agent's map-based check.
 WallCheck = Callable[[FloatArray, tuple[float, float, float]], bool]
+ESCAPE_SKIP_M = 0.5   # a band restarted off a wall skips the path this near the robot
 LOOKAHEAD_M = 0.45   # carrot distance the navigation agent has always used (control_law's default 0.6)
 
 
@@ -70,7 +71,10 @@ class ElasticBandController:
         except eb.BandInputError:
             band = self.band
         if self.wall_check is not None and self.wall_check(band.points, pose):
-            band = eb.band_from_path(ahead, (), self.band_params)
+            # Restart from the path beyond the robot's own half metre (it may stand in an inflated
+            # cell, which is why it is escaping): what the map judged free.
+            band = eb.band_from_path(_from_robot(pose, _beyond(pose, control_input.path, ESCAPE_SKIP_M)), (),
+                                     self.band_params)
         self.band = band
         out = self.follower.command(pose, band.points, control_input.dt_s, goal_theta=control_input.goal_theta)
         cmd = out.command
@@ -91,3 +95,9 @@ def _from_robot(pose: tuple[float, float, float], path: FloatArray) -> FloatArra
     if float(np.hypot(*(path[0] - robot[0]))) < 1e-9:
         return np.asarray(path, dtype=np.float64)
     return np.vstack([robot, path])
+
+
+def _beyond(pose: tuple[float, float, float], path: FloatArray, skip_m: float) -> FloatArray:
+    """The path from its first point farther than ``skip_m`` from the robot (its goal at least)."""
+    far = np.hypot(path[:, 0] - pose[0], path[:, 1] - pose[1]) > skip_m
+    return path[int(np.argmax(far)):] if np.any(far) else path[-1:]
