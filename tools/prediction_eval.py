@@ -237,7 +237,7 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
     between = [rng.normal(0.0, noise, (m - 1, len(frame), 2)) if noise > 0 and m > 1
                else np.zeros((max(m - 1, 0), len(frame), 2)) for frame in data.people]
     names = data.ids or None
-    times = np.arange(1, pred + 1) * dt
+    times = np.arange(1, pred + 1, dtype=np.float64) * dt
     by_start: dict[int, list[int]] = {}
     for start, pid in windows(data, obs + pred):
         if min_speed > 0:

@@ -54,7 +54,7 @@ class Agent(ABC):
         self.log = logging.getLogger(f"chronav.{config.name}")
 
     @abstractmethod
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         """Called once the replica has joined: declare signal handlers, write initial nodes.  Run by
         ``run_agent`` or the lockstep scheduler, ``graph`` checks every write against the vocabulary."""
 

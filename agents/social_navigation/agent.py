@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.world.freshness import LOCKSTEP, observed_s, observed_up_to
 from agents.runtime.recording import Recorder
 from agents.lib.control import controllers
@@ -83,7 +84,7 @@ def stand_in_goal(grid: np.ndarray, spec: Any, xy: tuple[float, float], inside: 
 class SocialNavigationAgent(Agent):
     kind = "social_navigation"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         robot = self.scene.robot

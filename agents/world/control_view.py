@@ -25,11 +25,16 @@ def tracked_people(graph: GraphReader, radius_m: float) -> NDArray[np.float64]:
     for node in graph.nodes_of_type(NodeType.PERSON):
         try:
             x, y, _theta = graph.world_pose(node.id)
-            vx, vy = float(node.attrs.get("vx", 0.0)), float(node.attrs.get("vy", 0.0))
+            vx, vy = _number(node.attrs.get("vx")), _number(node.attrs.get("vy"))
         except (KeyError, LookupError, ValueError, TypeError):
             continue
         rows.append((x, y, vx, vy, radius_m))
     return np.asarray(rows, dtype=np.float64).reshape(-1, 5)
+
+
+def _number(value: object) -> float:
+    """An attribute's number (a person not yet given a velocity stands still)."""
+    return float(value) if isinstance(value, int | float) else 0.0
 
 
 def obstacle_segments(scene: Scene, walls: Sequence[Wall]) -> NDArray[np.float64]:

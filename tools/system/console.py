@@ -57,8 +57,10 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         restart_limit = 0
     err = Console(stderr=True)
     interactive = sys.stderr.isatty() and not as_json
-    limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
-                                ("ros_domain", ros_domain), ("robot", robot)) if v is not None and not in_process}
+    limits: dict[str, Any] = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s",
+                                                                                     startup_timeout_s),
+                                                ("ros_domain", ros_domain), ("robot", robot))
+                              if v is not None and not in_process}
     if controller is not None:
         limits["agent_options"] = {"social_navigation": [f"controller={controller}"]}
     plain_tick = _PlainProgress(err)
