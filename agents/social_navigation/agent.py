@@ -367,7 +367,7 @@ class SocialNavigationAgent(Agent):
         pose = self.graph.world_pose(robot.id)
         control_input = ControlInput(pose=pose, velocity=self.last_cmd, path=self._ahead(pose),
                                      goal_theta=self.goal[2], limits=self.limits, dt_s=self.control_dt, now_s=now_s,
-                                     people=tracked_people(self.graph, self.maps.params.grid.person_radius_m),
+                                     people=self._people(),
                                      obstacles=self._obstacles(), scan=self._laser_points(robot, pose))
         assert self.controller is not None   # _start refuses an intention without one
         try:
@@ -408,6 +408,13 @@ class SocialNavigationAgent(Agent):
         if self.rec.enabled and int(pose_stamp * 10) % 5 == 0:
             band = getattr(self.controller, "band_points", None)   # what the controller follows, if it says
             self.decision.log_band((band if band is not None else control_input.path).tolist())
+
+    def _people(self) -> np.ndarray:
+        """The tracked people (K, 5), unless the controller says it does not read them
+        (``reads_people = False``: the elastic band sees people through the laser only)."""
+        if not getattr(self.controller, "reads_people", True):
+            return np.zeros((0, 5))
+        return tracked_people(self.graph, self.maps.params.grid.person_radius_m)
 
     def _ahead(self, pose: tuple[float, float, float]) -> np.ndarray:
         """The adopted global path from the point nearest the robot to the goal."""

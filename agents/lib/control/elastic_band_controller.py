@@ -31,6 +31,9 @@ LOOKAHEAD_M = 0.45   # carrot distance the navigation agent has always used (con
 class ElasticBandController:
     """Elastic band deformed by the laser, followed by chronav's control law (the seeds' method)."""
 
+    #: it sees people only through the laser: the agent need not read them from the DSR each cycle
+    reads_people = False
+
     def __init__(self, limits: RobotLimits) -> None:
         self.limits = limits
         self.band_params = eb.ElasticBandParams(robot_length_m=2 * limits.radius_m)
