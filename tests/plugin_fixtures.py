@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from agents.lib.control.elastic_band_controller import ElasticBandController
 from agents.lib.control.protocol import ControlCommand
 from agents.lib.planning.planners import BaselinePlanner
 from agents.lib.planning.search import Path
@@ -59,6 +60,18 @@ class NotAController:
 
 NOT_A_FACTORY = 42
 
+SEEN = []
+
+
+class RecordingController(ElasticBandController):
+    """The elastic band, keeping every ControlInput it is given (what the agent shows a controller)."""
+
+    reads_people = True
+
+    def command(self, control_input):
+        SEEN.append(control_input)
+        return super().command(control_input)
+
 
 class RaisingMetric:
     """Raises on every mission."""
@@ -76,6 +89,7 @@ class ClashingMetric:
 
 DEFAULT_ENTRIES: dict[str, dict[str, str]] = {
     "chronav.controllers": {"nan_ctrl": "chronav_test_plugins:NanController",
+                            "recording_ctrl": "chronav_test_plugins:RecordingController",
                             "raising_ctrl": "chronav_test_plugins:RaisingController",
                             "no_command": "chronav_test_plugins:NotAController",
                             "missing_module": "chronav_no_such_module:Factory"},
