@@ -89,12 +89,12 @@ def test_the_robot_waits_for_people_to_clear_the_only_way_then_goes(tmp_path: Pa
         "mission_id": "m", "step": 0})
     start = sim.now_s
     tick(start)
-    assert nav.intention_id == intention.id and nav.band is None and nav.blocked_since == start
+    assert nav.intention_id == intention.id and not nav.following and nav.blocked_since == start
     assert graph.get_node_by_name("robot").attrs["nav_active"] is True, "the clock keeps its lockstep pace"
     assert graph.get_node(intention.id).attrs["state"] == "active"
     write_person(graph, "doorkeeper", "resident", (17.0, 6.0, 0.0), "lounge", start + 5.0)
     tick(start + 5.0)
-    assert nav.band is not None and nav.blocked_since is None, "the doorway cleared: planned"
+    assert nav.following and nav.blocked_since is None, "the doorway cleared: planned"
     # blocked for good (a closed door): fails after the wait
     write_person(graph, "doorkeeper", "resident", (15.0, 2.4, 0.0), "corridor", start + 6.0)
     second = graph.insert_node(type="intention", name="intention/m/1", attrs={
@@ -102,7 +102,7 @@ def test_the_robot_waits_for_people_to_clear_the_only_way_then_goes(tmp_path: Pa
         "mission_id": "m", "step": 1})
     graph.update_node(intention.id, attrs={"state": "done"})
     tick(start + 6.0)
-    assert nav.intention_id == second.id and nav.band is None
+    assert nav.intention_id == second.id and not nav.following
     tick(start + 6.0 + BLOCKED_WAIT_S + 0.1)
     assert graph.get_node(second.id).attrs["state"] == "failed"
     assert "no path" in graph.get_node(second.id).attrs["reason"]

@@ -44,14 +44,14 @@ class MissionMetric(Protocol):
     def measure(self, run: MissionRun) -> Mapping[str, float]: ...
 
 
-_INSTANCES: dict[str, MissionMetric] = {}
+_INSTANCES: dict[tuple[str, int], MissionMetric] = {}
 
 
 def metric(name: str) -> MissionMetric:
     """The metric ``name``, built once per process; UnknownExtension or RefusedExtension."""
-    found = _INSTANCES.get(name)
+    factory = registry.load("metric", name, registry.check_callable)   # cached: a dict read
+    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
     if found is None:
-        factory = registry.load("metric", name, registry.check_callable)
         package = registry.entry("metric", name).package
         try:
             found = factory()
@@ -61,7 +61,7 @@ def metric(name: str) -> MissionMetric:
         if not isinstance(found, MissionMetric):
             raise registry.RefusedExtension("metric", name, package,
                                             f"its factory returned a {type(found).__name__} without measure()")
-        _INSTANCES[name] = found
+        _INSTANCES[(name, id(factory))] = found
     return found
 
 

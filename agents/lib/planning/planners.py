@@ -68,7 +68,7 @@ class InflationParams(BaseModel):
     inflation_radius_m: float = Field(1.2, gt=0, description="from the body's edge (ours, module doc)")
 
 
-_INSTANCES: dict[str, GlobalPlanner] = {}
+_INSTANCES: dict[tuple[str, int], GlobalPlanner] = {}
 
 
 def planner_names() -> tuple[str, ...]:
@@ -86,9 +86,9 @@ def check_planner(name: str) -> str:
 def planner(name: str) -> GlobalPlanner:
     """The planner ``name``, built once per process by its factory and checked against the
     protocol; UnknownExtension or RefusedExtension (plug-in, package, reason) otherwise."""
-    found = _INSTANCES.get(name)
+    factory = registry.load("planner", name, registry.check_callable)   # cached: a dict read
+    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
     if found is None:
-        factory = registry.load("planner", name, registry.check_callable)
         ext = registry.entry("planner", name)
         try:
             found = factory()
@@ -98,7 +98,7 @@ def planner(name: str) -> GlobalPlanner:
         if not isinstance(found, GlobalPlanner):
             raise registry.RefusedExtension("planner", name, ext.package,
                                             f"its factory returned a {type(found).__name__} without grid() and plan()")
-        _INSTANCES[name] = found
+        _INSTANCES[(name, id(factory))] = found
     return found
 
 

@@ -73,14 +73,14 @@ def interpolated(person: Person, found: Prediction | None, times: FloatArray) ->
     return np.stack([np.interp(times, known_t, known[:, 0]), np.interp(times, known_t, known[:, 1])], axis=1)
 
 
-_INSTANCES: dict[str, PeoplePredictor] = {}
+_INSTANCES: dict[tuple[str, int], PeoplePredictor] = {}
 
 
 def predictor(name: str) -> PeoplePredictor:
     """The predictor ``name``, built once per process; UnknownExtension or RefusedExtension."""
-    found = _INSTANCES.get(name)
+    factory = registry.load("predictor", name, registry.check_callable)   # cached: a dict read
+    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
     if found is None:
-        factory = registry.load("predictor", name, registry.check_callable)
         package = registry.entry("predictor", name).package
         try:
             found = factory()
@@ -90,7 +90,7 @@ def predictor(name: str) -> PeoplePredictor:
         if not isinstance(found, PeoplePredictor):
             raise registry.RefusedExtension("predictor", name, package,
                                             f"its factory returned a {type(found).__name__} without predict()")
-        _INSTANCES[name] = found
+        _INSTANCES[(name, id(factory))] = found
     return found
 
 
