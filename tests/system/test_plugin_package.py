@@ -18,6 +18,8 @@ import pytest
 
 from tests.support import REPO_ROOT
 
+pytestmark = pytest.mark.slow   # processes: pip, chronav runs
+
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 PACKAGE = "chronav-example-plugin"
 

@@ -6,8 +6,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from tests.plugin_fixtures import install_fake_plugins
 from tests.support import REPO_ROOT, ProcessGroup
+
+pytestmark = pytest.mark.slow   # chronav runs in their own processes
 
 TINY = REPO_ROOT / "tests" / "data" / "eval_tiny.yaml"
 
