@@ -179,9 +179,17 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
 
 
 def _driven(controller: str, maps: SceneMaps, smap: SocialMap, points: np.ndarray, t_s: float) -> dict[str, Any]:
+    """The controller driven along the path, with the path's metrics on what it drove."""
     from agents.world.offline_drive import drive   # only `chronav path --controller` needs it
 
-    return drive(controller, maps.nav, smap, points, t_s).as_dict()
+    driven = drive(controller, maps.nav, smap, points, t_s)
+    out = driven.as_dict()
+    if len(driven.trajectory) >= 2:
+        report = maps.measure(driven.trajectory, t_s)
+        out["metrics"] = {"psi_percent": report.psi_zone_percent,
+                          "psi_interaction_percent": report.psi_object_percent,
+                          "d_min_person_m": report.d_min_person_m, "d_min_object_m": report.d_min_object_m}
+    return out
 
 
 def _check_on_map(world: SceneWorld, traj: np.ndarray, source: Path) -> None:

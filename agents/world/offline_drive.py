@@ -7,7 +7,8 @@ object footprints as segments) and its command is integrated exactly (control_la
 every ``DRIVE_DT_S``.  Two simplifications: the "laser scan" is the walls' and footprints' points
 within the laser's range, 5 cm apart, without occlusion (what pushes the elastic band off
 walls), and the people stand where the map has them.  A check of the controller on the path,
-not a simulation of the day (``chronav launch --controller`` is that).
+not a simulation of the day (``chronav launch --controller`` is that).  The path's metrics (Psi,
+d_min) are measured on the driven trajectory too (agents/world/offline.py).
 """
 
 from __future__ import annotations

@@ -109,6 +109,8 @@ def test_path_drives_a_controller_offline_and_reports_a_refusal(broken) -> None:
     driven = json.loads(good.stdout)["controller"]
     assert good.exit_code == 0 and driven["reached"] and driven["refused"] is None
     assert abs(driven["points"][-1][0] - 5.2) < 0.2 and abs(driven["points"][-1][1] - 1.2) < 0.2
+    assert driven["metrics"]["d_min_person_m"]["resident"] > 0.5       # measured on what it drove
+    assert sum(driven["metrics"]["psi_percent"].values()) == pytest.approx(100.0)
     bad = CliRunner().invoke(app, [*base, "raising_ctrl"])
     assert bad.exit_code == 1
     assert "raised RuntimeError: boom" in json.loads(bad.stdout)["controller"]["refused"]
