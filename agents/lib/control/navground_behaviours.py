@@ -125,8 +125,8 @@ class HrvoParams(NavgroundParams):
         "static agents too; 0.2 m keeps a differential robot's body off a wall's end it passes "
         "(chronav's choice, tested; navground's default is 0)"))
     uncertainty_offset: float = Field(0.0, ge=0.0, description=(
-        "widening of the velocity obstacles for sensing uncertainty, the paper's uncertainty "
-        "offset (navground HRVO.uncertainty_offset default: none)"))
+        "widening of the velocity obstacles for sensing uncertainty (the HRVO library's "
+        "uncertaintyOffset; navground HRVO.uncertainty_offset default: none)"))
 
     wall_range_m: float = Field(2.0, gt=0.0, description=(
         "walls reach HRVO as discs (see WALL_DISC_RADIUS_M) only this near: its cost grows steeply "
@@ -139,16 +139,17 @@ class HrvoParams(NavgroundParams):
 
 class HlParams(NavgroundParams):
     """Human-like: Guzzi, Giusti, Gambardella, Theraulaz and Di Caro, "Human-friendly robot
-    navigation in dynamic environments", ICRA 2013 (after Moussaïd, Helbing and Theraulaz 2011):
+    navigation in dynamic environments", ICRA 2013 (after Moussaïd, Helbing and Theraulaz, "How
+    simple rules determine pedestrian behavior and crowd disasters", PNAS 108(17), 2011):
     the direction that minimises the distance to the target given the free distance to collision
     in each direction, at the speed that keeps ``eta`` from a collision."""
 
     tau_s: float = Field(0.125, ge=0.0, description=(
-        "relaxation time of the velocity towards the desired one (navground HL.tau default; the "
-        "paper's 'tau')"))
+        "relaxation time of the velocity towards the desired one: higher, gentler accelerations "
+        "(navground HL.tau default)"))
     eta_s: float = Field(0.5, gt=0.0, description=(
-        "time kept away from a collision: speed = free distance / eta (navground HL.eta default; "
-        "the paper's 'eta', after Moussaïd et al.)"))
+        "time kept away from a collision: speed = free distance / eta, as in Moussaïd et al. "
+        "(navground HL.eta default)"))
     aperture_rad: float = Field(math.pi, gt=0.0, le=math.pi, description=(
         "half-angle of the sector of candidate directions (navground HL.aperture default: all "
         "around)"))
@@ -492,3 +493,26 @@ def _same(got: Any, wanted: float | int | bool) -> bool:
     if isinstance(wanted, bool):
         return bool(got) == wanted
     return math.isclose(float(got), float(wanted), rel_tol=1e-5, abs_tol=1e-6)
+
+
+# ------------------------------------------------------------------------------------------ docs
+PARAMS_BY_BEHAVIOUR: dict[str, type[NavgroundParams]] = {
+    "ORCA": OrcaParams, "HRVO": HrvoParams, "HL": HlParams, "SocialForce": SocialForceParams}
+
+
+def parameter_table(params: type[NavgroundParams]) -> str:
+    """A markdown table of ``params``' fields: name, default, unit and description with its source.
+
+    For a behaviour's model, only what it adds to or changes in `NavgroundParams` is listed.
+    docs/baselines.md holds these tables; a unit test checks that they match the models."""
+    base = NavgroundParams.model_fields
+    rows = ["| parameter | default | unit | meaning and source |", "|---|---|---|---|"]
+    for name, info in params.model_fields.items():
+        if params is not NavgroundParams and name in base and base[name].default == info.default:
+            continue
+        unit = next((u for suffix, u in (("_mps", "m/s"), ("_radps", "rad/s"), ("_rad", "rad"), ("_m", "m"),
+                                         ("_s", "s")) if name.endswith(suffix)), "")
+        default = info.default
+        shown = f"{default:.4g}" if isinstance(default, float) else str(default)
+        rows.append(f"| `{name}` | {shown} | {unit} | {info.description or ''} |")
+    return "\n".join(rows)
