@@ -22,7 +22,8 @@ def test_the_parameter_tables_match_the_models(params: type[NavgroundParams]) ->
 
 
 def test_every_parameter_names_its_source() -> None:
-    for params in (NavgroundParams, *PARAMS_BY_BEHAVIOUR.values()):
+    models: list[type[NavgroundParams]] = [NavgroundParams, *PARAMS_BY_BEHAVIOUR.values()]
+    for params in models:
         for name, info in params.model_fields.items():
             assert info.description, f"{params.__name__}.{name} has no description"
             assert any(word in info.description for word in ("navground", "paper", "chronav", "RVO2", "HRVO")), \
