@@ -174,6 +174,16 @@ def test_commands_are_finite_for_extreme_inputs(name: str, limits: RobotLimits) 
     assert controller.command(cases[3]).reached   # the one-point path at the robot: nothing to do
 
 
+def test_a_non_finite_pose_or_period_is_a_clear_error() -> None:
+    controller = hrvo(LIMITS)
+    with pytest.raises(ValueError, match="ControlInput.pose"):
+        controller.command(ControlInput((float("nan"), 0.0, 0.0), (0.0, 0.0, 0.0), STRAIGHT, None, LIMITS, DT))
+    with pytest.raises(ValueError, match="ControlInput.dt_s"):
+        controller.command(ControlInput((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), STRAIGHT, None, LIMITS, 0.0))
+    with pytest.raises(ValueError, match="ControlInput.path"):
+        controller.command(ControlInput((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), np.zeros((0, 2)), None, LIMITS, DT))
+
+
 def test_non_finite_output_of_a_behaviour_becomes_a_stop() -> None:
     controller = orca(LIMITS)
     assert isinstance(controller, NavgroundController)

@@ -285,6 +285,10 @@ class NavgroundController:
     def command(self, control_input: ControlInput) -> ControlCommand:
         p, limits = self.params, control_input.limits
         x, y, theta = (float(v) for v in control_input.pose)
+        if not all(math.isfinite(v) for v in (x, y, theta)):
+            raise ValueError(f"ControlInput.pose: expected finite (x, y, theta), got {control_input.pose}")
+        if not (control_input.dt_s > 0.0 and math.isfinite(control_input.dt_s)):
+            raise ValueError(f"ControlInput.dt_s: expected a positive finite period, got {control_input.dt_s}")
         path = _path(control_input.path, (x, y))
         goal = path[-1]
         distance = math.hypot(goal[0] - x, goal[1] - y)
@@ -310,7 +314,8 @@ class NavgroundController:
             state.neighbors = [core.Neighbor((r[0], r[1]), r[4], (r[2], r[3]), i) for i, r in enumerate(people)]
             self._set_walls(state, segments, (x, y))
         near_goal = left <= p.lookahead_m
-        behaviour.target = core.Target.Point(target, p.goal_tolerance_m if near_goal else 0.0)
+        # Half chronav's tolerance: navground (in float32) must not stop just outside chronav's.
+        behaviour.target = core.Target.Point(target, p.goal_tolerance_m / 2 if near_goal else 0.0)
         twist = behaviour.compute_cmd(control_input.dt_s, core.Frame.relative, True)
         vx, vy = (float(v) for v in twist.velocity)
         omega = float(twist.angular_speed)
