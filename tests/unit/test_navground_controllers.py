@@ -218,6 +218,16 @@ def test_reset_forgets_the_behaviour_state() -> None:
     assert controller._behaviour is not before
 
 
+def test_the_limits_of_each_cycle_are_the_ones_obeyed() -> None:
+    controller = orca(LIMITS)
+    assert isinstance(controller, NavgroundController)
+    wide = RobotLimits(radius_m=0.5, max_speed_mps=0.2, max_angular_speed_radps=0.5, max_accel_mps2=100.0)
+    cmd = controller.command(ControlInput((0.0, 0.0, 0.0), (0.2, 0.0, 0.0), STRAIGHT, None, wide, DT))
+    assert 0.0 < cmd.vx <= 0.2 + 1e-6
+    behaviour = controller._behaviour   # navground plans for the robot it is now given
+    assert behaviour.radius == pytest.approx(0.5) and behaviour.max_speed == pytest.approx(0.2)
+
+
 def test_parameters_reach_navground_and_bad_ones_are_refused() -> None:
     controller = orca(LIMITS, OrcaParams(time_horizon_s=4.0, safety_margin_m=0.25))
     assert isinstance(controller, NavgroundController)
