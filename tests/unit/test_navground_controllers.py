@@ -12,6 +12,8 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from agents.lib.control.navground_behaviours import (
     FACTORIES,
@@ -246,3 +248,40 @@ def test_carrot_follows_the_path_round_corners_and_stops_at_the_goal() -> None:
     assert remaining == pytest.approx(2.2)
     point, _ = carrot(path, (2.1, 1.9), 0.6)
     np.testing.assert_allclose(point, [2.0, 2.0])
+
+
+coordinate = st.floats(-8.0, 8.0, allow_nan=False)
+speed = st.floats(-3.0, 3.0, allow_nan=False)
+
+
+@st.composite
+def control_inputs(draw: st.DrawFn) -> ControlInput:
+    """Any finite cycle: people anywhere (on the robot too), zero-length walls, odd velocities."""
+    limits = draw(st.sampled_from([LIMITS, OMNI]))
+    pose = (draw(coordinate), draw(coordinate), draw(st.floats(-10.0, 10.0)))
+    path = np.array(draw(st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=5)))
+    people = np.array(draw(st.lists(st.tuples(coordinate, coordinate, speed, speed, st.floats(0.0, 1.0)),
+                                    max_size=8)), dtype=float).reshape(-1, 5)
+    walls = np.array(draw(st.lists(st.tuples(coordinate, coordinate, coordinate, coordinate), max_size=6)),
+                     dtype=float).reshape(-1, 4)
+    if draw(st.booleans()) and len(walls):
+        walls[0, 2:] = walls[0, :2]   # a degenerate segment
+    velocity = (draw(speed), draw(speed), draw(speed))
+    goal_theta = draw(st.one_of(st.none(), st.floats(-4.0, 4.0)))
+    return ControlInput(pose, velocity, path, goal_theta, limits, draw(st.sampled_from([0.05, 0.1, 0.5])),
+                        people=people, obstacles=walls)
+
+
+@pytest.mark.parametrize("name", NAMES)
+@settings(max_examples=40, deadline=None)
+@given(control_input=control_inputs())
+def test_any_finite_cycle_gets_a_finite_command_within_the_limits(name: str, control_input: ControlInput) -> None:
+    limits = control_input.limits
+    cmd = FACTORIES[name](limits).command(control_input)
+    assert all(math.isfinite(v) for v in (cmd.vx, cmd.vy, cmd.omega, cmd.distance_to_goal_m))
+    assert abs(cmd.omega) <= limits.max_angular_speed_radps + 1e-6
+    if limits.drive == "differential":
+        assert cmd.vy == 0.0
+    # The speed moves from the current command towards the limit, by at most max_accel * dt.
+    previous = math.hypot(control_input.velocity[0], control_input.velocity[1] if limits.drive == "omni" else 0.0)
+    assert math.hypot(cmd.vx, cmd.vy) <= max(limits.max_speed_mps, previous) + 1e-6

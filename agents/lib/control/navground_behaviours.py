@@ -307,6 +307,8 @@ class NavgroundController:
                                                                             limits.max_accel_mps2))
         behaviour.pose = core.Pose2((x, y), theta)
         vx0, vy0, w0 = (float(v) if math.isfinite(v) else 0.0 for v in control_input.velocity)
+        if limits.drive == "differential":
+            vy0 = 0.0   # a differential robot has no sideways velocity, whatever it was told
         current = core.Twist2((vx0, vy0), w0, core.Frame.relative)
         behaviour.twist = current
         behaviour.actuated_twist = current
