@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 from agents.lib.control.navground_behaviours import (
     FACTORIES,
+    HlParams,
     NavgroundConfigError,
     NavgroundController,
     OrcaParams,
@@ -231,10 +232,12 @@ def test_the_limits_of_each_cycle_are_the_ones_obeyed() -> None:
 
 
 def test_parameters_reach_navground_and_bad_ones_are_refused() -> None:
-    controller = orca(LIMITS, OrcaParams(time_horizon_s=4.0, safety_margin_m=0.25))
-    assert isinstance(controller, NavgroundController)
+    controller = NavgroundController("ORCA", LIMITS, OrcaParams(time_horizon_s=4.0, safety_margin_m=0.25))
     assert controller._behaviour.get("time_horizon") == pytest.approx(4.0)
     assert controller._behaviour.safety_margin == pytest.approx(0.25)
+    assert NavgroundController("ORCA", LIMITS).params == OrcaParams()   # the behaviour's own defaults
+    with pytest.raises(NavgroundConfigError, match="'tau'"):   # HL's parameters are not ORCA's
+        NavgroundController("ORCA", LIMITS, HlParams())
     with pytest.raises(NavgroundConfigError, match="known: .*ORCA"):
         NavgroundController("NoSuchBehaviour", LIMITS)
     with pytest.raises(ValueError):

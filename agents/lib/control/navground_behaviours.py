@@ -277,7 +277,7 @@ class NavgroundController:
             raise NavgroundConfigError(f"limits.drive: expected 'differential' or 'omni', got {limits.drive!r}")
         self.behaviour_type = behaviour_type
         self.limits = limits
-        self.params = params if params is not None else NavgroundParams()
+        self.params = params if params is not None else PARAMS_BY_BEHAVIOUR.get(behaviour_type, NavgroundParams)()
         self._behaviour = self._make_behaviour()
 
     def reset(self) -> None:
@@ -359,7 +359,12 @@ class NavgroundController:
         behaviour.horizon = self.params.horizon_m
         behaviour.rotation_tau = self.params.rotation_tau_s
         behaviour.heading_behavior = core.Behavior.Heading.velocity
+        known = behaviour.properties
         for name, value in self.params.behaviour_properties().items():
+            if name not in known:
+                raise NavgroundConfigError(f"navground {self.behaviour_type}: no property {name!r} "
+                                           f"({type(self.params).__name__} is not its parameters; it has "
+                                           f"{', '.join(sorted(known))})")
             behaviour.set(name, value)
             if not _same(behaviour.get(name), value):   # navground's set fails silently
                 raise NavgroundConfigError(f"navground {self.behaviour_type}: property {name!r} = {value!r} "
@@ -398,24 +403,26 @@ class NavgroundController:
 
 
 # -------------------------------------------------------------------------------------- factories
-def orca(limits: RobotLimits, params: OrcaParams | None = None) -> LocalController:
+# The controller registry's entries: the robot's limits in, a controller with the documented
+# defaults out.  Other parameters: NavgroundController(type, limits, OrcaParams(...)) and so on.
+def orca(limits: RobotLimits) -> LocalController:
     """ORCA (van den Berg et al. 2011) through navground."""
-    return NavgroundController("ORCA", limits, params or OrcaParams())
+    return NavgroundController("ORCA", limits, OrcaParams())
 
 
-def hrvo(limits: RobotLimits, params: HrvoParams | None = None) -> LocalController:
+def hrvo(limits: RobotLimits) -> LocalController:
     """HRVO (Snape et al. 2011) through navground."""
-    return NavgroundController("HRVO", limits, params or HrvoParams())
+    return NavgroundController("HRVO", limits, HrvoParams())
 
 
-def human_like(limits: RobotLimits, params: HlParams | None = None) -> LocalController:
+def human_like(limits: RobotLimits) -> LocalController:
     """navground's human-like behaviour HL (Guzzi et al. 2013)."""
-    return NavgroundController("HL", limits, params or HlParams())
+    return NavgroundController("HL", limits, HlParams())
 
 
-def social_force(limits: RobotLimits, params: SocialForceParams | None = None) -> LocalController:
+def social_force(limits: RobotLimits) -> LocalController:
     """The social force model (Helbing and Molnár 1995) through navground."""
-    return NavgroundController("SocialForce", limits, params or SocialForceParams())
+    return NavgroundController("SocialForce", limits, SocialForceParams())
 
 
 FACTORIES: dict[str, Callable[[RobotLimits], LocalController]] = {
