@@ -56,10 +56,6 @@ class NavgroundConfigError(ValueError):
     """A behaviour parameter navground does not accept; the message names behaviour and parameter."""
 
 
-WALL_DISC_RADIUS_M = 0.1
-"""HRVO sees walls as rows of discs of this radius (see `NavgroundController._set_walls`)."""
-
-
 # ------------------------------------------------------------------------------------- parameters
 class NavgroundParams(BaseModel):
     """What every navground behaviour is given: chronav's path following and arrival, and
@@ -67,10 +63,13 @@ class NavgroundParams(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    safety_margin_m: float = Field(0.1, ge=0.0, description=(
-        "navground Behavior.safety_margin: clearance kept from people and walls beyond the bodies' "
-        "radii (navground's default is 0; 0.1 m as chronav's goal tolerance, so that a behaviour "
-        "does not plan to graze a person)"))
+    safety_margin_m: float = Field(0.05, ge=0.0, description=(
+        "navground Behavior.safety_margin: clearance kept from walls and people beyond the bodies' "
+        "radii (navground's default is 0). Small because the scenes' doors are 1.2 m wide for a "
+        "0.6 m robot: 0.3 m each side, and a larger wall margin closes them (chronav's choice)"))
+    social_margin_m: float = Field(0.1, ge=0.0, description=(
+        "navground Behavior.social_margin (constant): clearance kept from people only, on top of "
+        "the safety margin (navground's default is 0; chronav's choice)"))
     horizon_m: float = Field(5.0, gt=0.0, description=(
         "navground Behavior.horizon: radius of the environment the behaviour considers "
         "(navground default); farther people and walls are not passed"))
@@ -95,15 +94,17 @@ class OrcaParams(NavgroundParams):
     n-body collision avoidance", Robotics Research (ISRR 2009), Springer STAR 70, 2011; navground
     wraps the authors' RVO2 library."""
 
-    safety_margin_m: float = Field(0.3, ge=0.0, description=(
+    social_margin_m: float = Field(0.25, ge=0.0, description=(
         "ORCA leaves half of each avoidance to the other agent (reciprocity), and a person does not "
-        "run ORCA; 0.3 m keeps a differential robot clear of a person who walks at it without "
+        "run ORCA; 0.25 m keeps a differential robot clear of a person who walks at it without "
         "giving way (chronav's choice, tested; navground's default is 0)"))
     time_horizon_s: float = Field(10.0, gt=0.0, description=(
         "tau of the paper: the velocity obstacles of neighbours are truncated at this time "
         "(navground ORCA.time_horizon default, as RVO2's examples)"))
-    static_time_horizon_s: float = Field(10.0, gt=0.0, description=(
-        "the same for walls (RVO2's timeHorizonObst; navground ORCA.static_time_horizon default)"))
+    static_time_horizon_s: float = Field(2.0, gt=0.0, description=(
+        "the same for walls (RVO2's timeHorizonObst). navground's default, 10 s, caps the speed "
+        "towards a wall 3 m away at 0.3 m/s: the robot crawled a 13 m path of icra_usecase in "
+        "136 s; 2 s: 35 s (chronav's choice, tested)"))
     treat_obstacles_as_agents: bool = Field(True, description=(
         "static discs as RVO agents with zero velocity (navground default; chronav passes walls "
         "as line segments, which RVO2 handles as obstacles either way)"))
@@ -121,18 +122,24 @@ class HrvoParams(NavgroundParams):
     Reciprocal Velocity Obstacle", IEEE Transactions on Robotics 27(4), 2011; navground wraps the
     authors' HRVO library."""
 
-    safety_margin_m: float = Field(0.2, ge=0.0, description=(
-        "HRVO shares each avoidance with the other agent, and in navground walls reach it as "
-        "static agents too; 0.2 m keeps a differential robot's body off a wall's end it passes "
-        "(chronav's choice, tested; navground's default is 0)"))
+    social_margin_m: float = Field(0.1, ge=0.0, description=(
+        "HRVO shares each avoidance with the other agent too, but less than ORCA (the hybrid "
+        "obstacle); 0.1 m keeps a differential robot clear of a person who walks at it without "
+        "giving way (chronav's choice, tested; navground's default is 0)"))
     uncertainty_offset: float = Field(0.0, ge=0.0, description=(
         "widening of the velocity obstacles for sensing uncertainty (the HRVO library's "
         "uncertaintyOffset; navground HRVO.uncertainty_offset default: none)"))
 
-    wall_range_m: float = Field(2.0, gt=0.0, description=(
-        "walls reach HRVO as discs (see WALL_DISC_RADIUS_M) only this near: its cost grows steeply "
-        "with its neighbour count (measured: 192 discs within 5 m, 6 ms a step; those within 2 m, "
-        "0.3 ms); 2 m is over 3 s at 0.6 m/s (chronav's choice)"))
+    wall_range_m: float = Field(1.0, gt=0.0, description=(
+        "walls reach HRVO as discs only this near. HRVO's velocity obstacles have no time horizon: "
+        "in a closed room every direction meets a wall, and with the walls within 1.5 m the robot "
+        "froze 0.7 m before a goal 1 m from a corner of icra_usecase; beyond that, its cost grows "
+        "steeply with the number of discs (192 within 5 m: 6 ms a step). chronav's choice, tested"))
+    wall_disc_radius_m: float = Field(0.1, gt=0.0, description=(
+        "walls reach HRVO as rows of discs of this radius, one every two radii: walls 0.2 m thick "
+        "that the robot cannot slip between, and a 1.2 m door stays open. Thicker discs do not keep "
+        "HRVO farther from a wall's end (0.15 m: 0.02 m farther; 0.2 m: closed a door of "
+        "icra_usecase). chronav's choice, tested"))
 
     def behaviour_properties(self) -> dict[str, float | int | bool]:
         return {"uncertainty_offset": self.uncertainty_offset}
@@ -175,11 +182,15 @@ class SocialForceParams(NavgroundParams):
     escape panic", Nature 407, 2000: the potentials fall with the distance between the bodies'
     edges (and the safety margin), not between their centres (see `BodySocialForce`)."""
 
-    safety_margin_m: float = Field(0.3, ge=0.0, description=(
-        "added to the bodies' radii in the potentials; 0.3 m keeps a differential robot, which "
-        "cannot back away, clear of a person who walks at it without giving way (chronav's choice, "
-        "tested)"))
-    tau_s: float = Field(0.5, gt=0.0, description="relaxation time towards the desired velocity (paper: 0.5 s)")
+    social_margin_m: float = Field(0.25, ge=0.0, description=(
+        "added with the safety margin to the bodies' radii in the people's potential; 0.25 m keeps "
+        "a differential robot, which cannot back away, clear of a person who walks at it without "
+        "giving way (chronav's choice, tested)"))
+    tau_s: float = Field(0.3, gt=0.0, description=(
+        "relaxation time towards the desired velocity. The paper's 0.5 s is for a pedestrian "
+        "wanting 1.34 m/s (a pull of 2.7 m/s^2 from rest); a robot wanting 0.6 m/s would pull "
+        "with 1.2 m/s^2, and the paper's wall potential then holds it before a 1.2 m door of "
+        "icra_usecase. 0.3 s pulls with 2 m/s^2 and passes (chronav's choice, tested)"))
     step_duration_s: float = Field(1.0, gt=0.0, description=(
         "step duration Delta t of the elliptical repulsion of a moving person (navground default)"))
     phi_rad: float = Field(1.75, gt=0.0, description=(
@@ -227,7 +238,7 @@ class BodySocialForce(SocialForceBehavior):
         e = target / speed
         position = np.asarray(self.position, dtype=np.float64)
         force = (target - np.asarray(self.velocity, dtype=np.float64)) / max(self.tau, 1e-3)
-        clearance = self.radius + self.safety_margin
+        clearance = self.radius + self.safety_margin + self.social_margin.get()
         if len(self.people):
             force += self._weighted(self._people_forces(position, clearance), e)
         if len(self.segments):
@@ -356,6 +367,7 @@ class NavgroundController:
                 max_speed=limits.max_speed_mps, max_angular_speed=limits.max_angular_speed_radps)
         behaviour.radius = limits.radius_m
         behaviour.safety_margin = self.params.safety_margin_m
+        behaviour.social_margin.set(self.params.social_margin_m)
         behaviour.horizon = self.params.horizon_m
         behaviour.rotation_tau = self.params.rotation_tau_s
         behaviour.heading_behavior = core.Behavior.Heading.velocity
@@ -376,17 +388,17 @@ class NavgroundController:
 
         * ORCA: line obstacles (RVO2's polygonal obstacles, vertices included);
         * HL: line obstacles plus each segment's two ends as point obstacles: HL's line obstacles
-          have no end caps, and passing a wall's end it came 0.09 m into the robot's body;
+          have no end caps, and passing a wall's end without them the robot's body went 0.05 m
+          (differential) and 0.13 m (omni) over it;
         * HRVO: navground's HRVO ignores line obstacles (only neighbours and discs reach the HRVO
-          library), so each wall is a row of discs of radius ``WALL_DISC_RADIUS_M`` every
-          ``2 * WALL_DISC_RADIUS_M``: a 0.2 m thick wall the 0.3 m robot cannot slip through, within
-          ``HrvoParams.wall_range_m`` of the robot.
+          library), so each wall is a row of discs (`HrvoParams.wall_disc_radius_m`,
+          `HrvoParams.wall_range_m`).
         """
-        if self.behaviour_type == "HRVO":
-            reach = min(self.params.horizon_m, getattr(self.params, "wall_range_m", self.params.horizon_m))
+        if isinstance(self.params, HrvoParams):
+            radius = self.params.wall_disc_radius_m
+            reach = min(self.params.horizon_m, self.params.wall_range_m)
             state.line_obstacles = []
-            state.static_obstacles = [core.Disc((px, py), WALL_DISC_RADIUS_M)
-                                      for px, py in _wall_discs(segments, xy, reach)]
+            state.static_obstacles = [core.Disc((px, py), radius) for px, py in _wall_discs(segments, xy, reach, radius)]
             return
         state.line_obstacles = [core.LineSegment((r[0], r[1]), (r[2], r[3])) for r in segments]
         if self.behaviour_type == "HL":
@@ -478,19 +490,18 @@ def _near_segments(obstacles: FloatArray, xy: tuple[float, float], horizon_m: fl
     return rows[project_on_segments(xy, rows[:, :2], rows[:, 2:]).distance <= horizon_m]
 
 
-def _wall_discs(segments: FloatArray, xy: tuple[float, float], horizon_m: float) -> FloatArray:
-    """Centres of discs every ``2 * WALL_DISC_RADIUS_M`` along the segments, ends included,
-    those within the horizon only."""
-    spacing = 2.0 * WALL_DISC_RADIUS_M
+def _wall_discs(segments: FloatArray, xy: tuple[float, float], reach_m: float, radius_m: float) -> FloatArray:
+    """Centres of discs of ``radius_m`` every ``2 radius_m`` along the segments, ends included,
+    those whose disc comes within ``reach_m`` of ``xy``."""
     centres = []
     for x1, y1, x2, y2 in segments:
-        count = int(math.ceil(math.hypot(x2 - x1, y2 - y1) / spacing)) + 1
+        count = int(math.ceil(math.hypot(x2 - x1, y2 - y1) / (2.0 * radius_m))) + 1
         t = np.linspace(0.0, 1.0, count)[:, None]
         centres.append(np.hstack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)]))
     if not centres:
         return np.zeros((0, 2))
     points = np.vstack(centres)
-    return points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) <= horizon_m + WALL_DISC_RADIUS_M]
+    return points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) <= reach_m + radius_m]
 
 
 def _stopping_speed(distance_m: float, tolerance_m: float, max_accel_mps2: float) -> float:
