@@ -179,8 +179,9 @@ class SocialForceParams(NavgroundParams):
     """Social force: Helbing and Molnár, "Social force model for pedestrian dynamics", Physical
     Review E 51(5), 4282, 1995 (navground's implementation and defaults, which are the paper's),
     with the bodies' radii as in Helbing, Farkas and Vicsek, "Simulating dynamical features of
-    escape panic", Nature 407, 2000: the potentials fall with the distance between the bodies'
-    edges (and the safety margin), not between their centres (see `BodySocialForce`)."""
+    escape panic", Nature 407, 2000: the people's potential falls with the distance between the
+    bodies' edges (and the safety and social margins), not between their centres (see
+    `BodySocialForce`)."""
 
     social_margin_m: float = Field(0.25, ge=0.0, description=(
         "added with the safety margin to the bodies' radii in the people's potential; 0.25 m keeps "
@@ -214,8 +215,8 @@ class BodySocialForce(SocialForceBehavior):
     people's centres and ignores the robot's radius, so with the paper's constants
     (V0 = 2.1 m^2/s^2, sigma = 0.3 m) a 0.3 m robot walks into a 0.3 m person.  Here the distance
     ``b`` of the paper (the semi-minor axis of the ellipse with foci at the person and at the
-    person one ``step_duration`` ahead) is reduced by both radii and the safety margin, as in
-    Helbing, Farkas and Vicsek (2000).  Walls keep the paper's centre distance: U0 = 10 m^2/s^2 at
+    person one ``step_duration`` ahead) is reduced by both radii and the safety and social
+    margins, as in Helbing, Farkas and Vicsek (2000).  Walls keep the paper's centre distance: U0 = 10 m^2/s^2 at
     R = 0.2 m already pushes at 11 m/s^2 when the robot's edge touches one, and measured from the
     edge it would hold the robot a metre off every wall.  Everything else is the paper's:
     relaxation towards the desired velocity in ``tau``, exponential potentials, forces from
