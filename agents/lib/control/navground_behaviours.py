@@ -100,7 +100,7 @@ class OrcaParams(NavgroundParams):
         "giving way (chronav's choice, tested; navground's default is 0)"))
     time_horizon_s: float = Field(10.0, gt=0.0, description=(
         "tau of the paper: the velocity obstacles of neighbours are truncated at this time "
-        "(navground ORCA.time_horizon default, as RVO2's examples)"))
+        "(navground ORCA.time_horizon default)"))
     static_time_horizon_s: float = Field(2.0, gt=0.0, description=(
         "the same for walls (RVO2's timeHorizonObst). navground's default, 10 s, caps the speed "
         "towards a wall 3 m away at 0.3 m/s: the robot crawled a 13 m path of icra_usecase in "
@@ -129,7 +129,6 @@ class HrvoParams(NavgroundParams):
     uncertainty_offset: float = Field(0.0, ge=0.0, description=(
         "widening of the velocity obstacles for sensing uncertainty (the HRVO library's "
         "uncertaintyOffset; navground HRVO.uncertainty_offset default: none)"))
-
     wall_range_m: float = Field(1.0, gt=0.0, description=(
         "walls reach HRVO as discs only this near. HRVO's velocity obstacles have no time horizon: "
         "in a closed room every direction meets a wall, and with the walls within 1.5 m the robot "
