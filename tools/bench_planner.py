@@ -63,7 +63,16 @@ proposes, 12 people and 4 objects; the plan crosses the floor (generated in a te
                          (search.warm_up: numpy, numba, scipy.linalg, numba's registries): the floor
                          of any command that plans
   map_cells              cells of the map
-Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map]
+
+Local controllers (issue 38): one control cycle of a robot in a 10 m x 8 m room with 30 people
+within 4 m of it (seeded, walking) and 20 wall segments (the room, two tables, a cabinet):
+  controller_step_ms_30_<name>  median of one command() call of the navground controller <name>
+                         (orca, hrvo, hl, social_force; agents/lib/control/navground_behaviours.py),
+                         the people moved between calls as in a run
+  controller_step_ms_30_elastic_band  chronav's own: elastic_band.step on the simulated laser's
+                         points (91 rays, 5 m, as the scenes' robot) then BandFollower.command
+                         (the scan itself is not timed: the simulator makes it)
+Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
 """
 
 from __future__ import annotations
@@ -426,13 +435,84 @@ def bench_map(repeats: int, results: dict[str, Any]) -> None:
                     "search_start_s": round(search_s, 3)})
 
 
+def controller_scene(seed: int = 5) -> dict[str, Any]:
+    """The local controllers' benchmark scene: robot, path, 30 people near it, 20 wall segments."""
+    rng = np.random.default_rng(seed)
+    room = [(0.0, 0.0, 10.0, 0.0), (10.0, 0.0, 10.0, 8.0), (10.0, 8.0, 0.0, 8.0), (0.0, 8.0, 0.0, 0.0)]
+
+    def box(cx: float, cy: float, hx: float, hy: float) -> list[tuple[float, float, float, float]]:
+        corners = [(cx - hx, cy - hy), (cx + hx, cy - hy), (cx + hx, cy + hy), (cx - hx, cy + hy)]
+        return [(*a, *b) for a, b in zip(corners, corners[1:] + corners[:1], strict=True)]
+
+    walls = room + box(3.0, 6.0, 0.8, 0.45) + box(7.0, 2.0, 0.8, 0.45) + box(8.5, 6.5, 0.3, 0.6) \
+        + [(5.0, 0.0, 5.0, 1.2), (5.0, 8.0, 5.0, 6.8), (2.0, 0.0, 2.0, 0.8), (8.0, 8.0, 8.0, 7.4)]
+    robot = (5.0, 4.0, 0.0)
+    angle = rng.uniform(-math.pi, math.pi, 30)
+    distance = rng.uniform(0.8, 4.0, 30)
+    heading = rng.uniform(-math.pi, math.pi, 30)
+    speed = rng.uniform(0.0, 1.2, 30)
+    people = np.column_stack([robot[0] + distance * np.cos(angle), robot[1] + distance * np.sin(angle),
+                              speed * np.cos(heading), speed * np.sin(heading), np.full(30, 0.25)])
+    path = np.array([[5.0, 4.0], [6.0, 4.3], [7.5, 4.3], [9.0, 3.5]])
+    return {"robot": robot, "people": people, "walls": np.asarray(walls, dtype=np.float64), "path": path}
+
+
+def bench_controllers(repeats: int, results: dict[str, Any]) -> None:
+    """controller_step_ms_30_<name>: one control cycle of each local controller (module docstring)."""
+    from agents.lib.control.navground_behaviours import FACTORIES
+    from agents.lib.control.protocol import ControlInput, RobotLimits
+    from agents.lib.socialmap import elastic_band as eb
+    from agents.lib.socialmap.control import BandFollower
+    from agents.sim_robot.laser import Laser
+
+    scene = controller_scene()
+    limits = RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2)
+    calls = max(50, repeats * 30)
+    dt = 0.1
+    # The crowd at each call: each person walks on (a fresh world state per cycle, as in a run).
+    crowds = [scene["people"] + np.column_stack([scene["people"][:, 2:4] * dt * k, np.zeros((30, 3))])
+              for k in range(calls)]
+    inputs = [ControlInput(scene["robot"], (0.3, 0.0, 0.1), scene["path"], None, limits, dt, people=crowd,
+                           obstacles=scene["walls"]) for crowd in crowds]
+    for name, factory in FACTORIES.items():
+        controller = factory(limits)
+        for control_input in inputs[:10]:   # warm-up: first-call allocations, lazy imports
+            controller.command(control_input)
+        times = []
+        for control_input in inputs:
+            start = time.perf_counter()
+            controller.command(control_input)
+            times.append((time.perf_counter() - start) * 1e3)
+        results[f"controller_step_ms_30_{name}"] = round(statistics.median(times), 4)
+    laser = Laser(scene["walls"], 91, 5.0)
+    x, y, theta = scene["robot"]
+    scans = [laser.points(x, y, theta, laser.scan(x, y, theta, crowd[:, :2])) for crowd in crowds]
+    band = eb.band_from_path(scene["path"], scans[0])
+    follower = BandFollower("differential")
+    for points in scans[:10]:
+        follower.command(scene["robot"], eb.step(band, points, robot_pose=scene["robot"]).points, dt)
+    times = []
+    for points in scans:
+        start = time.perf_counter()
+        stepped = eb.step(band, points, robot_pose=scene["robot"])
+        follower.command(scene["robot"], stepped.points, dt)
+        times.append((time.perf_counter() - start) * 1e3)
+    results["controller_step_ms_30_elastic_band"] = round(statistics.median(times), 4)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="200,500,1000,2000", help="cells per side, comma-separated")
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--skip-compile", action="store_true", help="do not time a fresh numba compile")
     parser.add_argument("--skip-map", action="store_true", help="do not time the 100 m x 60 m building map")
+    parser.add_argument("--only", choices=["controllers"], help="time only this part (its keys alone)")
     options = parser.parse_args(argv)
+    if options.only == "controllers":
+        only: dict[str, Any] = {}
+        bench_controllers(options.repeats, only)
+        print(json.dumps(only))
+        return
     results: dict[str, Any] = {"world_size_m": WORLD_M, "people": N_PEOPLE, "objects": N_OBJECTS,
                                "ref_plan_counts_csr_build": 0}
     if not options.skip_compile:
@@ -448,6 +528,7 @@ def main(argv: list[str] | None = None) -> None:
         bench_size(size, options.repeats, results)
     if not options.skip_map:
         bench_map(options.repeats, results)
+    bench_controllers(options.repeats, results)
     print(json.dumps(results))
 
 
