@@ -66,12 +66,12 @@ proposes, 12 people and 4 objects; the plan crosses the floor (generated in a te
 
 Local controllers (issue 38): one control cycle of a robot in a 10 m x 8 m room with 30 people
 within 4 m of it (seeded, walking) and 20 wall segments (the room, two tables, a cabinet):
-  controller_step_ms_30_<name>  median of one command() call of the navground controller <name>
-                         (orca, hrvo, hl, social_force; agents/lib/control/navground_behaviours.py),
-                         the people moved between calls as in a run
-  controller_step_ms_30_elastic_band  chronav's own: elastic_band.step on the simulated laser's
-                         points (91 rays, 5 m, as the scenes' robot) then BandFollower.command
-                         (the scan itself is not timed: the simulator makes it)
+  controller_step_ms_30_<name>  median of one command() call of each registered controller <name>
+                         (chronav.controllers entry points: elastic_band, orca, hrvo, hl,
+                         social_force, and any installed plug-in's), built by the registry; the
+                         people moved between calls as in a run, the simulated laser's points (91
+                         rays, 5 m, as the scenes' robot) in ControlInput.scan (the scan itself is
+                         not timed: the simulator makes it)
 Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
 """
 
@@ -458,11 +458,11 @@ def controller_scene(seed: int = 5) -> dict[str, Any]:
 
 
 def bench_controllers(repeats: int, results: dict[str, Any]) -> None:
-    """controller_step_ms_30_<name>: one control cycle of each local controller (module docstring)."""
-    from agents.lib.control.navground_behaviours import FACTORIES
+    """controller_step_ms_30_<name>: one control cycle of each registered local controller (module
+    docstring), each built by the registry and given the same inputs (people, walls and the
+    simulated laser's returns: the elastic band reads the scan, navground's behaviours the people)."""
+    from agents.lib.control import controllers
     from agents.lib.control.protocol import ControlInput, RobotLimits
-    from agents.lib.socialmap import elastic_band as eb
-    from agents.lib.socialmap.control import BandFollower
     from agents.sim_robot.laser import Laser
 
     scene = controller_scene()
@@ -472,10 +472,13 @@ def bench_controllers(repeats: int, results: dict[str, Any]) -> None:
     # The crowd at each call: each person walks on (a fresh world state per cycle, as in a run).
     crowds = [scene["people"] + np.column_stack([scene["people"][:, 2:4] * dt * k, np.zeros((30, 3))])
               for k in range(calls)]
+    laser = Laser(scene["walls"], 91, 5.0)
+    x, y, theta = scene["robot"]
+    scans = [laser.points(x, y, theta, laser.scan(x, y, theta, crowd[:, :2])) for crowd in crowds]
     inputs = [ControlInput(scene["robot"], (0.3, 0.0, 0.1), scene["path"], None, limits, dt, people=crowd,
-                           obstacles=scene["walls"]) for crowd in crowds]
-    for name, factory in FACTORIES.items():
-        controller = factory(limits)
+                           obstacles=scene["walls"], scan=scan) for crowd, scan in zip(crowds, scans, strict=True)]
+    for name in controllers.controller_names():
+        controller = controllers.controller(name, limits)
         for control_input in inputs[:10]:   # warm-up: first-call allocations, lazy imports
             controller.command(control_input)
         times = []
@@ -484,20 +487,6 @@ def bench_controllers(repeats: int, results: dict[str, Any]) -> None:
             controller.command(control_input)
             times.append((time.perf_counter() - start) * 1e3)
         results[f"controller_step_ms_30_{name}"] = round(statistics.median(times), 4)
-    laser = Laser(scene["walls"], 91, 5.0)
-    x, y, theta = scene["robot"]
-    scans = [laser.points(x, y, theta, laser.scan(x, y, theta, crowd[:, :2])) for crowd in crowds]
-    band = eb.band_from_path(scene["path"], scans[0])
-    follower = BandFollower("differential")
-    for points in scans[:10]:
-        follower.command(scene["robot"], eb.step(band, points, robot_pose=scene["robot"]).points, dt)
-    times = []
-    for points in scans:
-        start = time.perf_counter()
-        stepped = eb.step(band, points, robot_pose=scene["robot"])
-        follower.command(scene["robot"], stepped.points, dt)
-        times.append((time.perf_counter() - start) * 1e3)
-    results["controller_step_ms_30_elastic_band"] = round(statistics.median(times), 4)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.lib.control.navground_behaviours import FACTORIES, PARAMS_BY_BEHAVIOUR, NavgroundParams, parameter_table
+from agents.lib.control import controllers
+from agents.lib.control.navground_behaviours import PARAMS_BY_BEHAVIOUR, NavgroundParams, parameter_table
 from tests.unit.test_navground_controllers import LIMITS, OMNI, STRAIGHT, drive
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "baselines.md"
@@ -50,7 +51,7 @@ def test_the_head_on_table_is_what_the_controllers_do() -> None:
         person = _person(float(speed), 0.2 if where.startswith("0.2") else 0.0)
         documented = [float(cell.strip("* ")) for cell in cells.split("|")]
         for name, value in zip(("orca", "hrvo", "hl", "social_force"), documented, strict=True):
-            poses, _, seen = drive(FACTORIES[name](limits), STRAIGHT, limits, people=person)
+            poses, _, seen = drive(controllers.controller(name, limits), STRAIGHT, limits, people=person)
             closest = min(math.hypot(p[0] - c[0, 0], p[1] - c[0, 1]) for p, c in zip(poses, seen, strict=False))
             assert closest == pytest.approx(value, abs=0.006), (
                 f"docs/baselines.md: {name}, {speed} m/s {where} the line, {drive_name}: documented {value}, "

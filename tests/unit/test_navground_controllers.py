@@ -17,7 +17,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from agents.lib.control.navground_behaviours import (
-    FACTORIES,
     HlParams,
     NavgroundConfigError,
     NavgroundController,
@@ -28,6 +27,7 @@ from agents.lib.control.navground_behaviours import (
     orca,
     social_force,
 )
+from agents.lib.control import controllers
 from agents.lib.control.protocol import ControlCommand, ControlInput, LocalController, RobotLimits
 from agents.sim_robot.laser import polygon_segments, polyline_segments
 from agents.world.building import footprint_polygons
@@ -38,6 +38,8 @@ DT = 0.1
 LIMITS = RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2)
 OMNI = RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2, drive="omni")
 STRAIGHT = np.array([[0.0, 0.0], [5.0, 0.0]])
+#: the four navground behaviours as the registry (pyproject's chronav.controllers) serves them
+FACTORIES = {name: controllers.factory(name) for name in ("hl", "hrvo", "orca", "social_force")}
 NAMES = sorted(FACTORIES)
 NO_PEOPLE = np.zeros((0, 5))
 NO_WALLS = np.zeros((0, 4))
@@ -73,8 +75,9 @@ def drive(controller: LocalController, path: np.ndarray, limits: RobotLimits = L
 
 
 def test_the_four_factories_are_local_controllers() -> None:
-    assert set(FACTORIES) == {"orca", "hrvo", "hl", "social_force"}
+    assert {"orca", "hrvo", "hl", "social_force", "elastic_band"} <= set(controllers.controller_names())
     assert FACTORIES["hl"] is human_like and FACTORIES["social_force"] is social_force
+    assert FACTORIES["orca"] is orca and FACTORIES["hrvo"] is hrvo
     for factory, kind in ((orca, "ORCA"), (hrvo, "HRVO"), (human_like, "HL"), (social_force, "SocialForce")):
         controller = factory(LIMITS)
         assert isinstance(controller, LocalController)

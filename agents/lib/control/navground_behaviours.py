@@ -39,7 +39,6 @@ command in the relative (robot) frame, so no rotation is done here.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from typing import Any
 
 import navground.core as core
@@ -437,9 +436,6 @@ def social_force(limits: RobotLimits) -> LocalController:
     return NavgroundController("SocialForce", limits, SocialForceParams())
 
 
-FACTORIES: dict[str, Callable[[RobotLimits], LocalController]] = {
-    "orca": orca, "hrvo": hrvo, "hl": human_like, "social_force": social_force}
-"""Short names of the factories (the benchmark's keys; the registry names are the platform's)."""
 
 
 # ---------------------------------------------------------------------------------------- helpers
