@@ -29,6 +29,7 @@ from typing import TypeGuard, cast
 
 import networkx as nx
 
+from grammar.canonical import canonical_key
 from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
 from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
@@ -47,6 +48,11 @@ DEFAULT_MAX_EXPANSIONS = 20_000
 MATCH_TRIES_PER_EXPANSION = 250
 MIN_MATCH_BUDGET = 100_000
 MAX_STATE_SIZE = 1_000_000
+AGM_MAX_WORLD_INCREMENT = 5
+"""AGM's planner (``agglplanner2.py``, ``maxWorldIncrement``) never searches a world with more than
+5 symbols beyond the start: with rules that create symbols each time they apply, that is what
+makes its search space finite. ``plan_growing`` starts there."""
+GROWTH_STEPS: tuple[int | None, ...] = (AGM_MAX_WORLD_INCREMENT, 10, None)
 """Bound on the facts (a state's links, nodes and attributes that differ from the world, plus one
 per state) that one search keeps: about 250 MB (measured: 242 MB peak for the whole process).
 Without it a rule that creates a node every time it applies made the kept states grow with the
@@ -144,13 +150,22 @@ def state_size(state: State) -> int:
             + len(ov.attrs) + len(ov.activated))
 
 
+def node_count(state: State) -> int:
+    """How many symbols the state's world holds (AGM's ``len(graph.nodes)``)."""
+    ov = state.overlay
+    return state.world.size - len(ov.deleted) + len(ov.created)
+
+
 class _PlanTask:
     """The planning problem as search.py sees it: states of the symbolic graph, one action per
     (rule, bindings) application, the target's match as the goal's witness."""
 
-    def __init__(self, planner: Planner, target: Target, rules: list[_Compiled], start: State) -> None:
+    def __init__(self, planner: Planner, target: Target, rules: list[_Compiled], start: State,
+                 max_new_symbols: int | None = None) -> None:
         self.planner, self.target, self.rules, self.start = planner, target, rules, start
         self.goal_pattern = planner.matcher.compile(target.pattern)
+        self.max_nodes = None if max_new_symbols is None else node_count(start) + max_new_symbols
+        self.over_growth = 0  # successors left out by the bound
 
     def initial(self) -> State:
         return self.start
@@ -160,18 +175,33 @@ class _PlanTask:
 
     def successors(self, state: State) -> Iterator[tuple[tuple[Rule, Bindings], State, float]]:
         for rule, b, nxt in self.planner.applications(state, self.rules):
+            if self.max_nodes is not None and node_count(nxt) > self.max_nodes and self.goal(nxt) is None:
+                self.over_growth += 1
+                continue
             yield (rule, b), nxt, rule.cost
 
     size = staticmethod(state_size)
 
 
-def _size_limit_reason(limit: int, expanded: int, rules: list[Rule]) -> str:
-    """Why a search that filled its memory bound stopped, in the grammar's words."""
+def _size_limit_reason(limit: int, expanded: int, rules: list[Rule],
+                       kept: tuple[tuple[tuple[Rule, Bindings], int], ...] = ()) -> str:
+    """Why a search that filled its memory bound stopped, in the grammar's words: which rules
+    produced the worlds it kept (states and facts per rule, largest first)."""
     growing = [r.name for r in rules if r.created_nodes or any(isinstance(a, FCreate) for a in effect_atoms(r.effect))]
     why = (f"rules {', '.join(growing[:5])} create nodes each time they apply, so the world keeps growing"
            if growing else "the rules keep producing new, larger worlds")
+    filled = ""
+    if kept:
+        per_rule: dict[str, list[int]] = {}
+        for (rule, _), facts in kept:
+            counts = per_rule.setdefault(rule.name, [0, 0])
+            counts[0] += 1
+            counts[1] += facts
+        ranked = sorted(per_rule.items(), key=lambda kv: (-kv[1][1], kv[0]))
+        filled = "; the kept worlds were made by " + ", ".join(
+            f"{name} ({states:,} worlds, {facts:,} facts)" for name, (states, facts) in ranked[:8])
     return (f"the search stopped after {expanded} expansions: the worlds it had to remember reached "
-            f"{limit:,} facts (the memory bound, docs/limits.md) before the target matched; {why} "
+            f"{limit:,} facts (the memory bound, docs/limits.md) before the target matched{filled}; {why} "
             f"and the target is probably unreachable: check the target and those rules")
 
 
@@ -180,8 +210,11 @@ class Planner:
     ``exclude`` names rules not to use (the hierarchical rules being expanded)."""
 
     def __init__(self, grammar: Grammar, world: nx.MultiDiGraph | World, *,
-                 include_passive: bool = False, exclude: frozenset[str] = frozenset()) -> None:
+                 include_passive: bool = False, exclude: frozenset[str] = frozenset(),
+                 max_new_symbols: int | None = None) -> None:
         self.grammar = grammar
+        # AGM's maxWorldIncrement: worlds with more symbols than the start + this are not searched
+        self.max_new_symbols = max_new_symbols
         self.world = world if isinstance(world, World) else World(world)
         self.matcher = Matcher(grammar.types, self.world)
         self.formulas = FormulaEvaluator(self.matcher)
@@ -283,9 +316,9 @@ class Planner:
         if h(start) == math.inf:
             return NoPlan("the target is unreachable: no chain of adjacency links leads the robot "
                           "to the room the target needs")
-        task = _PlanTask(self, target, rules, start)
+        task = _PlanTask(self, target, rules, start, self.max_new_symbols)
         result = astar(task, h, max_expansions=max_expansions, max_size=max_state_size,
-                       record=MAX_STATES if diagnose else 0)
+                       record=MAX_STATES if diagnose else 0, key=canonical_key)
         expanded, generated = result.expanded, result.generated
         if result.found:
             return self._reconstruct(result, target, expand)
@@ -293,7 +326,7 @@ class Planner:
             return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
                           expanded, generated)
         if result.outcome == "size_limit":
-            return NoPlan(_size_limit_reason(max_state_size, expanded, [c.rule for c in rules]),
+            return NoPlan(_size_limit_reason(max_state_size, expanded, [c.rule for c in rules], result.kept),
                           expanded, generated)
         reason = f"no sequence of rules reaches the target (all {expanded} reachable states searched)"
         diagnosis = explain(self, target, list(result.closed), [c.rule for c in rules]) if diagnose else None
@@ -355,7 +388,7 @@ class Planner:
                 nodes.append(PatternNode(node.name, node.type, pos=node.pos))
         target = Target(Pattern(tuple(nodes), rule.rhs.links), file=f"<expansion of {rule.name}>")
         sub = Planner(self.grammar, self.world, include_passive=self.include_passive,
-                      exclude=self.exclude | {rule.name})
+                      exclude=self.exclude | {rule.name}, max_new_symbols=self.max_new_symbols)
         return sub.plan(target, start=before)
 
 
@@ -420,3 +453,33 @@ def plan(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
     """Cheapest plan from ``world`` to ``target`` with ``grammar``'s rules, or ``NoPlan``."""
     planner = Planner(grammar, world, include_passive=include_passive)
     return planner.plan(target, max_expansions=max_expansions, heuristic=heuristic, prune=prune)
+
+
+def plan_growing(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
+                 max_expansions: int = DEFAULT_MAX_EXPANSIONS,
+                 steps: tuple[int | None, ...] = GROWTH_STEPS) -> tuple[PlanResult, int | None]:
+    """Plan as AGM does with node-creating rules: first among worlds at most
+    ``AGM_MAX_WORLD_INCREMENT`` symbols larger than the start (AGM's bound), then, if that finds no
+    plan, with the larger bounds of ``steps`` (``None``: unbounded). Returns the result and the bound
+    it was found with; the plan is a cheapest one among plans that stay within that bound. The
+    expansions of the failed attempts are added to the result's count. A grammar whose rules create
+    nothing is planned once, unbounded (the bound cannot matter)."""
+    creates = any(r.created_nodes or any(isinstance(a, FCreate) for a in effect_atoms(r.effect))
+                  for r in grammar.rules)
+    bounds = steps if creates else (None,)
+    world = world if isinstance(world, World) else World(world)
+    spent_expanded = spent_generated = 0
+    result: PlanResult = NoPlan("no bound tried")
+    bound: int | None = None
+    for bound in bounds:
+        result = Planner(grammar, world, max_new_symbols=bound).plan(target, max_expansions=max_expansions)
+        if result.found:
+            break
+        spent_expanded += result.expanded
+        spent_generated += result.generated
+        if not result.found and bound is not None and isinstance(result, NoPlan):
+            result = replace(result, reason=f"{result.reason} (worlds at most {bound} symbols larger than the start)")
+    if result.found:
+        result = replace(result, expanded=result.expanded + spent_expanded,
+                         generated=result.generated + spent_generated)
+    return result, bound

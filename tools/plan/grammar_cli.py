@@ -177,6 +177,10 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
                  at: str | None = typer.Option(None, "--at",
                                                   help="time of day (HH:MM) for the activities' state"),
                  max_expansions: int = typer.Option(20_000, "--max-expansions", min=1),
+                 max_new_symbols: int | None = typer.Option(
+                     None, "--max-new-symbols", min=0,
+                     help="with --world/--target: search only worlds at most N symbols larger than the start "
+                          "(default: AGM's 5, then 10, then unbounded until a plan is found)"),
                  as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
     """Plan a mission on a scene (SCENE --mission M), or a target on a world as AGM's agglplan
     (--world W --target T --grammar G); print each step with its bindings and the AGM plan file."""
@@ -201,15 +205,18 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
         for warning in grammar.warnings:  # read as AGM reads it, but probably a mistake: say so
             typer.echo(str(warning), err=True)
         if agm_mode:
-            from grammar.planner import Planner
+            from grammar.planner import plan_growing
 
             assert world_file is not None and target_file is not None
             target = load_target(target_file)
             for warning in target.warnings:
                 typer.echo(str(warning), err=True)
             world = _load_world(world_file)
-            result = Planner(grammar, world).plan(target, max_expansions=max_expansions)
-            payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file}
+            steps = (max_new_symbols,) if max_new_symbols is not None else None
+            result, bound = (plan_growing(grammar, world, target, max_expansions=max_expansions, steps=steps)
+                             if steps is not None else plan_growing(grammar, world, target, max_expansions=max_expansions))
+            payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file,
+                                       "max_new_symbols": bound}
             what = f"target {str(target_file)!r}"
         else:
             from grammar.missions import plan_mission
