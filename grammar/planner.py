@@ -75,6 +75,7 @@ class PlanStep:
     expansion: Plan | None = field(default=None, compare=False, repr=False)
     expansion_error: str | None = field(default=None, compare=False)
     agm_bindings: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+    state_after: State | None = field(default=None, compare=False, repr=False)  # the world after this step
 
     def __str__(self) -> str:
         args = ", ".join(f"{var}={name}" for var, name in self.bindings.items())
@@ -93,6 +94,7 @@ class Plan:
     generated: int
     target_bindings: Mapping[str, str]
     final_state: State | None = field(default=None, compare=False, repr=False)
+    created_ids: Mapping[int, str] = field(default_factory=dict, compare=False, repr=False)  # AGM ids given
     found: bool = field(default=True, init=False)
 
     def agm_lines(self) -> list[str]:
@@ -283,18 +285,21 @@ class Planner:
     def plan(self, target: Target, *, max_expansions: int = DEFAULT_MAX_EXPANSIONS,
              heuristic: str | Callable[[State], float] = "auto", prune: bool = True,
              start: State | None = None, expand: bool = True, diagnose: bool = True,
-             max_state_size: int = MAX_STATE_SIZE) -> PlanResult:
+             max_state_size: int = MAX_STATE_SIZE, created_ids: Mapping[int, str] | None = None) -> PlanResult:
         """A* (search.py) from the world (or from ``start``) to ``target``. ``prune`` drops rules
         irrelevant to the target (relevance.py: same reachability and optimal cost, far fewer
         states); ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search
-        (diagnosis.py); ``max_state_size`` bounds the facts the search keeps (docs/limits.md)."""
+        (diagnosis.py); ``max_state_size`` bounds the facts the search keeps (docs/limits.md);
+        ``created_ids`` gives the AGM ids of symbols that ``start`` holds but the world does not
+        (created by steps already run: grammar/executive.py)."""
         if max_expansions < 1:
             raise PlanningError(f"max_expansions must be >= 1, got {max_expansions}")
         # The expansion bound also bounds matching, which can be exponential within one expansion.
         budget = max(MIN_MATCH_BUDGET, max_expansions * MATCH_TRIES_PER_EXPANSION)
         self.matcher.budget = budget
         try:
-            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose, max_state_size)
+            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose, max_state_size,
+                              dict(created_ids or {}))
         except MatchBudgetExceeded:
             return NoPlan(f"expansion limit of {max_expansions} reached while matching patterns ({budget:,} candidate "
                           "nodes tried, the bound that limit sets on matching); the target or a rule matches the "
@@ -303,7 +308,8 @@ class Planner:
             self.matcher.budget = None
 
     def _plan(self, target: Target, max_expansions: int, heuristic: str | Callable[[State], float], prune: bool,
-              start: State | None, expand: bool, diagnose: bool, max_state_size: int) -> PlanResult:
+              start: State | None, expand: bool, diagnose: bool, max_state_size: int,
+              created_ids: dict[int, str]) -> PlanResult:
         start = start if start is not None else self.world.initial_state()
         missing = self._missing_constants(target, start)
         if missing:
@@ -321,7 +327,7 @@ class Planner:
                        record=MAX_STATES if diagnose else 0, key=canonical_key)
         expanded, generated = result.expanded, result.generated
         if result.found:
-            return self._reconstruct(result, target, expand)
+            return self._reconstruct(result, target, expand, created_ids)
         if result.outcome == "expansion_limit":
             return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
                           expanded, generated)
@@ -352,19 +358,20 @@ class Planner:
         raise PlanningError(f"unknown heuristic {heuristic!r} (use 'auto', 'zero' or a function)")
 
     def _reconstruct(self, result: SearchResult[State, tuple[Rule, Bindings]], target: Target,
-                     expand: bool) -> PlanResult:
+                     expand: bool, created_ids: Mapping[int, str]) -> PlanResult:
         expanded, generated = result.expanded, result.generated
         final = cast(State, result.goal)  # set when the search found the target
         match = cast(Bindings, result.witness)  # what _PlanTask.goal returns
-        ids = _AgmIds(self.world)
+        ids = _AgmIds(self.world, created_ids)
         steps: list[PlanStep] = []
         for index, found in enumerate(result.path):
             before, (rule, b), after = found.before, found.action, found.after
             names = {var: (before.name_of(n) if before.exists(n) else after.name_of(n)) for var, n in b.items()}
             agm = ids.step(rule, b, before, after)
-            step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm)
+            step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm,
+                            state_after=after)
             if rule.hierarchical and expand:
-                sub = self._expand(rule, b, before)
+                sub = self._expand(rule, b, before, {n: i for n, i in ids.created.items() if before.exists(n)})
                 if isinstance(sub, NoPlan):
                     if index == 0:  # AGM: the first step must be expandable, or there is no plan
                         return NoPlan(f"the plan starts with hierarchical step {step} but its expansion "
@@ -374,9 +381,9 @@ class Planner:
                     step = replace(step, expansion=sub)
             steps.append(step)
         target_names = {var: final.name_of(n) for var, n in match.items()}
-        return Plan(tuple(steps), result.cost, expanded, generated, target_names, final)
+        return Plan(tuple(steps), result.cost, expanded, generated, target_names, final, dict(ids.created))
 
-    def _expand(self, rule: Rule, bindings: Bindings, before: State) -> PlanResult:
+    def _expand(self, rule: Rule, bindings: Bindings, before: State, created_ids: Mapping[int, str]) -> PlanResult:
         """Plan the right-hand side of hierarchical ``rule`` from ``before``, its left-hand nodes
         fixed to ``bindings``, without the rules being expanded (AGM's ``excludeList``)."""
         nodes = []
@@ -389,7 +396,7 @@ class Planner:
         target = Target(Pattern(tuple(nodes), rule.rhs.links), file=f"<expansion of {rule.name}>")
         sub = Planner(self.grammar, self.world, include_passive=self.include_passive,
                       exclude=self.exclude | {rule.name}, max_new_symbols=self.max_new_symbols)
-        return sub.plan(target, start=before)
+        return sub.plan(target, start=before, created_ids=created_ids)
 
 
 class _AgmIds:
@@ -400,9 +407,9 @@ class _AgmIds:
     rule's deletions, the nodes its ``effect`` creates. The largest id is that of the graph the
     step applies to (a deleted node's id may be given again, as AGM does)."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, prior: Mapping[int, str] | None = None) -> None:
         self.world = world
-        self.created: dict[int, str] = {}  # created node -> its AGM id
+        self.created: dict[int, str] = dict(prior or {})  # created node -> its AGM id
         # integer world keys, largest first: the largest id of a state is the first that exists
         self.world_ids = sorted(((int(k), i) for i, k in enumerate(world.keys) if _is_int(k)), reverse=True)
 
@@ -457,7 +464,8 @@ def plan(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
 
 def plan_growing(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
                  max_expansions: int = DEFAULT_MAX_EXPANSIONS,
-                 steps: tuple[int | None, ...] = GROWTH_STEPS) -> tuple[PlanResult, int | None]:
+                 steps: tuple[int | None, ...] = GROWTH_STEPS, start: State | None = None,
+                 created_ids: Mapping[int, str] | None = None) -> tuple[PlanResult, int | None]:
     """Plan as AGM does with node-creating rules: first among worlds at most
     ``AGM_MAX_WORLD_INCREMENT`` symbols larger than the start (AGM's bound), then, if that finds no
     plan, with the larger bounds of ``steps`` (``None``: unbounded). Returns the result and the bound
@@ -472,7 +480,8 @@ def plan_growing(grammar: Grammar, world: nx.MultiDiGraph | World, target: Targe
     result: PlanResult = NoPlan("no bound tried")
     bound: int | None = None
     for bound in bounds:
-        result = Planner(grammar, world, max_new_symbols=bound).plan(target, max_expansions=max_expansions)
+        result = Planner(grammar, world, max_new_symbols=bound).plan(target, max_expansions=max_expansions,
+                                                                     start=start, created_ids=created_ids)
         if result.found:
             break
         spent_expanded += result.expanded

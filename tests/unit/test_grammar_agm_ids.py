@@ -244,3 +244,48 @@ def test_every_shipped_rule_creating_several_symbols_numbers_them_in_agms_order(
                     agm_creation_order_from_agm([n.name for n in rule.rhs.nodes], lhs), (path, rule.name)
                 checked.append(rule.name)
     assert {"findObject", "tell", "clutter", "clutter2", "findEgg"} <= set(checked)
+
+
+def _plan_json(grammar: Path, world: Path, target: Path, *extra: str) -> dict:
+    result = runner.invoke(app, ["plan", "--world", str(world), "--target", str(target),
+                                 "--grammar", str(grammar), "--json", *extra])
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+def test_expand_prints_the_primitive_plan_agms_executive_runs() -> None:
+    """Regression (issue 43): for a target whose plan is two hierarchical steps (as the egg
+    grammar's p1: *freirJerarquico, *enfriarJerarquico), ``--expand`` prints the primitive actions
+    AGM's executive runs, one AGM plan line each; AGM's plan checker accepts them in order."""
+    grammar, world, target = DATA / "cook_hierarchical.aggl", DATA / "cook_world.xml", DATA / "fried_cold_egg.aggt"
+    payload = _plan_json(grammar, world, target, "--expand")
+    assert [s["rule"] for s in payload["steps"]] == ["fryH", "coolH"]
+    lines = payload["primitive_plan"]["agm_plan"]
+    assert [line.split("@")[0] for line in lines] == ["move", "lightFire", "heat", "fry", "move", "startFridge",
+                                                      "cool"]
+    assert check_plan(grammar, world, lines, target)
+    # the second move starts where the first left the egg (on the fire, 5), which splicing the
+    # expansions of the abstract plan gets wrong: its coolH was expanded from the world before fryH
+    assert ast.literal_eval(lines[4].split("@", 1)[1])["c1"] == "5"
+    spliced = [step for top in payload["steps"] for step in top["expansion"]]
+    assert spliced[4]["agm_bindings"]["c1"] == "3"
+    # the text output lists the same lines after the AGM plan
+    text = runner.invoke(app, ["plan", "--world", str(world), "--target", str(target), "--grammar", str(grammar),
+                               "--expand"]).stdout.splitlines()
+    at = next(i for i, line in enumerate(text) if line.startswith("primitive plan (AGM's executive: 7 step(s)"))
+    assert [line.strip() for line in text[at + 1:]] == lines
+
+
+def test_expand_carries_the_ids_of_created_symbols_from_one_replan_to_the_next() -> None:
+    creating = DATA / "creating"
+    grammar, world, target = creating / "kitchen.aggl", creating / "kitchen_world.xml", \
+        creating / "fried_egg_on_plate.aggt"
+    payload = _plan_json(grammar, world, target, "--expand")
+    lines = payload["primitive_plan"]["agm_plan"]
+    assert lines == payload["agm_plan"]  # no hierarchical step: the executive runs the plan as it is
+    assert check_plan(grammar, world, lines, target)
+
+
+def test_expand_is_refused_without_world_and_target() -> None:
+    result = runner.invoke(app, ["plan", str(DATA / "two_rooms.xml"), "--mission", "room:kitchen", "--expand"])
+    assert result.exit_code == 2 and "--expand goes with --world" in result.output
