@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from agents.lib.socialmap.adaptive import AdaptiveParams
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall
 from agents.lib.socialmap.planners import DEFAULT_PLANNER, check_planner
@@ -43,8 +44,11 @@ class NavigationMaps:
         varies: maps built here plan with it by default (``plan(smap, ...)``) and judge paths on
         its grid (``smap.planning_grid``); UnknownPlannerError names the choices."""
         robot = scene.robot
+        # the wall adaptation makes room for the robot's body (the seed's d_r: its diameter plus the
+        # adaptation's own margin), not for the planning radius, which holds a clearance margin already
         params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m),
-                                 planner=PlannerParams(mode=check_planner(planner)))
+                                 planner=PlannerParams(mode=check_planner(planner)),
+                                 adaptive=AdaptiveParams(robot_diameter_m=2.0 * robot.radius))
         return cls(scene, params, CRUISE_FRACTION * robot.max_speed)
 
     def __post_init__(self) -> None:

@@ -402,7 +402,8 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     base_spaces = [stretched(space, p, scale, params.motion) for space, p, scale in zip(rest_spaces, people, scales,
                                                                                        strict=True)]
     adaptations = adapt_spaces(people, base_spaces, static.walls, params.zones.level(params.adaptive.zone),
-                               2.0 * grid_params.robot_radius_m, params.adaptive, occupancy=static.occupancy)
+                               params.adaptive.robot_diameter_m or 2.0 * grid_params.robot_radius_m, params.adaptive,
+                               occupancy=static.occupancy)
     spaces = [a.space for a in adaptations]
     groups = group_people(people, spaces, params.groups)
     windows = density_windows(spec, people, spaces, groups, params.zones)
