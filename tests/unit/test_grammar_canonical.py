@@ -131,3 +131,18 @@ def test_the_memory_bound_message_counts_the_worlds_each_rule_made() -> None:
     assert isinstance(result, NoPlan) and "memory bound" in result.reason
     assert "the kept worlds were made by " in result.reason
     assert "put (" in result.reason and "paint (" in result.reason and " worlds, " in result.reason
+
+
+def test_interchangeable_spotted_things_are_searched_once() -> None:
+    """Regression (issue 43: AGM's clean_table_easy target3, a 6-step plan, stopped chronav at the
+    memory bound after 1,128 expansions). The same shape, written for the tests: each ``spot``
+    creates a thing with seven symbols, each ``shareDesk`` eight more; keyed by creation order the
+    search stopped after 1,128 expansions, keyed up to renaming it finds the plan in about 330."""
+    result = runner.invoke(app, ["plan", "--world", str(DATA / "inventory_world.xml"),
+                                 "--target", str(DATA / "two_items_shared.aggt"),
+                                 "--grammar", str(DATA / "inventory.aggl"), "--json"])
+    assert result.exit_code == 0, result.output
+    payload = json.loads(result.stdout)
+    assert payload["found"] and payload["cost"] == 6
+    assert sorted(s["rule"] for s in payload["steps"]) == ["identifyDesk"] * 2 + ["shareDesk"] * 2 + ["spot"] * 2
+    assert payload["expanded"] < 1_128
