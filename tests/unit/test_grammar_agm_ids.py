@@ -277,9 +277,7 @@ def test_expand_prints_the_primitive_plan_agms_executive_runs() -> None:
 
 
 def test_expand_carries_the_ids_of_created_symbols_from_one_replan_to_the_next() -> None:
-    creating = DATA / "creating"
-    grammar, world, target = creating / "kitchen.aggl", creating / "kitchen_world.xml", \
-        creating / "fried_egg_on_plate.aggt"
+    grammar, world, target = DATA / "create_two.aggl", DATA / "create_world.xml", DATA / "hold_object.aggt"
     payload = _plan_json(grammar, world, target, "--expand")
     lines = payload["primitive_plan"]["agm_plan"]
     assert lines == payload["agm_plan"]  # no hierarchical step: the executive runs the plan as it is

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from typer.testing import CliRunner
 
 from grammar.canonical import canonical_key
@@ -98,6 +99,7 @@ def test_an_attribute_naming_a_created_symbol_follows_the_renaming() -> None:
     assert canonical_key(_after(planner, ["hall", "hall"])) != canonical_key(a)
 
 
+@pytest.mark.slow  # about 5 s of planning
 def test_the_egg_like_kitchen_plan_is_found_within_agm_s_world_growth_bound() -> None:
     """Regression (issue 43): with rules that create symbols at every step (findEgg, clutter,
     clutter2, as AGM's encuentraHuevo, estorbo, estorbo2), chronav stopped at its 1,000,000-fact
@@ -127,12 +129,13 @@ def test_an_explicit_world_growth_bound_too_small_for_the_plan_says_so() -> None
 def test_the_memory_bound_message_counts_the_worlds_each_rule_made() -> None:
     grammar = parse_grammar(PUT_BOX + "\nrule paint { lhs { t:tag } rhs { t:tag  t->t(red) } }", "put.aggl")
     target = parse_target("target { r:room  b:box  b->r(in)  b->b(shiny) }", "t.aggt")
-    result = Planner(grammar, TWO_ROOMS).plan(target, max_state_size=5_000, prune=False)
+    result = Planner(grammar, TWO_ROOMS).plan(target, max_state_size=1_500, prune=False)
     assert isinstance(result, NoPlan) and "memory bound" in result.reason
     assert "the kept worlds were made by " in result.reason
     assert "put (" in result.reason and "paint (" in result.reason and " worlds, " in result.reason
 
 
+@pytest.mark.slow  # about 5 s of planning
 def test_interchangeable_spotted_things_are_searched_once() -> None:
     """Regression (issue 43: AGM's clean_table_easy target3, a 6-step plan, stopped chronav at the
     memory bound after 1,128 expansions). The same shape, written for the tests: each ``spot``
