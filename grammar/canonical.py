@@ -61,18 +61,19 @@ class _Canon:
         self.size = state.world.size
         self.created = {i: (t, _hint(n)) for i, t, n in ov.created}
         self.names = {n: i for i, _, n in ov.created}
+        # links to world symbols never change colour: they go into the initial colour once; links
+        # between created symbols are what refinement re-reads
         self.adj: dict[int, list[tuple[int, str, int]]] = {i: [] for i in self.created}
+        self.fixed: dict[int, list[tuple[int, str, int]]] = {i: [] for i in self.created}
         self.world_edges: list[tuple[int, int, str]] = []
         self.created_edges: list[tuple[int, int, str]] = []
         for s, d, label in ov.added:
-            touches = False
-            if s in self.created:
-                self.adj[s].append((0, label, d))
-                touches = True
-            if d in self.created:
-                self.adj[d].append((1, label, s))
-                touches = True
-            (self.created_edges if touches else self.world_edges).append((s, d, label))
+            s_new, d_new = s in self.created, d in self.created
+            if s_new:
+                (self.adj[s] if d_new else self.fixed[s]).append((0, label, d))
+            if d_new:
+                (self.adj[d] if s_new else self.fixed[d]).append((1, label, s))
+            (self.created_edges if s_new or d_new else self.world_edges).append((s, d, label))
         self.own_attrs: dict[int, list[tuple[str, Any]]] = {i: [] for i in self.created}
         self.attrs = list(ov.attrs)
         for i, key, value in ov.attrs:
@@ -91,24 +92,24 @@ class _Canon:
         return repr(value)
 
     def _initial(self) -> dict[int, int]:
-        sigs = {i: repr((t, hint, sorted((k, self._value_mark(v)) for k, v in self.own_attrs[i])))
+        sigs = {i: repr((t, hint, sorted((k, self._value_mark(v)) for k, v in self.own_attrs[i]),
+                         sorted(self.fixed[i])))
                 for i, (t, hint) in self.created.items()}
         ranks = {s: r for r, s in enumerate(sorted(set(sigs.values())))}
         return {i: ranks[s] for i, s in sigs.items()}
 
     def _refine(self, colour: dict[int, int]) -> dict[int, int]:
         classes = len(set(colour.values()))
-        while True:
+        while classes < len(colour):  # (every symbol singled out: nothing left to split)
             sigs: dict[int, tuple[object, ...]] = {}
-            for i in self.created:
-                links = sorted((direction, label, 1, colour[j]) if j in self.created else (direction, label, 0, j)
-                               for direction, label, j in self.adj[i])
-                sigs[i] = (colour[i], tuple(links))
+            for i, links in self.adj.items():
+                sigs[i] = (colour[i], tuple(sorted([(direction, label, colour[j]) for direction, label, j in links])))
             ranks = {s: r for r, s in enumerate(sorted(set(sigs.values())))}
             new = {i: ranks[s] for i, s in sigs.items()}
             if len(ranks) == classes:
                 return new
             colour, classes = new, len(ranks)
+        return colour
 
     # ------------------------------------------------------------------ search
     def best(self) -> tuple[object, ...]:
