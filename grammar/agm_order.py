@@ -19,16 +19,20 @@ refused by AGM's ``AGGLPlanChecker``. This module reproduces that order exactly:
 - the open-addressing table (8 slots to start, probing ``i = 5i + perturb + 1``, ``perturb >>= 5``,
   resized to the smallest power of two above 4x the entries when two thirds full; ``dict(d)``
   pre-sized to twice the entries);
-- the history of the node dict: built by the parser in file order (``parseGraphFromAST``), deep-
-  copied once when the planner code is generated (``copy.deepcopy(self.agm)``: re-inserted in
-  iteration order), then copied by ``dict(other.nodes, **parametersDict)``.
+- the history of the node dict: built by the parser in file order (``parseGraphFromAST``), then
+  copied by ``dict(other.nodes, **parametersDict)``. AGM's current generator (``generate(agm,
+  skipPassiveRules)``) works on the parsed grammar itself: there is no ``copy.deepcopy`` in between
+  (a deep copy re-inserts the keys in iteration order, which can swap two of them: chronav modelled
+  one until issue 43, and numbered ``rb`` before ``hs`` where AGM numbers ``hs`` first).
 
-It was checked against the order found in two planner modules AGM generated (both rules named
-``findObjectVisually``, from two RoboComp grammars): right-hand sides ``r cl o re t rb po se``
-created in the order cl, o, re, t, rb, po, se, and ``r re se cl po o`` created as re, se, cl, po, o
-(tests/unit/test_grammar_agm_ids.py). The second comes from AGM's current code (with rule
-parameters and the ``dict(...)`` copy); the first from older code that iterated the deep-copied
-dict itself, which gives the same order for those 8 names but not for every 6- or 7-node side.
+Checked against the orders found in planner modules AGM generated (tests/unit/test_grammar_agm_ids.py):
+``findObjectVisually`` with right-hand sides ``r cl o re t rb po se`` (created cl, o, re, t, rb, po,
+se) and ``r re se cl po o`` (re, se, cl, po, o); the current generator's module for AGM's
+AGGLPlanner/example_HRI/clean_table_easy, whose ``tellHumanAboutTable`` side ``c ch oh hr h m mh o p
+sr sh rb hs ph r`` (an earlier version of that grammar) is created ch, oh, hr, mh, sh, rb, hs, ph;
+and AGM's own plan for that grammar's current version (side ``... sh hs rb sr ph r``), which numbers
+hs before rb. Older generators (before rule parameters) iterated ``other.nodes`` itself: the same
+order for most sides, not for every one.
 """
 
 from __future__ import annotations
@@ -123,9 +127,8 @@ def py2_dict_order(keys: Sequence[str], extra: Sequence[str] = ()) -> list[str]:
     """Iteration order of AGM's ``dict(nodes, **parameters)`` for a graph whose nodes were
     declared in the order ``keys`` (and a rule whose parameters are ``extra``)."""
     parsed = _built(keys)
-    deep_copied = _built(parsed.keys())  # copy.deepcopy re-inserts in iteration order
     result = _Py2Dict()
-    result.merge(deep_copied)
+    result.merge(parsed)
     if extra:
         result.merge(_built(extra))
     return result.keys()

@@ -29,6 +29,7 @@ from typing import TypeGuard, cast
 
 import networkx as nx
 
+from grammar.canonical import canonical_key
 from grammar.diagnosis import MAX_STATES, Diagnosis, explain, type_problem
 from grammar.errors import PlanningError
 from grammar.formulas import FormulaEvaluator
@@ -47,6 +48,11 @@ DEFAULT_MAX_EXPANSIONS = 20_000
 MATCH_TRIES_PER_EXPANSION = 250
 MIN_MATCH_BUDGET = 100_000
 MAX_STATE_SIZE = 1_000_000
+AGM_MAX_WORLD_INCREMENT = 5
+"""AGM's planner (``agglplanner2.py``, ``maxWorldIncrement``) never searches a world with more than
+5 symbols beyond the start: with rules that create symbols each time they apply, that is what
+makes its search space finite. ``plan_growing`` starts there."""
+GROWTH_STEPS: tuple[int | None, ...] = (AGM_MAX_WORLD_INCREMENT, 10, None)
 """Bound on the facts (a state's links, nodes and attributes that differ from the world, plus one
 per state) that one search keeps: about 250 MB (measured: 242 MB peak for the whole process).
 Without it a rule that creates a node every time it applies made the kept states grow with the
@@ -69,6 +75,7 @@ class PlanStep:
     expansion: Plan | None = field(default=None, compare=False, repr=False)
     expansion_error: str | None = field(default=None, compare=False)
     agm_bindings: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+    state_after: State | None = field(default=None, compare=False, repr=False)  # the world after this step
 
     def __str__(self) -> str:
         args = ", ".join(f"{var}={name}" for var, name in self.bindings.items())
@@ -87,6 +94,7 @@ class Plan:
     generated: int
     target_bindings: Mapping[str, str]
     final_state: State | None = field(default=None, compare=False, repr=False)
+    created_ids: Mapping[int, str] = field(default_factory=dict, compare=False, repr=False)  # AGM ids given
     found: bool = field(default=True, init=False)
 
     def agm_lines(self) -> list[str]:
@@ -144,13 +152,22 @@ def state_size(state: State) -> int:
             + len(ov.attrs) + len(ov.activated))
 
 
+def node_count(state: State) -> int:
+    """How many symbols the state's world holds (AGM's ``len(graph.nodes)``)."""
+    ov = state.overlay
+    return state.world.size - len(ov.deleted) + len(ov.created)
+
+
 class _PlanTask:
     """The planning problem as search.py sees it: states of the symbolic graph, one action per
     (rule, bindings) application, the target's match as the goal's witness."""
 
-    def __init__(self, planner: Planner, target: Target, rules: list[_Compiled], start: State) -> None:
+    def __init__(self, planner: Planner, target: Target, rules: list[_Compiled], start: State,
+                 max_new_symbols: int | None = None) -> None:
         self.planner, self.target, self.rules, self.start = planner, target, rules, start
         self.goal_pattern = planner.matcher.compile(target.pattern)
+        self.max_nodes = None if max_new_symbols is None else node_count(start) + max_new_symbols
+        self.over_growth = 0  # successors left out by the bound
 
     def initial(self) -> State:
         return self.start
@@ -160,18 +177,33 @@ class _PlanTask:
 
     def successors(self, state: State) -> Iterator[tuple[tuple[Rule, Bindings], State, float]]:
         for rule, b, nxt in self.planner.applications(state, self.rules):
+            if self.max_nodes is not None and node_count(nxt) > self.max_nodes and self.goal(nxt) is None:
+                self.over_growth += 1
+                continue
             yield (rule, b), nxt, rule.cost
 
     size = staticmethod(state_size)
 
 
-def _size_limit_reason(limit: int, expanded: int, rules: list[Rule]) -> str:
-    """Why a search that filled its memory bound stopped, in the grammar's words."""
+def _size_limit_reason(limit: int, expanded: int, rules: list[Rule],
+                       kept: tuple[tuple[tuple[Rule, Bindings], int], ...] = ()) -> str:
+    """Why a search that filled its memory bound stopped, in the grammar's words: which rules
+    produced the worlds it kept (states and facts per rule, largest first)."""
     growing = [r.name for r in rules if r.created_nodes or any(isinstance(a, FCreate) for a in effect_atoms(r.effect))]
     why = (f"rules {', '.join(growing[:5])} create nodes each time they apply, so the world keeps growing"
            if growing else "the rules keep producing new, larger worlds")
+    filled = ""
+    if kept:
+        per_rule: dict[str, list[int]] = {}
+        for (rule, _), facts in kept:
+            counts = per_rule.setdefault(rule.name, [0, 0])
+            counts[0] += 1
+            counts[1] += facts
+        ranked = sorted(per_rule.items(), key=lambda kv: (-kv[1][1], kv[0]))
+        filled = "; the kept worlds were made by " + ", ".join(
+            f"{name} ({states:,} worlds, {facts:,} facts)" for name, (states, facts) in ranked[:8])
     return (f"the search stopped after {expanded} expansions: the worlds it had to remember reached "
-            f"{limit:,} facts (the memory bound, docs/limits.md) before the target matched; {why} "
+            f"{limit:,} facts (the memory bound, docs/limits.md) before the target matched{filled}; {why} "
             f"and the target is probably unreachable: check the target and those rules")
 
 
@@ -180,8 +212,11 @@ class Planner:
     ``exclude`` names rules not to use (the hierarchical rules being expanded)."""
 
     def __init__(self, grammar: Grammar, world: nx.MultiDiGraph | World, *,
-                 include_passive: bool = False, exclude: frozenset[str] = frozenset()) -> None:
+                 include_passive: bool = False, exclude: frozenset[str] = frozenset(),
+                 max_new_symbols: int | None = None) -> None:
         self.grammar = grammar
+        # AGM's maxWorldIncrement: worlds with more symbols than the start + this are not searched
+        self.max_new_symbols = max_new_symbols
         self.world = world if isinstance(world, World) else World(world)
         self.matcher = Matcher(grammar.types, self.world)
         self.formulas = FormulaEvaluator(self.matcher)
@@ -250,18 +285,21 @@ class Planner:
     def plan(self, target: Target, *, max_expansions: int = DEFAULT_MAX_EXPANSIONS,
              heuristic: str | Callable[[State], float] = "auto", prune: bool = True,
              start: State | None = None, expand: bool = True, diagnose: bool = True,
-             max_state_size: int = MAX_STATE_SIZE) -> PlanResult:
+             max_state_size: int = MAX_STATE_SIZE, created_ids: Mapping[int, str] | None = None) -> PlanResult:
         """A* (search.py) from the world (or from ``start``) to ``target``. ``prune`` drops rules
         irrelevant to the target (relevance.py: same reachability and optimal cost, far fewer
         states); ``expand`` expands hierarchical steps; ``diagnose`` explains an exhausted search
-        (diagnosis.py); ``max_state_size`` bounds the facts the search keeps (docs/limits.md)."""
+        (diagnosis.py); ``max_state_size`` bounds the facts the search keeps (docs/limits.md);
+        ``created_ids`` gives the AGM ids of symbols that ``start`` holds but the world does not
+        (created by steps already run: grammar/executive.py)."""
         if max_expansions < 1:
             raise PlanningError(f"max_expansions must be >= 1, got {max_expansions}")
         # The expansion bound also bounds matching, which can be exponential within one expansion.
         budget = max(MIN_MATCH_BUDGET, max_expansions * MATCH_TRIES_PER_EXPANSION)
         self.matcher.budget = budget
         try:
-            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose, max_state_size)
+            return self._plan(target, max_expansions, heuristic, prune, start, expand, diagnose, max_state_size,
+                              dict(created_ids or {}))
         except MatchBudgetExceeded:
             return NoPlan(f"expansion limit of {max_expansions} reached while matching patterns ({budget:,} candidate "
                           "nodes tried, the bound that limit sets on matching); the target or a rule matches the "
@@ -270,7 +308,8 @@ class Planner:
             self.matcher.budget = None
 
     def _plan(self, target: Target, max_expansions: int, heuristic: str | Callable[[State], float], prune: bool,
-              start: State | None, expand: bool, diagnose: bool, max_state_size: int) -> PlanResult:
+              start: State | None, expand: bool, diagnose: bool, max_state_size: int,
+              created_ids: dict[int, str]) -> PlanResult:
         start = start if start is not None else self.world.initial_state()
         missing = self._missing_constants(target, start)
         if missing:
@@ -283,17 +322,17 @@ class Planner:
         if h(start) == math.inf:
             return NoPlan("the target is unreachable: no chain of adjacency links leads the robot "
                           "to the room the target needs")
-        task = _PlanTask(self, target, rules, start)
+        task = _PlanTask(self, target, rules, start, self.max_new_symbols)
         result = astar(task, h, max_expansions=max_expansions, max_size=max_state_size,
-                       record=MAX_STATES if diagnose else 0)
+                       record=MAX_STATES if diagnose else 0, key=canonical_key)
         expanded, generated = result.expanded, result.generated
         if result.found:
-            return self._reconstruct(result, target, expand)
+            return self._reconstruct(result, target, expand, created_ids)
         if result.outcome == "expansion_limit":
             return NoPlan(f"expansion limit of {max_expansions} reached before the target matched",
                           expanded, generated)
         if result.outcome == "size_limit":
-            return NoPlan(_size_limit_reason(max_state_size, expanded, [c.rule for c in rules]),
+            return NoPlan(_size_limit_reason(max_state_size, expanded, [c.rule for c in rules], result.kept),
                           expanded, generated)
         reason = f"no sequence of rules reaches the target (all {expanded} reachable states searched)"
         diagnosis = explain(self, target, list(result.closed), [c.rule for c in rules]) if diagnose else None
@@ -319,19 +358,20 @@ class Planner:
         raise PlanningError(f"unknown heuristic {heuristic!r} (use 'auto', 'zero' or a function)")
 
     def _reconstruct(self, result: SearchResult[State, tuple[Rule, Bindings]], target: Target,
-                     expand: bool) -> PlanResult:
+                     expand: bool, created_ids: Mapping[int, str]) -> PlanResult:
         expanded, generated = result.expanded, result.generated
         final = cast(State, result.goal)  # set when the search found the target
         match = cast(Bindings, result.witness)  # what _PlanTask.goal returns
-        ids = _AgmIds(self.world)
+        ids = _AgmIds(self.world, created_ids)
         steps: list[PlanStep] = []
         for index, found in enumerate(result.path):
             before, (rule, b), after = found.before, found.action, found.after
             names = {var: (before.name_of(n) if before.exists(n) else after.name_of(n)) for var, n in b.items()}
             agm = ids.step(rule, b, before, after)
-            step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm)
+            step = PlanStep(rule.name, names, rule.cost, hierarchical=rule.hierarchical, agm_bindings=agm,
+                            state_after=after)
             if rule.hierarchical and expand:
-                sub = self._expand(rule, b, before)
+                sub = self._expand(rule, b, before, {n: i for n, i in ids.created.items() if before.exists(n)})
                 if isinstance(sub, NoPlan):
                     if index == 0:  # AGM: the first step must be expandable, or there is no plan
                         return NoPlan(f"the plan starts with hierarchical step {step} but its expansion "
@@ -341,9 +381,9 @@ class Planner:
                     step = replace(step, expansion=sub)
             steps.append(step)
         target_names = {var: final.name_of(n) for var, n in match.items()}
-        return Plan(tuple(steps), result.cost, expanded, generated, target_names, final)
+        return Plan(tuple(steps), result.cost, expanded, generated, target_names, final, dict(ids.created))
 
-    def _expand(self, rule: Rule, bindings: Bindings, before: State) -> PlanResult:
+    def _expand(self, rule: Rule, bindings: Bindings, before: State, created_ids: Mapping[int, str]) -> PlanResult:
         """Plan the right-hand side of hierarchical ``rule`` from ``before``, its left-hand nodes
         fixed to ``bindings``, without the rules being expanded (AGM's ``excludeList``)."""
         nodes = []
@@ -355,8 +395,8 @@ class Planner:
                 nodes.append(PatternNode(node.name, node.type, pos=node.pos))
         target = Target(Pattern(tuple(nodes), rule.rhs.links), file=f"<expansion of {rule.name}>")
         sub = Planner(self.grammar, self.world, include_passive=self.include_passive,
-                      exclude=self.exclude | {rule.name})
-        return sub.plan(target, start=before)
+                      exclude=self.exclude | {rule.name}, max_new_symbols=self.max_new_symbols)
+        return sub.plan(target, start=before, created_ids=created_ids)
 
 
 class _AgmIds:
@@ -367,9 +407,9 @@ class _AgmIds:
     rule's deletions, the nodes its ``effect`` creates. The largest id is that of the graph the
     step applies to (a deleted node's id may be given again, as AGM does)."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, prior: Mapping[int, str] | None = None) -> None:
         self.world = world
-        self.created: dict[int, str] = {}  # created node -> its AGM id
+        self.created: dict[int, str] = dict(prior or {})  # created node -> its AGM id
         # integer world keys, largest first: the largest id of a state is the first that exists
         self.world_ids = sorted(((int(k), i) for i, k in enumerate(world.keys) if _is_int(k)), reverse=True)
 
@@ -420,3 +460,35 @@ def plan(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
     """Cheapest plan from ``world`` to ``target`` with ``grammar``'s rules, or ``NoPlan``."""
     planner = Planner(grammar, world, include_passive=include_passive)
     return planner.plan(target, max_expansions=max_expansions, heuristic=heuristic, prune=prune)
+
+
+def plan_growing(grammar: Grammar, world: nx.MultiDiGraph | World, target: Target, *,
+                 max_expansions: int = DEFAULT_MAX_EXPANSIONS,
+                 steps: tuple[int | None, ...] = GROWTH_STEPS, start: State | None = None,
+                 created_ids: Mapping[int, str] | None = None) -> tuple[PlanResult, int | None]:
+    """Plan as AGM does with node-creating rules: first among worlds at most
+    ``AGM_MAX_WORLD_INCREMENT`` symbols larger than the start (AGM's bound), then, if that finds no
+    plan, with the larger bounds of ``steps`` (``None``: unbounded). Returns the result and the bound
+    it was found with; the plan is a cheapest one among plans that stay within that bound. The
+    expansions of the failed attempts are added to the result's count. A grammar whose rules create
+    nothing is planned once, unbounded (the bound cannot matter)."""
+    creates = any(r.created_nodes or any(isinstance(a, FCreate) for a in effect_atoms(r.effect))
+                  for r in grammar.rules)
+    bounds = steps if creates else (None,)
+    world = world if isinstance(world, World) else World(world)
+    spent_expanded = spent_generated = 0
+    result: PlanResult = NoPlan("no bound tried")
+    bound: int | None = None
+    for bound in bounds:
+        result = Planner(grammar, world, max_new_symbols=bound).plan(target, max_expansions=max_expansions,
+                                                                     start=start, created_ids=created_ids)
+        if result.found:
+            break
+        spent_expanded += result.expanded
+        spent_generated += result.generated
+        if not result.found and bound is not None and isinstance(result, NoPlan):
+            result = replace(result, reason=f"{result.reason} (worlds at most {bound} symbols larger than the start)")
+    if result.found:
+        result = replace(result, expanded=result.expanded + spent_expanded,
+                         generated=result.generated + spent_generated)
+    return result, bound

@@ -45,7 +45,8 @@ def apply_rule(rule: Rule, state: State, lhs_bindings: Bindings, matcher: Matche
     for assignment in rule.assignments:
         value = matcher.eval(assignment.value, state, b)
         if isinstance(value, NodeRef):  # `set a.owner = p` stores the node's name
-            value = state.name_of(value.node)
+            ref = value.node  # (a symbol this step creates is not in `state` yet: its new name)
+            value = state.name_of(ref) if state.exists(ref) else editor.created[ref][1]
         values.append((b[assignment.var], assignment.attr, value))
 
     for s, d, label in changes.remove_edges:

@@ -63,7 +63,8 @@ class SearchResult(Generic[S, A]):
     """How a search ended. ``outcome`` is ``"found"`` (``path``, ``cost``, ``goal`` and ``witness``
     set), ``"exhausted"`` (every reachable state expanded), ``"expansion_limit"`` or
     ``"size_limit"``. ``closed`` lists the first ``record`` expanded states in expansion order
-    (what a diagnosis reads)."""
+    (what a diagnosis reads); on ``"size_limit"``, ``kept`` pairs the action that produced each
+    kept state with that state's size (what filled the bound)."""
 
     outcome: Literal["found", "exhausted", "expansion_limit", "size_limit"]
     expanded: int
@@ -74,6 +75,7 @@ class SearchResult(Generic[S, A]):
     goal: S | None = None
     witness: object | None = None
     closed: tuple[S, ...] = field(default=(), compare=False, repr=False)
+    kept: tuple[tuple[A, int], ...] = field(default=(), compare=False, repr=False)
 
     @property
     def found(self) -> bool:
@@ -86,68 +88,91 @@ def zero(state: object) -> float:
 
 
 def astar(task: SearchTask[S, A], heuristic: Callable[[S], float] = zero, *,
-          max_expansions: int = 20_000, max_size: int | None = None, record: int = 0
-          ) -> SearchResult[S, A]:
+          max_expansions: int = 20_000, max_size: int | None = None, record: int = 0,
+          key: Callable[[S], Hashable] | None = None) -> SearchResult[S, A]:
     """A* from ``task.initial()`` to the first state ``task.goal`` accepts.
 
     A state whose heuristic is ``math.inf`` is never queued (a dead end). ``max_size`` bounds the
     sum of ``task.size`` over the states kept (queued, closed or on a path): reaching it ends the
-    search with ``"size_limit"``. ``record`` keeps that many expanded states in ``closed``.
+    search with ``"size_limit"`` and ``kept`` (the action that produced each kept state, and its
+    size). ``record`` keeps that many expanded states in ``closed``. ``key`` maps a state to what
+    identifies it for the search (default: the state itself); states with equal keys are one
+    state, represented by the first reached at its best cost. It must only equate states that
+    have the same goal test, heuristic and successors up to the same renaming (the planner's
+    canonical key, grammar/canonical.py).
     """
+    ident: Callable[[S], Hashable] = key if key is not None else _identity
     start = task.initial()
     h0 = heuristic(start)
     size = task.size(start)
     if h0 == math.inf:
         return SearchResult("exhausted", 0, 0, size)
     counter = 0
-    queue: list[tuple[float, float, int, S]] = [(h0, h0, counter, start)]
-    best_g: dict[S, float] = {start: 0.0}
-    parent: dict[S, tuple[S, A]] = {}
-    closed: set[S] = set()
+    k0 = ident(start)
+    queue: list[tuple[float, float, int, S, Hashable]] = [(h0, h0, counter, start, k0)]
+    best_g: dict[Hashable, float] = {k0: 0.0}
+    rep: dict[Hashable, S] = {k0: start}  # the state that stands for its key (the best reached)
+    parent: dict[Hashable, tuple[S, A, int]] = {}
+    closed: set[Hashable] = set()
     order: list[S] = []
     expanded = generated = 0
     while queue:
-        _, _, _, state = heapq.heappop(queue)
-        if state in closed:
+        _, _, _, state, k = heapq.heappop(queue)
+        if k in closed or rep[k] is not state:
             continue
-        g = best_g[state]
+        g = best_g[k]
         witness = task.goal(state)
         if witness is not None:
-            return SearchResult("found", expanded, generated, size, _path(state, parent), g, state, witness,
+            return SearchResult("found", expanded, generated, size, _path(state, parent, ident), g, state, witness,
                                 tuple(order))
         if expanded >= max_expansions:
             return SearchResult("expansion_limit", expanded, generated, size, closed=tuple(order))
-        closed.add(state)
+        closed.add(k)
         if len(order) < record:
             order.append(state)
         expanded += 1
         for action, nxt, cost in task.successors(state):
             generated += 1
-            if nxt in closed:
+            k2 = ident(nxt)
+            if k2 in closed:
                 continue
             g2 = g + cost
-            old = best_g.get(nxt)
+            old = best_g.get(k2)
             if old is not None and g2 >= old:
                 continue
             h2 = heuristic(nxt)
             if h2 == math.inf:
                 continue
+            grown = 0
             if old is None:  # a state new to the search: it is kept from now on
-                size += task.size(nxt)
+                grown = task.size(nxt)
+                size += grown
                 if max_size is not None and size > max_size:
-                    return SearchResult("size_limit", expanded, generated, size, closed=tuple(order))
-            best_g[nxt] = g2
-            parent[nxt] = (state, action)
+                    kept = [(a, n) for _, a, n in parent.values()] + [(action, grown)]
+                    return SearchResult("size_limit", expanded, generated, size, closed=tuple(order),
+                                        kept=tuple(kept))
+            else:
+                grown = parent[k2][2] if k2 in parent else 0
+            best_g[k2] = g2
+            rep[k2] = nxt
+            parent[k2] = (state, action, grown)
             counter += 1
-            heapq.heappush(queue, (g2 + h2, h2, counter, nxt))
+            heapq.heappush(queue, (g2 + h2, h2, counter, nxt, k2))
     return SearchResult("exhausted", expanded, generated, size, closed=tuple(order))
 
 
-def _path(state: S, parent: dict[S, tuple[S, A]]) -> tuple[Step[S, A], ...]:
+def _identity(state: S) -> Hashable:
+    return state
+
+
+def _path(state: S, parent: dict[Hashable, tuple[S, A, int]], ident: Callable[[S], Hashable]
+          ) -> tuple[Step[S, A], ...]:
     steps: list[Step[S, A]] = []
-    while state in parent:
-        before, action = parent[state]
+    k = ident(state)
+    while k in parent:
+        before, action, _ = parent[k]
         steps.append(Step(before, action, state))
         state = before
+        k = ident(state)
     steps.reverse()
     return tuple(steps)

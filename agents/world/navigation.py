@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from agents.lib.socialmap.adaptive import AdaptiveParams
 from agents.lib.socialmap.grid import GridParams
 from agents.lib.socialmap.types import Room, Wall
 from agents.lib.planning.planners import DEFAULT_PLANNER, check_planner
@@ -45,7 +46,10 @@ class NavigationMaps:
         parameter a study varies: the navigation plans with it and judges paths on its grid;
         registry.UnknownExtension names the choices and their packages."""
         robot = scene.robot
-        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m))
+        # the wall adaptation makes room for the robot's body (the seed's d_r: its diameter plus the
+        # adaptation's own margin), not for the planning radius, which holds a clearance margin already
+        params = SocialMapParams(grid=GridParams(resolution_m=scene.resolution, robot_radius_m=robot.radius + margin_m),
+                                 adaptive=AdaptiveParams(robot_diameter_m=2.0 * robot.radius))
         return cls(scene, params, CRUISE_FRACTION * robot.max_speed, check_planner(planner))
 
     @property

@@ -165,14 +165,18 @@ def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal
         raise OfflineError(f"plug-in refused: {exc}", no_path=True) from None
     points = np.vstack([path.points_m])
     report = maps.measure(path_as_trajectory(points, t_s, maps.cruise_speed), t_s)
+    metrics: dict[str, Any] = {"psi_percent": report.psi_zone_percent,
+                               "psi_interaction_percent": report.psi_object_percent,
+                               "d_min_person_m": report.d_min_person_m, "d_min_object_m": report.d_min_object_m}
+    if report.psi_unadapted_zone_percent:  # the wall adaptation changed someone's space (docs/metrics.md)
+        metrics["psi_unadapted_zone_percent"] = report.psi_unadapted_zone_percent
     return {
         "scene": maps.world.scene.name, "t_s": t_s, "planner": planner, "baseline": planner == "baseline",
         "arrival_time": planner == "social",
         "method": method, "cost": path.cost, "length_m": path.length_m, "expanded": path.expanded,
         "points": points.round(3).tolist(),
         "objects": {s.name: {"R": s.r, "band": s.band, "active": s.active} for s in smap.object_spaces},
-        "metrics": {"psi_percent": report.psi_zone_percent, "psi_interaction_percent": report.psi_object_percent,
-                    "d_min_person_m": report.d_min_person_m, "d_min_object_m": report.d_min_object_m},
+        "metrics": metrics,
         **({} if controller is None else
            {"controller": {"name": controller, **_driven(controller, maps, smap, points, t_s)}}),
     }

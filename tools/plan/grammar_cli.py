@@ -134,9 +134,16 @@ def _step_lines(steps: Any, indent: str = "  ", prefix: str = "") -> list[str]:
     return lines
 
 
-def _report(result: Any, what: str, payload: dict[str, Any], as_json: bool) -> None:
-    """Print a plan (or why there is none) in chronav's form and AGM's plan-file form."""
+def _report(result: Any, what: str, payload: dict[str, Any], as_json: bool, primitive: Any = None) -> None:
+    """Print a plan (or why there is none) in chronav's form and AGM's plan-file form; with
+    ``primitive`` (``--expand``), also the primitive plan AGM's executive runs (grammar/executive.py)."""
     payload.update(found=result.found, expanded=result.expanded, generated=result.generated)
+    if primitive is not None:
+        payload["primitive_plan"] = ({"steps": [_step_json(s) for s in primitive.steps], "cost": primitive.cost,
+                                      "plans": primitive.plans, "agm_plan": primitive.agm_lines()}
+                                     if primitive.found else None)
+        if not primitive.found:
+            payload["primitive_plan_error"] = primitive.reason
     if result.found:
         payload.update(cost=result.cost, target_bindings=dict(result.target_bindings),
                        steps=[_step_json(s) for s in result.steps], agm_plan=result.agm_lines())
@@ -153,6 +160,14 @@ def _report(result: Any, what: str, payload: dict[str, Any], as_json: bool) -> N
         typer.echo("AGM plan:")
         for line in result.agm_lines():
             typer.echo(f"  {line}")
+        if primitive is not None and primitive.found:
+            typer.echo(f"primitive plan (AGM's executive: {len(primitive.steps)} step(s), cost {primitive.cost:g}, "
+                       f"{primitive.plans} plan(s)):")
+            for line in primitive.agm_lines():
+                typer.echo(f"  {line}")
+    if primitive is not None and not primitive.found:
+        typer.echo(f"no primitive plan: {primitive.reason}", err=True)
+        raise typer.Exit(1)
     if not result.found:
         typer.echo(f"no plan for {what}: {result.reason}", err=True)
         if result.diagnosis is not None:
@@ -177,6 +192,14 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
                  at: str | None = typer.Option(None, "--at",
                                                   help="time of day (HH:MM) for the activities' state"),
                  max_expansions: int = typer.Option(20_000, "--max-expansions", min=1),
+                 max_new_symbols: int | None = typer.Option(
+                     None, "--max-new-symbols", min=0,
+                     help="with --world/--target: search only worlds at most N symbols larger than the start "
+                          "(default: AGM's 5, then 10, then unbounded until a plan is found)"),
+                 expand: bool = typer.Option(
+                     False, "--expand",
+                     help="with --world/--target: also print the primitive plan AGM's executive runs (each "
+                          "hierarchical step replaced by its expansion, re-planning after each step)"),
                  as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
     """Plan a mission on a scene (SCENE --mission M), or a target on a world as AGM's agglplan
     (--world W --target T --grammar G); print each step with its bindings and the AGM plan file."""
@@ -189,6 +212,8 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
             _fail("--world and --target go together: chronav plan --world W.xml --target T.aggt --grammar G.aggl")
         if scene is not None or mission is not None or at is not None or robot is not None:
             _fail("with --world/--target, give no SCENE, --mission, --robot or --at")
+    elif expand:
+        _fail("--expand goes with --world W.xml --target T.aggt (AGM's hierarchical plans)")
     elif scene is None or mission is None:
         _fail("give SCENE --mission M, or --world W.xml --target T.aggt [--grammar G.aggl]")
     elif scene.suffix.lower() not in (".json", ".xml"):  # a scene: the executive's own planning at --at
@@ -196,20 +221,30 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
 
         plan_scene(scene, mission, _parse_time(at), grammar_file, robot, max_expansions, as_json)
         return
+    primitive: Any = None
     try:
         grammar = load_grammar(grammar_file or default_grammar_path())
         for warning in grammar.warnings:  # read as AGM reads it, but probably a mistake: say so
             typer.echo(str(warning), err=True)
         if agm_mode:
-            from grammar.planner import Planner
+            from grammar.planner import plan_growing
 
             assert world_file is not None and target_file is not None
             target = load_target(target_file)
             for warning in target.warnings:
                 typer.echo(str(warning), err=True)
             world = _load_world(world_file)
-            result = Planner(grammar, world).plan(target, max_expansions=max_expansions)
-            payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file}
+            steps = (max_new_symbols,) if max_new_symbols is not None else None
+            result, bound = (plan_growing(grammar, world, target, max_expansions=max_expansions, steps=steps)
+                             if steps is not None else plan_growing(grammar, world, target, max_expansions=max_expansions))
+            payload: dict[str, Any] = {"world": str(world_file), "target": str(target_file), "grammar": grammar.file,
+                                       "max_new_symbols": bound}
+            if expand and result.found:
+                from grammar.executive import primitive_plan
+
+                primitive = (primitive_plan(grammar, world, target, max_expansions=max_expansions, steps=steps)
+                             if steps is not None else
+                             primitive_plan(grammar, world, target, max_expansions=max_expansions))
             what = f"target {str(target_file)!r}"
         else:
             from grammar.missions import plan_mission
@@ -222,7 +257,7 @@ def plan_command(scene: Path | None = typer.Argument(None, help="scene file, or 
     except (GrammarError, MissionError, PlanningError) as err:
         _fail(str(err))
         return
-    _report(result, what, payload, as_json)
+    _report(result, what, payload, as_json, primitive if expand and result.found else None)
 
 
 def register(app: typer.Typer) -> None:

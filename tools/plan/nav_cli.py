@@ -126,6 +126,8 @@ def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:
 
     for key, value in result["metrics"]["psi_percent"].items():
         table.add_row(column_label(f"psi_zone_percent.{key}"), f"{value:.1f}")
+    for key, value in result["metrics"].get("psi_unadapted_zone_percent", {}).items():
+        table.add_row(column_label(f"psi_unadapted_zone_percent.{key}"), f"{value:.1f}")
     for name, value in result["metrics"]["psi_interaction_percent"].items():
         r = result["objects"][name]["R"]
         table.add_row(f"{column_label(f'psi_object_percent.{name}')}, R={r:.2f}", f"{value:.1f}")

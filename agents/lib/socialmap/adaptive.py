@@ -35,6 +35,11 @@ class AdaptiveParams(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     enabled: bool = True
+    robot_diameter_m: float | None = Field(
+        None, gt=0, description="the robot body's diameter (d_r = it + margin_m); None: twice the grid's "
+                                "robot_radius_m. A scene's maps give the body's, not the planning radius: "
+                                "that one already holds a clearance margin, which counted again left no room "
+                                "to adapt in a 1.6 m corridor (issue 43)")
     margin_m: float = Field(0.1, ge=0, description="added to the robot diameter to give d_r")
     d_min_m: float = Field(0.45, ge=0, description="no adaptation when d_s <= d_min")
     d_max_m: float = Field(1.2, gt=0, description="no adaptation when d_s >= d_max")
@@ -93,7 +98,7 @@ def adapt_space(space: PersonalSpace, distances: Sequence[float], level: float,
         current = getattr(space, f"{side}_m")
         if contour_distance(current, level) <= d_s:
             continue
-        space = space.with_side(side, sigma_for_contour(d_s, level))
+        space = space.with_side(side, float(sigma_for_contour(float(d_s), level)))
         adapted.append(side)
     # one distance per side (front, rear, left, right): a 4-tuple that mypy sees as tuple[float, ...]
     return Adaptation(space=space, wall_distance_m=tuple(float(d) for d in distances),  # type: ignore[arg-type]

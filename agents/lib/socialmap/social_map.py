@@ -38,6 +38,8 @@ roles.scales                                   resident 1, new_resident 1.25, st
 adaptive.enabled                               True        adaptive seed
 adaptive.margin_m / d_min_m / d_max_m          0.1/0.45/1.2 ours (adaptive seed gives no numbers)
 adaptive.zone (contour moved to d_s)           personal    adaptive seed ("distance to the personal space")
+adaptive.robot_diameter_m                      None        2 x grid.robot_radius_m; a scene's maps: the body's 2 x radius
+                                                           (adaptive seed: d_r = robot diameter + margin; issue 43)
 chronemics.r_min / r_max                       1.5 / 3.5   seed 5.2.2, Fig. 8; affordance V-B, Fig. 6
 chronemics.ramp_before_s / ramp_after_s        2700 s      seed 5.2.2 (45 minutes, same after the end)
 chronemics.band_edges                          1.5 2 2.5 3 3.5  affordance V-B (four colour intervals)
@@ -364,7 +366,8 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     base_spaces = [stretched(space, p, scale, params.motion) for space, p, scale in zip(rest_spaces, people, scales,
                                                                                        strict=True)]
     adaptations = adapt_spaces(people, base_spaces, static.walls, params.zones.level(params.adaptive.zone),
-                               2.0 * grid_params.robot_radius_m, params.adaptive, occupancy=static.occupancy)
+                               params.adaptive.robot_diameter_m or 2.0 * grid_params.robot_radius_m, params.adaptive,
+                               occupancy=static.occupancy)
     spaces = [a.space for a in adaptations]
     groups = group_people(people, spaces, params.groups)
     windows = density_windows(spec, people, spaces, groups, params.zones)
