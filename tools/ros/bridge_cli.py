@@ -63,3 +63,41 @@ def bridge(scene: str = typer.Argument(..., help="the running system's scene fil
         argv += ["--run-dir", str(target.run_dir)]
     sys.stderr.write(f"ROS 2 bridge joining {target.describe()}\n")
     raise typer.Exit(run_agent(RosBridgeAgent, argv))
+
+
+@ros_app.command("stats")
+def stats(ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
+                                         help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID or 0)"),
+          ros_endpoint: str = typer.Option(None, "--ros-endpoint", help="the ROS side's Zenoh router "
+                                           "(default: $CHRONAV_ROS_ENDPOINT or tcp/127.0.0.1:7447)"),
+          ros_config: Path = typer.Option(None, "--ros-config", help="YAML: topics, frames, QoS (docs/ros2.md)"),
+          timeout: float = typer.Option(5.0, "--timeout", min=0.1, max=600.0,
+                                        help="seconds to wait for the bridge's /diagnostics"),
+          as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
+    """What the running bridge received from ROS 2 and refused, per topic and reason (from its
+    /diagnostics, published once a second)."""
+    import json
+
+    from agents.ros_bridge.config import BridgeConfigError, config_from_options
+    from tools.ros.stats import NoDiagnostics, read_stats
+
+    options = {k: str(v) for k, v in (("ros_domain", ros_domain), ("ros_endpoint", ros_endpoint),
+                                       ("ros_config", ros_config)) if v is not None}
+    try:
+        document = read_stats(config_from_options(options), timeout)
+    except (BridgeConfigError, NoDiagnostics) as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        raise typer.Exit(1) from None
+    if as_json:
+        print(json.dumps(document))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"ROS 2 node /{document['node']} (domain {document['domain']}): received")
+    for column in ("topic", "taken", "refused", "refused (by reason)"):
+        table.add_column(column, overflow="fold")
+    for topic, row in sorted(document["topics"].items()):
+        reasons = ", ".join(f"{k}={v}" for k, v in sorted(row["reasons"].items()))
+        table.add_row(topic, str(row["taken"]), str(row["refused"]), reasons or "0")
+    Console().print(table)
