@@ -17,6 +17,7 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -171,6 +172,7 @@ class FakeUnicycle:
         self.odom = client.publisher("/odom", "nav_msgs/msg/Odometry")
         self.scan = client.publisher("/scan", "sensor_msgs/msg/LaserScan")
         self.travelled = 0.0
+        self.glitch = threading.Event()   # set: the next two /odom have x = NaN and x = 1e308
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self.run, daemon=True)
         self.thread.start()
@@ -197,12 +199,22 @@ class FakeUnicycle:
                                                               w=math.cos(self.theta / 2)))
             import numpy as np
 
-            self.odom(T["nav_msgs/msg/Odometry"](
-                header=header, child_frame_id="base_link",
-                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
-                twist=T["geometry_msgs/msg/TwistWithCovariance"](
-                    twist=T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w)),
-                    covariance=np.zeros(36))))
+            twist = T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w)),
+                covariance=np.zeros(36))
+
+            def odometry(pose: Any, header: Any = header, twist: Any = twist) -> Any:
+                return T["nav_msgs/msg/Odometry"](
+                    header=header, child_frame_id="base_link", twist=twist,
+                    pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))
+
+            if self.glitch.is_set():
+                for bad_x in (math.nan, 1e308):
+                    self.odom(odometry(T["geometry_msgs/msg/Pose"](
+                        position=T["geometry_msgs/msg/Point"](x=bad_x, y=self.y, z=0.0),
+                        orientation=pose.orientation)))
+                self.glitch.clear()
+            self.odom(odometry(pose))
             self.scan(T["sensor_msgs/msg/LaserScan"](
                 header=T["std_msgs/msg/Header"](stamp=stamp, frame_id="base_link"), angle_min=-1.57,
                 angle_max=1.57, angle_increment=3.14 / 90, time_increment=0.0, scan_time=0.05, range_min=0.05,
@@ -233,11 +245,22 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         assert not [t for t in client.graph() if t.split("/")[8] == "chronav" and "/MP/" in t
                     and t.split("/")[9] in ("%odom", "%scan")]
         T = STORE.types
-        goal_pub(T["geometry_msgs/msg/PoseStamped"](
-            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="map"),
-            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=GOAL[0], y=GOAL[1], z=0.0),
-                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
-                                                                                           w=1.0))))
+        bridge_pid = json.loads((run_dir / "pids.json").read_text())["ros_bridge"]
+
+        def goal(x: float, y: float, frame: str = "map") -> Any:
+            return T["geometry_msgs/msg/PoseStamped"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+                                                frame_id=frame),
+                pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=x, y=y, z=0.0),
+                                                 orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
+                                                                                               w=1.0)))
+
+        # issue 42: what a ROS network may send is refused and counted, and the bridge stays up
+        robot.glitch.set()                       # /odom with x = NaN, then x = 1e308, between good ones
+        for bad in (goal(1e308, 2.0), goal(2.0, 2.0, frame=""), goal(7.5, 2.0), goal(0.05, 2.0)):
+            goal_pub(bad)
+        wait_until(lambda: not robot.glitch.is_set(), 10, message="the odometry glitches sent")
+        goal_pub(goal(GOAL[0], GOAL[1]))
         wait_until(lambda: any(n["type"] == "mission" and n["attrs"].get("state") in ("done", "failed")
                                for n in _dsr(run_dir)["nodes"]), 150, interval=1.0, message="the mission's end")
         mission = next(n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission")
@@ -247,6 +270,16 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         # the DSR holds the ROS robot's pose (the bridge wrote it), not a simulated one
         x, y = _pose_of(_dsr(run_dir), "robot")
         assert math.hypot(x - robot.x, y - robot.y) < 0.3
+        assert [n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission"] == [mission]   # refused: no mission
+        assert json.loads((run_dir / "pids.json").read_text())["ros_bridge"] == bridge_pid   # never restarted
+        stats = subprocess.run([sys.executable, "-m", "tools.cli", "ros", "stats", "--ros-endpoint", endpoint,
+                                "--ros-domain", str(DOMAIN), "--json", "--timeout", "20"], capture_output=True,
+                               text=True, timeout=60, cwd=REPO_ROOT, check=False)
+        assert stats.returncode == 0, stats.stderr
+        counts = json.loads(stats.stdout)["topics"]
+        assert counts["/goal_pose"]["reasons"] == {"outside_map": 1, "empty_frame": 1, "unreachable": 2}
+        assert counts["/goal_pose"]["taken"] == 1
+        assert counts["/odom"]["reasons"] == {"not_finite": 1, "outside_map": 1} and counts["/odom"]["taken"] > 100
     finally:
         if robot is not None:
             robot.stop.set()
