@@ -137,7 +137,8 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         assert all(len(a[2]) == 16 for a in odom.attachments)
 
         log = (tmp_path / "bridge.log").read_text()
-        assert "not a valid geometry_msgs/msg/PoseStamped" in log and "frame 'odom' refused" in log
+        assert "[undecodable]" in log and "not a valid geometry_msgs/msg/PoseStamped" in log
+        assert "[wrong_frame]" in log and "frame_id 'odom' is not 'map'" in log
 
         os.killpg(bridge.pid, signal.SIGINT)
         bridge.wait(timeout=60)
@@ -154,6 +155,8 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         last = topics["/odom"][-1][1].pose.pose.position
         assert math.hypot(last.x - GOAL[0], last.y - GOAL[1]) < 0.3
         assert {p.name for p in topics["/people"][0][1].people} == {"ana", "ben"}
+        end = topics["/plan"][-1][1].poses[-1].pose.position   # the plans the navigation adopted
+        assert math.hypot(end.x - GOAL[0], end.y - GOAL[1]) < 0.1
     finally:
         if client is not None:
             client.close()
