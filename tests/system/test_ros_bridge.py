@@ -10,6 +10,7 @@ robot plans (the /plan ends at the goal, the DSR has the pose mission) and drive
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import math
 import os
@@ -18,6 +19,7 @@ import subprocess
 import sys
 from pathlib import Path
 from typing import Any
+from zoneinfo import ZoneInfo
 
 import pytest
 
@@ -95,6 +97,9 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         info = client.subscribe("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo",
                                 transient_local=True).wait(timeout=30)
         assert info.type == 0 and info.filter_mask_topic == "/keepout_filter_mask"
+        # stamped with the scene's time of day (10:00 and a little), as every topic (issue 42)
+        ten_o_clock = dt.datetime(2026, 11, 25, 10, tzinfo=ZoneInfo("Europe/Madrid")).timestamp()
+        assert ten_o_clock <= info.header.stamp.sec <= ten_o_clock + 600, info.header.stamp
 
         # people where the DSR has them
         msg = people.wait(lambda m: len(m.people) == 2, timeout=60)
@@ -244,6 +249,10 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         run_dir = next((tmp_path / "runs").glob("*/connect.json")).parent
         goal_pub = client.publisher("/goal_pose", "geometry_msgs/msg/PoseStamped")
         wait_until(goal_pub.matched, 180, interval=0.2, message="chronav's /goal_pose subscription")
+        info = client.subscribe("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo",
+                                transient_local=True).wait(timeout=30)
+        ten_o_clock = dt.datetime(2026, 11, 25, 10, tzinfo=ZoneInfo("Europe/Madrid")).timestamp()
+        assert ten_o_clock <= info.header.stamp.sec <= ten_o_clock + 600, info.header.stamp   # the scene's time
         # chronav does not publish the robot's own topics in this mode
         assert not [t for t in client.graph() if t.split("/")[8] == "chronav" and "/MP/" in t
                     and t.split("/")[9] in ("%odom", "%scan")]
