@@ -49,7 +49,7 @@ from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE
 from agents.ros_bridge import messages as msgs
 from agents.ros_bridge import validate
 from agents.ros_bridge.config import BridgeConfig, BridgeConfigError, TopicSpec, config_from_options
-from agents.ros_bridge.inbox import GOAL_POSE, MAX_PENDING_GOALS, ODOM, SCAN, TYPES, Inbox, ReceiveStats
+from agents.ros_bridge.inbox import GOAL_POSE, ODOM, SCAN, TYPES, Inbox, ReceiveStats
 from agents.ros_bridge.maps import Grid, RosMaps
 from agents.ros_bridge.wire import RosNode, RosPublisher, fully_qualified, ros_session_config
 from agents.runtime.base import Agent
@@ -59,7 +59,6 @@ from agents.world.vocabulary import WORLD, EdgeType, MissionState, NodeType, act
 from scenes.clock import format_clock
 
 GOAL_PREFIX = "ros_goal_"
-__all__ = ["MAX_PENDING_GOALS", "RosBridgeAgent", "resample_scan"]
 ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (the simulator's is 10)
 #: share of one core the bridge may spend rebuilding the social map from the DSR (a 1000 x 600
 #: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
