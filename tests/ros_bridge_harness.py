@@ -57,7 +57,7 @@ class OfflineBridge(RosBridgeAgent):
 
 
 def bridge(robot: str = "ros", t_s: float = 36_000.0) -> tuple[OfflineBridge, Any]:
-    """A bridge on a DSR of the ros_lounge scene at ``t_s`` (10:00), set up, stepped once."""
+    """A bridge on a DSR of the ros_lounge scene at ``t_s`` (10:00), set up (not stepped yet)."""
     world = load_world(SCENE)
     graph = graph_at(world, t_s)
     agent = OfflineBridge(AgentConfig(name="ros_bridge", scene=SCENE, options={"robot": robot}))

@@ -64,6 +64,9 @@ ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (th
 #: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
 SOCIAL_MAP_CPU_BUDGET = 0.25
 RETRY_S = 2.0            # between attempts to reach the ROS side's router
+#: with --robot ros, after this long (wall s) without a valid /odom the bridge sends a zero /cmd_vel
+#: and forwards no command until odometry returns: the navigation would steer by a frozen pose
+ODOM_TIMEOUT_S = 0.5
 
 
 class RosBridgeAgent(Agent):
@@ -89,6 +92,8 @@ class RosBridgeAgent(Agent):
         self.stats: dict[str, dict[str, float]] = {}
         self.external = self.config.option("robot", "sim") == "ros"
         self._robot_written = -math.inf
+        self._odom_written = 0        # inbox.odom_count when the robot was last written
+        self._halted = False          # True while /odom is silent: zero /cmd_vel sent, commands held
         self._last_cmd: Any = None
         frames, topics = self.cfg.frames, self.cfg.topics
         limits = validate.Limits(tuple(self.scene.bounds), frames.map, frames.odom, frames.base,  # type: ignore[arg-type]
@@ -169,7 +174,7 @@ class RosBridgeAgent(Agent):
             return
         a = node.attrs
         cmd = (a.get("cmd_stamp"), a.get("cmd_vx"), a.get("cmd_vy"), a.get("cmd_omega"))
-        if cmd[0] is None or cmd == self._last_cmd:
+        if cmd[0] is None or cmd == self._last_cmd or self._halted:
             return
         self._last_cmd = cmd
         self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
@@ -177,9 +182,9 @@ class RosBridgeAgent(Agent):
     def _write_robot(self, t_s: float, wall: float) -> None:
         """The ROS robot's latest odometry and scan (checked by the inbox) into the DSR, as the
         simulator would write them."""
-        odom, scan, g = self.inbox.odom, self.inbox.scan, self.graph
-        if odom is None or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
-            return
+        odom, scan, g, count = self.inbox.odom, self.inbox.scan, self.graph, self.inbox.odom_count
+        if odom is None or count == self._odom_written or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
+            return   # nothing new: a pose is written once, so its pose_stamp never makes an old pose look fresh
         robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
         if robot is None or world is None:
             return
@@ -191,6 +196,21 @@ class RosBridgeAgent(Agent):
             g.insert_or_assign_edge(world.id, robot.id, EdgeType.RT, attrs={"x": odom.x, "y": odom.y, "theta": odom.yaw})
             g.update_node(robot.id, attrs=attrs)
         self._robot_written = wall
+        self._odom_written = count
+
+    def _watch_odometry(self, wall: float) -> None:
+        """Stop the ROS robot while its odometry is silent (or every message of it refused)."""
+        silent_s = wall - self.inbox.odom_at
+        if silent_s > ODOM_TIMEOUT_S and not self._halted:
+            self._halted = True
+            self.cmd_pub.publish(msgs.twist(0.0, 0.0, 0.0))
+            self.log.warning("no valid %s %s: zero %s sent, commands held until odometry comes",
+                             self.subscribed[ODOM], "yet" if math.isinf(silent_s) else f"for {silent_s:.1f} s",
+                             self.cfg.topics.cmd_vel.name)
+        elif silent_s <= ODOM_TIMEOUT_S and self._halted:
+            self._halted = False
+            self._last_cmd = None   # the navigation's current command goes out at its next write
+            self.log.info("%s is back: commands go out again", self.subscribed[ODOM])
 
     # ------------------------------------------------------------------ goals
     def _take_goals(self, t_s: float) -> None:
@@ -237,6 +257,7 @@ class RosBridgeAgent(Agent):
         wall = time.monotonic()
         if self.external:
             self._guarded(ODOM, self._write_robot, t_s, wall)
+            self._watch_odometry(wall)
         stamp = msgs.ros_time(t_s, self.epoch_s)
         frames = self.cfg.frames
         robot = g.get_node_by_name(self.scene.robot.name)

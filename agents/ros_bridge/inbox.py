@@ -89,6 +89,8 @@ class Inbox:
         self.order = v.StampOrder()
         self.goals: queue.Queue[v.Goal] = queue.Queue(maxsize=MAX_PENDING_GOALS)
         self.odom: v.RobotState | None = None
+        self.odom_count = 0                   # odometry messages taken (the agent writes each new one once)
+        self.odom_at = -float("inf")          # wall clock (stats.clock) when the newest was taken
         self.scan: v.Scan | None = None
         self._lock = threading.Lock()
 
@@ -124,6 +126,8 @@ class Inbox:
             with self._lock:
                 self.order.check(topic, state.stamp_s)
                 self.odom = state
+                self.odom_count += 1
+                self.odom_at = self.stats.clock()
         elif key == SCAN:
             scan = v.check_scan(message, self.limits)
             with self._lock:

@@ -116,3 +116,43 @@ def test_diagnostics_and_filter_info_are_published_in_the_scenes_time() -> None:
     info = agent.node.publishers["/costmap_filter_info"].sent[0]
     assert (info.header.stamp.sec, info.header.stamp.nanosec) == (expected.sec, expected.nanosec)
     assert np.isclose(info.base, agent.scale.base)
+
+
+def test_a_pose_is_written_once_and_a_silent_odometry_stops_the_robot() -> None:
+    """A roboticist's expectation: the navigation never steers by a frozen pose. Each /odom is
+    written into the DSR once; after ODOM_TIMEOUT_S without a valid one (silence, or only refused
+    ones) the bridge sends a zero /cmd_vel and holds the navigation's commands until it returns."""
+    import time
+
+    from agents.ros_bridge.agent import ODOM_TIMEOUT_S
+
+    agent, graph = bridge()
+    cmd_vel = agent.node.publishers["/cmd_vel"].sent
+    agent.step()
+    assert agent._halted and cmd_vel[-1].linear.x == 0.0            # no /odom yet: stopped
+    send(agent, "/odom", odom(), msgs.ODOMETRY)
+    agent.step()
+    robot = graph.get_node_by_name("robot")
+    stamp = robot.attrs["pose_stamp"]
+    assert not agent._halted
+    clock = graph.get_node_by_name("clock")
+    graph.update_node(clock.id, attrs={"now_s": clock.attrs["now_s"] + 1.0})
+    agent._robot_written = -math.inf
+    agent.step()
+    assert graph.get_node_by_name("robot").attrs["pose_stamp"] == stamp   # no new odometry: not rewritten
+    graph.update_node(robot.id, attrs={"cmd_stamp": 1.0, "cmd_vx": 0.4, "cmd_vy": 0.0, "cmd_omega": 0.0})
+    graph.dispatch()   # the DSR signal the bridge reacts to
+    assert cmd_vel[-1].linear.x == pytest.approx(0.4)                     # forwarded at once
+    agent.inbox.odom_at = time.monotonic() - ODOM_TIMEOUT_S - 0.1         # odometry went silent
+    for _ in range(3):
+        send(agent, "/odom", odom(x=math.nan), msgs.ODOMETRY)             # refused ones do not count
+    agent.step()
+    assert agent._halted and cmd_vel[-1].linear.x == 0.0
+    graph.update_node(robot.id, attrs={"cmd_stamp": 2.0, "cmd_vx": 0.5, "cmd_vy": 0.0, "cmd_omega": 0.0})
+    graph.dispatch()   # the DSR signal the bridge reacts to
+    assert cmd_vel[-1].linear.x == 0.0                                    # held while silent
+    send(agent, "/odom", odom(), msgs.ODOMETRY)
+    agent.step()
+    graph.update_node(robot.id, attrs={"cmd_stamp": 3.0, "cmd_vx": 0.3, "cmd_vy": 0.0, "cmd_omega": 0.0})
+    graph.dispatch()   # the DSR signal the bridge reacts to
+    assert not agent._halted and cmd_vel[-1].linear.x == pytest.approx(0.3)
