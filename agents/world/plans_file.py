@@ -84,8 +84,8 @@ def read_plans(path: Path) -> list[AdoptedPlan]:
             continue
         try:
             record = json.loads(line)
-        except ValueError as exc:
-            raise SourceError(file, lineno, None, "", f"not a JSON object ({exc})") from None
+        except (ValueError, RecursionError) as exc:   # RecursionError: nesting thousands deep
+            raise SourceError(file, lineno, None, "", f"not a JSON object ({str(exc)[:100]})") from None
         if not isinstance(record, dict):
             raise SourceError(file, lineno, None, "", "expected a JSON object with t_s, x, y")
         (t_s,) = _numbers(file, lineno, "t_s", [record.get("t_s")], 0.0, MAX_TRAJECTORY_TIME_S)

@@ -45,7 +45,8 @@ def test_written_plans_read_back(tmp_path: Path) -> None:
                                            ('{"t_s": 1.0, "x": [0.0, 1.0], "y": [0.0]}', "y"),
                                            ('{"t_s": 1.0, "x": [], "y": []}', "x"),
                                            ('{"t_s": 1.0, "x": [NaN], "y": [0.0]}', "x"),
-                                           ('[1, 2]', ""), ("not json", "")])
+                                           ('[1, 2]', ""), ("not json", ""), ("[" * 100_000, ""),
+                                           ('{"t_s": 1.0, "x": [' + "9" * 5000 + '], "y": [0.0]}', "")])
 def test_a_bad_line_is_an_error_naming_file_line_and_key(tmp_path: Path, line: str, key: str) -> None:
     path = tmp_path / PLANS_FILE
     path.write_text('{"t_s": 1.0, "x": [0.0], "y": [0.0]}\n\n' + line + "\n")
