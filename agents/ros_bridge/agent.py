@@ -38,6 +38,7 @@ the loop's period), and a stop when the bridge ends.
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from functools import partial
@@ -67,6 +68,8 @@ RETRY_S = 2.0            # between attempts to reach the ROS side's router
 #: with --robot ros, after this long (wall s) without a valid /odom the bridge sends a zero /cmd_vel
 #: and forwards no command until odometry returns: the navigation would steer by a frozen pose
 ODOM_TIMEOUT_S = 0.5
+#: the bridge's received/refused counts in the run directory (rewritten when they change, at most 1/s)
+RECEIVED_FILE = "ros_received.json"
 
 
 class RosBridgeAgent(Agent):
@@ -293,8 +296,23 @@ class RosBridgeAgent(Agent):
         now = self.received.snapshot()
         topics = [self.subscribed[GOAL_POSE]] + ([self.subscribed[ODOM], self.subscribed[SCAN]] if self.external else [])
         message = msgs.diagnostics(self.cfg.node, now, self._diagnosed, topics, stamp)
+        if now != self._diagnosed:
+            self._keep_counts(now)
         self._diagnosed = now
         return message
+
+    def _keep_counts(self, counts: dict[str, Any]) -> None:
+        """``<run>/ros_received.json``: the counts as of now, so a finished run keeps them and the
+        launcher can show them (replaced atomically; nothing without a run directory)."""
+        run_dir = self.config.run_dir
+        if run_dir is None:
+            return
+        tmp = run_dir / f"{RECEIVED_FILE}.tmp"
+        try:
+            tmp.write_text(json.dumps({"node": self.cfg.node, **counts}, sort_keys=True), encoding="utf-8")
+            tmp.replace(run_dir / RECEIVED_FILE)
+        except OSError as exc:
+            self.log.warning("cannot write %s: %s", run_dir / RECEIVED_FILE, exc)
 
     def _due(self, key: str, wall: float) -> bool:
         if key not in self.pubs:
@@ -366,6 +384,7 @@ class RosBridgeAgent(Agent):
         received = self.received.snapshot()
         self.log.info("received: taken %s; refused %s", received["accepted"] or "nothing",
                       received["refused"] or "nothing")
+        self._keep_counts(received)
         if self.node is None:
             return
         if self.external:

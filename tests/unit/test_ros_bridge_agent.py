@@ -156,3 +156,20 @@ def test_a_pose_is_written_once_and_a_silent_odometry_stops_the_robot() -> None:
     graph.update_node(robot.id, attrs={"cmd_stamp": 3.0, "cmd_vx": 0.3, "cmd_vy": 0.0, "cmd_omega": 0.0})
     graph.dispatch()   # the DSR signal the bridge reacts to
     assert not agent._halted and cmd_vel[-1].linear.x == pytest.approx(0.3)
+
+
+def test_the_counts_are_kept_in_the_run_directory(tmp_path) -> None:
+    import json
+
+    from agents.ros_bridge.agent import RECEIVED_FILE
+
+    agent, _graph = bridge()
+    agent.config = agent.config.model_copy(update={"run_dir": tmp_path})
+    send(agent, "/goal_pose", goal(frame=""), msgs.POSE_STAMPED)
+    agent._last.pop("diagnostics", None)
+    agent.step()
+    kept = json.loads((tmp_path / RECEIVED_FILE).read_text())
+    assert kept["refused"] == {"/goal_pose": {v.EMPTY_FRAME: 1}} and kept["node"] == "chronav"
+    send(agent, "/odom", odom(), msgs.ODOMETRY)
+    agent.teardown()
+    assert json.loads((tmp_path / RECEIVED_FILE).read_text())["accepted"] == {"/odom": 1}
