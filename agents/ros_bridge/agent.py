@@ -394,8 +394,10 @@ class RosBridgeAgent(Agent):
 
 
 def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[float]:
-    """A scan's ranges (a LaserScan, or validate.Scan) at the scene's ray angles (nearest ray; no return or out of the scan's
-    field of view: ``range_max``, as the simulator's laser reports a ray that hits nothing)."""
+    """A scan's ranges (a LaserScan, or validate.Scan) at the scene's ray angles (nearest ray; no
+    return or out of the scan's field of view: ``range_max``, as the simulator's laser reports a ray
+    that hits nothing).  REP-117: +inf and NaN are no return, -inf is "too close to measure", so an
+    obstacle at the scanner's ``range_min`` (never free space)."""
     ranges = np.asarray(scan.ranges, dtype=float)
     if len(ranges) == 0 or scan.angle_increment == 0:
         return [range_max] * len(angles)
@@ -403,4 +405,6 @@ def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[floa
     inside = (index >= 0) & (index < len(ranges))
     picked = np.where(inside, ranges[np.clip(index, 0, len(ranges) - 1)], range_max)
     valid = np.isfinite(picked) & (picked >= scan.range_min) & (picked <= scan.range_max)
-    return np.minimum(np.where(valid, picked, range_max), range_max).tolist()
+    out = np.where(valid, picked, range_max)
+    out = np.where(inside & np.isneginf(picked), float(scan.range_min), out)
+    return np.minimum(out, range_max).tolist()

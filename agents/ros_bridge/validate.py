@@ -18,7 +18,7 @@ The rules (docs/ros2.md, "What the bridge accepts"):
 - **scans**: angles within +-2 pi, a non-zero increment of at most 2 pi with the sign of
   ``angle_max - angle_min``, ``0 <= range_min < range_max <= MAX_RANGE_M``, at most
   ``MAX_SCAN_RAYS`` rays; each range is either a finite value in ``[0, MAX_RANGE_M]`` or one of
-  REP-117's "no return" values (NaN, +inf, -inf), which are kept and read as nothing hit;
+  REP-117's special values, kept (NaN and +inf: no return; -inf: too close to measure);
 - **frames**: ``/goal_pose`` in the map frame; ``/odom`` in the odom or the map frame with the
   robot's base as child; ``/scan`` in the laser or the base frame.  **An empty frame_id is
   refused on every topic**: tf2 cannot place data without a frame, and guessing ``map`` for it

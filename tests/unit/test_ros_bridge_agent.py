@@ -173,3 +173,12 @@ def test_the_counts_are_kept_in_the_run_directory(tmp_path) -> None:
     send(agent, "/odom", odom(), msgs.ODOMETRY)
     agent.teardown()
     assert json.loads((tmp_path / RECEIVED_FILE).read_text())["accepted"] == {"/odom": 1}
+
+
+def test_a_too_close_ray_is_an_obstacle_not_free_space() -> None:
+    """REP-117: -inf means "too close to measure"; +inf and NaN mean no return."""
+    from agents.ros_bridge.agent import resample_scan
+
+    taken = v.check_scan(scan([-math.inf, math.inf, math.nan] + [2.0] * 88), v.Limits((0.0, 0.0, 6.0, 4.0)))
+    first_three = [float(a) for a in np.linspace(-1.57, 1.57, 91)[:3]]
+    assert resample_scan(taken, first_three, 5.0) == [pytest.approx(0.05), 5.0, 5.0]
