@@ -11,6 +11,7 @@ from typing import Any
 
 from agents.ros_bridge.agent import RosBridgeAgent
 from agents.ros_bridge.types import deserialize, serialize
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.config import AgentConfig
 from agents.runtime.recording import Recorder
 from agents.world.offline import graph_at
@@ -61,5 +62,6 @@ def bridge(robot: str = "ros", t_s: float = 36_000.0) -> tuple[OfflineBridge, An
     world = load_world(SCENE)
     graph = graph_at(world, t_s)
     agent = OfflineBridge(AgentConfig(name="ros_bridge", scene=SCENE, options={"robot": robot}))
-    agent.setup(graph, Recorder("ros_bridge", None, None))
+    checked = CheckedGraph(graph, "ros_bridge")   # as run_agent gives it: writes outside the vocabulary refused
+    agent.setup(checked, Recorder("ros_bridge", None, None))
     return agent, graph

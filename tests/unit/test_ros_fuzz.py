@@ -110,6 +110,7 @@ def test_whatever_ros_sends_the_bridge_stays_up_and_counts_it(agent_graph, batch
     agent._robot_written = -math.inf
     agent.step()   # raises nothing: an exception here is what used to end (and restart) the bridge
     assert _total(agent) - before == len(batch), "every message is counted once, taken or refused"
+    assert agent.graph.refused == 0, agent.graph.last_refusal      # nothing written outside the vocabulary
     world, robot = graph.get_node_by_name(WORLD), graph.get_node_by_name("robot")
     pose = graph.get_edge(world.id, robot.id, EdgeType.RT).attrs
     assert all(math.isfinite(pose[k]) for k in ("x", "y", "theta")) and -5.0 <= pose["x"] <= 11.0
