@@ -182,3 +182,26 @@ def test_a_too_close_ray_is_an_obstacle_not_free_space() -> None:
     taken = v.check_scan(scan([-math.inf, math.inf, math.nan] + [2.0] * 88), v.Limits((0.0, 0.0, 6.0, 4.0)))
     first_three = [float(a) for a in np.linspace(-1.57, 1.57, 91)[:3]]
     assert resample_scan(taken, first_three, 5.0) == [pytest.approx(0.05), 5.0, 5.0]
+
+
+def test_ros_stats_reads_what_a_run_kept(tmp_path) -> None:
+    import json
+
+    from typer.testing import CliRunner
+
+    from agents.ros_bridge.agent import RECEIVED_FILE
+    from tools.cli import app
+
+    agent, _graph = bridge()
+    agent.config = agent.config.model_copy(update={"run_dir": tmp_path})
+    send(agent, "/odom", odom(x=math.nan), msgs.ODOMETRY)
+    send(agent, "/odom", odom(), msgs.ODOMETRY)
+    agent.teardown()
+    done = CliRunner().invoke(app, ["ros", "stats", "--run", str(tmp_path), "--json"])
+    assert done.exit_code == 0, done.output
+    assert json.loads(done.stdout)["topics"] == {"/odom": {"taken": 1, "refused": 1, "reasons": {v.NOT_FINITE: 1}}}
+    (tmp_path / RECEIVED_FILE).write_text('{"accepted": [1], "refused": 3}')
+    done = CliRunner().invoke(app, ["ros", "stats", "--run", str(tmp_path)])
+    assert done.exit_code == 1 and RECEIVED_FILE in done.stderr and "Traceback" not in done.output
+    done = CliRunner().invoke(app, ["ros", "stats", "--run", str(tmp_path / "nothing")])
+    assert done.exit_code == 1 and "no run" in done.stderr

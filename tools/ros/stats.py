@@ -5,11 +5,15 @@ network sent), the bridge already publishes them there for ROS tools (rqt_robot_
 `ros2 topic echo /diagnostics`), and one source means `chronav ros stats` and a ROS engineer see
 the same numbers.  The command joins the ROS side's router as a ROS 2 node of its own
 (``chronav_stats``) and waits for the bridge's next DiagnosticArray (it publishes one a second).
+With ``--run RUN`` it reads the counts the run kept instead (``<run>/ros_received.json``, written
+by the bridge as they change and at its end): no ROS network needed, and a finished run works.
 """
 
 from __future__ import annotations
 
+import json
 import threading
+from pathlib import Path
 from typing import Any
 
 from agents.ros_bridge import messages as msgs
@@ -75,3 +79,31 @@ def read_stats(cfg: BridgeConfig, timeout_s: float) -> dict[str, Any]:
                             f"via {cfg.endpoint} within {timeout_s:g} s: is the bridge running (chronav launch "
                             "--ros, chronav ros bridge), and are the domain and endpoint right?")
     return {"node": cfg.node, "domain": cfg.domain, "topics": got}
+
+
+#: largest ros_received.json read (a few topics and reasons: a few hundred bytes)
+MAX_RECEIVED_FILE_BYTES = 1024 * 1024
+
+
+def stats_of_run(run_dir: Path) -> dict[str, Any]:
+    """The counts a run kept (``<run>/ros_received.json``), in read_stats' shape."""
+    from agents.ros_bridge.agent import RECEIVED_FILE
+    from scenes.errors import SourceError
+    from scenes.files import read_text_bounded
+
+    path = run_dir / RECEIVED_FILE
+    if not path.exists():
+        raise NoDiagnostics(f"{path} does not exist: the run had no ROS 2 bridge (chronav launch --ros, --robot ros), "
+                            "or its bridge received nothing yet")
+    try:
+        data = json.loads(read_text_bounded(path, max_bytes=MAX_RECEIVED_FILE_BYTES, what="counts file"))
+        accepted, refused = data["accepted"], data["refused"]
+        topics = {str(t): {"taken": int(accepted.get(t, 0)), "refused": sum(int(n) for n in refused.get(t, {}).values()),
+                           "reasons": {str(r): int(n) for r, n in refused.get(t, {}).items()}}
+                  for t in sorted(set(accepted) | set(refused))}
+        return {"node": str(data.get("node", "chronav")), "run": str(run_dir), "topics": topics}
+    except SourceError as exc:
+        raise NoDiagnostics(str(exc)) from None
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError) as exc:
+        raise NoDiagnostics(f"{path}: not the counts the bridge writes ({type(exc).__name__}: {str(exc)[:80]})") \
+            from None
