@@ -292,6 +292,10 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         assert counts["/goal_pose"]["reasons"] == {"outside_map": 1, "empty_frame": 1, "unreachable": 2}
         assert counts["/goal_pose"]["taken"] == 1
         assert counts["/odom"]["reasons"] == {"not_finite": 1, "outside_map": 1} and counts["/odom"]["taken"] > 100
+        kept = subprocess.run([sys.executable, "-m", "tools.cli", "ros", "stats", "--run", str(run_dir), "--json"],
+                              capture_output=True, text=True, timeout=60, cwd=REPO_ROOT, check=False)
+        assert kept.returncode == 0, kept.stderr       # the run keeps them too (ros_received.json)
+        assert json.loads(kept.stdout)["topics"]["/goal_pose"]["reasons"] == counts["/goal_pose"]["reasons"]
     finally:
         if robot is not None:
             robot.stop.set()
