@@ -4,7 +4,9 @@ The RIHS01 hashes are computed by rosbags from the type descriptions; the expect
 published by others: std_msgs/String in rmw_zenoh's docs/design.md key-expression examples,
 OccupancyGrid, TFMessage and Twist in `ros2 topic info --verbose` outputs of ROS 2 installs
 (RViz's /map subscription, amcl's /tf, teleop_turtle's cmd_vel), Odometry, LaserScan,
-PoseStamped, Path and Clock in other ROS-2-over-Zenoh clients' tables and golden-hash tests.
+PoseStamped, Path and Clock in other ROS-2-over-Zenoh clients' tables and golden-hash tests,
+DiagnosticArray in rosidl_generator_c's output for diagnostic_msgs
+(``diagnostic_msgs__msg__DiagnosticArray__TYPE_HASH``) and in other clients' tables.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ PUBLISHED_HASHES = {
     "geometry_msgs/msg/PoseStamped": "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8",
     "nav_msgs/msg/Path": "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b",
     "rosgraph_msgs/msg/Clock": "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
+    "diagnostic_msgs/msg/DiagnosticArray": "RIHS01_5a8a36efb05fb25070fa0fb3810290c0e6cd4862b54a8fb975a1ee8dc55a333e",
 }
 
 
