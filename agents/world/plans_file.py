@@ -14,6 +14,7 @@ as a person-given file: bounded, every line checked, errors naming the file, lin
 from __future__ import annotations
 
 import json
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from agents.lib.socialmap.metrics import MAX_COORDINATE_M, MAX_TRAJECTORY_TIME_S
 from scenes.errors import SourceError
 from scenes.files import read_text_bounded
 
+log = logging.getLogger("chronav.plans_file")
 PLANS_FILE = "plans.jsonl"
 #: largest plans.jsonl read back (a day of replanning every few seconds with 500-point paths is
 #: ~100 MB; more is not a run's file)
@@ -42,12 +44,18 @@ class AdoptedPlan:
 
 
 class PlansWriter:
-    """Appends adopted paths to ``<run_dir>/plans.jsonl`` (nothing without a run directory)."""
+    """Appends adopted paths to ``<run_dir>/plans.jsonl`` (nothing without a run directory).
+
+    A file that cannot be opened or written (a full disk, a read-only run directory) is logged
+    once and given up: keeping the record must never stop the navigation."""
 
     def __init__(self, run_dir: Path | None) -> None:
         self._handle: IO[str] | None = None
         if run_dir is not None:
-            self._handle = (Path(run_dir) / PLANS_FILE).open("a", encoding="utf-8", buffering=1)
+            try:
+                self._handle = (Path(run_dir) / PLANS_FILE).open("a", encoding="utf-8", buffering=1)
+            except OSError as exc:
+                log.warning("cannot keep the adopted plans in %s: %s", Path(run_dir) / PLANS_FILE, exc)
 
     def adopted(self, t_s: float, xs: Sequence[float], ys: Sequence[float], cost: float, reason: str) -> None:
         if self._handle is None:
@@ -55,12 +63,19 @@ class PlansWriter:
         line = {"t_s": round(float(t_s), 3), "x": [round(float(v), 4) for v in xs],
                 "y": [round(float(v), 4) for v in ys], "cost": float(cost) if math.isfinite(cost) else None,
                 "reason": str(reason)}
-        self._handle.write(json.dumps(line, separators=(",", ":")) + "\n")
+        try:
+            self._handle.write(json.dumps(line, separators=(",", ":")) + "\n")
+        except OSError as exc:
+            log.warning("cannot keep the adopted plans any more (%s): later plans are not in %s", exc, PLANS_FILE)
+            self.close()
 
     def close(self) -> None:
         if self._handle is not None:
-            self._handle.close()
-            self._handle = None
+            handle, self._handle = self._handle, None
+            try:
+                handle.close()
+            except OSError:
+                pass
 
 
 def _numbers(file: str, lineno: int, key: str, values: object, lo: float, hi: float) -> tuple[float, ...]:

@@ -54,3 +54,12 @@ def test_a_bad_line_is_an_error_naming_file_line_and_key(tmp_path: Path, line: s
         read_plans(path)
     assert (caught.value.line, caught.value.key) == (3, key)
     assert str(path) in str(caught.value)
+
+
+def test_a_run_directory_that_cannot_be_written_does_not_stop_the_navigation(tmp_path: Path) -> None:
+    PlansWriter(tmp_path / "missing" / "run").adopted(1.0, [0.0], [0.0], 1.0, "not kept")   # logged, no raise
+    full = PlansWriter(None)
+    full._handle = open("/dev/full", "w", encoding="utf-8", buffering=1)  # noqa: SIM115 - a disk that is full
+    full.adopted(1.0, [0.0], [0.0], 1.0, "not kept")
+    assert full._handle is None                         # given up after the first failed write
+    full.adopted(2.0, [0.0], [0.0], 1.0, "given up")
