@@ -133,3 +133,23 @@ def test_numbers_in_messages_are_shown_readably() -> None:
     with pytest.raises(v.Refused) as caught:
         v.check_goal(goal(x=1e308), LIMITS)
     assert "1e+308" in str(caught.value) and len(str(caught.value)) < 200
+
+
+def test_the_documented_bounds_are_the_codes() -> None:
+    from agents.ros_bridge.agent import ODOM_TIMEOUT_S
+    from agents.ros_bridge.inbox import LOG_INTERVAL_S, MAX_PENDING_GOALS
+    from agents.world.plans_file import MAX_PATH_POINTS, MAX_PLANS_BYTES
+    from tests.support import REPO_ROOT
+
+    limits = (REPO_ROOT / "docs" / "limits.md").read_text(encoding="utf-8")
+    ros2 = (REPO_ROOT / "docs" / "ros2.md").read_text(encoding="utf-8")
+    for text in (f"within {v.POSE_MARGIN_M:g} m of the scene's extent", f"at most {v.MAX_LINEAR_SPEED_MPS:g} m/s and "
+                 f"{v.MAX_ANGULAR_SPEED_RPS:g} rad/s", f"1 to {v.MAX_SCAN_RAYS:,} rays",
+                 f"finite ranges 0 to {v.MAX_RANGE_M:g} m", f"after {ODOM_TIMEOUT_S:g} s a zero",
+                 f"every {LOG_INTERVAL_S:g} s", f"| {MAX_PENDING_GOALS} (more", f"{MAX_PLANS_BYTES} bytes",
+                 f"{MAX_PATH_POINTS:,} points"):
+        assert text in limits, text
+    for text in (f"scene's extent plus {v.POSE_MARGIN_M:g} m", f"1 to {v.MAX_SCAN_RAYS:,} rays",
+                 f"norm 1 +- {v.QUATERNION_NORM_TOLERANCE:g}", f"more than {v.STAMP_RESET_S:g} s older",
+                 f"for {ODOM_TIMEOUT_S:g} s (`ODOM_TIMEOUT_S`"):
+        assert text in ros2, text
