@@ -12,7 +12,7 @@ Hypothesis at them.
 The rules (docs/ros2.md, "What the bridge accepts"):
 
 - **numbers**: every field the bridge reads is finite; ``/odom`` and ``/goal_pose`` positions lie
-  inside the scene's extent plus ``POSE_MARGIN_M``; speeds at most ``MAX_LINEAR_SPEED_MPS`` and
+  inside the scene's extent plus ``POSE_MARGIN_M`` (and ``|z|`` at most ``MAX_HEIGHT_M``); speeds at most ``MAX_LINEAR_SPEED_MPS`` and
   ``MAX_ANGULAR_SPEED_RPS``; orientations are quaternions of norm 1 +- ``QUATERNION_NORM_TOLERANCE``
   (tf2 normalises; a zero quaternion is not a rotation);
 - **scans**: angles within +-2 pi, a non-zero increment of at most 2 pi with the sign of
@@ -39,6 +39,8 @@ import numpy as np
 #: how far outside the scene's extent (walls, rooms or map) a received pose may lie (m): a robot
 #: whose localiser drifted a little past the outer wall is still believed, 1e308 is not
 POSE_MARGIN_M = 5.0
+#: highest |z| a received position may have (m): a robot on an upper floor of a building, not 1e308
+MAX_HEIGHT_M = 100.0
 #: fastest linear speed an /odom may report (m/s): twice the fastest robot a scene may describe
 #: (scenes/model.py MAX_SPEED_MPS = 5.0)
 MAX_LINEAR_SPEED_MPS = 10.0
@@ -189,7 +191,9 @@ def yaw_of_quaternion(q: Any, what: str) -> float:
 
 
 def _position(p: Any, limits: Limits, what: str) -> tuple[float, float]:
-    x, y, _z = finite(what, (("position.x", p.x), ("position.y", p.y), ("position.z", p.z)))
+    x, y, z = finite(what, (("position.x", p.x), ("position.y", p.y), ("position.z", p.z)))
+    if abs(z) > MAX_HEIGHT_M:
+        raise Refused(OUTSIDE_MAP, f"{what}: position.z {shown(z)} m is more than {MAX_HEIGHT_M:g} m from the floor")
     if not limits.inside(x, y):
         xmin, ymin, xmax, ymax = limits.extent
         raise Refused(OUTSIDE_MAP, f"{what}: position ({shown(x)}, {shown(y)}) is more than {limits.margin_m:g} m "

@@ -58,6 +58,14 @@ def test_absurd_positions_are_refused(x: float, expected: str) -> None:
     assert reason(v.check_odometry, odom(x=x), LIMITS) == expected
 
 
+def test_a_position_far_above_the_floor_is_refused() -> None:
+    message = goal()
+    message.pose.position.z = 1e308
+    assert reason(v.check_goal, message, LIMITS) == v.OUTSIDE_MAP
+    message.pose.position.z = 3.0                                  # an upper floor
+    assert v.check_goal(message, LIMITS).x == 2.0
+
+
 def test_a_pose_a_little_outside_the_scene_is_believed() -> None:
     assert v.check_odometry(odom(x=-4.0), LIMITS).x == -4.0      # within POSE_MARGIN_M
 
