@@ -171,17 +171,6 @@ def twist(vx: float, vy: float, omega: float) -> Any:
     return msg_class(TWIST)(linear=vector3(vx, vy), angular=vector3(0.0, 0.0, omega))
 
 
-def goal_of(message: Any) -> tuple[float, float, float]:
-    """(x, y, yaw) of a geometry_msgs/PoseStamped; ValueError when not finite."""
-    p, q = message.pose.position, message.pose.orientation
-    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
-    yaw = yaw_of(q) if norm > 1e-9 else 0.0
-    values = (float(p.x), float(p.y), yaw)
-    if not all(math.isfinite(v) for v in values):
-        raise ValueError(f"goal pose {values} is not finite")
-    return values
-
-
 def diagnostics(node: str, received: dict[str, Any], before: dict[str, Any], topics: Sequence[str],
                 stamp: Any) -> Any:
     """diagnostic_msgs/DiagnosticArray of what the bridge received: one status per subscribed

@@ -36,6 +36,8 @@ from typing import Any
 
 import numpy as np
 
+from agents.ros_bridge.messages import yaw_of
+
 #: how far outside the scene's extent (walls, rooms or map) a received pose may lie (m): a robot
 #: whose localiser drifted a little past the outer wall is still believed, 1e308 is not
 POSE_MARGIN_M = 5.0
@@ -187,7 +189,7 @@ def yaw_of_quaternion(q: Any, what: str) -> float:
     norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     if abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE:
         raise Refused(BAD_QUATERNION, f"{what}: orientation has norm {shown(norm)}, not 1 (a rotation)")
-    return math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+    return yaw_of(q)
 
 
 def _position(p: Any, limits: Limits, what: str) -> tuple[float, float]:

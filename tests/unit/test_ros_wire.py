@@ -20,6 +20,7 @@ import pytest
 
 from agents.ros_bridge import messages as msgs
 from agents.ros_bridge.config import BridgeConfigError, load_bridge_config
+from agents.ros_bridge.validate import Limits, check_goal
 from agents.ros_bridge.types import dds_type_name, deserialize, serialize, type_hash
 from agents.ros_bridge.wire import Qos, attachment, fully_qualified, mangle, parse_attachment, topic_key
 
@@ -84,10 +85,12 @@ def test_cdr_has_the_encapsulation_header_and_round_trips() -> None:
 
 def test_goal_pose_and_laser_conventions() -> None:
     goal = msgs.path([0.0, 1.0], [0.0, 1.0], msgs.ros_time(0.0), "map").poses[-1]
-    assert msgs.goal_of(goal) == pytest.approx((1.0, 1.0, math.pi / 4))
+    limits = Limits((0.0, 0.0, 6.0, 4.0))
+    taken = check_goal(goal, limits)
+    assert (taken.x, taken.y, taken.yaw) == pytest.approx((1.0, 1.0, math.pi / 4))
     bad = msgs.path([math.nan, 1.0], [0.0, 1.0], msgs.ros_time(0.0), "map").poses[0]
-    with pytest.raises(ValueError, match="not finite"):
-        msgs.goal_of(bad)
+    with pytest.raises(ValueError, match="is nan"):
+        check_goal(bad, limits)
     scan = msgs.laser_scan([1.0, 5.0, 2.0], [-0.5, 0.0, 0.5], 5.0, msgs.ros_time(0.0), "base_link")
     assert scan.angle_increment == pytest.approx(0.5) and math.isinf(scan.ranges[1])   # REP-117: no return
 
