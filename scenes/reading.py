@@ -14,7 +14,10 @@ blocks forever waiting for a writer; a directory or a device is not a file at al
 opened without blocking (``O_NONBLOCK``: opening a FIFO returns at once), the *opened* file is
 checked to be a regular file (no race between a check and the read), its size is checked against
 the caller's bound before a byte is read, and at most ``max_bytes + 1`` bytes are ever read (a file
-that grows while it is read is still refused).
+that grows while it is read is still refused).  Memory is asked for by what the file holds, never
+by the bound: one buffer of its size plus one byte, then small chunks only if it grew meanwhile
+(a bound of gigabytes must not reserve gigabytes for a file of a few kilobytes; under an
+address-space limit that reservation alone fails with MemoryError).
 """
 
 from __future__ import annotations
@@ -22,6 +25,10 @@ from __future__ import annotations
 import errno
 import os
 import stat
+
+
+#: read size once a file turned out longer than its size said (it grows while being read)
+GROWTH_CHUNK_BYTES = 64 * 1024
 
 
 class NotRegularFile(ValueError):
@@ -85,13 +92,27 @@ def read_bounded(path: str | os.PathLike[str], *, max_bytes: int, what: str = "f
             raise FileTooLarge(f"{info.st_size:,} bytes; a {what} may have at most {max_bytes:,}{how}",
                                info.st_size, max_bytes)
         os.set_blocking(fd, True)
-        with os.fdopen(fd, "rb", closefd=True) as handle:
-            fd = -1
-            data = handle.read(max_bytes + 1)
+        data = _read_upto(fd, info.st_size, max_bytes)
     finally:
-        if fd >= 0:
-            os.close(fd)
+        os.close(fd)
     if len(data) > max_bytes:
         raise FileTooLarge(f"more than {max_bytes:,} bytes; a {what} may have at most {max_bytes:,}{how}",
                            None, max_bytes)
     return data
+
+
+def _read_upto(fd: int, size: int, max_bytes: int) -> bytes:
+    """At most ``max_bytes + 1`` bytes of ``fd``: first ``size + 1`` (the file's size as fstat gave
+    it; the extra byte tells whether it grew), then chunks of GROWTH_CHUNK_BYTES until the end or
+    past the bound.  ``os.read`` may return less than asked (pipes, reads of 2 GiB and more): loop."""
+    parts: list[bytes] = []
+    total = 0
+    want = min(size, max_bytes) + 1
+    while total <= max_bytes:
+        chunk = os.read(fd, min(want - total, max_bytes + 1 - total) if total < want
+                        else min(GROWTH_CHUNK_BYTES, max_bytes + 1 - total))
+        if not chunk:
+            break
+        parts.append(chunk)
+        total += len(chunk)
+    return parts[0] if len(parts) == 1 else b"".join(parts)

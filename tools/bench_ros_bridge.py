@@ -22,6 +22,15 @@ Two measurements, each with a reference taken in the same run (the machine is sh
    (26 people, 520 x 200 grid) towards an otherwise idle ROS router; after a warm-up, the CPU
    share of the ros_bridge process over that time, beside the social_navigation agent's
    (reference: the agent that builds the same maps to plan), from the processes' CPU times.
+4. **A flood of bad messages** (``--flood-s``, default 60, 0 skips; ``--only-flood`` runs this
+   alone): ``chronav launch ros_lounge --robot ros`` with a fake ROS robot here (integrates
+   /cmd_vel, publishes /odom and /scan at 20 Hz), while this process puts ``--flood-rate``
+   (10,000) bad messages a second on /odom, /scan and /goal_pose (NaN and 1e308 poses, NaN scan
+   angles, ranges of 3e38, empty frames, cut CDR, random bytes).  ``flood_cpu_share``: the
+   ros_bridge process's CPU time over the flood's wall time; ``flood_bridge_restarts``: its pid
+   changes (0 expected); ``flood_refused``: the refusals its /diagnostics counted meanwhile; then
+   a valid /goal_pose: ``flood_goal_completed`` (the fake robot within 0.35 m of it) and
+   ``flood_goal_s`` (wall seconds to get there).
 """
 
 from __future__ import annotations
@@ -303,11 +312,207 @@ def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, 
     return {f"live_{name}_cpu_share_{scene}": round((after[name] - before[name]) / wall, 4) for name in procs}
 
 
+# ------------------------------------------------------------------ 4. flood of bad messages
+FLOOD_SCENE = REPO / "tests" / "data" / "ros_lounge.yaml"
+FLOOD_GOAL = (4.8, 3.0)
+
+
+def _bad_payloads(count: int) -> list[tuple[str, bytes]]:
+    """(topic, CDR) of bad messages of every kind the bridge refuses, built once (the flood must
+    cost this process little)."""
+    import math
+
+    from agents.ros_bridge import messages as msgs
+    from agents.ros_bridge.types import msg_class, serialize
+
+    rng = np.random.default_rng(3)
+    stamp = msgs.ros_time(time.time())
+    angles = list(np.linspace(-1.57, 1.57, 91))
+    out: list[tuple[str, bytes]] = []
+    for i in range(count):
+        kind = i % 8
+        if kind == 0:
+            m = msgs.odometry(math.nan, 1.0, 0.0, 0.0, 0.0, 0.0, stamp, "odom", "base_link")
+            out.append(("/odom", serialize(m, msgs.ODOMETRY)))
+        elif kind == 1:
+            m = msgs.odometry(1e308, 1.0, 0.0, 0.0, 0.0, 0.0, stamp, "odom", "base_link")
+            out.append(("/odom", serialize(m, msgs.ODOMETRY)))
+        elif kind == 2:
+            g = msg_class(msgs.POSE_STAMPED)(header=msgs.header(stamp, "map"), pose=msgs.pose(1e308, 2.0, 0.0))
+            out.append(("/goal_pose", serialize(g, msgs.POSE_STAMPED)))
+        elif kind == 3:
+            g = msg_class(msgs.POSE_STAMPED)(header=msgs.header(stamp, ""), pose=msgs.pose(2.0, 2.0, 0.0))
+            out.append(("/goal_pose", serialize(g, msgs.POSE_STAMPED)))
+        elif kind == 4:
+            sc = msgs.laser_scan([1.0] * 91, angles, 5.0, stamp, "base_link")
+            sc.angle_min = math.nan
+            out.append(("/scan", serialize(sc, msgs.LASER_SCAN)))
+        elif kind == 5:
+            sc = msgs.laser_scan([1.0] * 91, angles, 5.0, stamp, "base_link")
+            sc.ranges = np.full(91, 3e38, dtype=np.float32)
+            out.append(("/scan", serialize(sc, msgs.LASER_SCAN)))
+        elif kind == 6:
+            data = serialize(msgs.odometry(1.0, 1.0, 0.0, 0.0, 0.0, 0.0, stamp, "odom", "base_link"), msgs.ODOMETRY)
+            out.append(("/odom", data[: int(rng.integers(0, len(data)))]))
+        else:
+            out.append((("/odom", "/scan", "/goal_pose")[i % 3], rng.bytes(int(rng.integers(0, 200)))))
+    return out
+
+
+class _FakeRobot:
+    """A ROS 2 robot on the ROS side: integrates /cmd_vel (unicycle), publishes /odom (map frame)
+    and a scan with no returns at 20 Hz, from a thread of this process."""
+
+    def __init__(self, session: Any, domain: int, pose: tuple[float, float, float]) -> None:
+        from agents.ros_bridge import messages as msgs
+        from agents.ros_bridge.types import deserialize
+        from agents.ros_bridge.wire import Qos, RosNode
+
+        self.x, self.y, self.theta = pose
+        self.cmd = (0.0, 0.0)
+        self.node = RosNode(session, "fake_robot", domain)
+        self.odom = self.node.create_publisher("/odom", msgs.ODOMETRY, Qos())
+        self.scan = self.node.create_publisher("/scan", msgs.LASER_SCAN, Qos("best_effort", depth=5))
+
+        def on_cmd(data: bytes) -> None:
+            twist = deserialize(data, msgs.TWIST)
+            self.cmd = (float(twist.linear.x), float(twist.angular.z))
+
+        self.node.create_subscription("/cmd_vel", msgs.TWIST, Qos(), on_cmd)
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        import math
+
+        from agents.ros_bridge import messages as msgs
+
+        angles = list(np.linspace(-1.57, 1.57, 91))
+        dt = 0.05
+        while not self.stop.wait(dt):
+            v, w = self.cmd
+            self.x += v * math.cos(self.theta) * dt
+            self.y += v * math.sin(self.theta) * dt
+            self.theta += w * dt
+            stamp = msgs.ros_time(time.time())
+            self.odom.publish(msgs.odometry(self.x, self.y, self.theta, v, 0.0, w, stamp, "odom", "base_link"))
+            self.scan.publish(msgs.laser_scan([10.0] * 91, angles, 5.0, stamp, "base_link"))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(timeout=5)
+        self.node.close()
+
+
+def flood(endpoint: str, seconds: float, rate: float) -> dict[str, Any]:
+    import math
+    import signal
+    import tempfile
+
+    import psutil
+
+    from agents.ros_bridge import messages as msgs
+    from agents.ros_bridge.types import deserialize, msg_class, type_hash
+    from agents.ros_bridge.wire import Qos, RosNode, topic_key
+    from tools.ros.stats import counts_of
+
+    domain = 6
+    payloads = _bad_payloads(64)
+    types = {"/odom": msgs.ODOMETRY, "/scan": msgs.LASER_SCAN, "/goal_pose": msgs.POSE_STAMPED}
+    assert all(type_hash(t) for t in types.values())
+    ros = _session(endpoint)
+    robot = _FakeRobot(ros, domain, (0.8, 1.2, 0.0))
+    refused = {"value": 0}
+
+    def on_diagnostics(data: bytes) -> None:
+        counts = counts_of(deserialize(data, msgs.DIAGNOSTIC_ARRAY), "chronav")
+        refused["value"] = sum(row["refused"] for row in counts.values())
+
+    watcher = RosNode(ros, "bench_watch", domain)
+    watcher.create_subscription("/diagnostics", msgs.DIAGNOSTIC_ARRAY, Qos(), on_diagnostics)
+    import zenoh
+
+    pubs = {t: ros.declare_publisher(topic_key(domain, t, types[t]), congestion_control=zenoh.CongestionControl.DROP)
+            for t in types}
+    out: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory() as runs:
+        env = {k: v for k, v in os.environ.items() if not k.startswith("CHRONAV_")}
+        env.update({"CHRONAV_ROS_ENDPOINT": endpoint, "CHRONAV_RUNS": runs, "RERUN": "off"})
+        launcher = subprocess.Popen([sys.executable, "-m", "tools.cli", "launch", str(FLOOD_SCENE), "--robot", "ros",
+                                     "--ros-domain", str(domain), "--no-record", "--timeout", str(seconds + 400)],
+                                    cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                    start_new_session=True)
+        try:
+            deadline = time.monotonic() + 240
+            pids: dict[str, int] = {}
+            while time.monotonic() < deadline and not pids.get("ros_bridge"):
+                time.sleep(1.0)
+                for path in Path(runs).glob("*/pids.json"):
+                    pids = json.loads(path.read_text())
+            logs = next(Path(runs).glob("*/logs"))
+            while time.monotonic() < deadline and "ROS 2 node" not in (logs / "ros_bridge.log").read_text():
+                time.sleep(1.0)
+            time.sleep(5.0)   # warm-up
+            bridge = psutil.Process(pids["ros_bridge"])
+            refused_before = refused["value"]
+            cpu_before = sum(bridge.cpu_times()[:2])
+            started = time.monotonic()
+            sent = 0
+            batch = max(1, int(rate / 100))
+            next_at = started
+            while time.monotonic() - started < seconds:
+                for _ in range(batch):
+                    topic, data = payloads[sent % len(payloads)]
+                    pubs[topic].put(data)
+                    sent += 1
+                next_at += batch / rate
+                time.sleep(max(0.0, next_at - time.monotonic()))
+            wall = time.monotonic() - started
+            cpu = sum(bridge.cpu_times()[:2]) - cpu_before
+            time.sleep(2.0)   # the last /diagnostics of the flood
+            pids_after = json.loads(next(Path(runs).glob("*/pids.json")).read_text())
+            out.update({"flood_s": round(wall, 1), "flood_sent": sent, "flood_rate_msgs_per_s": round(sent / wall),
+                        "flood_cpu_share": round(cpu / wall, 4), "flood_bridge_alive": bridge.is_running(),
+                        "flood_bridge_restarts": int(pids_after.get("ros_bridge") != pids["ros_bridge"]),
+                        "flood_refused": refused["value"] - refused_before})
+            # then a goal: the fake robot must get there
+            goal_pub = ros.declare_publisher(topic_key(domain, "/goal_pose", msgs.POSE_STAMPED))
+            goal = msg_class(msgs.POSE_STAMPED)(header=msgs.header(msgs.ros_time(time.time()), "map"),
+                                                pose=msgs.pose(FLOOD_GOAL[0], FLOOD_GOAL[1], 0.0))
+            from agents.ros_bridge.types import serialize
+
+            goal_started = time.monotonic()
+            goal_pub.put(serialize(goal, msgs.POSE_STAMPED))
+            reached = False
+            while time.monotonic() - goal_started < 120:
+                if math.hypot(robot.x - FLOOD_GOAL[0], robot.y - FLOOD_GOAL[1]) < 0.35:
+                    reached = True
+                    break
+                time.sleep(0.2)
+            out.update({"flood_goal_completed": reached, "flood_goal_s": round(time.monotonic() - goal_started, 1)})
+        finally:
+            if launcher.poll() is None:
+                os.killpg(launcher.pid, signal.SIGINT)
+                try:
+                    launcher.wait(timeout=120)
+                except subprocess.TimeoutExpired:
+                    os.killpg(launcher.pid, signal.SIGKILL)
+                    launcher.wait(timeout=10)
+            robot.close()
+            watcher.close()
+            ros.close()
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--samples", type=int, default=200)
     parser.add_argument("--live-seconds", type=float, default=30.0, help="0: skip the live run")
+    parser.add_argument("--flood-s", type=float, default=60.0, help="seconds of bad messages (0: skip)")
+    parser.add_argument("--flood-rate", type=float, default=10_000.0, help="bad messages a second")
+    parser.add_argument("--only-flood", action="store_true", help="run the flood phase alone")
     parser.add_argument("--subscriber", nargs=3, metavar=("ENDPOINT", "DOMAIN", "SECONDS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.subscriber:
@@ -319,6 +524,13 @@ def main() -> None:
     endpoint = f"tcp/127.0.0.1:{port}"
     router = _router(port)
     out: dict[str, Any] = {}
+    if args.only_flood:
+        try:
+            out.update(flood(endpoint, args.flood_s, args.flood_rate))
+        finally:
+            _stop(router)
+        print(json.dumps(out))
+        return
     try:
         sub = subprocess.Popen([sys.executable, "-m", "tools.bench_ros_bridge", "--subscriber", endpoint, "3",
                                 str(args.seconds + 3)], cwd=REPO, stdout=subprocess.PIPE, start_new_session=True)
@@ -338,6 +550,8 @@ def main() -> None:
                     for k, v in latency(endpoint, args.samples).items()})
         if args.live_seconds > 0:
             out.update(live(endpoint, args.live_seconds))
+        if args.flood_s > 0:
+            out.update(flood(endpoint, args.flood_s, args.flood_rate))
     finally:
         _stop(router)
     print(json.dumps(out))

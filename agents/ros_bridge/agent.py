@@ -18,7 +18,13 @@ when what it shows changed.
 
 What it subscribes: ``/goal_pose`` (geometry_msgs/PoseStamped in the map frame) becomes a pose
 mission (``mission/ros_goal_<n>``, due now) that the executive plans and runs like any other.
-A goal in another frame, or not finite, is refused with a log line; nothing is written.
+Every received message first goes through inbox.py (size, CDR, the checks of validate.py); a goal
+that passes them is still refused when the robot can never stand there (outside the building, in
+a wall's or an object's margin: ``RosMaps.goal_problem``), so it never becomes a mission that
+fails the run.  Refusals are counted per topic and reason, logged (rate-limited), and published
+on ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, 1 Hz); ``chronav ros stats`` reads them.
+Nothing a message holds can raise out of the loop: an unexpected error while using one is
+counted as ``internal_error``.
 
 ``-o robot=ros`` (``chronav launch --robot ros``): the robot is a ROS 2 robot.  The bridge then
 does not publish ``/odom``, ``/scan`` and the odom -> base_link transform (the robot does); it
@@ -32,18 +38,21 @@ the loop's period), and a stop when the bridge ends.
 
 from __future__ import annotations
 
+import json
 import math
-import queue
 import time
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from agents.lib.socialmap.nav2 import KEEPOUT_FILTER_TYPE
 from agents.ros_bridge import messages as msgs
+from agents.ros_bridge import validate
 from agents.ros_bridge.config import BridgeConfig, BridgeConfigError, TopicSpec, config_from_options
+from agents.ros_bridge.inbox import GOAL_POSE, ODOM, SCAN, TYPES, Inbox, ReceiveStats
 from agents.ros_bridge.maps import Grid, RosMaps
-from agents.ros_bridge.wire import RosNode, RosPublisher, ros_session_config
+from agents.ros_bridge.wire import RosNode, RosPublisher, fully_qualified, ros_session_config
 from agents.runtime.base import Agent
 from agents.runtime.recording import Recorder
 from agents.world.dsr_readers import closed_doors, dsr_people
@@ -51,12 +60,16 @@ from agents.world.vocabulary import WORLD, EdgeType, MissionState, NodeType, act
 from scenes.clock import format_clock
 
 GOAL_PREFIX = "ros_goal_"
-MAX_PENDING_GOALS = 16
 ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (the simulator's is 10)
 #: share of one core the bridge may spend rebuilding the social map from the DSR (a 1000 x 600
 #: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
 SOCIAL_MAP_CPU_BUDGET = 0.25
 RETRY_S = 2.0            # between attempts to reach the ROS side's router
+#: with --robot ros, after this long (wall s) without a valid /odom the bridge sends a zero /cmd_vel
+#: and forwards no command until odometry returns: the navigation would steer by a frozen pose
+ODOM_TIMEOUT_S = 0.5
+#: the bridge's received/refused counts in the run directory (rewritten when they change, at most 1/s)
+RECEIVED_FILE = "ros_received.json"
 
 
 class RosBridgeAgent(Agent):
@@ -81,11 +94,18 @@ class RosBridgeAgent(Agent):
         self._retry_at = -math.inf
         self.stats: dict[str, dict[str, float]] = {}
         self.external = self.config.option("robot", "sim") == "ros"
-        self._odom: Any = None
-        self._scan: Any = None
         self._robot_written = -math.inf
+        self._odom_written = 0        # inbox.odom_count when the robot was last written
+        self._halted = False          # True while /odom is silent: zero /cmd_vel sent, commands held
         self._last_cmd: Any = None
-        self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
+        frames, topics = self.cfg.frames, self.cfg.topics
+        limits = validate.Limits(tuple(self.scene.bounds), frames.map, frames.odom, frames.base,  # type: ignore[arg-type]
+                                 frames.laser)
+        self.received = ReceiveStats(self.log)
+        self.subscribed = {key: fully_qualified(getattr(topics, key).name, self.cfg.namespace)
+                           for key in (GOAL_POSE, ODOM, SCAN)}
+        self.inbox = Inbox(limits, self.subscribed, self.received)
+        self._diagnosed: dict[str, Any] = {"accepted": {}, "refused": {}}
         self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
             f"mission/{GOAL_PREFIX}"))
         if self.external:
@@ -98,42 +118,58 @@ class RosBridgeAgent(Agent):
         import zenoh
 
         try:
-            self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
+            self.node = self._connect()
         except zenoh.ZError:
             self._retry_at = time.monotonic() + RETRY_S
             self.log.warning("the ROS 2 side's Zenoh router at %s does not answer; trying again in %.0f s "
                              "(start it with `ros2 run rmw_zenoh_cpp rmw_zenohd`, or give its endpoint with "
                              "CHRONAV_ROS_ENDPOINT or --ros-endpoint)", self.cfg.endpoint, RETRY_S)
             return False
-        self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        self._declare()
+        return True
+
+    def _connect(self) -> RosNode:
+        """The Zenoh session towards the ROS side's router, and the ROS node on it (tests replace
+        this with a node that records, tests/ros_bridge_harness.py)."""
+        import zenoh
+
+        self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
+        return RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+
+    def _declare(self) -> None:
+        """The node's publishers and subscriptions."""
+        assert self.node is not None
         topics = self.cfg.topics
         own_robot = () if self.external else ("odom", "scan")
         for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
                                ("keepout_filter_mask", msgs.OCCUPANCY_GRID),
                                ("costmap_filter_info", msgs.COSTMAP_FILTER_INFO), ("people", msgs.PEOPLE),
                                ("plan", msgs.PATH), ("tf", msgs.TF), ("odom", msgs.ODOMETRY),
-                               ("scan", msgs.LASER_SCAN), ("agenda", msgs.STRING), ("clock", msgs.CLOCK)):
+                               ("scan", msgs.LASER_SCAN), ("agenda", msgs.STRING), ("clock", msgs.CLOCK),
+                               ("diagnostics", msgs.DIAGNOSTIC_ARRAY)):
             spec: TopicSpec = getattr(topics, key)
             if spec.enabled and (key not in ("odom", "scan") or key in own_robot):
                 self.pubs[key] = self.node.create_publisher(spec.name, type_name, spec.qos.qos())
         if topics.goal_pose.enabled:
-            self.node.create_subscription(topics.goal_pose.name, msgs.POSE_STAMPED, topics.goal_pose.qos.qos(),
-                                          self._on_goal, on_error=self.log.warning)
+            self._subscribe(GOAL_POSE)
         if self.external:
             self._setup_external()
         self.log.info("ROS 2 node /%s on domain %d via %s: %s", self.cfg.node, self.cfg.domain, self.cfg.endpoint,
                       ", ".join(p.topic for p in self.pubs.values()))
-        return True
 
     # ------------------------------------------------------------------ --robot ros
     def _setup_external(self) -> None:
         topics = self.cfg.topics
         assert self.node is not None
         self.cmd_pub = self.node.create_publisher(topics.cmd_vel.name, msgs.TWIST, topics.cmd_vel.qos.qos())
-        self.node.create_subscription(topics.odom.name, msgs.ODOMETRY, topics.odom.qos.qos(),
-                                      lambda m: setattr(self, "_odom", m), on_error=self.log.warning)
-        self.node.create_subscription(topics.scan.name, msgs.LASER_SCAN, topics.scan.qos.qos(),
-                                      lambda m: setattr(self, "_scan", m), on_error=self.log.warning)
+        self._subscribe(ODOM)
+        self._subscribe(SCAN)
+
+    def _subscribe(self, key: str) -> None:
+        """Every payload of subscription ``key`` goes to the inbox (decoded, checked, counted there)."""
+        assert self.node is not None
+        spec: TopicSpec = getattr(self.cfg.topics, key)
+        self.node.create_subscription(spec.name, TYPES[key], spec.qos.qos(), partial(self.inbox.receive, key))
 
     def _on_robot_command(self, node: Any, *_rest: object) -> None:
         """The navigation's command reached this replica: send it now (the agent's thread)."""
@@ -141,62 +177,76 @@ class RosBridgeAgent(Agent):
             return
         a = node.attrs
         cmd = (a.get("cmd_stamp"), a.get("cmd_vx"), a.get("cmd_vy"), a.get("cmd_omega"))
-        if cmd[0] is None or cmd == self._last_cmd:
+        if cmd[0] is None or cmd == self._last_cmd or self._halted:
             return
         self._last_cmd = cmd
         self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
 
     def _write_robot(self, t_s: float, wall: float) -> None:
-        """The ROS robot's latest odometry and scan into the DSR, as the simulator would write them."""
-        odom, g = self._odom, self.graph
-        if odom is None or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
-            return
+        """The ROS robot's latest odometry and scan (checked by the inbox) into the DSR, as the
+        simulator would write them."""
+        odom, scan, g, count = self.inbox.odom, self.inbox.scan, self.graph, self.inbox.odom_count
+        if odom is None or count == self._odom_written or wall - self._robot_written < 1.0 / ROBOT_RATE_HZ:
+            return   # nothing new: a pose is written once, so its pose_stamp never makes an old pose look fresh
         robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
         if robot is None or world is None:
             return
-        p, tw = odom.pose.pose, odom.twist.twist
-        attrs: dict[str, Any] = {"pose_stamp": t_s, "v": float(tw.linear.x), "vy": float(tw.linear.y),
-                                 "omega": float(tw.angular.z)}
+        attrs: dict[str, Any] = {"pose_stamp": t_s, "v": odom.v, "vy": odom.vy, "omega": odom.omega}
         angles = robot.attrs.get("laser_angles") or []
-        if self._scan is not None and angles:
-            attrs["laser_ranges"] = resample_scan(self._scan, angles, self.scene.robot.laser_range)
+        if scan is not None and angles:
+            attrs["laser_ranges"] = resample_scan(scan, angles, self.scene.robot.laser_range)
         with g.transaction():
-            g.insert_or_assign_edge(world.id, robot.id, EdgeType.RT, attrs={"x": float(p.position.x), "y": float(p.position.y),
-                                                                     "theta": msgs.yaw_of(p.orientation)})
+            g.insert_or_assign_edge(world.id, robot.id, EdgeType.RT, attrs={"x": odom.x, "y": odom.y, "theta": odom.yaw})
             g.update_node(robot.id, attrs=attrs)
         self._robot_written = wall
+        self._odom_written = count
 
-    # ------------------------------------------------------------------ subscriptions
-    def _on_goal(self, message: Any) -> None:
-        """Zenoh's thread: only queue it; the DSR is written from the agent's loop."""
-        try:
-            x, y, yaw = msgs.goal_of(message)
-        except ValueError as exc:
-            self.log.warning("goal refused: %s", exc)
-            return
-        try:
-            self.goals.put_nowait((x, y, yaw, str(message.header.frame_id)))
-        except queue.Full:
-            self.log.warning("goal (%.2f, %.2f) refused: %d goals already wait", x, y, MAX_PENDING_GOALS)
+    def _watch_odometry(self, wall: float) -> None:
+        """Stop the ROS robot while its odometry is silent (or every message of it refused)."""
+        silent_s = wall - self.inbox.odom_at
+        if silent_s > ODOM_TIMEOUT_S and not self._halted:
+            self._halted = True
+            self.cmd_pub.publish(msgs.twist(0.0, 0.0, 0.0))
+            self.log.warning("no valid %s %s: zero %s sent, commands held until odometry comes",
+                             self.subscribed[ODOM], "yet" if math.isinf(silent_s) else f"for {silent_s:.1f} s",
+                             self.cfg.topics.cmd_vel.name)
+        elif silent_s <= ODOM_TIMEOUT_S and self._halted:
+            self._halted = False
+            self._last_cmd = None   # the navigation's current command goes out at its next write
+            self.log.info("%s is back: commands go out again", self.subscribed[ODOM])
 
+    # ------------------------------------------------------------------ goals
     def _take_goals(self, t_s: float) -> None:
-        while True:
-            try:
-                x, y, yaw, frame = self.goals.get_nowait()
-            except queue.Empty:
-                return
-            if frame not in (self.cfg.frames.map, ""):
-                self.log.warning("goal in frame %r refused: give goals in %r", frame, self.cfg.frames.map)
+        """Goals the inbox took become missions, unless the robot can never stand there."""
+        goals = self.inbox.take_goals()
+        if not goals:
+            return
+        topic, closed = self.subscribed[GOAL_POSE], tuple(closed_doors(self.graph))
+        for goal in goals:
+            problem = self.maps.goal_problem(self.graph, goal.x, goal.y, closed)
+            if problem is not None:
+                self.received.refuse(topic, validate.UNREACHABLE, f"{topic}: goal refused: {problem}")
+                self.rec.event(f"{format_clock(t_s)} ROS 2 goal refused: {problem}")
                 continue
             self._goal_count += 1
             mission_id = f"{GOAL_PREFIX}{self._goal_count}"
-            goal = f"pose:{x:.3f},{y:.3f},{yaw:.4f}"
+            text = f"pose:{goal.x:.3f},{goal.y:.3f},{goal.yaw:.4f}"
             self.graph.insert_node(type=NodeType.MISSION, name=mission_name(mission_id),
-                                   attrs={"mission_id": mission_id, "goal": goal, "time_s": t_s,
+                                   attrs={"mission_id": mission_id, "goal": text, "time_s": t_s,
                                           "state": MissionState.PENDING, "description": "goal from ROS 2 /goal_pose",
                                           "replans": 0})
-            self.rec.event(f"{format_clock(t_s)} ROS 2 goal {goal} -> mission {mission_id}")
-            self.log.info("goal %s -> mission %s", goal, mission_id)
+            self.received.accept(topic)
+            self.rec.event(f"{format_clock(t_s)} ROS 2 goal {text} -> mission {mission_id}")
+            self.log.info("goal %s -> mission %s", text, mission_id)
+
+    def _guarded(self, key: str, action: Any, *args: Any) -> None:
+        """``action(*args)`` on received data; an error it raises is counted on ``key``'s topic as
+        internal_error (and logged, rate-limited), never raised out of the loop."""
+        try:
+            action(*args)
+        except Exception as exc:  # noqa: BLE001 - whatever a message held must not end the bridge
+            topic = self.subscribed[key]
+            self.received.refuse(topic, validate.INTERNAL, f"{topic}: {type(exc).__name__}: {validate.shown(str(exc))}")
 
     # ------------------------------------------------------------------ loop
     def step(self) -> None:
@@ -206,10 +256,11 @@ class RosBridgeAgent(Agent):
         t_s = now_s(g)
         if t_s is None or g.get_node_by_name(WORLD) is None:
             return
-        self._take_goals(t_s)
+        self._guarded(GOAL_POSE, self._take_goals, t_s)
         wall = time.monotonic()
         if self.external:
-            self._write_robot(t_s, wall)
+            self._guarded(ODOM, self._write_robot, t_s, wall)
+            self._watch_odometry(wall)
         stamp = msgs.ros_time(t_s, self.epoch_s)
         frames = self.cfg.frames
         robot = g.get_node_by_name(self.scene.robot.name)
@@ -218,7 +269,7 @@ class RosBridgeAgent(Agent):
             closed = tuple(closed_doors(g))
             self._publish_if("map", wall, closed, lambda: self._map(stamp, closed))
         if "costmap_filter_info" in self.pubs and "costmap_filter_info" not in self._seen:
-            self._publish_if("costmap_filter_info", wall, True, lambda: msgs.costmap_filter_info(
+            self._publish_if("costmap_filter_info", wall, True, lambda: msgs.costmap_filter_info(  # the scene's time
                 KEEPOUT_FILTER_TYPE, self.pubs["keepout_filter_mask"].topic if "keepout_filter_mask" in self.pubs
                 else self.cfg.topics.keepout_filter_mask.name, self.scale.base, self.scale.multiplier, stamp,
                 frames.map))
@@ -237,6 +288,31 @@ class RosBridgeAgent(Agent):
             self._social(wall, t_s, stamp, people)
         if robot is not None and people is not None:
             self._publish_if("tf", wall, (t_s, robot.attrs.get("pose_stamp")), lambda: self._tf(robot, people, stamp))
+        if self._due("diagnostics", wall):
+            self._publish_if("diagnostics", wall, wall, lambda: self._diagnostics(stamp))
+
+    def _diagnostics(self, stamp: Any) -> Any:
+        """What was received and refused since the start, per subscribed topic (ROS's health topic)."""
+        now = self.received.snapshot()
+        topics = [self.subscribed[GOAL_POSE]] + ([self.subscribed[ODOM], self.subscribed[SCAN]] if self.external else [])
+        message = msgs.diagnostics(self.cfg.node, now, self._diagnosed, topics, stamp)
+        if now != self._diagnosed:
+            self._keep_counts(now)
+        self._diagnosed = now
+        return message
+
+    def _keep_counts(self, counts: dict[str, Any]) -> None:
+        """``<run>/ros_received.json``: the counts as of now, so a finished run keeps them and the
+        launcher can show them (replaced atomically; nothing without a run directory)."""
+        run_dir = self.config.run_dir
+        if run_dir is None:
+            return
+        tmp = run_dir / f"{RECEIVED_FILE}.tmp"
+        try:
+            tmp.write_text(json.dumps({"node": self.cfg.node, **counts}, sort_keys=True), encoding="utf-8")
+            tmp.replace(run_dir / RECEIVED_FILE)
+        except OSError as exc:
+            self.log.warning("cannot write %s: %s", run_dir / RECEIVED_FILE, exc)
 
     def _due(self, key: str, wall: float) -> bool:
         if key not in self.pubs:
@@ -305,6 +381,10 @@ class RosBridgeAgent(Agent):
         summary = ", ".join(f"{k} {int(v['count'])} msgs {v['seconds'] * 1000:.0f} ms"
                             for k, v in sorted(self.stats.items()))
         self.log.info("published: %s", summary or "nothing")
+        received = self.received.snapshot()
+        self.log.info("received: taken %s; refused %s", received["accepted"] or "nothing",
+                      received["refused"] or "nothing")
+        self._keep_counts(received)
         if self.node is None:
             return
         if self.external:
@@ -314,8 +394,10 @@ class RosBridgeAgent(Agent):
 
 
 def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[float]:
-    """A LaserScan's ranges at the scene's ray angles (nearest ray; no return or out of the scan's
-    field of view: ``range_max``, as the simulator's laser reports a ray that hits nothing)."""
+    """A scan's ranges (a LaserScan, or validate.Scan) at the scene's ray angles (nearest ray; no
+    return or out of the scan's field of view: ``range_max``, as the simulator's laser reports a ray
+    that hits nothing).  REP-117: +inf and NaN are no return, -inf is "too close to measure", so an
+    obstacle at the scanner's ``range_min`` (never free space)."""
     ranges = np.asarray(scan.ranges, dtype=float)
     if len(ranges) == 0 or scan.angle_increment == 0:
         return [range_max] * len(angles)
@@ -323,4 +405,6 @@ def resample_scan(scan: Any, angles: list[float], range_max: float) -> list[floa
     inside = (index >= 0) & (index < len(ranges))
     picked = np.where(inside, ranges[np.clip(index, 0, len(ranges) - 1)], range_max)
     valid = np.isfinite(picked) & (picked >= scan.range_min) & (picked <= scan.range_max)
-    return np.minimum(np.where(valid, picked, range_max), range_max).tolist()
+    out = np.where(valid, picked, range_max)
+    out = np.where(inside & np.isneginf(picked), float(scan.range_min), out)
+    return np.minimum(out, range_max).tolist()

@@ -64,6 +64,9 @@ class Topics(BaseModel):
     clock: TopicSpec = TopicSpec(name="/clock", qos=QosSpec(reliability="best_effort", depth=1), rate_hz=20.0)
     goal_pose: TopicSpec = TopicSpec(name="/goal_pose")
     cmd_vel: TopicSpec = TopicSpec(name="/cmd_vel")
+    #: what the bridge received and refused, per subscribed topic (diagnostic_msgs/DiagnosticArray;
+    #: ROS nodes publish their health there about once a second, as diagnostic_updater does)
+    diagnostics: TopicSpec = TopicSpec(name="/diagnostics", rate_hz=1.0)
 
 
 class Frames(BaseModel):

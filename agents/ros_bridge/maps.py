@@ -7,6 +7,9 @@
   walls included);
 - the keepout filter mask (``/keepout_filter_mask``): the social layers only, exactly the mask
   ``chronav map export`` writes (agents/lib/socialmap/nav2.py).
+
+And the one question the bridge asks of a goal before it becomes a mission: can the robot ever
+stand there (:meth:`RosMaps.goal_problem`)?
 """
 
 from __future__ import annotations
@@ -15,10 +18,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from agents.lib.socialmap.nav2 import MaskScale, keepout_values, social_costs
+from agents.lib.socialmap.objects import object_geometry
 from agents.lib.socialmap.social_map import SocialMap
+from agents.world.dsr_readers import dsr_objects
 from agents.world.navigation import NavigationMaps
+from dsr.protocols import GraphReader
 from scenes.model import Scene
 
 
@@ -47,3 +54,22 @@ class RosMaps:
         origin, res = (smap.spec.x0, smap.spec.y0), smap.spec.resolution
         return (Grid(keepout_values(smap.cost, self.scale), origin, res),
                 Grid(keepout_values(social_costs(smap), self.scale), origin, res))
+
+    def goal_problem(self, graph: GraphReader, x: float, y: float, closed: Sequence[str] = ()) -> str | None:
+        """Why the robot can never stand at (x, y), or None: outside every room of the building,
+        within the robot's radius plus the planning margin of a wall or a closed door (the
+        navigation's own static map), or of an object's footprint (where the objects are in the
+        DSR).  People and activities are not reasons: they move and end."""
+        scene, radius = self.nav.scene, self.nav.params.grid.robot_radius_m
+        if scene.rooms and scene.room_at(x, y) is None:
+            return f"({x:.2f}, {y:.2f}) is outside the building (in no room of scene {scene.name!r})"
+        static = self.nav.static(closed=tuple(closed))
+        if not static.spec.contains_xy(x, y) or not np.isfinite(static.grid[static.spec.cell_of(x, y)]):
+            return (f"({x:.2f}, {y:.2f}) is within {radius:.2f} m (the robot's radius plus margin) of a wall "
+                    "or a closed door")
+        point = shapely.Point(x, y)
+        for obj in dsr_objects(graph):
+            distance = object_geometry(obj).footprint.distance(point)
+            if distance <= radius:
+                return f"({x:.2f}, {y:.2f}) is {distance:.2f} m from the footprint of object {obj.name!r}"
+        return None

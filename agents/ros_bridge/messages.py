@@ -31,6 +31,9 @@ STRING = "std_msgs/msg/String"
 CLOCK = "rosgraph_msgs/msg/Clock"
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 TWIST = "geometry_msgs/msg/Twist"
+DIAGNOSTIC_ARRAY = "diagnostic_msgs/msg/DiagnosticArray"
+#: diagnostic_msgs/DiagnosticStatus levels
+DIAGNOSTIC_OK, DIAGNOSTIC_WARN = 0, 1
 
 
 def day_epoch_s(date: dt.date, timezone: str) -> float:
@@ -168,12 +171,23 @@ def twist(vx: float, vy: float, omega: float) -> Any:
     return msg_class(TWIST)(linear=vector3(vx, vy), angular=vector3(0.0, 0.0, omega))
 
 
-def goal_of(message: Any) -> tuple[float, float, float]:
-    """(x, y, yaw) of a geometry_msgs/PoseStamped; ValueError when not finite."""
-    p, q = message.pose.position, message.pose.orientation
-    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
-    yaw = yaw_of(q) if norm > 1e-9 else 0.0
-    values = (float(p.x), float(p.y), yaw)
-    if not all(math.isfinite(v) for v in values):
-        raise ValueError(f"goal pose {values} is not finite")
-    return values
+def diagnostics(node: str, received: dict[str, Any], before: dict[str, Any], topics: Sequence[str],
+                stamp: Any) -> Any:
+    """diagnostic_msgs/DiagnosticArray of what the bridge received: one status per subscribed
+    topic (``<node>: received <topic>``), level WARN when it refused a message of that topic since
+    the previous array (``before``), values ``taken``, ``refused`` and ``refused.<reason>``
+    (totals since the bridge started, as ReceiveStats.snapshot gives them)."""
+    status_cls, value_cls = msg_class("diagnostic_msgs/msg/DiagnosticStatus"), msg_class("diagnostic_msgs/msg/KeyValue")
+    out = []
+    for topic in topics:
+        taken = int(received["accepted"].get(topic, 0))
+        reasons = received["refused"].get(topic, {})
+        refused = sum(reasons.values())
+        new = refused - sum(before.get("refused", {}).get(topic, {}).values())
+        values = [value_cls(key="taken", value=str(taken)), value_cls(key="refused", value=str(refused))]
+        values += [value_cls(key=f"refused.{reason}", value=str(n)) for reason, n in sorted(reasons.items())]
+        worst = max(reasons, key=lambda r: reasons[r]) if reasons else ""
+        text = f"{taken} taken, {refused} refused" + (f" (most: {worst})" if worst else "")
+        out.append(status_cls(level=DIAGNOSTIC_WARN if new > 0 else DIAGNOSTIC_OK, name=f"{node}: received {topic}",
+                              message=text, hardware_id=node, values=values))
+    return msg_class(DIAGNOSTIC_ARRAY)(header=header(stamp, ""), status=out)

@@ -33,7 +33,7 @@ from typing import Any, Literal
 import zenoh
 from zenoh import ext
 
-from agents.ros_bridge.types import dds_type_name, deserialize, serialize, type_hash
+from agents.ros_bridge.types import dds_type_name, serialize, type_hash
 
 ADMIN_SPACE = "@ros2_lv"
 GID_SIZE = 16
@@ -41,7 +41,8 @@ GID_SIZE = 16
 RMW_ZENOH_DEFAULT_DEPTH = 42
 #: rmw_zenoh's sporadic heartbeat period for RELIABLE + TRANSIENT_LOCAL publishers (s)
 MISS_DETECTION_HEARTBEAT_S = 0.5
-#: largest message the bridge decodes from the ROS side (goals, odometry, scans are far smaller)
+#: largest message the bridge decodes from the ROS side (goals, odometry, scans are far smaller;
+#: inbox.py refuses larger ones)
 MAX_RECEIVED_BYTES = 4 * 1024 * 1024
 
 Reliability = Literal["reliable", "best_effort"]
@@ -192,29 +193,16 @@ class RosNode:
         self.publishers.append(pub)
         return pub
 
-    def create_subscription(self, topic: str, type_name: str, qos: Qos,
-                            callback: Callable[[Any], None],
-                            on_error: Callable[[str], None] | None = None) -> None:
-        """Deliver every decoded message of ``topic`` to ``callback`` (on Zenoh's callback thread).
-        A payload that does not decode as ``type_name`` goes to ``on_error`` and is dropped."""
+    def create_subscription(self, topic: str, type_name: str, qos: Qos, on_payload: Callable[[bytes], None]) -> None:
+        """Hand every sample's payload (CDR bytes, undecoded) of ``topic`` to ``on_payload``, on
+        Zenoh's callback thread.  Decoding and checking are the receiver's (inbox.py), so that
+        every received byte takes one path that counts what it refuses."""
         topic = fully_qualified(topic, self.namespace)
         key = topic_key(self.domain, topic, type_name)
         token_key, _ = self._entity_token("MS", topic, type_name, qos)
 
         def on_sample(sample: zenoh.Sample) -> None:
-            data = sample.payload.to_bytes()
-            if len(data) > MAX_RECEIVED_BYTES:
-                if on_error is not None:
-                    on_error(f"{topic}: a message of {len(data)} bytes was dropped (at most {MAX_RECEIVED_BYTES})")
-                return
-            try:
-                message = deserialize(data, type_name)
-            except Exception:  # noqa: BLE001 - any malformed CDR: rosbags raises several kinds
-                if on_error is not None:
-                    on_error(f"{topic}: a message of {len(data)} bytes that is not a valid {type_name} was "
-                             "dropped (a publisher with another type or version of that message?)")
-                return
-            callback(message)
+            on_payload(sample.payload.to_bytes())
 
         if qos.durability == "transient_local":
             sub = ext.declare_advanced_subscriber(self.session, key, on_sample,

@@ -49,6 +49,7 @@ from agents.runtime.drawing.social_map import DecisionLogger, DecisionStamp
 from agents.world.control_view import obstacle_segments, tracked_people
 from agents.world.dsr_readers import closed_doors
 from agents.world.navigation import DEFAULT_PLANNER, PLANNING_MARGIN_M, NavigationMaps
+from agents.world.plans_file import PlansWriter
 from agents.world.vocabulary import IntentionKind, IntentionState, IntentionView, RobotView, intentions
 from agents.world.vocabulary import now_s as now_of
 from scenes.clock import format_clock
@@ -142,6 +143,7 @@ class SocialNavigationAgent(Agent):
         # The recording's decision layer: every map built is logged at its time (what was used).
         self.decision = DecisionLogger(recorder)
         self._planned_s: float | None = None   # when the path in use was planned (None: no path)
+        self.plans = PlansWriter(self.config.run_dir)   # <run>/plans.jsonl: every adopted path
         xmin, _ymin, _xmax, ymax = self.scene.bounds
         self._stamp_anchor = (xmin, ymax + 0.5)
 
@@ -515,6 +517,9 @@ class SocialNavigationAgent(Agent):
         self.rec.event(f"{format_clock(now_s or 0.0)} navigation failed: {reason}", level="ERROR")
         self._stop(robot, self.intention_id, IntentionState.FAILED, reason)
 
+    def teardown(self) -> None:
+        self.plans.close()
+
     # ----------------------------------------------------------------- outputs
     def _publish_path(self, points: np.ndarray, now_s: float, reason: str, cost: float, replan: bool) -> None:
         robot = self._robot()
@@ -528,5 +533,6 @@ class SocialNavigationAgent(Agent):
                 self.graph.update_node(intention.node_id, attrs={**attrs, "replans": intention.replans + int(replan)})
         self.rec.event(f"{format_clock(now_s)} path {reason}: {len(points)} points, cost {cost:.1f}")
         self._planned_s = now_s
+        self.plans.adopted(now_s, points[:, 0], points[:, 1], cost, reason)
         self.decision.log_path(points.tolist())
         self.decision.log_stamp(self._stamp(now_s), self._stamp_anchor)   # every path is planned on a map of now_s

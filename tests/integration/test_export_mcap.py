@@ -13,8 +13,12 @@ from pathlib import Path
 from zoneinfo import ZoneInfo
 
 import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
 from tests.integration.ros2_client import read_back
 from tests.support import REPO_ROOT
+
+from agents.world.plans_file import PlansWriter
 
 SCENE = REPO_ROOT / "tests" / "data" / "ros_lounge.yaml"
 T0 = 36_000.0   # 10:00:00
@@ -32,6 +36,10 @@ def _run_dir(tmp_path: Path) -> Path:
         people += [f"{T0 + 0.1 * i:.3f},ana,resident,3.6000,1.5000,-1.57080,0.0000,0.0000,",
                    f"{T0 + 0.1 * i:.3f},ben,resident,{1.5 + 0.02 * i:.4f},3.2000,0.00000,0.2000,0.0000,"]
     (run / "people.csv").write_text("\n".join(people) + "\n")
+    plans = PlansWriter(run)   # as the navigation agent writes it
+    plans.adopted(T0, [0.8, 1.5, 1.8], [1.2, 1.2, 1.5], 12.5, "new goal")
+    plans.adopted(T0 + 100, [1.8, 2.4], [1.2, 1.2], 4.0, "replan")
+    plans.close()
     return run
 
 
@@ -64,6 +72,17 @@ def test_export_writes_a_bag_both_readers_decode(tmp_path: Path) -> None:
     assert agenda["activities"][0]["id"] == "game" and agenda["activities"][0]["state"] == "running"
     stamps = [ns for v in topics.values() for ns, _ in v]
     assert min(stamps) == first_ns
+    # the adopted plans, as rosbags reads them and as mcap-ros2-support decodes them
+    plans = topics["/plan"]
+    assert [ns for ns, _ in plans] == [first_ns, round((midnight + T0 + 100) * 1e9)]
+    assert [(p.pose.position.x, p.pose.position.y) for p in plans[0][1].poses] == [(0.8, 1.2), (1.5, 1.2), (1.8, 1.5)]
+    assert plans[1][1].header.frame_id == "map" and plans[1][1].header.stamp.sec == int(midnight + T0 + 100)
+    with out.open("rb") as handle:
+        decoded = [(message.log_time, ros) for _schema, channel, message, ros in
+                   make_reader(handle, decoder_factories=[DecoderFactory()]).iter_decoded_messages()
+                   if channel.topic == "/plan"]
+    assert [ns for ns, _ in decoded] == [ns for ns, _ in plans]
+    assert [(p.pose.position.x, p.pose.position.y) for p in decoded[1][1].poses] == [(1.8, 1.2), (2.4, 1.2)]
 
 
 def test_a_bad_run_is_refused_with_the_file_and_line(tmp_path: Path) -> None:
@@ -77,3 +96,12 @@ def test_a_bad_run_is_refused_with_the_file_and_line(tmp_path: Path) -> None:
     (run / "result.json").unlink()
     done = _export(run, tmp_path / "bad.mcap")
     assert done.returncode == 1 and "no result.json" in done.stderr
+
+
+def test_a_bad_plans_file_is_refused_with_the_file_line_and_key(tmp_path: Path) -> None:
+    run = _run_dir(tmp_path)
+    with (run / "plans.jsonl").open("a") as handle:
+        handle.write('{"t_s": 36200.0, "x": [1e308], "y": [1.0]}\n')
+    done = _export(run, tmp_path / "bad.mcap")
+    assert done.returncode == 1 and "plans.jsonl:3" in done.stderr and "x" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr and not (tmp_path / "bad.mcap").exists()

@@ -10,6 +10,7 @@ robot plans (the /plan ends at the goal, the DSR has the pose mission) and drive
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import math
 import os
@@ -17,6 +18,8 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
+from zoneinfo import ZoneInfo
 
 import pytest
 
@@ -94,6 +97,9 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         info = client.subscribe("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo",
                                 transient_local=True).wait(timeout=30)
         assert info.type == 0 and info.filter_mask_topic == "/keepout_filter_mask"
+        # stamped with the scene's time of day (10:00 and a little), as every topic (issue 42)
+        ten_o_clock = dt.datetime(2026, 11, 25, 10, tzinfo=ZoneInfo("Europe/Madrid")).timestamp()
+        assert ten_o_clock <= info.header.stamp.sec <= ten_o_clock + 600, info.header.stamp
 
         # people where the DSR has them
         msg = people.wait(lambda m: len(m.people) == 2, timeout=60)
@@ -136,7 +142,8 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         assert all(len(a[2]) == 16 for a in odom.attachments)
 
         log = (tmp_path / "bridge.log").read_text()
-        assert "not a valid geometry_msgs/msg/PoseStamped" in log and "frame 'odom' refused" in log
+        assert "[undecodable]" in log and "not a valid geometry_msgs/msg/PoseStamped" in log
+        assert "[wrong_frame]" in log and "frame_id 'odom' is not 'map'" in log
 
         os.killpg(bridge.pid, signal.SIGINT)
         bridge.wait(timeout=60)
@@ -153,6 +160,8 @@ def test_ros_client_sees_the_run_and_drives_the_robot_to_a_goal_pose(tmp_path: P
         last = topics["/odom"][-1][1].pose.pose.position
         assert math.hypot(last.x - GOAL[0], last.y - GOAL[1]) < 0.3
         assert {p.name for p in topics["/people"][0][1].people} == {"ana", "ben"}
+        end = topics["/plan"][-1][1].poses[-1].pose.position   # the plans the navigation adopted
+        assert math.hypot(end.x - GOAL[0], end.y - GOAL[1]) < 0.1
     finally:
         if client is not None:
             client.close()
@@ -171,6 +180,7 @@ class FakeUnicycle:
         self.odom = client.publisher("/odom", "nav_msgs/msg/Odometry")
         self.scan = client.publisher("/scan", "sensor_msgs/msg/LaserScan")
         self.travelled = 0.0
+        self.glitch = threading.Event()   # set: the next two /odom have x = NaN and x = 1e308
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self.run, daemon=True)
         self.thread.start()
@@ -197,12 +207,22 @@ class FakeUnicycle:
                                                               w=math.cos(self.theta / 2)))
             import numpy as np
 
-            self.odom(T["nav_msgs/msg/Odometry"](
-                header=header, child_frame_id="base_link",
-                pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
-                twist=T["geometry_msgs/msg/TwistWithCovariance"](
-                    twist=T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w)),
-                    covariance=np.zeros(36))))
+            twist = T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=T["geometry_msgs/msg/Twist"](linear=vec(x=v, y=0.0, z=0.0), angular=vec(x=0.0, y=0.0, z=w)),
+                covariance=np.zeros(36))
+
+            def odometry(pose: Any, header: Any = header, twist: Any = twist) -> Any:
+                return T["nav_msgs/msg/Odometry"](
+                    header=header, child_frame_id="base_link", twist=twist,
+                    pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)))
+
+            if self.glitch.is_set():
+                for bad_x in (math.nan, 1e308):
+                    self.odom(odometry(T["geometry_msgs/msg/Pose"](
+                        position=T["geometry_msgs/msg/Point"](x=bad_x, y=self.y, z=0.0),
+                        orientation=pose.orientation)))
+                self.glitch.clear()
+            self.odom(odometry(pose))
             self.scan(T["sensor_msgs/msg/LaserScan"](
                 header=T["std_msgs/msg/Header"](stamp=stamp, frame_id="base_link"), angle_min=-1.57,
                 angle_max=1.57, angle_increment=3.14 / 90, time_increment=0.0, scan_time=0.05, range_min=0.05,
@@ -229,15 +249,30 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         run_dir = next((tmp_path / "runs").glob("*/connect.json")).parent
         goal_pub = client.publisher("/goal_pose", "geometry_msgs/msg/PoseStamped")
         wait_until(goal_pub.matched, 180, interval=0.2, message="chronav's /goal_pose subscription")
+        info = client.subscribe("/costmap_filter_info", "nav2_msgs/msg/CostmapFilterInfo",
+                                transient_local=True).wait(timeout=30)
+        ten_o_clock = dt.datetime(2026, 11, 25, 10, tzinfo=ZoneInfo("Europe/Madrid")).timestamp()
+        assert ten_o_clock <= info.header.stamp.sec <= ten_o_clock + 600, info.header.stamp   # the scene's time
         # chronav does not publish the robot's own topics in this mode
         assert not [t for t in client.graph() if t.split("/")[8] == "chronav" and "/MP/" in t
                     and t.split("/")[9] in ("%odom", "%scan")]
         T = STORE.types
-        goal_pub(T["geometry_msgs/msg/PoseStamped"](
-            header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id="map"),
-            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=GOAL[0], y=GOAL[1], z=0.0),
-                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
-                                                                                           w=1.0))))
+        bridge_pid = json.loads((run_dir / "pids.json").read_text())["ros_bridge"]
+
+        def goal(x: float, y: float, frame: str = "map") -> Any:
+            return T["geometry_msgs/msg/PoseStamped"](
+                header=T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+                                                frame_id=frame),
+                pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=x, y=y, z=0.0),
+                                                 orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0,
+                                                                                               w=1.0)))
+
+        # issue 42: what a ROS network may send is refused and counted, and the bridge stays up
+        robot.glitch.set()                       # /odom with x = NaN, then x = 1e308, between good ones
+        for bad in (goal(1e308, 2.0), goal(2.0, 2.0, frame=""), goal(7.5, 2.0), goal(0.05, 2.0)):
+            goal_pub(bad)
+        wait_until(lambda: not robot.glitch.is_set(), 10, message="the odometry glitches sent")
+        goal_pub(goal(GOAL[0], GOAL[1]))
         wait_until(lambda: any(n["type"] == "mission" and n["attrs"].get("state") in ("done", "failed")
                                for n in _dsr(run_dir)["nodes"]), 150, interval=1.0, message="the mission's end")
         mission = next(n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission")
@@ -247,6 +282,20 @@ def test_a_ros2_robot_is_driven_to_a_goal_pose(tmp_path: Path) -> None:
         # the DSR holds the ROS robot's pose (the bridge wrote it), not a simulated one
         x, y = _pose_of(_dsr(run_dir), "robot")
         assert math.hypot(x - robot.x, y - robot.y) < 0.3
+        assert [n for n in _dsr(run_dir)["nodes"] if n["type"] == "mission"] == [mission]   # refused: no mission
+        assert json.loads((run_dir / "pids.json").read_text())["ros_bridge"] == bridge_pid   # never restarted
+        stats = subprocess.run([sys.executable, "-m", "tools.cli", "ros", "stats", "--ros-endpoint", endpoint,
+                                "--ros-domain", str(DOMAIN), "--json", "--timeout", "20"], capture_output=True,
+                               text=True, timeout=60, cwd=REPO_ROOT, check=False)
+        assert stats.returncode == 0, stats.stderr
+        counts = json.loads(stats.stdout)["topics"]
+        assert counts["/goal_pose"]["reasons"] == {"outside_map": 1, "empty_frame": 1, "unreachable": 2}
+        assert counts["/goal_pose"]["taken"] == 1
+        assert counts["/odom"]["reasons"] == {"not_finite": 1, "outside_map": 1} and counts["/odom"]["taken"] > 100
+        kept = subprocess.run([sys.executable, "-m", "tools.cli", "ros", "stats", "--run", str(run_dir), "--json"],
+                              capture_output=True, text=True, timeout=60, cwd=REPO_ROOT, check=False)
+        assert kept.returncode == 0, kept.stderr       # the run keeps them too (ros_received.json)
+        assert json.loads(kept.stdout)["topics"]["/goal_pose"]["reasons"] == counts["/goal_pose"]["reasons"]
     finally:
         if robot is not None:
             robot.stop.set()

@@ -4,7 +4,9 @@ The RIHS01 hashes are computed by rosbags from the type descriptions; the expect
 published by others: std_msgs/String in rmw_zenoh's docs/design.md key-expression examples,
 OccupancyGrid, TFMessage and Twist in `ros2 topic info --verbose` outputs of ROS 2 installs
 (RViz's /map subscription, amcl's /tf, teleop_turtle's cmd_vel), Odometry, LaserScan,
-PoseStamped, Path and Clock in other ROS-2-over-Zenoh clients' tables and golden-hash tests.
+PoseStamped, Path and Clock in other ROS-2-over-Zenoh clients' tables and golden-hash tests,
+DiagnosticArray in rosidl_generator_c's output for diagnostic_msgs
+(``diagnostic_msgs__msg__DiagnosticArray__TYPE_HASH``) and in other clients' tables.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import pytest
 
 from agents.ros_bridge import messages as msgs
 from agents.ros_bridge.config import BridgeConfigError, load_bridge_config
+from agents.ros_bridge.validate import Limits, check_goal
 from agents.ros_bridge.types import dds_type_name, deserialize, serialize, type_hash
 from agents.ros_bridge.wire import Qos, attachment, fully_qualified, mangle, parse_attachment, topic_key
 
@@ -31,6 +34,7 @@ PUBLISHED_HASHES = {
     "geometry_msgs/msg/PoseStamped": "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8",
     "nav_msgs/msg/Path": "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b",
     "rosgraph_msgs/msg/Clock": "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564",
+    "diagnostic_msgs/msg/DiagnosticArray": "RIHS01_5a8a36efb05fb25070fa0fb3810290c0e6cd4862b54a8fb975a1ee8dc55a333e",
 }
 
 
@@ -81,10 +85,12 @@ def test_cdr_has_the_encapsulation_header_and_round_trips() -> None:
 
 def test_goal_pose_and_laser_conventions() -> None:
     goal = msgs.path([0.0, 1.0], [0.0, 1.0], msgs.ros_time(0.0), "map").poses[-1]
-    assert msgs.goal_of(goal) == pytest.approx((1.0, 1.0, math.pi / 4))
+    limits = Limits((0.0, 0.0, 6.0, 4.0))
+    taken = check_goal(goal, limits)
+    assert (taken.x, taken.y, taken.yaw) == pytest.approx((1.0, 1.0, math.pi / 4))
     bad = msgs.path([math.nan, 1.0], [0.0, 1.0], msgs.ros_time(0.0), "map").poses[0]
-    with pytest.raises(ValueError, match="not finite"):
-        msgs.goal_of(bad)
+    with pytest.raises(ValueError, match="is nan"):
+        check_goal(bad, limits)
     scan = msgs.laser_scan([1.0, 5.0, 2.0], [-0.5, 0.0, 0.5], 5.0, msgs.ros_time(0.0), "base_link")
     assert scan.angle_increment == pytest.approx(0.5) and math.isinf(scan.ranges[1])   # REP-117: no return
 

@@ -63,3 +63,49 @@ def bridge(scene: str = typer.Argument(..., help="the running system's scene fil
         argv += ["--run-dir", str(target.run_dir)]
     sys.stderr.write(f"ROS 2 bridge joining {target.describe()}\n")
     raise typer.Exit(run_agent(RosBridgeAgent, argv))
+
+
+@ros_app.command("stats")
+def stats(ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
+                                         help="ROS_DOMAIN_ID (default: $ROS_DOMAIN_ID or 0)"),
+          ros_endpoint: str = typer.Option(None, "--ros-endpoint", help="the ROS side's Zenoh router "
+                                           "(default: $CHRONAV_ROS_ENDPOINT or tcp/127.0.0.1:7447)"),
+          ros_config: Path = typer.Option(None, "--ros-config", help="YAML: topics, frames, QoS (docs/ros2.md)"),
+          timeout: float = typer.Option(5.0, "--timeout", min=0.1, max=600.0,
+                                        help="seconds to wait for the bridge's /diagnostics"),
+          run: str = typer.Option(None, "--run", help="a run directory or id: the counts that run kept "
+                                                      "(<run>/ros_received.json; no ROS network needed)"),
+          as_json: bool = typer.Option(False, "--json", help="print one JSON object")) -> None:
+    """What the running bridge received from ROS 2 and refused, per topic and reason (from its
+    /diagnostics, published once a second; with --run, from what a run kept)."""
+    import json
+
+    from agents.ros_bridge.config import BridgeConfigError, config_from_options
+    from tools.ros.export_mcap import ExportError, find_run
+    from tools.ros.stats import NoDiagnostics, read_stats, stats_of_run
+    from tools.system.runs import runs_dir
+
+    options = {k: str(v) for k, v in (("ros_domain", ros_domain), ("ros_endpoint", ros_endpoint),
+                                       ("ros_config", ros_config)) if v is not None}
+    try:
+        if run is not None:
+            document = stats_of_run(find_run(run, runs_dir()))
+        else:
+            document = read_stats(config_from_options(options), timeout)
+    except (BridgeConfigError, NoDiagnostics, ExportError) as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        raise typer.Exit(1) from None
+    if as_json:
+        print(json.dumps(document))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    where = f"run {document['run']}" if "run" in document else f"domain {document['domain']}"
+    table = Table(title=f"ROS 2 node /{document['node']} ({where}): received")
+    for column in ("topic", "taken", "refused", "refused (by reason)"):
+        table.add_column(column, overflow="fold")
+    for topic, row in sorted(document["topics"].items()):
+        reasons = ", ".join(f"{k}={v}" for k, v in sorted(row["reasons"].items()))
+        table.add_row(topic, str(row["taken"]), str(row["refused"]), reasons or "0")
+    Console().print(table)

@@ -20,7 +20,7 @@ def register(app: typer.Typer) -> None:
                scene: str = typer.Option(None, "--scene", help="the run's scene file (default: the one the run "
                                                                "names in result.json)"),
                as_json: bool = typer.Option(False, "--json", help="print a summary as one JSON object")) -> None:
-        """Write a finished run's topics (odom, tf, people, clock, map, social costmap, agenda) as a ROS 2 bag,
+        """Write a finished run's topics (odom, tf, people, clock, map, social costmap, agenda, plan) as a ROS 2 bag,
         stamped in the scene's clock."""
         from scenes.yamlio import SourceError
         from tools.ros.export_mcap import ExportError, export_mcap, find_run

@@ -14,7 +14,9 @@ What a run keeps, and so what the bag has (docs/ros2.md says it too):
   ``/social_costmap``, ``/keepout_filter_mask`` and ``/agenda`` of the world at that time as the
   offline commands rebuild it (agents/world/offline.py: the scripted world, people replayed
   from the day's start, so the same as live until the robot has influenced someone).
-The planned paths and the laser are not written to the run's files, so they are not in the bag.
+- ``/plan`` at every path the navigation adopted (``plans.jsonl``, agents/world/plans_file.py),
+  stamped with the sim time it was adopted, as the live bridge publishes it.
+The laser is not written to the run's files, so ``/scan`` is not in the bag.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from agents.ros_bridge.config import Frames, Topics
 from agents.ros_bridge.maps import RosMaps
 from agents.ros_bridge.types import serialize, typestore
 from agents.world.offline import graph_at
+from agents.world.plans_file import PLANS_FILE, read_plans
 from agents.world.scene_world import load_world
 from agents.world.vocabulary import activities
 from scenes.angles import wrap_angle
@@ -90,6 +93,7 @@ def export_mcap(run_dir: Path, out: Path, scene: str | Path | None = None) -> di
     try:
         traj = read_trajectory_csv(trajectory_csv)
         people = read_people_csv(run_dir / "people.csv") if (run_dir / "people.csv").exists() else None
+        plans = read_plans(run_dir / PLANS_FILE) if (run_dir / PLANS_FILE).exists() else None
     except MetricsInputError as exc:
         raise ExportError(str(exc)) from None
     if len(traj) == 0:
@@ -126,6 +130,9 @@ def export_mcap(run_dir: Path, out: Path, scene: str | Path | None = None) -> di
             _robot(traj, epoch, fr, write)
             if people is not None:
                 _people(people, epoch, fr, write)
+            if plans is not None:
+                for plan in plans:
+                    write("plan", msgs.PATH, plan.t_s, msgs.path(plan.x, plan.y, msgs.ros_time(plan.t_s, epoch), fr.map))
             for log_ns, _, key, data in sorted(pending):   # in log-time order, as a recorder writes
                 writer.write(connections[key], log_ns, data)
         produced = next(bag.glob("*.mcap"))

@@ -63,7 +63,7 @@ def register(app: typer.Typer) -> None:
                ros_domain: int = typer.Option(None, "--ros-domain", min=0, max=232,
                                               help="ROS_DOMAIN_ID of --ros (default: $ROS_DOMAIN_ID or 0)"),
                robot: str = typer.Option("sim", "--robot", help="sim: the simulated robot; ros: a ROS 2 robot "
-                                         "(its /odom and /scan in, /cmd_vel out; needs --ros)"),
+                                         "(its /odom and /scan in, /cmd_vel out; starts the ROS 2 bridge itself, --ros not needed)"),
                in_process: bool = typer.Option(False, "--in-process",
                                                help="every agent in this process, stepped in lockstep on one graph "
                                                     "(no router, no restarts; as fast as the machine allows)"),
