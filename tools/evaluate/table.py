@@ -2,8 +2,9 @@
 
 Why the metrics come from ``metrics_offline`` on a per-mission trajectory file: the promise of
 ``chronav evaluate`` is that its numbers are what ``chronav metrics SCENE TRAJ.csv`` prints for the
-same stretch of the run.  So each mission's rows of the run's ``trajectory.csv`` are written to
-``<run>/missions/<mission>.csv`` and measured by the command's own library function, and *every*
+same stretch of the run.  So each mission is measured on the run's slices of it (the robot's
+``<run>/missions/<mission>.csv`` and the people's ``<mission>.people.csv`` beside it, written by
+every run: tools/system/mission_slices.py) by the command's own library function, and *every*
 number it returns becomes a column (nested names joined with a dot by the metrics library's ``flatten``:
 ``d_min_person_m.senior_1``).
 A metric added to ``chronav metrics`` later (the dynamic ones of issue 15) becomes a column, a box
@@ -17,8 +18,6 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from agents.world.vocabulary import MissionState
 
 #: columns that describe a row; every other column is a metric
@@ -26,45 +25,30 @@ META_COLUMNS: tuple[str, ...] = (
     "scene", "planner", "seed", "mission", "state", "mission_time_s", "started_s", "finished_s", "at_s",
     "trajectory_csv", "run_dir", "rrd", "host", "run_wall_s",
 )
-MISSIONS_DIR = "missions"
 TABLE_STEM = "table"
 
 
-def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_s: float, path: Path) -> int:
-    """The mission's samples of the run's trajectory as a ``t,x,y,theta`` CSV; returns how many."""
-    from tools.system.report import _mission_rows
-
-    rows = _mission_rows(trajectory, started_s, finished_s)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", encoding="utf-8") as handle:
-        handle.write("t,x,y,theta\n")
-        for t, x, y, theta in rows.tolist():    # Python floats: repr round-trips exactly
-            handle.write(f"{t!r},{x!r},{y!r},{theta!r}\n")
-    return len(rows)
-
-
 def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dict[str, float]]:
-    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``.
-
-    The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
-    too (issue 15's ``people.csv``), pass the mission's slice of them here."""
+    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``
+    prints them for a mission's slice: the people's slice, the mission's start and its target are
+    the ones ``chronav metrics`` finds beside the CSV (tools/system/mission_slices.py), so the
+    ``dynamic.*`` metrics among the moving people are columns too."""
     from agents.lib.socialmap.metrics import flatten
     from agents.world.offline import metrics_offline
+    from tools.system.mission_slices import slice_inputs
 
-    report = metrics_offline(scene, trajectory_csv, None)
+    beside = slice_inputs(trajectory_csv)
+    report = metrics_offline(scene, trajectory_csv, beside.at_s, beside.people_csv, goal_xy=beside.goal_xy)
     return float(report["at_s"]), flatten(report["metrics"])
 
 
 def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, rrd: str | None,
                  missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float) -> list[dict[str, Any]]:
-    """One row per mission of a finished run: its state, times and (when done) its metrics."""
-    from agents.lib.socialmap.metrics import MetricsInputError, read_trajectory_csv
+    """One row per mission of a finished run: its state, times and (when done) its metrics, measured
+    on the run's per-mission slices."""
+    from tools.system.mission_slices import ensure_mission_slices
 
-    traj_path = Path(run_dir) / "trajectory.csv"
-    try:
-        trajectory = read_trajectory_csv(traj_path)
-    except MetricsInputError:
-        trajectory = None    # stopped before the robot drove: no mission has samples
+    slices = ensure_mission_slices(Path(run_dir), missions)
     rows = []
     for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0.0))):
         row: dict[str, Any] = {
@@ -74,13 +58,11 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
             "at_s": math.nan, "trajectory_csv": None, "run_dir": str(run_dir), "rrd": rrd, "host": host,
             "run_wall_s": float(run_wall_s),
         }
-        if trajectory is not None and row["state"] == MissionState.DONE and math.isfinite(row["started_s"]) \
-                and math.isfinite(row["finished_s"]):
-            csv_path = Path(run_dir) / MISSIONS_DIR / f"{mission_id}.csv"
-            if write_mission_trajectory(trajectory, row["started_s"], row["finished_s"], csv_path) >= 2:
-                row["trajectory_csv"] = str(csv_path)
-                row["at_s"], metrics = measure_mission(scene, csv_path)
-                row.update(metrics)
+        piece = slices.get(mission_id)
+        if piece is not None and row["state"] == MissionState.DONE:
+            row["trajectory_csv"] = str(piece.trajectory_csv)
+            row["at_s"], metrics = measure_mission(scene, piece.trajectory_csv)
+            row.update(metrics)
         rows.append(row)
     return rows
 

@@ -118,18 +118,21 @@ def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:
 
 def metrics_command(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
                     trajectory: Path = typer.Argument(..., help="CSV with header t,x,y,theta (s, m, m, rad)"),
-                    at: str = typer.Option(None, "--at", help="HH:MM for people and agenda (default: t of the "
-                                                              "first sample if >= 1 h, else the scene's start)"),
+                    at: str = typer.Option(None, "--at", help="HH:MM for people and agenda (default: a mission "
+                                                              "slice's start, else t of the first sample if >= 1 h, "
+                                                              "else the scene's start)"),
                     people: Path = typer.Option(None, "--people", help="people's trajectories (header "
                                                 "t,name,role,x,y,theta,vx,vy,group; s, -, -, m, m, rad, m/s, "
-                                                "m/s, group label or empty; default: people.csv beside the "
-                                                "trajectory, as a run writes it)"),
+                                                "m/s, group label or empty; default: <mission>.people.csv "
+                                                "beside a mission's slice <run>/missions/<mission>.csv, "
+                                                "else people.csv beside the trajectory, as a run writes it)"),
                     definitions: str = typer.Option("published", "--definitions",
                                                     help="published (the papers' definitions, chronav's names) "
                                                          "or hunav (HuNavSim's evaluator, its quirks and its "
                                                          "metric names; docs/metrics.md)"),
                     goal: str = typer.Option(None, "--goal", help="target X,Y (m) for completed and the "
-                                                                  "distances to target"),
+                                                                  "distances to target (default: a mission "
+                                                                  "slice's pose goal)"),
                     robot_radius: float = typer.Option(None, "--robot-radius", min=0.0,
                                                        help="robot radius (m; default: the scene's, or "
                                                             "HuNavSim's 0.35 with --definitions hunav)"),
@@ -145,9 +148,14 @@ def metrics_command(scene: str = typer.Argument(..., help="scene file or name in
 
     if definitions not in ("published", "hunav"):
         raise typer.BadParameter("use published or hunav", param_hint="--definitions")
+    from tools.system.mission_slices import slice_inputs
+
+    beside = slice_inputs(trajectory)    # a mission's slice: its people, start and target beside it
+    at_s = _clock(at, "--at")
     try:
-        report = metrics_offline(scene, trajectory, _clock(at, "--at"), people, definitions=definitions,
-                                 goal_xy=None if goal is None else _xy(goal, "--goal"),
+        report = metrics_offline(scene, trajectory, beside.at_s if at_s is None else at_s,
+                                 people or beside.people_csv, definitions=definitions,
+                                 goal_xy=beside.goal_xy if goal is None else _xy(goal, "--goal"),
                                  robot_radius_m=robot_radius, person_radius_m=person_radius)
     except (OfflineError, MetricsInputError) as exc:
         _fail(str(exc))

@@ -11,24 +11,20 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 
 
-def _mission_rows(trajectory: np.ndarray, started_s: float, finished_s: float) -> np.ndarray:
-    mask = (trajectory[:, 0] >= started_s - 1e-6) & (trajectory[:, 0] <= finished_s + 1e-6)
-    return trajectory[mask]
-
-
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    """Per mission: social and baseline metrics (model_dump of MetricsReport) plus table rows."""
+    """Per mission: social and baseline metrics (model_dump of MetricsReport), measured from the
+    run's per-mission slices (tools/system/mission_slices.py: cut now if the run has none yet)."""
     from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv, read_trajectory_csv
     from agents.world.offline import OfflineError, SceneMaps, path_as_trajectory
     from agents.lib.socialmap.search import PlanningError
     from agents.lib.socialmap.social_map import plan
+    from tools.system.mission_slices import ensure_mission_slices
 
     traj_path = Path(run_dir) / "trajectory.csv"
     report: dict[str, Any] = {"scene": Path(scene).stem, "missions": {}}
@@ -36,7 +32,7 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
         report["error"] = "no trajectory was recorded"
         return report
     try:
-        trajectory = read_trajectory_csv(traj_path)
+        read_trajectory_csv(traj_path)
     except TrajectoryFormatError as exc:   # e.g. stopped before the robot's first sample
         report["error"] = f"no usable trajectory was recorded ({exc})"
         return report
@@ -45,21 +41,19 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
     except OfflineError as exc:
         report["error"] = str(exc)
         return report
-    people_path = Path(run_dir) / "people.csv"
-    try:   # the people's trajectories, for HuNavSim's dynamic metrics of each mission
-        tracks = read_people_csv(people_path) if people_path.exists() else None
-    except TrajectoryFormatError:
-        tracks = None
-    for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
-        if mission.get("state") != MissionState.DONE or "started_s" not in mission:
+    report["scene"] = maps.world.scene.name
+    slices = ensure_mission_slices(Path(run_dir), missions)
+    for mission_id, piece in slices.items():
+        if missions.get(mission_id, {}).get("state") != MissionState.DONE:
             continue
-        started, finished = float(mission["started_s"]), float(mission["finished_s"])
-        social = _mission_rows(trajectory, started, finished)
-        if len(social) < 2:
-            continue
-        goal_xy, why = mission_target(mission)
-        entry: dict[str, Any] = {"social": maps.measure(social, started, tracks, goal_xy=goal_xy,
-                                                        goal_missing=why).model_dump()}
+        social = read_trajectory_csv(piece.trajectory_csv)
+        try:   # the people's trajectories, for HuNavSim's dynamic metrics of each mission
+            tracks = read_people_csv(piece.people_csv) if piece.people_csv is not None else None
+        except TrajectoryFormatError:
+            tracks = None
+        started = piece.started_s
+        entry: dict[str, Any] = {"social": maps.measure(social, started, tracks, goal_xy=piece.goal_xy,
+                                                        goal_missing=piece.goal_missing).model_dump()}
         smap = maps.at(started)
         try:
             base = plan(smap, tuple(social[0, 1:3]), tuple(social[-1, 1:3]), planner="baseline")
@@ -68,21 +62,8 @@ def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str,
         except PlanningError as exc:
             entry["baseline_error"] = str(exc)
         report["missions"][mission_id] = entry
+    report["cruise_speed_mps"] = maps.cruise_speed
     return report
-
-
-def mission_target(mission: dict[str, Any]) -> tuple[tuple[float, float] | None, str]:
-    """A mission's target point (a pose mission's x, y) or None and why (room, person, object goals
-    have no single point: completed and the distances to target are then not measured)."""
-    goal = str(mission.get("goal", ""))
-    kind, _, argument = goal.partition(":")
-    if kind == "pose":
-        try:
-            x, y = (float(v) for v in argument.split(",")[:2])
-            return (x, y), ""
-        except ValueError:
-            pass
-    return None, f"a {kind or 'mission'} goal has no single target point"
 
 
 def log_report(recorder: Any, report: dict[str, Any], missions: dict[str, dict[str, Any]]) -> None:
