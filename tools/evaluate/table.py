@@ -84,6 +84,14 @@ def metric_columns(rows: Iterable[Mapping[str, Any]]) -> list[str]:
     return list(seen)
 
 
+def headline_metric(metric: str) -> bool:
+    """A metric of the whole mission (``d_t``, ``dynamic.min_distance_to_people_m``), not one of a
+    person, object, band or group (``d_min_person_m.ann``, ``dynamic.intrusions_per_person.ann.personal``):
+    the study's summary shows these; the per-mission tables show every column."""
+    head, _, rest = metric.partition(".")
+    return not rest or (head == "dynamic" and "." not in rest)
+
+
 def to_arrow(rows: Sequence[Mapping[str, Any]]) -> Any:
     """The rows as a pyarrow Table: meta columns first, metrics after, missing metrics null."""
     import pyarrow as pa
