@@ -172,3 +172,49 @@ def test_the_demos_tables_are_the_reports_piped(tmp_path: Path, capsys: pytest.C
     out = capsys.readouterr().out
     # the metrics, then the run's summary (the missions table, where the run is: not this test's)
     _check_plain_80(out[out.index("eval_walkers / cross: social planner"):out.index("Missions of eval_walkers")])
+
+
+@pytest.mark.slow   # a sweep's worker process (~8 s)
+def test_a_study_carries_every_metric_chronav_metrics_computes_among_walking_people(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fails when a metric of `chronav metrics` (people given) is missing from a study's table, its
+    summary, its paired tests or its report: the study is `chronav evaluate` on eval_walkers."""
+    import math
+
+    import tools.evaluate.figures
+    from agents.lib.socialmap.metric_catalog import CATALOG
+    from tools.evaluate.figures import study_metrics
+    from tools.evaluate.table import META_COLUMNS, headline_metric, read_table
+
+    drawn: list[list[str]] = []
+    monkeypatch.setattr(tools.evaluate.figures, "all_figures",     # the box plots: one per study metric
+                        lambda rows, *a, **k: drawn.append(study_metrics(rows)) or {})
+    out = tmp_path / "study"
+    result = _invoke(["evaluate", str(WALKERS), "--planners", "social,baseline", "--seeds", "1", "--jobs", "1",
+                      "--no-record", "--out", str(out), "--json"], RERUN="off")
+    assert result.exit_code == 0, result.output
+    rows = read_table(out / "table.parquet")
+    assert sorted(r["planner"] for r in rows) == ["baseline", "social"]
+    for row in rows:
+        measured = {k: v for k, v in row.items() if k not in META_COLUMNS}
+        by_hand = _invoke(["metrics", str(WALKERS), row["trajectory_csv"], "--json"])
+        assert by_hand.exit_code == 0, by_hand.output
+        report = json.loads(by_hand.stdout)
+        assert report["people"] is not None
+        expected = flatten(report["metrics"])
+        assert set(expected) - set(measured) == set(), "metrics of chronav metrics missing from the study"
+        assert measured == expected
+    dynamic = [m.key for m in CATALOG if m.key.startswith("dynamic.") and not m.key.endswith(".*")]
+    assert len(dynamic) >= 25
+    for key in dynamic:
+        assert all(math.isfinite(r[key]) for r in rows), key
+    assert set(dynamic) <= set(drawn[0])
+    summary = (out / "summary.csv").read_text()
+    tests = (out / "tests.csv").read_text()
+    html = (out / "report.html").read_text()
+    head = html[html.index("<h2>Summary</h2>"):html.index("<h2>Per mission")]
+    for key in dynamic:
+        assert f",{key}," in summary and f"{key}," in tests, key
+        assert headline_metric(key) and f'title="{key}"' in head, key
+    assert "dynamic.intrusions_per_person.visitor.intimate" in summary
+    assert not headline_metric("dynamic.intrusions_per_person.visitor.intimate")
