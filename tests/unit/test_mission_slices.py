@@ -218,3 +218,23 @@ def test_a_study_carries_every_metric_chronav_metrics_computes_among_walking_peo
         assert headline_metric(key) and f'title="{key}"' in head, key
     assert "dynamic.intrusions_per_person.visitor.intimate" in summary
     assert not headline_metric("dynamic.intrusions_per_person.visitor.intimate")
+
+
+def test_any_mission_id_gets_its_own_slices_inside_the_runs_missions_folder(run_dir: Path, tmp_path: Path) -> None:
+    """Mission ids are any printable names: one with a path in it, or ending like a people slice."""
+    from tools.system.mission_slices import read_mission_slices, write_mission_slices
+
+    other = tmp_path / "run"
+    other.mkdir()
+    for name in ("trajectory.csv", "people.csv"):
+        shutil.copy(run_dir / name, other / name)
+    cross = json.loads((run_dir / "result.json").read_text())["missions"]["cross"]
+    missions = {name: {**cross, "mission_id": name} for name in ("../../escape", "cross", "cross.people", "a b")}
+    written = write_mission_slices(other, missions)
+    assert sorted(written) == sorted(missions)
+    files = sorted(p.name for p in (other / "missions").iterdir())
+    assert len(files) == 12 and not (tmp_path / "escape.csv").exists()
+    assert (other / "missions" / "cross.people.csv").read_text().startswith("t,name,role")
+    assert read_mission_slices(other).keys() == written.keys()
+    result = _invoke(["metrics", str(WALKERS), str(written["../../escape"].trajectory_csv), "--json"])
+    assert result.exit_code == 0 and json.loads(result.stdout)["people"] == str(written["../../escape"].people_csv)

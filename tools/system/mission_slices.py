@@ -16,8 +16,10 @@ study's table call it too, so a run written before the slices existed gets them 
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +31,8 @@ import numpy as np
 MISSIONS_DIR = "missions"
 #: the people's slice of ``<mission>.csv`` is ``<mission>.people.csv`` beside it
 PEOPLE_SUFFIX = ".people"
+#: mission ids used as file names as they are (anything else: slice_stem)
+_SAFE_STEM = re.compile(r"[A-Za-z0-9_-]{1,100}")
 #: margin on each side of a mission's window (the clock's float sums)
 WINDOW_EPS_S = 1e-6
 
@@ -55,10 +59,22 @@ class SliceInputs:
     goal_xy: tuple[float, float] | None
 
 
+def slice_stem(mission_id: str) -> str:
+    """The file name (without extension) of a mission's slices: the id itself when it is made of
+    letters, digits, ``_`` and ``-``; otherwise those characters and a hash of the id.
+
+    Why: a mission id is any printable name (scenes/names.py), and ``a/../b`` or ``x.people`` must
+    neither leave ``missions/`` nor take another mission's people slice."""
+    if _SAFE_STEM.fullmatch(mission_id):
+        return mission_id
+    cleaned = re.sub(r"[^A-Za-z0-9_-]+", "_", mission_id)[:60].strip("_") or "mission"
+    return f"{cleaned}-{hashlib.sha256(mission_id.encode('utf-8')).hexdigest()[:10]}"
+
+
 def slice_paths(run_dir: Path, mission_id: str) -> tuple[Path, Path, Path]:
     """(robot CSV, people CSV, mission JSON) of one mission of a run."""
-    base = Path(run_dir) / MISSIONS_DIR
-    return base / f"{mission_id}.csv", base / f"{mission_id}{PEOPLE_SUFFIX}.csv", base / f"{mission_id}.json"
+    base, stem = Path(run_dir) / MISSIONS_DIR, slice_stem(mission_id)
+    return base / f"{stem}.csv", base / f"{stem}{PEOPLE_SUFFIX}.csv", base / f"{stem}.json"
 
 
 def mission_target(mission: Mapping[str, Any]) -> tuple[tuple[float, float] | None, str]:
