@@ -131,6 +131,8 @@ class _Notes:
 
 def mission_tables(report: dict[str, Any], notes: _Notes) -> list[tuple[str, list[tuple[str, str, str]]]]:
     """(title, [(metric, social, baseline)]) per mission of a report, missing values as footnote marks."""
+    if not report["missions"]:
+        return []
     speed = report.get("cruise_speed_mps")
     baseline_mark = notes.mark(BASELINE_NOTE.format(speed=f" ({speed:.2f} m/s)" if speed else ""))
     out = []
