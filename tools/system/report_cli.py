@@ -15,7 +15,7 @@ import typer
 
 
 def report_command(run: str = typer.Argument("latest", help="a finished run: latest (the newest), its directory "
-                                             "or its id (default: latest)"),
+                                             "or its id"),
                    mission: str = typer.Option(None, "--mission", help="only this mission (default: every one)"),
                    as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
     """Social planner against the non-social baseline, per mission, for a finished run (never re-run)."""
