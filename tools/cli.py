@@ -27,6 +27,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.ros.bridge_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
     "tools.predict_cli",          # chronav predict evaluate (people prediction on real pedestrians)
     "tools.plugins_cli",          # chronav plugins (every installed extension)
+    "tools.system.report_cli",    # chronav report (a finished run's per-mission tables)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

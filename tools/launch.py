@@ -437,6 +437,9 @@ def _write_result(result: RunResult) -> None:
         "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
         "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error,
         "scene_path": str(result.scene_path.resolve()) if result.scene_path else None}, indent=2))
+    from tools.system.mission_slices import ensure_mission_slices
+
+    ensure_mission_slices(result.run_dir, result.missions)   # missions/<id>.csv, .people.csv, .json
 
 
 def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:

@@ -25,6 +25,7 @@ from typer.testing import CliRunner
 from agents.lib.metrics.metrics import flatten, read_trajectory_csv
 from tests.support import REPO_ROOT
 from tests.system.launch_helpers import EvaluateRuns
+from scenes.clock import format_clock
 from tools.cli import app
 from tools.evaluate.report import format_value
 from tools.evaluate.table import META_COLUMNS, read_table
@@ -75,15 +76,29 @@ def test_table_and_report_are_chronav_metrics_of_the_runs(sweeps: dict[str, dict
         summary = {(r["planner"], r["metric"]): float(r["mean"]) for r in csv.DictReader(summary_file)}
     report = Path(sweep["report"]).read_text()
     for row in rows:
-        # Cut the mission out of the run's trajectory ourselves, from the launcher's result.json.
+        # Cut the mission out of the run's trajectory and people ourselves, from the launcher's result.json,
+        # and measure it as a user would: the people, the mission's start and its target given by hand.
         mission = json.loads((Path(row["run_dir"]) / "result.json").read_text())["missions"][row["mission"]]
+        started, finished = mission["started_s"], mission["finished_s"]
         trajectory = read_trajectory_csv(Path(row["run_dir"]) / "trajectory.csv")
-        inside = (trajectory[:, 0] >= mission["started_s"] - 1e-6) & (trajectory[:, 0] <= mission["finished_s"] + 1e-6)
+        inside = (trajectory[:, 0] >= started - 1e-6) & (trajectory[:, 0] <= finished + 1e-6)
         own = tmp_path / f"{row['planner']}.csv"
         np.savetxt(own, trajectory[inside], delimiter=",", header="t,x,y,theta", comments="", fmt="%.17g")
-        result = CliRunner().invoke(app, ["metrics", str(TINY), str(own), "--json"])
+        header, *lines = (Path(row["run_dir"]) / "people.csv").read_text().splitlines()
+        own_people = tmp_path / f"{row['planner']}_people.csv"
+        own_people.write_text("\n".join([header, *(line for line in lines
+                                                  if started - 1e-6 <= float(line.split(",")[0]) <= finished + 1e-6)]))
+        assert started == int(started), "the mission starts on a whole second: --at can say when"
+        goal = ",".join(mission["goal"].removeprefix("pose:").split(",")[:2])
+        result = CliRunner().invoke(app, ["metrics", str(TINY), str(own), "--people", str(own_people), "--goal", goal,
+                                          "--at", format_clock(started), "--json"])
         assert result.exit_code == 0, result.output
         expected = flatten(json.loads(result.stdout)["metrics"])
+        assert any(key.startswith("dynamic.") for key in expected), "measured among the moving people"
+        # The run's own slice, measured by `chronav metrics` with nothing else said, gives the same.
+        beside = CliRunner().invoke(app, ["metrics", str(TINY), row["trajectory_csv"], "--json"])
+        assert beside.exit_code == 0, beside.output
+        assert flatten(json.loads(beside.stdout)["metrics"]) == expected
         measured = {k: v for k, v in row.items() if k not in META_COLUMNS}
         assert set(measured) == set(expected)
         for metric, value in expected.items():

@@ -170,8 +170,8 @@ def _mission_table(summaries: Sequence[Summary], scene: str, mission: str, plann
 def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any]], planners: Sequence[str],
                    metrics: Sequence[str]) -> str:
     """One table for the whole study, whatever its number of seeds and missions: per planner, the
-    missions completed and, for each top-level metric (per-person and per-object ones are in the
-    per-mission tables), the mean over the missions of the seeds' means (each mission weighs one)."""
+    missions completed and, for each top-level metric (``headline_metric``: per-person and
+    per-object ones are in the per-mission tables), the mean over the missions of the seeds' means (each mission weighs one)."""
     from tools.evaluate.figures import metric_label
 
     head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
@@ -181,8 +181,10 @@ def _summary_table(summaries: Sequence[Summary], rows: Sequence[Mapping[str, Any
         ok = sum(1 for r in mine if r.get("state") == MissionState.DONE)
         done.append(f"<td>{ok} / {len(mine)}</td>")
     body = [f"<tr><td>missions completed (runs x missions)</td>{''.join(done)}</tr>"]
+    from tools.evaluate.table import headline_metric
+
     for metric in metrics:
-        if "." in metric:
+        if not headline_metric(metric):
             continue
         cells = []
         for planner in planners:
@@ -288,8 +290,10 @@ def _provenance_html(runs: Sequence[Mapping[str, Any]], prov: Mapping[str, Any],
            if prov.get("mode") == "in-process" else "a full launch of the six agents as processes")
     parts.append(f'<p class="note">Each run is {how}; metrics are those of '
                  "<code>chronav metrics SCENE TRAJ.csv</code> on each mission's stretch of the run's trajectory "
-                 "(<code>missions/&lt;mission&gt;.csv</code> in the run directory), against the world at its "
-                 "first sample. Table: <code>table.parquet</code> / <code>table.csv</code>; the numbers of the "
+                 "(<code>missions/&lt;mission&gt;.csv</code> in the run directory) with the people's "
+                 "trajectories over the same stretch beside it (<code>&lt;mission&gt;.people.csv</code>: the "
+                 "metrics among moving people, <code>dynamic.*</code>), against the world at the mission's "
+                 "start. Table: <code>table.parquet</code> / <code>table.csv</code>; the numbers of the "
                  "tables below: <code>summary.csv</code>, <code>tests.csv</code>.</p>")
     return parts
 

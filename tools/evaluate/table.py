@@ -2,8 +2,9 @@
 
 Why the metrics come from ``metrics_offline`` on a per-mission trajectory file: the promise of
 ``chronav evaluate`` is that its numbers are what ``chronav metrics SCENE TRAJ.csv`` prints for the
-same stretch of the run.  So each mission's rows of the run's ``trajectory.csv`` are written to
-``<run>/missions/<mission>.csv`` and measured by the command's own library function, and *every*
+same stretch of the run.  So each mission is measured on the run's slices of it (the robot's
+``<run>/missions/<mission>.csv`` and the people's ``<mission>.people.csv`` beside it, written by
+every run: tools/system/mission_slices.py) by the command's own library function, and *every*
 number it returns becomes a column (nested names joined with a dot by the metrics library's ``flatten``:
 ``d_min_person_m.senior_1``).
 A metric added to ``chronav metrics`` later (the dynamic ones of issue 15) becomes a column, a box
@@ -18,8 +19,6 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from agents.world.vocabulary import MissionState
 
 #: columns that describe a row; every other column is a metric
@@ -27,32 +26,20 @@ META_COLUMNS: tuple[str, ...] = (
     "scene", "planner", "controller", "seed", "mission", "state", "reason", "refused", "mission_time_s", "started_s", "finished_s", "at_s",
     "trajectory_csv", "run_dir", "rrd", "host", "run_wall_s",
 )
-MISSIONS_DIR = "missions"
 TABLE_STEM = "table"
 
 
-def write_mission_trajectory(trajectory: np.ndarray, started_s: float, finished_s: float, path: Path) -> int:
-    """The mission's samples of the run's trajectory as a ``t,x,y,theta`` CSV; returns how many."""
-    from tools.system.report import _mission_rows
-
-    rows = _mission_rows(trajectory, started_s, finished_s)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", encoding="utf-8") as handle:
-        handle.write("t,x,y,theta\n")
-        for t, x, y, theta in rows.tolist():    # Python floats: repr round-trips exactly
-            handle.write(f"{t!r},{x!r},{y!r},{theta!r}\n")
-    return len(rows)
-
-
 def measure_mission(scene: str | Path, trajectory_csv: Path) -> tuple[float, dict[str, float]]:
-    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``.
-
-    The one place that calls ``chronav metrics``'s function: when it takes the people's trajectories
-    too (issue 15's ``people.csv``), pass the mission's slice of them here."""
+    """(time the world is taken at, flat metrics) exactly as ``chronav metrics SCENE CSV --json``
+    prints them for a mission's slice: the people's slice, the mission's start and its target are
+    the ones ``chronav metrics`` finds beside the CSV (tools/system/mission_slices.py), so the
+    ``dynamic.*`` metrics among the moving people are columns too."""
     from agents.lib.metrics.metrics import flatten
     from agents.world.offline import metrics_offline
+    from tools.system.mission_slices import slice_inputs
 
-    report = metrics_offline(scene, trajectory_csv, None)
+    beside = slice_inputs(trajectory_csv)
+    report = metrics_offline(scene, trajectory_csv, beside.at_s, beside.people_csv, goal_xy=beside.goal_xy)
     return float(report["at_s"]), flatten(report["metrics"])
 
 
@@ -72,16 +59,13 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
                  missions: Mapping[str, Mapping[str, Any]], host: str, run_wall_s: float,
                  controller: str = "elastic_band") -> list[dict[str, Any]]:
     """One row per mission of a finished run: its state, times and (when done) every installed
-    metric's columns (agents/lib/metrics/registered.py; chronav's own catalogue is one of them)."""
+    metric's columns (agents/lib/metrics/registered.py; chronav's own catalogue is one of them),
+    measured on the run's per-mission slices."""
+    from agents.lib.metrics.metrics import read_trajectory_csv
     from agents.lib.metrics.registered import MissionRun, measure_all
+    from tools.system.mission_slices import ensure_mission_slices
 
-    from agents.lib.metrics.metrics import MetricsInputError, read_trajectory_csv
-
-    traj_path = Path(run_dir) / "trajectory.csv"
-    try:
-        trajectory = read_trajectory_csv(traj_path)
-    except MetricsInputError:
-        trajectory = None    # stopped before the robot drove: no mission has samples
+    slices = ensure_mission_slices(Path(run_dir), missions)
     rows = []
     for mission_id, mission in sorted(missions.items(), key=lambda kv: float(kv[1].get("time_s", 0.0))):
         row: dict[str, Any] = {
@@ -95,18 +79,17 @@ def mission_rows(*, scene: str | Path, planner: str, seed: int, run_dir: Path, r
             "at_s": math.nan, "trajectory_csv": None, "run_dir": str(run_dir), "rrd": rrd, "host": host,
             "run_wall_s": float(run_wall_s),
         }
-        if trajectory is not None and row["state"] == MissionState.DONE and math.isfinite(row["started_s"]) \
-                and math.isfinite(row["finished_s"]):
-            csv_path = Path(run_dir) / MISSIONS_DIR / f"{mission_id}.csv"
-            if write_mission_trajectory(trajectory, row["started_s"], row["finished_s"], csv_path) >= 2:
-                row["trajectory_csv"] = str(csv_path)
-                run = MissionRun(scene_file=Path(scene), trajectory=read_trajectory_csv(csv_path),
-                                 trajectory_csv=csv_path, mission=mission_id, planner=planner, controller=controller)
-                metrics, problems = measure_all(run)
-                row["at_s"] = metrics.pop(AT_S_COLUMN, math.nan)
-                row.update(metrics)
-                for problem in problems:
-                    print(f"warning: {problem}", file=sys.stderr)
+        piece = slices.get(mission_id)
+        if piece is not None and row["state"] == MissionState.DONE:
+            row["trajectory_csv"] = str(piece.trajectory_csv)
+            run = MissionRun(scene_file=Path(scene), trajectory=read_trajectory_csv(piece.trajectory_csv),
+                             trajectory_csv=piece.trajectory_csv, mission=mission_id, planner=planner,
+                             controller=controller)
+            metrics, problems = measure_all(run)
+            row["at_s"] = metrics.pop(AT_S_COLUMN, math.nan)
+            row.update(metrics)
+            for problem in problems:
+                print(f"warning: {problem}", file=sys.stderr)
         rows.append(row)
     return rows
 
@@ -126,6 +109,14 @@ def metric_columns(rows: Iterable[Mapping[str, Any]]) -> list[str]:
             if key not in META_COLUMNS:
                 seen.setdefault(key, None)
     return list(seen)
+
+
+def headline_metric(metric: str) -> bool:
+    """A metric of the whole mission (``d_t``, ``dynamic.min_distance_to_people_m``), not one of a
+    person, object, band or group (``d_min_person_m.ann``, ``dynamic.intrusions_per_person.ann.personal``):
+    the study's summary shows these; the per-mission tables show every column."""
+    head, _, rest = metric.partition(".")
+    return not rest or (head == "dynamic" and "." not in rest)
 
 
 def to_arrow(rows: Sequence[Mapping[str, Any]]) -> Any:

@@ -135,20 +135,59 @@ def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:
     Console().print(table)
 
 
-def metrics_command(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
-                    trajectory: Path = typer.Argument(..., help="CSV with header t,x,y,theta (s, m, m, rad)"),
-                    at: str = typer.Option(None, "--at", help="HH:MM for people and agenda (default: t of the "
-                                                              "first sample if >= 1 h, else the scene's start)"),
+def _mission_slice(scene: str, trajectory: str | None, mission: str | None) -> tuple[str, Path]:
+    """(scene, trajectory CSV) of ``chronav metrics``: SCENE TRAJ.csv as given, or a mission's slice
+    of a finished run (SCENE RUN --mission M, or RUN --mission M with the scene the run recorded)."""
+    from tools.system.finished_runs import find_finished_run, read_result, run_scene, unknown_mission
+    from tools.system.mission_slices import ensure_mission_slices
+    from tools.system.runs import RunError
+
+    if trajectory is not None and trajectory != "latest" and not Path(trajectory).is_dir() \
+            and (Path(trajectory).exists() or trajectory.endswith(".csv")):
+        if mission is not None:
+            raise typer.BadParameter(f"{trajectory} is a trajectory file; --mission picks a mission of a run: "
+                                     "chronav metrics SCENE RUN --mission M", param_hint="--mission")
+        return scene, Path(trajectory)
+    try:
+        run_dir = find_finished_run(scene if trajectory is None else trajectory)
+    except RunError as exc:
+        if trajectory is not None:
+            raise
+        raise RunError(f"no trajectory given: use chronav metrics SCENE TRAJ.csv, or a finished run with "
+                       f"chronav metrics RUN --mission M ({exc})") from None
+    result = read_result(run_dir)
+    slices = ensure_mission_slices(run_dir, result["missions"])
+    if mission is None:
+        listed = ", ".join(slices) or "none (no mission of this run ended with the robot driving)"
+        raise RunError(f"run {run_dir.name}: pick a mission with --mission M; its missions: {listed}")
+    if mission not in slices:
+        raise unknown_mission(mission, run_dir, list(slices))
+    return (run_scene(run_dir, result) if trajectory is None else scene), slices[mission].trajectory_csv
+
+
+def metrics_command(scene: str = typer.Argument(..., help="scene file or name in scenes/; or a finished run "
+                                                "(latest, its directory or id) with --mission, the scene it ran"),
+                    trajectory: str = typer.Argument(None, help="CSV with header t,x,y,theta (s, m, m, rad); or a "
+                                                     "finished run (latest, its directory or id) with --mission",
+                                                     show_default=False),
+                    mission: str = typer.Option(None, "--mission", help="with a run: the mission to measure, on "
+                                                "the run's slices of it (<run>/missions/<mission>.csv and the "
+                                                "people's <mission>.people.csv)"),
+                    at: str = typer.Option(None, "--at", help="HH:MM for people and agenda (default: a mission "
+                                                              "slice's start, else t of the first sample if >= 1 h, "
+                                                              "else the scene's start)"),
                     people: Path = typer.Option(None, "--people", help="people's trajectories (header "
                                                 "t,name,role,x,y,theta,vx,vy,group; s, -, -, m, m, rad, m/s, "
-                                                "m/s, group label or empty; default: people.csv beside the "
-                                                "trajectory, as a run writes it)"),
+                                                "m/s, group label or empty; default: <mission>.people.csv "
+                                                "beside a mission's slice <run>/missions/<mission>.csv, "
+                                                "else people.csv beside the trajectory, as a run writes it)"),
                     definitions: str = typer.Option("published", "--definitions",
                                                     help="published (the papers' definitions, chronav's names) "
                                                          "or hunav (HuNavSim's evaluator, its quirks and its "
                                                          "metric names; docs/metrics.md)"),
                     goal: str = typer.Option(None, "--goal", help="target X,Y (m) for completed and the "
-                                                                  "distances to target"),
+                                                                  "distances to target (default: a mission "
+                                                                  "slice's pose goal)"),
                     robot_radius: float = typer.Option(None, "--robot-radius", min=0.0,
                                                        help="robot radius (m; default: the scene's, or "
                                                             "HuNavSim's 0.35 with --definitions hunav)"),
@@ -164,9 +203,20 @@ def metrics_command(scene: str = typer.Argument(..., help="scene file or name in
 
     if definitions not in ("published", "hunav"):
         raise typer.BadParameter("use published or hunav", param_hint="--definitions")
+    from tools.system.mission_slices import slice_inputs
+    from tools.system.runs import RunError
+
     try:
-        report = metrics_offline(scene, trajectory, _clock(at, "--at"), people, definitions=definitions,
-                                 goal_xy=None if goal is None else _xy(goal, "--goal"),
+        scene, trajectory_csv = _mission_slice(scene, trajectory, mission)
+    except RunError as exc:
+        _fail(str(exc))
+        return
+    beside = slice_inputs(trajectory_csv)    # a mission's slice: its people, start and target beside it
+    at_s = _clock(at, "--at")
+    try:
+        report = metrics_offline(scene, trajectory_csv, beside.at_s if at_s is None else at_s,
+                                 people or beside.people_csv, definitions=definitions,
+                                 goal_xy=beside.goal_xy if goal is None else _xy(goal, "--goal"),
                                  robot_radius_m=robot_radius, person_radius_m=person_radius)
     except (OfflineError, MetricsInputError) as exc:
         _fail(str(exc))
@@ -177,7 +227,7 @@ def metrics_command(scene: str = typer.Argument(..., help="scene file or name in
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title=f"metrics of {trajectory} on {report['scene']} ({definitions} definitions)")
+    table = Table(title=f"metrics of {trajectory_csv} on {report['scene']} ({definitions} definitions)")
     table.add_column("metric (unit)")
     table.add_column("value", justify="right")
     for label, value in report["table"]:
