@@ -312,29 +312,57 @@ def snapshot(graph: Any) -> dict[str, Any]:
 
 
 def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
+    """A table on a terminal; on a pipe or file, a plain layout wrapped between words (tools/plain.py)."""
     from rich.console import Console
     from rich.table import Table
     from rich.text import Text
 
     from scenes.names import shown
+    from tools.plain import is_plain, plural
 
     def cell(value: object) -> Text:
         # Names come from other people's files and commands: never markup, never terminal escapes.
         return Text(shown(value, 120))
 
     console = Console(file=out, highlight=False, soft_wrap=True)
-    title = Text(f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {len(data['activities'])} activities")
-    table = Table(title=title, title_justify="left")
+    heading = f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {plural(len(data['activities']), 'activity', 'activities')}"
+    objects = ", ".join(_object_text(o) for o in data["objects"])
+    if is_plain(console):
+        _print_plain_snapshot(console, heading, data["activities"], shown(objects or "none yet", 10_000))
+        return
+    table = Table(title=Text(heading), title_justify="left")
     for column in ("id", "name", "object", "start", "end", "state", "participants", "R now"):
-        table.add_column(column, overflow="fold")
+        # Ids, objects, times and states are single tokens: they keep their width, text columns wrap.
+        wraps = column in ("name", "participants")
+        table.add_column(column, overflow="fold", no_wrap=not wraps)
     for row in data["activities"]:
         r = row["object_R"]
         table.add_row(cell(row["id"]), cell(row["name"]), cell(row["object"]), cell(row["start"]), cell(row["end"]),
                       cell(row["state"]), cell(", ".join(map(str, row["participants"]))),
                       "-" if r is None else f"{r:.2f}")
     console.print(table)
-    objects = ", ".join(_object_text(o) for o in data["objects"])
     console.print(shown(f"objects: {objects or 'none yet'}", 10_000), markup=False)
+
+
+def _print_plain_snapshot(console: Any, heading: str, activities: list[dict[str, Any]], objects: str) -> None:
+    """Two or three lines per activity: when, state and id; then its object, R and participants,
+    wrapped between words at the console's width (never a name cut in two)."""
+    from scenes.names import shown
+    from tools.plain import console_width, print_lines, wrapped
+
+    width = console_width(console)
+    lines = wrapped(heading, width, indent="  ")
+    for row in activities:
+        name = f" ({shown(row['name'], 120)})" if row["name"] and row["name"] != row["id"] else ""
+        lines += wrapped(f"{row['start']}-{row['end']} {shown(row['state'], 40)}: {shown(row['id'], 120)}{name}",
+                         width, first="  ", indent="      ")
+        r = row["object_R"]
+        detail = f"on {shown(row['object'], 120)}, R now {'-' if r is None else f'{r:.2f}'}"
+        if row["participants"]:
+            detail += "; participants: " + ", ".join(shown(p, 120) for p in row["participants"])
+        lines += wrapped(detail, width, first="      ", indent="      ")
+    lines += wrapped(f"objects: {objects}", width, indent="  ")
+    print_lines(console, lines)
 
 
 def _r_text(row: dict[str, Any]) -> str:

@@ -15,4 +15,4 @@ def test_the_plain_progress_line_keeps_its_chronav_prefix():
     progress = _PlainProgress(Console(file=out, width=200, force_terminal=False))
     progress({"now_s": 9 * 3600 + 30 * 60, "clock_mode": "driving",
               "missions": {"m1": {"state": "done"}, "m2": {"state": "pending"}}})
-    assert out.getvalue().splitlines() == ["[chronav] sim 09:30 clock=driving missions done 1/2"]
+    assert out.getvalue().splitlines() == ["[chronav] sim 09:30:00 clock=driving missions done 1/2"]
