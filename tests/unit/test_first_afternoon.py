@@ -39,3 +39,22 @@ def test_export_latest_is_the_newest_finished_run(tmp_path: Path) -> None:
 
 
 SCENE_DIR = REPO_ROOT / "scenes"
+
+
+def test_scene_from_map_given_a_scene_file_says_so(tmp_path: Path) -> None:
+    for scene, hint in ((SCENE_DIR / "center_day.yaml", ""), (SCENE_DIR / "map_ward.yaml", "maps/ward.yaml")):
+        result = runner.invoke(app, ["scene", "from-map", str(scene), "--out", str(tmp_path / "x.yaml")])
+        assert result.exit_code != 0
+        assert "this is a chronav scene file, not a map_server map yaml" in result.stderr, result.stderr
+        assert hint in result.stderr and "unknown key" not in result.stderr and "Traceback" not in result.output
+        assert not (tmp_path / "x.yaml").exists()
+
+
+def test_path_outside_the_scenes_day_is_refused_with_its_hours() -> None:
+    for at in ("08:00", "18:30"):
+        result = runner.invoke(app, ["path", "center_day", "--at", at, "--from", "4,1.2", "--to", "11,4"])
+        assert result.exit_code == 2, result.output
+        assert (f"--at {at}:00 is outside the day of scene 'center_day', which runs 09:00:00-18:00:00"
+                in result.stderr), result.stderr
+    plan = runner.invoke(app, ["plan", "center_day", "--mission", "room:lounge", "--at", "08:00"])
+    assert plan.exit_code == 2 and "which runs 09:00:00-18:00:00" in plan.stderr
