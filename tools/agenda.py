@@ -469,13 +469,34 @@ class ChangeWatcher:
         from agents.world.vocabulary import RequestState
         state = node.attrs.get("state")
         if state in RequestState.ANSWERED and (changed is None or "state" in changed):
+            message = str(node.attrs.get("message", ""))
+            # The agent's refusals already begin "refused: "; the line says it once.
             self.emit("request", f"request from {node.attrs.get('requested_by', '?')} {state}: "
-                      f"{node.attrs.get('message', '')}", event=state, request=node.name)
+                      f"{message.removeprefix(f'{state}: ')}", event=state, request=node.name)
 
 
 # ---------------------------------------------------------------------------------------------
 # Commands.
 # ---------------------------------------------------------------------------------------------
+
+RUN_CHECK_S = 1.0
+
+
+def system_ended(graph: Any, target: Target) -> str | None:
+    """Why there is nothing left to watch (the run ended, or every agent left the graph), or None.
+
+    Why: a watch that outlives its run waited silently forever; the launcher's end (result.json,
+    or its process gone) and the agents' liveliness tokens both say the system is gone."""
+    from tools.system.connection import members
+    from tools.system.runs import run_is_alive
+
+    if target.run_dir is not None and not run_is_alive(target.run_dir):
+        return f"run {target.run_dir.name} has ended"
+    present = members(graph, timeout_s=RUN_CHECK_S)
+    if present is not None and not [m for m in present if m != graph.agent]:
+        return f"no agent is left in {target.describe()}: the system has stopped"
+    return None
+
 
 @dataclass(frozen=True)
 class Connection:
@@ -633,6 +654,7 @@ def watch_command(
     """Follow the agenda live: one line per activity change, R step or answered request."""
     from agents.world.vocabulary import now_s
     from dsr.process import exit_on_sigterm
+    from tools.plain import plural
 
     exit_on_sigterm()
     try:
@@ -641,10 +663,18 @@ def watch_command(
             watcher = ChangeWatcher(replica, r_step=r_step, as_json=as_json, out=sys.stdout, limit=count)
             watcher.connect()
             typer.echo(f"watching the agenda of {address.describe()} at {_clock_text(now_s(replica))}: "
-                       f"{len(watcher.activities)} activities (Ctrl-C to stop)", err=True)
+                       f"{plural(len(watcher.activities), 'activity', 'activities')} (ends with the run, or "
+                       "Ctrl-C)", err=True)
             deadline = time.monotonic() + timeout if timeout > 0 else None
+            next_check = time.monotonic() + RUN_CHECK_S
             while not watcher.done and (deadline is None or time.monotonic() < deadline):
                 replica.dispatch(timeout=0.1)
+                if time.monotonic() >= next_check:
+                    ended = system_ended(replica, address)
+                    if ended:
+                        typer.echo(f"watch ends: {ended}", err=True)
+                        return
+                    next_check = time.monotonic() + RUN_CHECK_S
     except AgendaToolError as exc:
         _fail("watch", exc)
     except KeyboardInterrupt:

@@ -477,3 +477,33 @@ def test_names_from_the_graph_are_shown_without_terminal_escapes() -> None:
     text = out.getvalue()
     assert "\x1b" not in text and "\x07" not in text
     assert "\\x1b[2J" in text and "[bold]x" in text  # shown, escaped, not interpreted as markup
+
+
+def test_watch_ends_with_a_line_when_the_system_stops(router: str) -> None:
+    """Issue 39: a watch that outlived its system waited silently until Ctrl-C."""
+    graph = f"agenda_cli_{os.getpid()}_{next(_graph_numbers)}"
+    joined = join("sim_robot", graph=graph, settings=_client(router))
+    _populate_world(joined.__enter__())
+    stopper = threading.Timer(2.0, lambda: joined.__exit__(None, None, None))
+    stopper.start()
+    try:
+        result = runner.invoke(app, ["agenda", "watch", "--timeout", "30"],
+                               env={"CHRONAV_ZENOH_CONNECT": router, "CHRONAV_GRAPH": graph})
+    finally:
+        stopper.join()
+    assert result.exit_code == 0, result.output
+    assert f"watch ends: no agent is left in graph '{graph}'" in result.stderr, result.stderr
+    assert "(ends with the run, or Ctrl-C)" in result.stderr
+
+
+def test_watch_says_refused_once() -> None:
+    graph = DSRGraph("watch_refused")
+    graph.insert_node(type="clock", name="clock", attrs={"now_s": NOW_S})
+    out = StringIO()
+    watcher = tool.ChangeWatcher(graph, r_step=0.1, as_json=False, out=out)
+    watcher.connect()
+    request = graph.insert_node(type="agenda_request", name="agenda_request/x", attrs={
+        "state": "pending", "requested_by": "staff", "change": "{}"})
+    graph.update_node(request.id, attrs={"state": "refused", "message": "refused: no activity with id 'x' today"})
+    graph.dispatch()
+    assert out.getvalue().splitlines() == ["09:05:00 request from staff refused: no activity with id 'x' today"]
