@@ -18,6 +18,7 @@ def register(app: typer.Typer) -> None:
         notes (overlapping activities) are printed but allowed."""
         from agents.world.scene_world import load_world
         from scenes.yamlio import SourceError
+        from tools.plain import plural
 
         results: dict[str, str] = {}
         notes: dict[str, list[str]] = {}
@@ -34,8 +35,8 @@ def register(app: typer.Typer) -> None:
             results[str(file)] = "ok"
             notes[str(file)] = list(loaded.notes)
             if not as_json:
-                typer.echo(f"{file}: ok ({len(scene.rooms)} rooms, {len(scene.objects)} objects, "
-                           f"{len(scene.people)} people, {len(scene.missions)} missions)")
+                typer.echo(f"{file}: ok ({plural(len(scene.rooms), 'room')}, {plural(len(scene.objects), 'object')}, "
+                           f"{plural(len(scene.people), 'person', 'people')}, {plural(len(scene.missions), 'mission')})")
                 for note in loaded.notes:
                     typer.echo(f"{file}: note: {note}")
         if as_json:

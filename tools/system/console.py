@@ -17,6 +17,7 @@ from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
+from tools.plain import plural
 
 if TYPE_CHECKING:
     from tools.launch import RunResult
@@ -104,8 +105,9 @@ class _PlainProgress:
             now = status.get("now_s")
             missions = status.get("missions", {})
             done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
-            self.err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
-                           f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False,
+            mode = status.get("clock_mode") or "starting"    # no clock node yet: the agents are starting
+            when = f"sim {format_clock(now) if now is not None else '--:--:--'}"
+            self.err.print(f"[chronav] {when} clock={mode} missions done {done}/{len(missions)}", highlight=False,
                            markup=False)   # "[chronav]" is text, not a rich style tag
 
 
@@ -155,7 +157,7 @@ def print_result(result: Any, out: Console) -> None:
     out.print(f"run directory: {result.run_dir}", **line)
     if result.rrd_path:
         out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", **line)
-    done = f"{result.missions_done}/{len(result.missions)} missions done"
+    done = f"{result.missions_done}/{plural(len(result.missions), 'mission')} done"
     wall = f"{result.wall_s:.1f} s wall"
     closing = {
         "interrupted": f"INTERRUPTED (Ctrl-C or SIGTERM) after {wall}: {done}; agents stopped",
