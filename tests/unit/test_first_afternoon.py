@@ -58,3 +58,15 @@ def test_path_outside_the_scenes_day_is_refused_with_its_hours() -> None:
                 in result.stderr), result.stderr
     plan = runner.invoke(app, ["plan", "center_day", "--mission", "room:lounge", "--at", "08:00"])
     assert plan.exit_code == 2 and "which runs 09:00:00-18:00:00" in plan.stderr
+
+
+def test_the_license_is_an_spdx_string_so_setuptools_prints_no_deprecation_banner() -> None:
+    """A license table made setuptools >= 77 print its deprecation banner on every install."""
+    import re
+    import tomllib
+
+    project = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    assert project["project"]["license"] == "Apache-2.0"
+    requires = next(r for r in project["build-system"]["requires"] if r.startswith("setuptools"))
+    found = re.fullmatch(r"setuptools>=(\d+)(\.\d+)*", requires)
+    assert found and int(found[1]) >= 77, requires      # the first setuptools that reads the SPDX string
