@@ -70,3 +70,16 @@ def test_the_license_is_an_spdx_string_so_setuptools_prints_no_deprecation_banne
     requires = next(r for r in project["build-system"]["requires"] if r.startswith("setuptools"))
     found = re.fullmatch(r"setuptools>=(\d+)(\.\d+)*", requires)
     assert found and int(found[1]) >= 77, requires      # the first setuptools that reads the SPDX string
+
+
+def test_ros_bridge_with_no_system_says_what_to_do_in_one_line(tmp_path: Path) -> None:
+    """Issue 39: `chronav ros bridge SCENE` with no run printed a 40-line traceback."""
+    from tests.support import free_port
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"        # nothing listens there
+    result = runner.invoke(app, ["ros", "bridge", "center_day"],
+                           env={"CHRONAV_RUNS": str(tmp_path), "CHRONAV_ZENOH_CONNECT": endpoint})
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output and len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert result.stderr.startswith(f"chronav ros bridge: cannot reach a chronav system: nothing listens at {endpoint}")
+    assert "chronav launch SCENE" in result.stderr
