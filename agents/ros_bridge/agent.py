@@ -57,6 +57,7 @@ ROBOT_RATE_HZ = 20.0     # DSR writes of the ROS robot's odometry per second (th
 #: map with 30 people takes ~0.1-0.15 s here: its rate then drops below the configured 5 Hz)
 SOCIAL_MAP_CPU_BUDGET = 0.25
 RETRY_S = 2.0            # between attempts to reach the ROS side's router
+ODOM_WAIT_S = 5.0        # wall s after joining the ROS side before a silent robot (--robot ros) is reported
 
 
 class RosBridgeAgent(Agent):
@@ -84,6 +85,7 @@ class RosBridgeAgent(Agent):
         self._odom: Any = None
         self._scan: Any = None
         self._robot_written = -math.inf
+        self._joined_at = math.inf
         self._last_cmd: Any = None
         self.goals: queue.Queue[tuple[float, float, float, str]] = queue.Queue(maxsize=MAX_PENDING_GOALS)
         self._goal_count = sum(1 for n in graph.nodes_of_type(NodeType.MISSION) if n.name.startswith(
@@ -101,11 +103,15 @@ class RosBridgeAgent(Agent):
             self.session = zenoh.open(ros_session_config(self.cfg.endpoint, self.cfg.mode))
         except zenoh.ZError:
             self._retry_at = time.monotonic() + RETRY_S
+            self.problem = (f"the ROS 2 side does not answer: no Zenoh router at {self.cfg.endpoint} (start "
+                            "`ros2 run rmw_zenoh_cpp rmw_zenohd`, or give --ros-endpoint)")
             self.log.warning("the ROS 2 side's Zenoh router at %s does not answer; trying again in %.0f s "
                              "(start it with `ros2 run rmw_zenoh_cpp rmw_zenohd`, or give its endpoint with "
                              "CHRONAV_ROS_ENDPOINT or --ros-endpoint)", self.cfg.endpoint, RETRY_S)
             return False
         self.node = RosNode(self.session, self.cfg.node, self.cfg.domain, self.cfg.namespace)
+        self.problem = ""
+        self._joined_at = time.monotonic()
         topics = self.cfg.topics
         own_robot = () if self.external else ("odom", "scan")
         for key, type_name in (("map", msgs.OCCUPANCY_GRID), ("social_costmap", msgs.OCCUPANCY_GRID),
@@ -145,6 +151,14 @@ class RosBridgeAgent(Agent):
             return
         self._last_cmd = cmd
         self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
+
+    def _check_odom(self, wall: float) -> None:
+        """--robot ros: say so (on the launcher's console) while the ROS robot sends no odometry."""
+        if self._odom is not None:
+            self.problem = ""
+        elif wall - self._joined_at >= ODOM_WAIT_S:
+            self.problem = (f"the ROS 2 robot sends no {self.cfg.topics.odom.name} (waited {wall - self._joined_at:.0f} s "
+                            f"on ROS domain {self.cfg.domain} via {self.cfg.endpoint}): is the robot up, on that domain?")
 
     def _write_robot(self, t_s: float, wall: float) -> None:
         """The ROS robot's latest odometry and scan into the DSR, as the simulator would write them."""
@@ -209,6 +223,7 @@ class RosBridgeAgent(Agent):
         self._take_goals(t_s)
         wall = time.monotonic()
         if self.external:
+            self._check_odom(wall)
             self._write_robot(t_s, wall)
         stamp = msgs.ros_time(t_s, self.epoch_s)
         frames = self.cfg.frames
