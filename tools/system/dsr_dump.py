@@ -120,7 +120,9 @@ def attr_text(key: str, value: Any, *, all_items: bool = False) -> str:
 
 def _node_pose(graph: Any, node_id: int) -> str:
     """``@(x, y)`` from the RT edge that places the node in its parent, if any."""
-    for edge in graph.edges_to(node_id, "RT"):
+    from agents.world.vocabulary import EdgeType
+
+    for edge in graph.edges_to(node_id, EdgeType.RT):
         if "x" in edge.attrs and "y" in edge.attrs:
             return f"@({float(edge.attrs['x']):.2f}, {float(edge.attrs['y']):.2f}) "
     return ""
@@ -129,6 +131,7 @@ def _node_pose(graph: Any, node_id: int) -> str:
 def dump_lines(graph: Any, width: int, *, all_attrs: bool) -> list[str]:
     """The graph grouped by node type, then edges by type.  Compact: one line per node (its key
     attributes, cut at ``width``); ``all_attrs``: every attribute, wrapped between attributes."""
+    from agents.world.vocabulary import EdgeType, NodeType
     from tools.plain import cut, plural, wrapped
 
     nodes = sorted(graph.nodes(), key=lambda n: (n.type, n.name))
@@ -145,7 +148,7 @@ def dump_lines(graph: Any, width: int, *, all_attrs: bool) -> list[str]:
                 k for k in KEY_ATTRS.get(node_type, sorted(node.attrs)) if k in node.attrs
                 and (node_type in KEY_ATTRS or not isinstance(node.attrs[k], (list, dict)))]
             attrs = ", ".join(attr_text(k, node.attrs[k], all_items=all_attrs) for k in keys)
-            where = "" if node_type == "room" else _node_pose(graph, node.id)   # a room's frame is not a place
+            where = "" if node_type == NodeType.ROOM else _node_pose(graph, node.id)   # a room's frame is not a place
             head = f"  {node.name} [{node.id}] {where}" if all_attrs else f"  {node.name} {where}"
             if all_attrs:
                 lines += wrapped(head + attrs, width, indent="      ")
@@ -163,7 +166,7 @@ def dump_lines(graph: Any, width: int, *, all_attrs: bool) -> list[str]:
                 attrs = ", ".join(attr_text(k, v, all_items=True) for k, v in sorted(edge.attrs.items()))
                 lines += wrapped(f"  {names.get(edge.src, edge.src)} -> {names.get(edge.dst, edge.dst)} {attrs}",
                                  width, first="  ", indent="      ")
-        elif edge_type == "RT":     # the poses are on the nodes, as @(x, y)
+        elif edge_type == EdgeType.RT:     # the poses are on the nodes, as @(x, y)
             lines.append(f"edges RT ({len(group)}): the poses shown as @(x, y) above")
         else:                       # one line per source: its targets, wrapped between names
             lines.append(f"edges {edge_type} ({len(group)})")
