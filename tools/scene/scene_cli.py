@@ -43,4 +43,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(json.dumps({"files": results, "notes": notes, "ok": not failed}))
         raise typer.Exit(1 if failed else 0)
 
+    from tools.scene.show_cli import show   # light: its heavy imports are inside the command
+
+    scene_app.command("show")(show)
     app.add_typer(scene_app, name="scene")
