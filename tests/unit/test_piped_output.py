@@ -130,3 +130,13 @@ def test_chaos_piped_keeps_every_column(monkeypatch: Any, tmp_path: Path) -> Non
         assert f"kill {agent} at 3.25 s wall (sim 09:30:0" in " ".join(text.split())
     assert "restarted by the supervisor, rejoined the graph" in " ".join(text.split())
     assert len(lines) <= 3 * 3 + 5
+
+
+def test_dsr_dump_follow_lines_print_times_of_day() -> None:
+    from dsr import DSRGraph
+    from tools.system.dsr_dump import _event_text
+
+    graph = DSRGraph("follow")
+    clock = graph.insert_node(type="clock", name="clock", attrs={"now_s": 32400.0, "mode": "idle"})
+    assert _event_text(graph, "node_updated", (clock, ["now_s"])) == f"~ node clock (clock, {clock.id}) now_s=09:00:00"
+    assert _event_text(graph, "node_added", (clock,)).endswith("mode=idle, now_s=09:00:00")

@@ -102,3 +102,14 @@ def test_progress_line_and_summary_show_the_problem(tmp_path: Path) -> None:
     assert f"problem at the end of the run: ros_bridge: {PROBLEM}" in text
     assert "see below: ros_bridge" in text, "the missions table gives the likely reason"
     assert text.splitlines()[-1].endswith("but ros_bridge reported a problem (above)")
+
+
+def test_the_live_table_carries_the_problem_as_its_caption() -> None:
+    from tools.system.console import _status_table
+
+    table = _status_table({"now_s": None, "clock_mode": None, "missions": {}, "agents": {},
+                           "problems": {"ros_bridge": PROBLEM}})
+    assert table.caption == f"ros_bridge: {PROBLEM}"
+    out = io.StringIO()
+    Console(file=out, width=300, force_terminal=False).print(table)
+    assert "starting" in out.getvalue() and "None" not in out.getvalue()
