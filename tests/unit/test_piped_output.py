@@ -140,3 +140,21 @@ def test_dsr_dump_follow_lines_print_times_of_day() -> None:
     clock = graph.insert_node(type="clock", name="clock", attrs={"now_s": 32400.0, "mode": "idle"})
     assert _event_text(graph, "node_updated", (clock, ["now_s"])) == f"~ node clock (clock, {clock.id}) now_s=09:00:00"
     assert _event_text(graph, "node_added", (clock,)).endswith("mode=idle, now_s=09:00:00")
+
+
+def test_dsr_stats_piped_keeps_every_counter(capsys: Any, monkeypatch: Any) -> None:
+    from tools.system.dsr_dump import _print_stats
+
+    monkeypatch.setenv("COLUMNS", str(WIDTH))
+    report = {"nodes": 55, "tombstones": 3, "stats": {"received": 1200, "applied": 1190, "published": 300,
+                                                      "rejects": {"policy": 2}, "rejected_policy": 2, "deferred": 0,
+                                                      "syncs": 4, "fetches_postponed": 1, "compacted": 9}}
+    agents = ["social_navigation", "human_observer", "object_recognition"]
+    _print_stats("center_day_run", {"members": {a: report for a in agents}, "router": None})
+    lines = _lines(capsys.readouterr().out)
+    _assert_fits(lines)
+    assert lines[0] == "DSR graph 'center_day_run': 3 members"
+    text = " ".join(" ".join(lines).split())
+    for agent in agents:
+        assert (f"{agent}: nodes 55, received 1200, applied 1190, published 300, refused policy=2, policy 2, "
+                f"deferred 0, fetches 4 (held back 1), tombstones 3, compacted 9") in text

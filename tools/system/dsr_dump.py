@@ -344,10 +344,36 @@ def stats(
     _print_stats(target.graph, document)
 
 
+def stats_lines(graph_name: str, document: dict[str, Any], width: int) -> list[str]:
+    """The members' counters as a plain layout (pipes, logs): one entry per member, wrapped between
+    words, where the eleven-column table would be cut at 80 columns."""
+    from tools.plain import plural, wrapped
+
+    lines = [f"DSR graph {graph_name!r}: {plural(len(document['members']), 'member')}"]
+    for agent, report in document["members"].items():
+        c = report.get("stats", {})
+        reasons = ", ".join(f"{k}={v}" for k, v in sorted((c.get("rejects") or {}).items())) or "0"
+        lines += wrapped(f"{agent}: nodes {report.get('nodes')}, received {c.get('received')}, applied "
+                         f"{c.get('applied')}, published {c.get('published')}, refused {reasons}, policy "
+                         f"{c.get('rejected_policy')}, deferred {c.get('deferred')}, fetches {c.get('syncs')} "
+                         f"(held back {c.get('fetches_postponed', 0)}), tombstones {report.get('tombstones')}, "
+                         f"compacted {c.get('compacted')}", width, first="  ", indent="      ")
+    return lines
+
+
 def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
-    """The members' counters as a table, then what the router's ACL denied."""
+    """The members' counters as a table (a plain layout when not on a terminal), then what the
+    router's ACL denied."""
     from rich.console import Console
     from rich.table import Table
+
+    from tools.plain import console_width, is_plain, print_lines
+
+    console = Console()
+    if is_plain(console):
+        print_lines(console, stats_lines(graph_name, document, console_width(console)))
+        _print_router(document)
+        return
     table = Table(title=f"DSR graph {graph_name!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
                    "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
@@ -362,7 +388,11 @@ def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
                       f"{counters.get('syncs')} ({counters.get('fetches_postponed', 0)})",
                       str(report.get("tombstones")),
                       str(counters.get("compacted")))
-    Console().print(table)
+    console.print(table)
+    _print_router(document)
+
+
+def _print_router(document: dict[str, Any]) -> None:
     router = document.get("router")
     if router is not None and not router.get("acl", True):
         typer.echo("router: no access-control list (nothing is denied or counted)")
