@@ -154,7 +154,7 @@ def print_result(result: Any, out: Console) -> None:
     the run and its recording are, and one closing line saying how the run ended."""
     table = Table(title=f"Missions of {result.scene}")
     for column in ("mission", "state", "started", "finished", "reason"):
-        table.add_column(column)
+        table.add_column(column, no_wrap=column != "reason")   # ids and times stay whole; reasons wrap
     problems = problems_text(getattr(result, "problems", None) or {})
     for mid, m in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
         # A mission that did not end, while an agent reports a problem: the problem is the likely reason.
