@@ -30,3 +30,24 @@ def test_an_unreachable_ros_side_shows_on_the_progress_line_and_in_the_summary(p
     assert "OK: 1/1 mission done" in text and "but ros_bridge reported a problem (above)" in text
     (result_file,) = runs.glob("*/result.json")
     assert json.loads(result_file.read_text())["problems"]["ros_bridge"].startswith("the ROS 2 side does not answer")
+
+
+def test_a_ros_robot_that_never_sends_odom_is_the_reason_in_the_summary(procs: ProcessGroup, tmp_path: Path) -> None:
+    """`--robot ros` with the ROS side up but no robot on it: the run times out, and the progress
+    line, the missions' reason and the summary say the robot sends no /odom (issue 39)."""
+    from tests.support import port_open, wait_until
+
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    procs.spawn(["-m", "dsr.router", "--listen", endpoint], log_path=tmp_path / "ros_router.log")   # rmw_zenohd's stand-in
+    wait_until(lambda: port_open(port), 30, message="the ROS-side router")
+    runs, log = tmp_path / "runs", tmp_path / "launch.log"
+    proc = procs.spawn(["-m", "tools.cli", "launch", str(SCENE), "--robot", "ros", "--no-record", "--timeout", "45"],
+                       env={"CHRONAV_RUNS": str(runs), "CHRONAV_ROS_ENDPOINT": endpoint}, log_path=log)
+    proc.wait(timeout=150)
+    text = log.read_text()
+    assert proc.returncode == 1, text[-3000:]
+    problem = "ros_bridge: the ROS 2 robot sends no /odom"
+    assert any(line.startswith("[chronav] sim ") and f"| {problem}" in line for line in text.splitlines()), text[-3000:]
+    assert f"problem at the end of the run: {problem}" in text and "see below: ros_bridge" in text
+    assert "TIMED OUT" in text and "but ros_bridge reported a problem (above)" in text
