@@ -320,9 +320,9 @@ def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
     from scenes.names import shown
     from tools.plain import is_plain, plural
 
-    def cell(value: object) -> Text:
+    def cell(value: object, limit: int = 120) -> Text:
         # Names come from other people's files and commands: never markup, never terminal escapes.
-        return Text(shown(value, 120))
+        return Text(shown(value, limit))
 
     console = Console(file=out, highlight=False, soft_wrap=True)
     heading = f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {plural(len(data['activities']), 'activity', 'activities')}"
@@ -338,7 +338,7 @@ def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
     for row in data["activities"]:
         r = row["object_R"]
         table.add_row(cell(row["id"]), cell(row["name"]), cell(row["object"]), cell(row["start"]), cell(row["end"]),
-                      cell(row["state"]), cell(", ".join(map(str, row["participants"]))),
+                      cell(row["state"]), cell(", ".join(map(str, row["participants"])), 4_000),
                       "-" if r is None else f"{r:.2f}")
     console.print(table)
     console.print(shown(f"objects: {objects or 'none yet'}", 10_000), markup=False)
