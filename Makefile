@@ -52,4 +52,4 @@ lock:
 	rm -rf .lock-venv build
 
 clean:
-	rm -rf $(VENV) recordings/*.rrd
+	rm -rf $(VENV) recordings/*.rrd recordings/*/rrd

@@ -43,13 +43,16 @@ _parse_clock_cached = functools.lru_cache(maxsize=1024)(_parse_clock)
 
 
 def format_clock(seconds: float) -> str:
-    """Seconds since midnight -> ``"HH:MM"`` (``"HH:MM:SS"`` when not whole minutes), for messages."""
+    """Seconds since midnight -> ``"HH:MM:SS"``, for messages and tables.
+
+    Why always with seconds: a column or a log where some times read ``11:00`` and others
+    ``11:00:30`` is hard to scan, and a reader cannot tell a whole minute from a dropped field."""
     whole = int(round(seconds))
     sign = "-" if whole < 0 else ""
     whole = abs(whole)
     hours, rest = divmod(whole, 3600)
     minutes, secs = divmod(rest, 60)
-    return f"{sign}{hours:02d}:{minutes:02d}" + (f":{secs:02d}" if secs else "")
+    return f"{sign}{hours:02d}:{minutes:02d}:{secs:02d}"
 
 
 def _checked_clock(value: str) -> str:

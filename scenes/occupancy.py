@@ -223,6 +223,13 @@ def load_occupancy(yaml_path: str | Path) -> OccupancyMap:
     if not isinstance(located.data, dict):
         raise SourceError(str(yaml_path), 1, 1, "", "a map file must be a YAML mapping (image, resolution, "
                           "origin, negate, occupied_thresh, free_thresh, mode)")
+    if "image" not in located.data and {"rooms", "robot", "walls", "map"} & set(located.data):
+        # A chronav scene where a map_server yaml was expected: say so, not "unknown key 'name'".
+        map_ref = located.data.get("map")
+        hint = f" (this scene stands on map: {map_ref})" if isinstance(map_ref, str) else ""
+        raise SourceError(str(yaml_path), 1, 1, "", "this is a chronav scene file, not a map_server map yaml "
+                          f"(image, resolution, origin, ...){hint}; give the map's yaml, e.g. "
+                          "scenes/maps/ward.yaml, as saved by map_saver")
     meta = validate_located(MapYaml, located)
     image_path = Path(meta.image)
     if not image_path.is_absolute():

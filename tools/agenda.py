@@ -312,29 +312,57 @@ def snapshot(graph: Any) -> dict[str, Any]:
 
 
 def print_snapshot(data: dict[str, Any], out: TextIO) -> None:
+    """A table on a terminal; on a pipe or file, a plain layout wrapped between words (tools/plain.py)."""
     from rich.console import Console
     from rich.table import Table
     from rich.text import Text
 
     from scenes.names import shown
+    from tools.plain import is_plain, plural
 
-    def cell(value: object) -> Text:
+    def cell(value: object, limit: int = 120) -> Text:
         # Names come from other people's files and commands: never markup, never terminal escapes.
-        return Text(shown(value, 120))
+        return Text(shown(value, limit))
 
     console = Console(file=out, highlight=False, soft_wrap=True)
-    title = Text(f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {len(data['activities'])} activities")
-    table = Table(title=title, title_justify="left")
+    heading = f"agenda of {shown(data['graph'], 80)} at {data['now'] or '?'}: {plural(len(data['activities']), 'activity', 'activities')}"
+    objects = ", ".join(_object_text(o) for o in data["objects"])
+    if is_plain(console):
+        _print_plain_snapshot(console, heading, data["activities"], shown(objects or "none yet", 10_000))
+        return
+    table = Table(title=Text(heading), title_justify="left")
     for column in ("id", "name", "object", "start", "end", "state", "participants", "R now"):
-        table.add_column(column, overflow="fold")
+        # Ids, objects, times and states are single tokens: they keep their width, text columns wrap.
+        wraps = column in ("name", "participants")
+        table.add_column(column, overflow="fold", no_wrap=not wraps)
     for row in data["activities"]:
         r = row["object_R"]
         table.add_row(cell(row["id"]), cell(row["name"]), cell(row["object"]), cell(row["start"]), cell(row["end"]),
-                      cell(row["state"]), cell(", ".join(map(str, row["participants"]))),
+                      cell(row["state"]), cell(", ".join(map(str, row["participants"])), 4_000),
                       "-" if r is None else f"{r:.2f}")
     console.print(table)
-    objects = ", ".join(_object_text(o) for o in data["objects"])
     console.print(shown(f"objects: {objects or 'none yet'}", 10_000), markup=False)
+
+
+def _print_plain_snapshot(console: Any, heading: str, activities: list[dict[str, Any]], objects: str) -> None:
+    """Two or three lines per activity: when, state and id; then its object, R and participants,
+    wrapped between words at the console's width (never a name cut in two)."""
+    from scenes.names import shown
+    from tools.plain import console_width, print_lines, wrapped
+
+    width = console_width(console)
+    lines = wrapped(heading, width, indent="  ")
+    for row in activities:
+        name = f" ({shown(row['name'], 120)})" if row["name"] and row["name"] != row["id"] else ""
+        lines += wrapped(f"{row['start']}-{row['end']} {shown(row['state'], 40)}: {shown(row['id'], 120)}{name}",
+                         width, first="  ", indent="      ")
+        r = row["object_R"]
+        detail = f"on {shown(row['object'], 120)}, R now {'-' if r is None else f'{r:.2f}'}"
+        if row["participants"]:
+            detail += "; participants: " + ", ".join(shown(p, 120) for p in row["participants"])
+        lines += wrapped(detail, width, first="      ", indent="      ")
+    lines += wrapped(f"objects: {objects}", width, indent="  ")
+    print_lines(console, lines)
 
 
 def _r_text(row: dict[str, Any]) -> str:
@@ -441,13 +469,34 @@ class ChangeWatcher:
         from agents.world.vocabulary import RequestState
         state = node.attrs.get("state")
         if state in RequestState.ANSWERED and (changed is None or "state" in changed):
+            message = str(node.attrs.get("message", ""))
+            # The agent's refusals already begin "refused: "; the line says it once.
             self.emit("request", f"request from {node.attrs.get('requested_by', '?')} {state}: "
-                      f"{node.attrs.get('message', '')}", event=state, request=node.name)
+                      f"{message.removeprefix(f'{state}: ')}", event=state, request=node.name)
 
 
 # ---------------------------------------------------------------------------------------------
 # Commands.
 # ---------------------------------------------------------------------------------------------
+
+RUN_CHECK_S = 1.0
+
+
+def system_ended(graph: Any, target: Target) -> str | None:
+    """Why there is nothing left to watch (the run ended, or every agent left the graph), or None.
+
+    Why: a watch that outlives its run waited silently forever; the launcher's end (result.json,
+    or its process gone) and the agents' liveliness tokens both say the system is gone."""
+    from tools.system.connection import members
+    from tools.system.runs import run_is_alive
+
+    if target.run_dir is not None and not run_is_alive(target.run_dir):
+        return f"run {target.run_dir.name} has ended"
+    present = members(graph, timeout_s=RUN_CHECK_S)
+    if present is not None and not [m for m in present if m != graph.agent]:
+        return f"no agent is left in {target.describe()}: the system has stopped"
+    return None
+
 
 @dataclass(frozen=True)
 class Connection:
@@ -605,6 +654,7 @@ def watch_command(
     """Follow the agenda live: one line per activity change, R step or answered request."""
     from agents.world.vocabulary import now_s
     from dsr.process import exit_on_sigterm
+    from tools.plain import plural
 
     exit_on_sigterm()
     try:
@@ -613,10 +663,18 @@ def watch_command(
             watcher = ChangeWatcher(replica, r_step=r_step, as_json=as_json, out=sys.stdout, limit=count)
             watcher.connect()
             typer.echo(f"watching the agenda of {address.describe()} at {_clock_text(now_s(replica))}: "
-                       f"{len(watcher.activities)} activities (Ctrl-C to stop)", err=True)
+                       f"{plural(len(watcher.activities), 'activity', 'activities')} (ends with the run, or "
+                       "Ctrl-C)", err=True)
             deadline = time.monotonic() + timeout if timeout > 0 else None
+            next_check = time.monotonic() + RUN_CHECK_S
             while not watcher.done and (deadline is None or time.monotonic() < deadline):
                 replica.dispatch(timeout=0.1)
+                if time.monotonic() >= next_check:
+                    ended = system_ended(replica, address)
+                    if ended:
+                        typer.echo(f"watch ends: {ended}", err=True)
+                        return
+                    next_check = time.monotonic() + RUN_CHECK_S
     except AgendaToolError as exc:
         _fail("watch", exc)
     except KeyboardInterrupt:

@@ -77,7 +77,8 @@ class AgendaAgent(Agent):
             new_day = apply_change(self.day, change, known_objects=self.world.object_names,
                                    known_rooms=self.world.room_names, known_people=self.world.person_names)
         except AgendaChangeError as exc:
-            self.rec.event(f"{format_clock(now_s)} agenda change from {origin} refused: {exc}", level="WARN")
+            reason = str(exc).removeprefix("refused: ")     # the change's errors say "refused: " already
+            self.rec.event(f"{format_clock(now_s)} agenda change from {origin} refused: {reason}", level="WARN")
             return False, str(exc)
         before = {a.id: a for a in self.day.activities}
         self.day = new_day

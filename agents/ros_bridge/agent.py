@@ -70,6 +70,7 @@ RETRY_S = 2.0            # between attempts to reach the ROS side's router
 ODOM_TIMEOUT_S = 0.5
 #: the bridge's received/refused counts in the run directory (rewritten when they change, at most 1/s)
 RECEIVED_FILE = "ros_received.json"
+ODOM_WAIT_S = 5.0        # wall s after joining the ROS side before a silent robot (--robot ros) is reported
 
 
 class RosBridgeAgent(Agent):
@@ -97,6 +98,7 @@ class RosBridgeAgent(Agent):
         self._robot_written = -math.inf
         self._odom_written = 0        # inbox.odom_count when the robot was last written
         self._halted = False          # True while /odom is silent: zero /cmd_vel sent, commands held
+        self._joined_at = math.inf
         self._last_cmd: Any = None
         frames, topics = self.cfg.frames, self.cfg.topics
         limits = validate.Limits(tuple(self.scene.bounds), frames.map, frames.odom, frames.base,  # type: ignore[arg-type]
@@ -121,10 +123,14 @@ class RosBridgeAgent(Agent):
             self.node = self._connect()
         except zenoh.ZError:
             self._retry_at = time.monotonic() + RETRY_S
+            self.problem = (f"the ROS 2 side does not answer: no Zenoh router at {self.cfg.endpoint} (start "
+                            "`ros2 run rmw_zenoh_cpp rmw_zenohd`, or give --ros-endpoint)")
             self.log.warning("the ROS 2 side's Zenoh router at %s does not answer; trying again in %.0f s "
                              "(start it with `ros2 run rmw_zenoh_cpp rmw_zenohd`, or give its endpoint with "
                              "CHRONAV_ROS_ENDPOINT or --ros-endpoint)", self.cfg.endpoint, RETRY_S)
             return False
+        self.problem = ""
+        self._joined_at = time.monotonic()
         self._declare()
         return True
 
@@ -181,6 +187,14 @@ class RosBridgeAgent(Agent):
             return
         self._last_cmd = cmd
         self.cmd_pub.publish(msgs.twist(float(cmd[1] or 0.0), float(cmd[2] or 0.0), float(cmd[3] or 0.0)))
+
+    def _check_odom(self, wall: float) -> None:
+        """--robot ros: say so (on the launcher's console) while the ROS robot sends no odometry."""
+        if self.inbox.odom is not None:
+            self.problem = ""
+        elif wall - self._joined_at >= ODOM_WAIT_S:
+            self.problem = (f"the ROS 2 robot sends no {self.cfg.topics.odom.name} (waited {wall - self._joined_at:.0f} s "
+                            f"on ROS domain {self.cfg.domain} via {self.cfg.endpoint}): is the robot up, on that domain?")
 
     def _write_robot(self, t_s: float, wall: float) -> None:
         """The ROS robot's latest odometry and scan (checked by the inbox) into the DSR, as the
@@ -259,6 +273,7 @@ class RosBridgeAgent(Agent):
         self._guarded(GOAL_POSE, self._take_goals, t_s)
         wall = time.monotonic()
         if self.external:
+            self._check_odom(wall)
             self._guarded(ODOM, self._write_robot, t_s, wall)
             self._watch_odometry(wall)
         stamp = msgs.ros_time(t_s, self.epoch_s)

@@ -46,6 +46,9 @@ class Agent(ABC):
     #: (agents/runtime/lockstep.py) the scheduler hands every agent its virtual wall clock, so a
     #: run's pacing, and with it the simulated world, does not depend on how loaded the machine is.
     wall_clock: Callable[[], float] = staticmethod(time.monotonic)
+    #: what keeps the agent from its job right now, in a user's words ("" when nothing); stamped on
+    #: its heartbeat, so the launcher shows it on the console (agents/runtime/heartbeat.py)
+    problem: str = ""
 
     def __init__(self, config: AgentConfig) -> None:
         self.config = config
@@ -118,7 +121,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                     started = time.monotonic()
                     graph.dispatch(timeout=0.0)
                     agent.step()
-                    heartbeat.maybe_beat()
+                    heartbeat.maybe_beat(agent.problem)
                     remaining = config.period_s - (time.monotonic() - started)
                     if remaining > 0:
                         # Wait for signals (DSR changes) rather than sleeping blind.

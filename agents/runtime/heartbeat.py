@@ -6,6 +6,9 @@ endless computation; only a stamp written by the loop itself shows that it still
 progress.  ``heartbeat/<agent>`` carries ``beat`` (a counter), ``pid`` (which incarnation wrote
 it: a restarted agent's first stamps must not be mistaken for its predecessor's) and
 ``wall_s``.  The launcher (tools/system/supervisor.py) restarts an agent whose stamp stops changing.
+``problem`` says, in a user's words, what keeps a running agent from its job (the ROS 2 side does
+not answer, the ROS robot sends no /odom): the launcher shows it on its progress line and in the
+run's summary, where before only the agent's log had it.
 """
 
 from __future__ import annotations
@@ -27,14 +30,18 @@ class Heartbeat:
         self.graph, self.agent, self.period_s = graph, agent, period_s
         self.beat = 0
         self._last = -float("inf")
+        self._problem = ""
 
-    def maybe_beat(self) -> None:
+    def maybe_beat(self, problem: str = "") -> None:
+        """Stamp (at most every ``period_s``), with the agent's ``problem`` when it changed."""
         now = time.monotonic()
         if now - self._last < self.period_s:
             return
         self._last = now
         self.beat += 1
-        attrs = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
+        attrs: dict[str, object] = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
+        if problem != self._problem:
+            attrs["problem"] = self._problem = problem
         node = self.graph.get_node_by_name(heartbeat_name(self.agent))
         if node is None:
             self.graph.insert_node(type=NodeType.HEARTBEAT, name=heartbeat_name(self.agent), attrs=attrs)
@@ -51,3 +58,10 @@ def read_stamp(graph: GraphReader, agent: str) -> tuple[int, int] | None:
     if not isinstance(pid, int) or not isinstance(beat, int):
         return None
     return pid, beat
+
+
+def read_problem(graph: GraphReader, agent: str) -> str:
+    """What the agent last reported as keeping it from its job ("" when nothing, or no stamp yet)."""
+    node = graph.get_node_by_name(heartbeat_name(agent))
+    problem = None if node is None else node.attrs.get("problem")
+    return problem if isinstance(problem, str) else ""

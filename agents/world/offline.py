@@ -150,11 +150,25 @@ def path_as_trajectory(points: np.ndarray, t0_s: float, speed_mps: float) -> np.
     return np.column_stack([t, points[:, 0], points[:, 1], theta])
 
 
+def check_within_day(world: SceneWorld, t_s: float, option: str = "--at") -> None:
+    """Refuse a time outside the scene's day (its clock's start to end).
+
+    Why: nobody and nothing is simulated there (the people and the agenda start with the day), so a
+    plan at 08:00 on a 09:00-18:00 scene silently showed the world at 09:00."""
+    clock = world.scene.clock
+    if not clock.start_s <= t_s <= clock.end_s:
+        raise OfflineError(f"{option} {format_clock(t_s)} is outside the day of scene {world.scene.name!r}, which "
+                           f"runs {format_clock(clock.start_s)}-{format_clock(clock.end_s)} (its clock: start, end); "
+                           "give a time within it")
+
+
 def plan_offline(scene: str | Path, t_s: float, start: tuple[float, float], goal: tuple[float, float], *,
                  planner: str = "social", method: str = "astar", controller: str | None = None) -> dict[str, Any]:
     """One plan with ``planner`` (agents/lib/planning/planners.py) plus its metrics, as a JSON-ready
-    dict; with ``controller``, that local controller driven along it (offline_drive.py)."""
+    dict; with ``controller``, that local controller driven along it (offline_drive.py). ``t_s``
+    must lie within the scene's day."""
     maps = SceneMaps.load(scene)
+    check_within_day(maps.world, t_s)
     smap = maps.at(t_s)
     try:
         path = plan(smap, start, goal, method=method, planner=planner, cruise_speed_mps=maps.cruise_speed)

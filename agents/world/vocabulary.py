@@ -256,6 +256,7 @@ class HeartbeatAttr(StrEnum):
     BEAT = "beat"
     PID = "pid"
     WALL_S = "wall_s"
+    PROBLEM = "problem"   # what keeps the agent from its job now, in a user's words ("" when nothing)
 
 
 class PoseAttr(StrEnum):
@@ -454,7 +455,8 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them
     NodeSpec(NodeType.HEARTBEAT, (*ALL_AGENTS, ROS_BRIDGE),
              _attrs((*ALL_AGENTS, ROS_BRIDGE), {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT,
-                                                HeartbeatAttr.WALL_S: FLOAT}), deleters=()),
+                                                HeartbeatAttr.WALL_S: FLOAT, HeartbeatAttr.PROBLEM: STR}),
+             deleters=()),
 )}
 
 _POSE = {PoseAttr.X: FLOAT, PoseAttr.Y: FLOAT, PoseAttr.THETA: FLOAT}

@@ -34,6 +34,18 @@ def test_dump_json_and_table(world):
     assert result.exit_code == 0 and "a-w3" in result.stdout and "5 nodes" in result.stdout
 
 
+def test_dump_piped_at_80_columns_is_one_line_per_node_grouped_by_type(world):
+    """Issue 39: piped, the dump is grouped by node type, one line per node, nothing folded."""
+    result = CliRunner().invoke(app, ["dsr", "dump", "--connect", world], env={"COLUMNS": "80"})
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0].startswith("DSR graph 'chronav': 5 nodes, 0 edges")
+    assert sorted(line.split()[0] for line in lines if line.startswith("  ")) == [f"a-w{i}" for i in range(5)]
+    assert len(lines) <= 1 + 5 + 5 and all(len(line) <= 80 for line in lines), lines
+    every = CliRunner().invoke(app, ["dsr", "dump", "--all", "--connect", world], env={"COLUMNS": "80"})
+    assert every.exit_code == 0 and "a-w3 [" in every.stdout and "i=3" in every.stdout
+
+
 def test_dump_reports_unreachable_router_on_stderr():
     result = CliRunner().invoke(app, ["dsr", "dump", "--json", "--connect", "tcp/127.0.0.1:1"])
     assert result.exit_code == 1 and "nothing listens at tcp/127.0.0.1:1" in result.stderr

@@ -131,7 +131,7 @@ def test_added_activity_makes_the_driving_robot_go_round_the_tv(procs: ProcessGr
                                   cwd=REPO_ROOT, capture_output=True, text=True, timeout=60,
                                   env={**os.environ, "RERUN": "off"})
             assert tool.returncode == 0, tool.stderr
-            assert tool.stdout.startswith(f"accepted: add: {activity_id} tv {start}-{end} upcoming"), tool.stdout
+            assert tool.stdout.startswith(f"accepted: add: {activity_id} tv {start}:00-{end}:00 upcoming"), tool.stdout
 
             wait_until(lambda: graph.get_node_by_name(f"activity/{activity_id}") is not None, 10,
                        message="the activity node")
@@ -155,7 +155,7 @@ def test_added_activity_makes_the_driving_robot_go_round_the_tv(procs: ProcessGr
     store = RrdReader(str(result["rrd"])).stream().collect()
     agenda_events = _texts(store, "/events/agenda")
     accepted = [t for t, text in agenda_events
-                if f"accepted: add: {activity_id} tv {start}-{end}" in text and "chronav agenda (" in text]
+                if f"accepted: add: {activity_id} tv {start}:00-{end}:00" in text and "chronav agenda (" in text]
     assert len(accepted) == 1, agenda_events
     accepted_s = accepted[0]
 

@@ -83,7 +83,7 @@ def test_failed_mission_before_the_robot_moves_still_gives_table_recording_and_r
     assert proc.returncode == 1, text
     assert "Traceback" not in text
     assert "Missions of unreachable_goal" in text and "m0905" in text and "failed" in text
-    assert "FAILED: 0/1 missions done" in text
+    assert "FAILED: 0/1 mission done" in text
     run_dir = the_run(tmp_path / "recordings")        # ./recordings of the current directory
     result = json.loads((run_dir / "result.json").read_text())
     assert result["missions"]["m0905"]["state"] == "failed" and not result["ok"]
@@ -101,7 +101,7 @@ def test_ctrl_c_in_the_first_seconds_says_interrupted_and_still_merges(procs: Pr
     text = finished(proc, log, 60)
     assert proc.returncode == 130, text
     assert "Traceback" not in text
-    assert "INTERRUPTED (Ctrl-C or SIGTERM)" in text and "0/1 missions done" in text
+    assert "INTERRUPTED (Ctrl-C or SIGTERM)" in text and "0/1 mission done" in text
     assert "Missions of agenda_live" in text and "m0905" in text
     run_dir = the_run(runs)
     result = json.loads((run_dir / "result.json").read_text())

@@ -152,3 +152,22 @@ def test_move_then_read_back(start: int, length: int) -> None:
     end_text = f"{end // 60:02d}:{end % 60:02d}"
     moved = move_activity(base, "g", start=text, end=end_text).get("g")
     assert (moved.start_s, moved.end_s) == (start * 60.0, end * 60.0)
+
+
+def test_loading_a_foreign_agenda_refuses_in_one_short_message() -> None:
+    """Issue 39: the sample .ics into center_day gave 3,000 characters listing its 26 people five
+    times; each list of names now comes once, cut with a count, and each activity's problems on one line."""
+    from agents.lib.agenda.changes import parse_change
+    from agents.world.scene_world import load_world
+    from tests.support import REPO_ROOT
+    from tools.agenda import load_change
+
+    world = load_world(REPO_ROOT / "scenes" / "center_day.yaml")
+    change = load_change(Path(REPO_ROOT / "scenes" / "sample_agenda.ics"), replace=False)
+    with pytest.raises(AgendaChangeError) as refused:
+        apply_change(world.agenda, parse_change(json.dumps(change)), known_objects=world.object_names,
+                     known_rooms=world.room_names, known_people=world.person_names)
+    text = str(refused.value)
+    assert text.count("res_ana") == 1 and text.count("known rooms:") == 1 and "... and 14 more" in text
+    assert len(text) < 1200 and len(text.splitlines()) == 5, text
+    assert "participant 'therapist' is not a person of the scene (did you mean 'therapist_eva'?)" in text

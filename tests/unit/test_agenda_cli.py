@@ -169,7 +169,7 @@ def test_add_prints_the_answer_and_list_json_shows_activity_and_r(live: LiveSyst
     result = live.invoke("add", "tv", "09:08", "09:40", "--name", "Serious game",
                          "--participants", "senior_1, therapist")
     assert result.exit_code == 0, result.output
-    assert result.stdout == "accepted: add: tv-0908 tv 09:08-09:40 upcoming\n"
+    assert result.stdout == "accepted: add: tv-0908 tv 09:08:00-09:40:00 upcoming\n"
     wait_until(lambda: live.tv_r() == pytest.approx(expected_r()), 5, message="R raised")
     # the delete travels tool -> router -> this replica, independently of the agenda's R write
     wait_until(lambda: not live.requests(), 5, message="the tool deletes its request once answered")
@@ -177,10 +177,10 @@ def test_add_prints_the_answer_and_list_json_shows_activity_and_r(live: LiveSyst
     listed = live.invoke("list", "--json")
     assert listed.exit_code == 0, listed.output
     data = json.loads(listed.stdout)
-    assert data["graph"] == live.graph and data["now"] == "09:05" and data["now_s"] == NOW_S
+    assert data["graph"] == live.graph and data["now"] == "09:05:00" and data["now_s"] == NOW_S
     (row,) = data["activities"]
     assert {k: row[k] for k in ("id", "name", "object", "start", "end", "state", "participants")} == {
-        "id": "tv-0908", "name": "Serious game", "object": "tv", "start": "09:08", "end": "09:40",
+        "id": "tv-0908", "name": "Serious game", "object": "tv", "start": "09:08:00", "end": "09:40:00",
         "state": "upcoming", "participants": ["senior_1", "therapist"]}
     assert row["object_R"] == pytest.approx(expected_r())
     (obj,) = data["objects"]
@@ -191,12 +191,14 @@ def test_add_prints_the_answer_and_list_json_shows_activity_and_r(live: LiveSyst
 def test_list_table_shows_times_state_and_r(live: LiveSystem) -> None:
     assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
     wait_until(lambda: live.tv_r() > 3.0, 5, message="R raised")
-    result = live.invoke("list")
+    # Piped (CliRunner is not a terminal) at 80 columns: the plain layout, names whole (issue 39).
+    result = runner.invoke(app, ["agenda", "list"], env={**live.env, "COLUMNS": "80"})
     assert result.exit_code == 0, result.output
-    row = next(line for line in result.stdout.splitlines() if "tv-0908" in line)
-    assert ["tv-0908", "tv", "tv", "09:08", "09:40", "upcoming", f"{expected_r():.2f}"] == [
-        cell.strip() for cell in row.strip("│┃ ").split("│") if cell.strip()]
+    lines = result.stdout.splitlines()
+    assert lines[0] == f"agenda of {live.graph} at 09:05:00: 1 activity"
+    assert lines[1:3] == ["  09:08:00-09:40:00 upcoming: tv-0908 (tv)", f"      on tv, R now {expected_r():.2f}"]
     assert f"objects: tv R={expected_r():.2f} (dark_orange)" in result.stdout
+    assert all(len(line) <= 80 for line in lines), lines
 
 
 def test_unknown_object_is_refused_naming_it_and_the_known_ones(live: LiveSystem) -> None:
@@ -220,13 +222,13 @@ def test_move_then_cancel(live: LiveSystem) -> None:
     moved = live.invoke("move", "tv-0908", "--start", "09:20", "--json")
     assert moved.exit_code == 0, moved.output
     answer = json.loads(moved.stdout)
-    assert answer["accepted"] is True and answer["message"] == "move: tv-0908 tv 09:20-09:52 upcoming"
+    assert answer["accepted"] is True and answer["message"] == "move: tv-0908 tv 09:20:00-09:52:00 upcoming"
     assert answer["change"] == {"op": "move", "id": "tv-0908", "start": "09:20"}
     wait_until(lambda: live.tv_r() == pytest.approx(expected_r(START_S + 720, END_S + 720)), 5, message="R moved")
 
     cancelled = live.invoke("cancel", "tv-0908")
     assert cancelled.exit_code == 0, cancelled.output
-    assert cancelled.stdout == "accepted: cancel: tv-0908 tv 09:20-09:52 cancelled\n"
+    assert cancelled.stdout == "accepted: cancel: tv-0908 tv 09:20:00-09:52:00 cancelled\n"
     wait_until(lambda: live.tv_r() == pytest.approx(1.5), 5, message="R back to R_min")
     again = live.invoke("cancel", "tv-0908")
     assert again.exit_code == 1 and "already cancelled" in again.stderr
@@ -238,7 +240,7 @@ def test_load_merge_and_replace(live: LiveSystem, tmp_path: Path) -> None:
     assert live.invoke("add", "tv", "09:08", "09:40").exit_code == 0
     merged = live.invoke("load", str(day))
     assert merged.exit_code == 0, merged.output
-    assert merged.stdout == "accepted: load: game tv 09:30-10:00 upcoming\n"
+    assert merged.stdout == "accepted: load: game tv 09:30:00-10:00:00 upcoming\n"
     wait_until(lambda: len(live.world.nodes_of_type("activity")) == 2, 5, message="two activities")
     replaced = live.invoke("load", str(day), "--replace")
     assert replaced.exit_code == 0, replaced.output
@@ -407,11 +409,11 @@ def test_watcher_lines_offline() -> None:
     graph.delete_node(activity.id)
     graph.dispatch()
     assert out.getvalue().splitlines() == [
-        "09:05 activity tv-0908 added: tv 09:08-09:40 upcoming (Game)",
-        "09:05 object tv R 1.50 -> 3.37 (dark_orange)",
-        "09:06 activity tv-0908 moved: 09:08-09:40 -> 09:18-09:50",
-        "09:06 activity tv-0908 upcoming -> cancelled",
-        "09:06 activity tv-0908 removed from the agenda",
+        "09:05:00 activity tv-0908 added: tv 09:08:00-09:40:00 upcoming (Game)",
+        "09:05:00 object tv R 1.50 -> 3.37 (dark_orange)",
+        "09:06:00 activity tv-0908 moved: 09:08:00-09:40:00 -> 09:18:00-09:50:00",
+        "09:06:00 activity tv-0908 upcoming -> cancelled",
+        "09:06:00 activity tv-0908 removed from the agenda",
     ]
 
 
@@ -437,7 +439,7 @@ def test_watch_follows_a_change_live(live: LiveSystem) -> None:
     assert by_kind["activity"]["event"] == "added" and by_kind["activity"]["activity"]["activity_id"] == "tv-0908"
     assert by_kind["object"]["object"]["R"] == pytest.approx(expected_r())
     assert by_kind["request"]["event"] == "accepted" and "add: tv-0908" in by_kind["request"]["text"]
-    assert all(e["time"] == "09:05" for e in events)
+    assert all(e["time"] == "09:05:00" for e in events)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -475,3 +477,33 @@ def test_names_from_the_graph_are_shown_without_terminal_escapes() -> None:
     text = out.getvalue()
     assert "\x1b" not in text and "\x07" not in text
     assert "\\x1b[2J" in text and "[bold]x" in text  # shown, escaped, not interpreted as markup
+
+
+def test_watch_ends_with_a_line_when_the_system_stops(router: str) -> None:
+    """Issue 39: a watch that outlived its system waited silently until Ctrl-C."""
+    graph = f"agenda_cli_{os.getpid()}_{next(_graph_numbers)}"
+    joined = join("sim_robot", graph=graph, settings=_client(router))
+    _populate_world(joined.__enter__())
+    stopper = threading.Timer(2.0, lambda: joined.__exit__(None, None, None))
+    stopper.start()
+    try:
+        result = runner.invoke(app, ["agenda", "watch", "--timeout", "30"],
+                               env={"CHRONAV_ZENOH_CONNECT": router, "CHRONAV_GRAPH": graph})
+    finally:
+        stopper.join()
+    assert result.exit_code == 0, result.output
+    assert f"watch ends: no agent is left in graph '{graph}'" in result.stderr, result.stderr
+    assert "(ends with the run, or Ctrl-C)" in result.stderr
+
+
+def test_watch_says_refused_once() -> None:
+    graph = DSRGraph("watch_refused")
+    graph.insert_node(type="clock", name="clock", attrs={"now_s": NOW_S})
+    out = StringIO()
+    watcher = tool.ChangeWatcher(graph, r_step=0.1, as_json=False, out=out)
+    watcher.connect()
+    request = graph.insert_node(type="agenda_request", name="agenda_request/x", attrs={
+        "state": "pending", "requested_by": "staff", "change": "{}"})
+    graph.update_node(request.id, attrs={"state": "refused", "message": "refused: no activity with id 'x' today"})
+    graph.dispatch()
+    assert out.getvalue().splitlines() == ["09:05:00 request from staff refused: no activity with id 'x' today"]

@@ -30,9 +30,9 @@ def test_clock_times_parse_and_format() -> None:
     for bad in ("24:01", "11:60", "11", "eleven", "25:00"):
         with pytest.raises(ValueError):
             parse_clock(bad)
-    assert format_clock(11 * H) == "11:00"
+    assert format_clock(11 * H) == "11:00:00"
     assert format_clock(11 * H + 30) == "11:00:30"
-    assert format_clock(-H) == "-01:00"
+    assert format_clock(-H) == "-01:00:00"
 
 
 def test_parse_when_distinguishes_clock_and_iso() -> None:

@@ -55,7 +55,7 @@ def test_end_not_after_start_from_mixed_times_is_reported() -> None:
         expand_day([spec], DAY, "Europe/Madrid", {"tv"})
     (error,) = info.value.report.errors
     assert error.code == "end_not_after_start"
-    assert "end 11:00 is not after start 12:00" in error.message
+    assert "end 11:00:00 is not after start 12:00:00" in error.message
 
 
 def test_every_error_is_collected_in_one_report() -> None:
@@ -79,7 +79,7 @@ def test_overlaps_on_one_object_are_infos_not_errors() -> None:
     assert pairs == [("a", "b"), ("a", "c"), ("b", "c")]
     assert all(f.severity is Severity.INFO for f in report.infos)
     first = next(f for f in report.infos if f.activity_id == "b")
-    assert "from 11:00 to 12:00" in first.message and "R(t) takes the larger value" in first.message
+    assert "from 11:00:00 to 12:00:00" in first.message and "R(t) takes the larger value" in first.message
 
 
 def test_expand_day_accepts_overlaps() -> None:

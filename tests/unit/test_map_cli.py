@@ -121,7 +121,7 @@ def test_exported_masks_reload_to_the_same_costs(tmp_path: Path) -> None:
                                       "--out", str(out), "--json"])
     assert result.exit_code == 0, result.output
     index = json.loads(result.stdout)
-    assert [s["time"] for s in index["slices"]] == ["09:50", "09:55", "10:00"]
+    assert [s["time"] for s in index["slices"]] == ["09:50:00", "09:55:00", "10:00:00"]
     maps = SceneMaps.load("map_ward")
     ward = maps.world.scene.occupancy
     scale = MaskScale.for_params(maps.nav.params)

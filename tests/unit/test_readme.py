@@ -42,3 +42,28 @@ def test_two_setup_commands() -> None:
     assert "make demo" in README and "make test" in README
     makefile = (REPO_ROOT / "Makefile").read_text()
     assert re.search(r"^demo:", makefile, re.M) and re.search(r"^test:", makefile, re.M)
+
+
+def test_first_session_agenda_change_is_accepted_on_center_day() -> None:
+    """The README's first session adds an activity to center_day: the agenda agent must accept it."""
+    import json
+    import shlex
+
+    from agents.lib.agenda.changes import apply_change, parse_change
+    from agents.world.scene_world import load_world
+    from tools.agenda import add_change, split_participants
+
+    section = README[README.index("## A first session"):README.index("## Watching a run in Rerun")]
+    assert "chronav launch center_day" in section and "chronav agenda watch" in section
+    line = next(ln for ln in section.splitlines() if "chronav agenda add" in ln)
+    args = shlex.split(line.split("#")[0])[3:]
+    obj, start, end = args[:3]
+    options = dict(zip(args[3::2], args[4::2]))
+    world = load_world(REPO_ROOT / "scenes" / "center_day.yaml")
+    change = add_change(obj, start, end, name=options["--name"],
+                        participants=split_participants(options["--participants"]))
+    day = apply_change(world.agenda, parse_change(json.dumps(change)), known_objects=world.object_names,
+                       known_rooms=world.room_names, known_people=world.person_names)
+    added = next(a for a in day.activities if a.name == options["--name"])
+    assert not [a for a in world.agenda.activities
+                if a.object == obj and a.start_s < added.end_s and added.start_s < a.end_s], "a free slot"

@@ -132,8 +132,20 @@ def test_tour_finds_start_closest_approach_and_arrival(tmp_path: Path, monkeypat
     from tools.launch import merge_recordings
 
     merge_recordings(sorted(paths), merged)
+    # Issue 39: once merged, the per-agent parts (39 MB for center_day) are gone, and their folder.
+    assert not any(p.exists() for p in paths) and not paths[0].parent.exists()
     store = RrdReader(str(merged)).stream().collect()
     stops = [(s.mission, s.what, s.sim_s) for s in tour_stops(store)]
     assert stops == [("m1", "start", 36000.0), ("m1", "closest-1.00m", 36006.0), ("m1", "arrival", 36010.0)]
     assert end_of(store) == 36010.0
     assert parse_size("1280x720") == (1280, 720)
+
+
+def test_a_failed_merge_keeps_the_per_agent_recordings(tmp_path: Path) -> None:
+    from tools.launch import merge_recordings
+
+    part = tmp_path / "rrd" / "sim_robot-1.rrd"
+    part.parent.mkdir()
+    part.write_bytes(b"not a recording")
+    assert merge_recordings([part], tmp_path / "merged.rrd") is None
+    assert part.read_bytes() == b"not a recording"

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from tools.chaos.schedule import clock_text
+
 
 
 def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dict[str, Any]:
@@ -130,8 +132,9 @@ def lost_writes(graph: Any, loaded: Any, done_seen: set[str], accepted: list[str
             continue
         if (float(attrs.get("start_s", -1)), float(attrs.get("end_s", -1))) != (activity.start_s, activity.end_s) \
                 or attrs.get("object") != activity.object or (attrs.get("state") == ActivityState.CANCELLED) != activity.cancelled:
-            lost.append(f"activity {activity.id} in the DSR ({attrs.get('start_s')}-{attrs.get('end_s')}, "
-                        f"{attrs.get('state')}) differs from the agenda log ({activity.start_s}-{activity.end_s}, "
+            lost.append(f"activity {activity.id} in the DSR ({clock_text(attrs.get('start_s'))}-"
+                        f"{clock_text(attrs.get('end_s'))}, {attrs.get('state')}) differs from the agenda log "
+                        f"({clock_text(activity.start_s)}-{clock_text(activity.end_s)}, "
                         f"{'cancelled' if activity.cancelled else 'not cancelled'})")
     extra = set(published) - {a.id for a in day.activities}
     lost += [f"activity {a} is in the DSR but not in the agenda log" for a in sorted(extra)]

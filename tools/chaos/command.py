@@ -148,11 +148,25 @@ def _table(summary: dict[str, Any]) -> Any:
 
     table = Table(title=f"chaos on {summary['scene']}: {'OK' if summary['ok'] else 'FAILED'}")
     for column in ("#", "fault", "at (wall s)", "sim", "mission", "recovered s", "converged s", "note"):
-        table.add_column(column)
+        table.add_column(column, no_wrap=column not in ("fault", "note"))
     for index, fault in enumerate(summary["faults"]):
         table.add_row(str(index), fault["what"], str(fault["at_wall_s"]), clock_text(fault["at_sim_s"]),
                       str(fault["mission"]), str(fault["recovered_s"]), str(fault["converged_s"]), fault["note"])
     return table
+
+
+def fault_lines(summary: dict[str, Any], width: int) -> list[str]:
+    """The faults as a plain layout for pipes and logs: one entry per fault, wrapped between words
+    at ``width`` (the table's eight columns do not fit 80 columns without cutting them)."""
+    from tools.plain import wrapped
+
+    lines = [f"chaos on {summary['scene']}: {'OK' if summary['ok'] else 'FAILED'}"]
+    for index, fault in enumerate(summary["faults"]):
+        text = (f"#{index} {fault['what']} at {fault['at_wall_s']} s wall (sim {clock_text(fault['at_sim_s'])}, "
+                f"mission {fault['mission']}): recovered {fault['recovered_s']} s, converged {fault['converged_s']} s"
+                + (f"; {fault['note']}" if fault["note"] else ""))
+        lines += wrapped(text, width, first="  ", indent="      ")
+    return lines
 
 
 def register(app: typer.Typer) -> None:
@@ -187,8 +201,13 @@ def register(app: typer.Typer) -> None:
         if as_json:
             typer.echo(json.dumps(summary))
         else:
+            from tools.plain import console_width, is_plain, print_lines
+
             console = Console()
-            console.print(_table(summary))
+            if is_plain(console):
+                print_lines(console, fault_lines(summary, console_width(console)))
+            else:
+                console.print(_table(summary))
             console.print(f"missions completed {summary['missions_completed']}/{summary['missions_total']}, "
                           f"faults injected {summary['faults_injected']}/{summary['faults_planned']}, "
                           f"convergence max {summary['convergence_max_s']} s, writes lost {summary['writes_lost']}")

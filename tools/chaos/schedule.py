@@ -65,8 +65,9 @@ def _hhmm(seconds: float) -> str:
     return f"{minutes // 60:02d}:{minutes % 60:02d}"
 
 
-def clock_text(seconds: float | None) -> str:
-    if seconds is None:
+def clock_text(seconds: object) -> str:
+    """A sim time as HH:MM:SS, ``-`` when there is none (not a number)."""
+    if not isinstance(seconds, (int, float)) or isinstance(seconds, bool):
         return "-"
     from scenes.clock import format_clock
 

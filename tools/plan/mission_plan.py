@@ -56,6 +56,13 @@ def plan_scene(scene: Path, mission: str, at_s: float | None, grammar_file: Path
         _fail(str(exc))
         return
     t_s = world.scene.clock.start_s if at_s is None else at_s
+    from agents.world.offline import OfflineError, check_within_day
+
+    try:
+        check_within_day(world, t_s)
+    except OfflineError as exc:
+        _fail(str(exc))
+        return
     from scenes.names import shown
 
     echoed = shown(mission, 80)   # the mission as typed, cut to a readable length (it may be 100,000 characters)

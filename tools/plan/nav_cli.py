@@ -103,7 +103,7 @@ def path_command(scene: str = typer.Argument(..., help="scene file or name in sc
     if as_json:
         typer.echo(json.dumps(result))
     else:
-        _print_path(result, chosen, at)
+        _print_path(result, chosen, t_s)
         if driven is not None:
             typer.echo(f"controller {driven['name']}: " + (f"refused: {driven['refused']}" if driven["refused"] else
                        f"{'reached the goal' if driven['reached'] else 'did not reach the goal'} in "
@@ -112,12 +112,14 @@ def path_command(scene: str = typer.Argument(..., help="scene file or name in sc
         raise typer.Exit(1)
 
 
-def _print_path(result: dict[str, Any], chosen: str, at: str) -> None:
+def _print_path(result: dict[str, Any], chosen: str, t_s: float) -> None:
     """The plan as a table: cost, length, Psi per zone and per interaction space, waypoint count."""
     from rich.console import Console
     from rich.table import Table
 
-    table = Table(title=f"{chosen} path on {result['scene']} at {at}")
+    from scenes.clock import format_clock
+
+    table = Table(title=f"{chosen} path on {result['scene']} at {format_clock(t_s)}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_row("cost (cost-weighted m)", f"{result['cost']:.2f}")

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import typer
 
+PROBE_TIMEOUT_S = 5.0
+
 ros_app = typer.Typer(help="chronav and ROS 2 (docs/ros2.md).", no_args_is_help=True)
 
 
@@ -36,12 +38,18 @@ def bridge(scene: str = typer.Argument(..., help="the running system's scene fil
     /goal_pose becomes a pose mission.  Runs until Ctrl-C."""
     from agents.ros_bridge.agent import RosBridgeAgent
     from agents.runtime.base import run_agent
-    from tools.system.connection import ConnectionProblem, resolve_target
+    from tools.system.connection import ConnectionProblem, open_replica, resolve_target
 
     try:
         target = resolve_target(None, None, run, role="reader")
+        # Can the system be reached?  Asked as the run's reader first, so that "no run" is one line
+        # saying what to do (as `chronav agenda` and `dsr dump` say it), not the agent's traceback.
+        # (A run whose agents have not joined yet is fine: the bridge waits for its world.)
+        with open_replica(target, agent=f"ros_bridge_probe-{os.getpid()}", read_only=True,
+                          timeout_s=PROBE_TIMEOUT_S):
+            pass
     except ConnectionProblem as exc:
-        sys.stderr.write(f"error: {exc}\n")
+        sys.stderr.write(f"chronav ros bridge: {exc}\n")
         raise typer.Exit(2) from None
     env = {"CHRONAV_ZENOH_CONNECT": ",".join(target.connect), "CHRONAV_ZENOH_MODE": "client",
            "CHRONAV_GRAPH": target.graph}

@@ -13,8 +13,8 @@ FORMATS = ("mcap",)
 
 def register(app: typer.Typer) -> None:
     @app.command("export")
-    def export(run: str = typer.Argument(..., help="a finished run: its directory, or its id under ./recordings "
-                                                   "($CHRONAV_RUNS)"),
+    def export(run: str = typer.Argument(..., help="a finished run: 'latest' (your newest finished run), its "
+                                                   "directory, or its id under ./recordings ($CHRONAV_RUNS)"),
                fmt: str = typer.Option("mcap", "--format", help="mcap: a rosbag2 MCAP file (ros2 bag, Foxglove)"),
                out: Path = typer.Option(..., "--out", help="the file to write, e.g. run.mcap"),
                scene: str = typer.Option(None, "--scene", help="the run's scene file (default: the one the run "
@@ -30,7 +30,8 @@ def register(app: typer.Typer) -> None:
             sys.stderr.write(f"error: --format {fmt!r}: the formats are {', '.join(FORMATS)}\n")
             raise typer.Exit(2)
         try:
-            summary = export_mcap(find_run(run, runs_dir()), out, scene)
+            run_dir = find_run(run, runs_dir())
+            summary = {"run_dir": str(run_dir), **export_mcap(run_dir, out, scene)}
         except (ExportError, SourceError) as exc:
             sys.stderr.write(f"error: {exc}\n")
             raise typer.Exit(1) from None
@@ -39,4 +40,4 @@ def register(app: typer.Typer) -> None:
         else:
             total = sum(summary["messages"].values())
             topics = ", ".join(f"{k} {v}" for k, v in sorted(summary["messages"].items()))
-            print(f"wrote {out}: {total} messages ({topics})")
+            print(f"wrote {out} from run {run_dir.name}: {total} messages ({topics})")

@@ -52,11 +52,18 @@ class ExportError(Exception):
 
 
 def find_run(run: str, runs_dir: Path) -> Path:
-    """A run directory, or a run id under the runs directory."""
+    """``latest`` (the newest finished run), a run directory, or a run id under the runs directory."""
+    if run == "latest":
+        from tools.system.runs import RunError, latest_finished_run
+
+        try:
+            return latest_finished_run(runs_dir)
+        except RunError as exc:
+            raise ExportError(str(exc)) from None
     for candidate in (Path(run), runs_dir / run):
         if candidate.is_dir():
             return candidate
-    raise ExportError(f"no run {run!r}: give a run directory or a run id under {runs_dir}")
+    raise ExportError(f"no run {run!r}: give 'latest', a run directory or a run id under {runs_dir}")
 
 
 def _qos(spec: Any) -> list[Any]:

@@ -51,9 +51,12 @@ def slice_times(at_s: float, until_s: float | None, every_min: float | None) -> 
 
 
 def _tag(t_s: float) -> str:
+    """The slice's file tag: ``HHMM``, ``HHMMSS`` when not on a whole minute (file names stay as
+    they were before clock times always carried their seconds)."""
     from scenes.clock import format_clock
 
-    return format_clock(t_s).replace(":", "")
+    text = format_clock(t_s)
+    return (text[:-3] if text.endswith(":00") else text).replace(":", "")
 
 
 def filters_params(tag: str, scale: Any) -> dict[str, Any]:

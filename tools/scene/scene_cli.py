@@ -18,6 +18,7 @@ def register(app: typer.Typer) -> None:
         notes (overlapping activities) are printed but allowed."""
         from agents.world.scene_world import load_world
         from scenes.yamlio import SourceError
+        from tools.plain import plural
 
         results: dict[str, str] = {}
         notes: dict[str, list[str]] = {}
@@ -34,12 +35,15 @@ def register(app: typer.Typer) -> None:
             results[str(file)] = "ok"
             notes[str(file)] = list(loaded.notes)
             if not as_json:
-                typer.echo(f"{file}: ok ({len(scene.rooms)} rooms, {len(scene.objects)} objects, "
-                           f"{len(scene.people)} people, {len(scene.missions)} missions)")
+                typer.echo(f"{file}: ok ({plural(len(scene.rooms), 'room')}, {plural(len(scene.objects), 'object')}, "
+                           f"{plural(len(scene.people), 'person', 'people')}, {plural(len(scene.missions), 'mission')})")
                 for note in loaded.notes:
                     typer.echo(f"{file}: note: {note}")
         if as_json:
             typer.echo(json.dumps({"files": results, "notes": notes, "ok": not failed}))
         raise typer.Exit(1 if failed else 0)
 
+    from tools.scene.show_cli import show   # light: its heavy imports are inside the command
+
+    scene_app.command("show")(show)
     app.add_typer(scene_app, name="scene")

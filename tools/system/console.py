@@ -17,6 +17,7 @@ from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
+from tools.plain import plural
 
 if TYPE_CHECKING:
     from tools.launch import RunResult
@@ -33,9 +34,18 @@ def _status_table(status: dict[str, Any]) -> Table:
     mission_text = " ".join(f"{mid}:{m.get('state', '?')}" for mid, m in sorted(missions.items())) or "-"
     agents = " ".join(f"{name}{'' if up == 'up' else '!'}{'' if not r else f'(r{r})'}"
                       for name, (up, r) in status.get("agents", {}).items())
-    table.add_row(format_clock(now) if now is not None else "-", str(status.get("clock_mode") or "-"),
+    table.add_row(format_clock(now) if now is not None else "-", str(status.get("clock_mode") or "starting"),
                   mission_text, agents)
+    problems = problems_text(status.get("problems") or {})
+    if problems:
+        table.caption = problems
     return table
+
+
+def problems_text(problems: dict[str, str]) -> str:
+    """``ros_bridge: the ROS 2 side does not answer ...``: what agents report as keeping them from
+    their job (agents/runtime/heartbeat.py), for the progress line and the run's summary."""
+    return "; ".join(f"{agent}: {problem}" for agent, problem in sorted(problems.items()))
 
 
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
@@ -86,7 +96,8 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
         print(json.dumps({"scene": result.scene, "ok": result.ok, "outcome": outcome(result),
                           "missions": result.missions, "events": result.events, "restarts": result.restarts,
                           "wall_s": round(result.wall_s, 2), "interrupted": result.interrupted,
-                          "timed_out": result.timed_out, "error": result.error, "run_dir": str(result.run_dir),
+                          "timed_out": result.timed_out, "error": result.error, "problems": result.problems,
+                          "run_dir": str(result.run_dir),
                           "rrd": str(result.rrd_path) if result.rrd_path else None,
                           **({"report": report} if report is not None else {})}))
     else:
@@ -109,9 +120,12 @@ class _PlainProgress:
             now = status.get("now_s")
             missions = status.get("missions", {})
             done = sum(1 for m in missions.values() if m.get("state") == MissionState.DONE)
-            self.err.print(f"[chronav] sim {format_clock(now) if now is not None else '-'} "
-                           f"clock={status.get('clock_mode')} missions done {done}/{len(missions)}", highlight=False,
-                           markup=False)   # "[chronav]" is text, not a rich style tag
+            mode = status.get("clock_mode") or "starting"    # no clock node yet: the agents are starting
+            when = f"sim {format_clock(now) if now is not None else '--:--:--'}"
+            problems = problems_text(status.get("problems") or {})
+            self.err.print(f"[chronav] {when} clock={mode} missions done {done}/{len(missions)}"
+                           + (f" | {problems}" if problems else ""), highlight=False, soft_wrap=True,
+                           markup=False)   # "[chronav]" is text, not a rich style tag; one line per tick
 
 
 def _metrics_report(result: RunResult, as_json: bool) -> dict[str, Any]:
@@ -145,22 +159,27 @@ def print_result(result: Any, out: Console) -> None:
     the run and its recording are, and one closing line saying how the run ended."""
     table = Table(title=f"Missions of {result.scene}")
     for column in ("mission", "state", "started", "finished", "reason"):
-        table.add_column(column)
+        table.add_column(column, no_wrap=column != "reason")   # ids and times stay whole; reasons wrap
+    problems = problems_text(getattr(result, "problems", None) or {})
     for mid, m in sorted(result.missions.items(), key=lambda kv: float(kv[1].get("time_s", 0))):
+        # A mission that did not end, while an agent reports a problem: the problem is the likely reason.
+        reason = str(m.get("reason", "")) or (f"see below: {', '.join(sorted(result.problems))}"
+                                              if problems and m.get("state") != MissionState.DONE else "")
         table.add_row(mid, str(m.get("state")),
                       format_clock(float(m["started_s"])) if "started_s" in m else "-",
-                      format_clock(float(m["finished_s"])) if "finished_s" in m else "-",
-                      str(m.get("reason", "")))
+                      format_clock(float(m["finished_s"])) if "finished_s" in m else "-", reason)
     out.print(table)
     line = {"highlight": False, "markup": False, "soft_wrap": True}    # paths and messages stay whole
     for event in result.events:
         out.print(f"[supervisor] {event}", **line)
     if result.error:
         out.print(f"error: {result.error}", **line)
+    if problems:
+        out.print(f"problem at the end of the run: {problems}", **line)
     out.print(f"run directory: {result.run_dir}", **line)
     if result.rrd_path:
         out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", **line)
-    done = f"{result.missions_done}/{len(result.missions)} missions done"
+    done = f"{result.missions_done}/{plural(len(result.missions), 'mission')} done"
     wall = f"{result.wall_s:.1f} s wall"
     closing = {
         "interrupted": f"INTERRUPTED (Ctrl-C or SIGTERM) after {wall}: {done}; agents stopped",
@@ -169,4 +188,5 @@ def print_result(result: Any, out: Console) -> None:
         "ok": f"OK: {done} in {wall}",
         "failed": f"FAILED: {done} in {wall}",
     }[outcome(result)]
-    out.print(closing, **line)
+    warned = f"; but {', '.join(sorted(result.problems))} reported a problem (above)" if problems else ""
+    out.print(closing + warned, **line)

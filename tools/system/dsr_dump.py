@@ -60,45 +60,131 @@ def _event_text(graph: Any, signal: str, args: tuple[Any, ...]) -> str:
     if signal.startswith("node_"):
         node = args[0]
         mark = "+" if signal == "node_added" else "~"
-        shown = node.attrs if signal == "node_added" else {k: node.attrs.get(k) for k in args[1]}
+        keys = sorted(node.attrs) if signal == "node_added" else list(args[1])
+        shown = ", ".join(attr_text(k, node.attrs.get(k)) for k in keys)
         return f"{mark} node {node.name} ({node.type}, {node.id}) {shown}"
     if signal == "edge_deleted":
         return f"- edge {name(args[0])} -{args[2]}-> {name(args[1])}"
     edge = args[0]
     mark = "+" if signal == "edge_added" else "~"
-    return f"{mark} edge {name(edge.src)} -{edge.type}-> {name(edge.dst)} {edge.attrs}"
+    shown = ", ".join(attr_text(k, v) for k, v in sorted(edge.attrs.items()))
+    return f"{mark} edge {name(edge.src)} -{edge.type}-> {name(edge.dst)} {shown}"
 
 
-def _print_tables(graph: Any) -> None:
+# The attributes the compact dump shows for each node type (``--all`` shows every one); other types
+# show their scalar attributes.  What a person checks first: where things are, their state, times.
+KEY_ATTRS: dict[str, tuple[str, ...]] = {
+    "clock": ("now_s", "mode", "rate", "start_s", "end_s", "finished"),
+    "robot": ("v", "omega", "nav_active", "path_cost", "planned_s", "pose_stamp"),
+    "person": ("role", "seen_s", "vx", "vy"),
+    "object": ("kind", "R", "R_band", "active"),
+    "door": ("open", "width", "rooms"),
+    "activity": ("state", "start_s", "end_s", "object", "room"),
+    "mission": ("goal", "time_s", "state", "started_s", "finished_s", "reason"),
+    "intention": ("mission_id", "kind", "state", "target", "issued_s", "until_s", "reason"),
+    "agenda_request": ("state", "requested_by", "requested_s", "message"),
+    "agenda": ("applied",),
+    "heartbeat": ("beat", "pid"),
+    "sensor": ("observed_s",),
+    "ground_truth": ("stamp",),
+    "room": (),
+}
+
+
+def is_clock_key(key: str) -> bool:
+    """Attributes holding a time of the sim day (seconds since midnight): shown as HH:MM:SS.
+    ``wall_s`` is a wall-clock epoch, not a time of day."""
+    return (key.endswith("_s") and key != "wall_s") or key.endswith("stamp")
+
+
+def attr_text(key: str, value: Any, *, all_items: bool = False) -> str:
+    """``key=value`` for a person: times of day as HH:MM:SS, floats with 2 decimals (never
+    ``3.24e+04``); unless ``all_items``, long lists are summarised and text is unquoted and cut."""
+    from scenes.clock import format_clock
+
+    if isinstance(value, bool) or value is None:
+        shown = str(value)
+    elif isinstance(value, (int, float)) and is_clock_key(key):
+        shown = format_clock(float(value))
+    elif isinstance(value, float):
+        shown = f"{value:.2f}"
+    elif isinstance(value, (list, tuple)):
+        items = [f"{v:.2f}" if isinstance(v, float) else str(v) for v in value]
+        shown = "[" + ", ".join(items if all_items or len(items) <= 4 else [*items[:3], f"... {len(items):,} items"]) + "]"
+    elif isinstance(value, str) and not all_items:
+        shown = value if len(value) <= 60 else value[:57] + "..."
+    else:
+        shown = repr(value) if isinstance(value, str) else str(value)
+    return f"{key}={shown}"
+
+
+def _node_pose(graph: Any, node_id: int) -> str:
+    """``@(x, y)`` from the RT edge that places the node in its parent, if any."""
+    from agents.world.vocabulary import EdgeType
+
+    for edge in graph.edges_to(node_id, EdgeType.RT):
+        if "x" in edge.attrs and "y" in edge.attrs:
+            return f"@({float(edge.attrs['x']):.2f}, {float(edge.attrs['y']):.2f}) "
+    return ""
+
+
+def dump_lines(graph: Any, width: int, *, all_attrs: bool) -> list[str]:
+    """The graph grouped by node type, then edges by type.  Compact: one line per node (its key
+    attributes, cut at ``width``); ``all_attrs``: every attribute, wrapped between attributes."""
+    from agents.world.vocabulary import EdgeType, NodeType
+    from tools.plain import cut, plural, wrapped
+
+    nodes = sorted(graph.nodes(), key=lambda n: (n.type, n.name))
+    edges = graph.edges()
+    lines = [f"DSR graph {graph.graph_name!r}: {plural(len(nodes), 'node')}, {plural(len(edges), 'edge')}"
+             + ("" if all_attrs else " (key attributes; --all for every one)")]
+    by_type: dict[str, list[Any]] = {}
+    for node in nodes:
+        by_type.setdefault(node.type, []).append(node)
+    for node_type, group in by_type.items():
+        lines.append(f"{node_type} ({len(group)})")
+        for node in group:
+            keys = sorted(node.attrs) if all_attrs else [
+                k for k in KEY_ATTRS.get(node_type, sorted(node.attrs)) if k in node.attrs
+                and (node_type in KEY_ATTRS or not isinstance(node.attrs[k], (list, dict)))]
+            attrs = ", ".join(attr_text(k, node.attrs[k], all_items=all_attrs) for k in keys)
+            where = "" if node_type == NodeType.ROOM else _node_pose(graph, node.id)   # a room's frame is not a place
+            head = f"  {node.name} [{node.id}] {where}" if all_attrs else f"  {node.name} {where}"
+            if all_attrs:
+                lines += wrapped(head + attrs, width, indent="      ")
+            else:
+                lines.append(cut((head + attrs).rstrip(), width))
+    names = {n.id: n.name for n in nodes}
+    by_edge: dict[str, list[Any]] = {}
+    for edge in edges:
+        by_edge.setdefault(edge.type, []).append(edge)
+    for edge_type, group in sorted(by_edge.items()):
+        group = sorted(group, key=lambda e: (names.get(e.src, ""), names.get(e.dst, "")))
+        if all_attrs:
+            lines.append(f"edges {edge_type} ({len(group)})")
+            for edge in group:
+                attrs = ", ".join(attr_text(k, v, all_items=True) for k, v in sorted(edge.attrs.items()))
+                lines += wrapped(f"  {names.get(edge.src, edge.src)} -> {names.get(edge.dst, edge.dst)} {attrs}",
+                                 width, first="  ", indent="      ")
+        elif edge_type == EdgeType.RT:     # the poses are on the nodes, as @(x, y)
+            lines.append(f"edges RT ({len(group)}): the poses shown as @(x, y) above")
+        else:                       # one line per source: its targets, wrapped between names
+            lines.append(f"edges {edge_type} ({len(group)})")
+            targets: dict[Any, list[str]] = {}
+            for edge in group:
+                targets.setdefault(edge.src, []).append(str(names.get(edge.dst, edge.dst)))
+            for src, dsts in targets.items():
+                lines += wrapped(f"{names.get(src, src)} -> {', '.join(dsts)}", width, first="  ", indent="      ")
+    return lines
+
+
+def _print_tables(graph: Any, all_attrs: bool = False) -> None:
     from rich.console import Console
-    from rich.table import Table
+
+    from tools.plain import console_width, print_lines
 
     console = Console()
-    nodes = Table(title=f"DSR graph {graph.graph_name!r}: {len(graph)} nodes")
-    for column in ("id", "type", "name", "attrs"):
-        nodes.add_column(column, overflow="fold")
-    for node in graph.nodes():
-        nodes.add_row(str(node.id), node.type, node.name, _short(node.attrs))
-    console.print(nodes)
-    edge_list = graph.edges()
-    edges = Table(title=f"{len(edge_list)} edges")
-    for column in ("from", "type", "to", "attrs"):
-        edges.add_column(column, overflow="fold")
-    for edge in edge_list:
-        src, dst = graph.get_node(edge.src), graph.get_node(edge.dst)
-        edges.add_row(src.name if src else str(edge.src), edge.type,
-                      dst.name if dst else str(edge.dst), _short(edge.attrs))
-    console.print(edges)
-
-
-def _short(attrs: dict[str, Any]) -> str:
-    parts = []
-    for key, value in sorted(attrs.items()):
-        if isinstance(value, float):
-            parts.append(f"{key}={value:.3g}")
-        else:
-            parts.append(f"{key}={value!r}")
-    return ", ".join(parts)
+    print_lines(console, dump_lines(graph, console_width(console), all_attrs=all_attrs))
 
 
 @dsr_app.command("dump")
@@ -112,6 +198,8 @@ def dump(
                                    "seconds (0 = until Ctrl-C)."),
     timeout: float = typer.Option(5.0, "--timeout", help="Seconds to wait for the connection, and "
                                   "again for the state."),
+    all_attrs: bool = typer.Option(False, "--all", help="Every attribute of every node and edge (default: "
+                                   "one line per node with its key attributes)."),
     output_format: str = typer.Option("table", "--format",
                                       help="table, json, or agm-xml (RoboComp AGM world XML, for AGM "
                                            "tools; not with --follow)."),
@@ -128,7 +216,7 @@ def dump(
         with open_replica(target, agent=f"dump-{os.getpid()}", read_only=True,
                           timeout_s=timeout) as graph:
             require_system(graph, target)
-            _print_snapshot(graph, target.graph, output_format, json_output)
+            _print_snapshot(graph, target.graph, output_format, json_output, all_attrs)
             if not follow:
                 return
             _follow(graph, json_output, duration)
@@ -162,8 +250,9 @@ def _dump_target(connect: list[str], graph_name: str | None, run: str | None, ti
         raise typer.Exit(2) from None
 
 
-def _print_snapshot(graph: DSRGraph, name: str, output_format: str, json_output: bool) -> None:
-    """The whole graph once: AGM world XML, one JSON document, or the rich tables."""
+def _print_snapshot(graph: DSRGraph, name: str, output_format: str, json_output: bool,
+                    all_attrs: bool = False) -> None:
+    """The whole graph once: AGM world XML, one JSON document, or the text grouped by type."""
     import orjson
 
     document = {"graph": name, **graph.to_document(),
@@ -175,7 +264,7 @@ def _print_snapshot(graph: DSRGraph, name: str, output_format: str, json_output:
     elif json_output:
         sys.stdout.write(orjson.dumps(document).decode() + "\n")
     else:
-        _print_tables(graph)
+        _print_tables(graph, all_attrs)
     sys.stdout.flush()
 
 
@@ -255,10 +344,36 @@ def stats(
     _print_stats(target.graph, document)
 
 
+def stats_lines(graph_name: str, document: dict[str, Any], width: int) -> list[str]:
+    """The members' counters as a plain layout (pipes, logs): one entry per member, wrapped between
+    words, where the eleven-column table would be cut at 80 columns."""
+    from tools.plain import plural, wrapped
+
+    lines = [f"DSR graph {graph_name!r}: {plural(len(document['members']), 'member')}"]
+    for agent, report in document["members"].items():
+        c = report.get("stats", {})
+        reasons = ", ".join(f"{k}={v}" for k, v in sorted((c.get("rejects") or {}).items())) or "0"
+        lines += wrapped(f"{agent}: nodes {report.get('nodes')}, received {c.get('received')}, applied "
+                         f"{c.get('applied')}, published {c.get('published')}, refused {reasons}, policy "
+                         f"{c.get('rejected_policy')}, deferred {c.get('deferred')}, fetches {c.get('syncs')} "
+                         f"(held back {c.get('fetches_postponed', 0)}), tombstones {report.get('tombstones')}, "
+                         f"compacted {c.get('compacted')}", width, first="  ", indent="      ")
+    return lines
+
+
 def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
-    """The members' counters as a table, then what the router's ACL denied."""
+    """The members' counters as a table (a plain layout when not on a terminal), then what the
+    router's ACL denied."""
     from rich.console import Console
     from rich.table import Table
+
+    from tools.plain import console_width, is_plain, print_lines
+
+    console = Console()
+    if is_plain(console):
+        print_lines(console, stats_lines(graph_name, document, console_width(console)))
+        _print_router(document)
+        return
     table = Table(title=f"DSR graph {graph_name!r}: {len(document['members'])} members")
     for column in ("agent", "nodes", "received", "applied", "published", "refused (by reason)",
                    "policy", "deferred", "fetches (held back)", "tombstones", "compacted"):
@@ -273,7 +388,11 @@ def _print_stats(graph_name: str, document: dict[str, Any]) -> None:
                       f"{counters.get('syncs')} ({counters.get('fetches_postponed', 0)})",
                       str(report.get("tombstones")),
                       str(counters.get("compacted")))
-    Console().print(table)
+    console.print(table)
+    _print_router(document)
+
+
+def _print_router(document: dict[str, Any]) -> None:
     router = document.get("router")
     if router is not None and not router.get("acl", True):
         typer.echo("router: no access-control list (nothing is denied or counted)")

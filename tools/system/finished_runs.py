@@ -11,28 +11,15 @@ import json
 from pathlib import Path
 from typing import Any
 
-from tools.system.runs import RESULT_FILE, RunError, runs_dir
-
-
-def newest_finished_run(directory: Path) -> Path:
-    """The run directory under ``directory`` whose ``result.json`` was written last."""
-    found = []
-    for result in directory.glob(f"*/{RESULT_FILE}"):
-        try:
-            found.append((result.stat().st_mtime, result.parent))
-        except OSError:
-            continue
-    if not found:
-        raise RunError(f"no finished run under {directory} (a finished run has a {RESULT_FILE}); run one with "
-                       "`chronav launch SCENE` or set $CHRONAV_RUNS to where your runs are")
-    return max(found)[1].absolute()
+from tools.system.runs import RESULT_FILE, RunError, latest_finished_run, runs_dir
 
 
 def find_finished_run(run: str, directory: Path | None = None) -> Path:
-    """``latest`` (the newest finished run), a run directory, or a run id under the runs directory."""
+    """``latest`` (your newest finished run: runs.latest_finished_run, as `chronav export`), a run
+    directory, or a run id under the runs directory."""
     directory = directory or runs_dir()
     if run == "latest":
-        return newest_finished_run(directory)
+        return latest_finished_run(directory)
     for candidate in (Path(run), directory / run):
         if candidate.is_dir():
             if not (candidate / RESULT_FILE).exists():

@@ -330,6 +330,24 @@ def latest_live_run(directory: Path) -> Path:
     raise RunError(f"no live run of yours under {where}; {HOW_TO_START}")
 
 
+def latest_finished_run(directory: Path) -> Path:
+    """The newest run of this OS user under ``directory`` that has finished (wrote its
+    ``result.json``, launched or in-process): what ``latest`` means for commands that read a run
+    after the fact (`chronav export latest`), where a live run has nothing to read yet."""
+    finished = []
+    for path in directory.glob(f"*/{RESULT_FILE}"):
+        try:
+            info = path.stat()
+        except OSError:
+            continue
+        if info.st_uid == os.getuid():
+            finished.append((info.st_mtime, path.parent))
+    if not finished:
+        raise RunError(f"no finished run of yours under {directory}; run one with `chronav launch SCENE` (in this "
+                       f"directory, or with the same ${RUNS_ENV}) and wait for it to end")
+    return max(finished, key=lambda item: item[0])[1].absolute()
+
+
 def find_run_dir(run: str, directory: Path) -> Path:
     """``latest``, a run directory, or a run id under ``directory``."""
     if run == "latest":

@@ -18,7 +18,7 @@ from agents.lib.agenda.expand import AgendaSource, assign_ids, drafts_for_day, r
 from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, ActivityState, AgendaDay,
                                  AgendaError, AgendaSourceError, format_clock, parse_when,
                                  wall_seconds)
-from agents.lib.agenda.validate import ValidationReport, validate_activities
+from agents.lib.agenda.validate import ValidationReport, summary, validate_activities
 from agents.lib.agenda.yaml_source import parse_agenda_text
 from scenes.yamlio import user_message
 
@@ -31,7 +31,7 @@ class AgendaChangeError(AgendaError):
 
 def _refuse(report: ValidationReport) -> None:
     if report.errors:
-        raise AgendaChangeError("refused: " + "\n".join(f.message for f in report.errors))
+        raise AgendaChangeError("refused: " + summary(report.errors))
 
 
 def add_activity(day: AgendaDay, spec: ActivitySpec, *, known_objects: Collection[str] | None,

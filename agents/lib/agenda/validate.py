@@ -60,9 +60,50 @@ class Finding:
     message: str
     activity_id: str
     source: str
+    known: str = ""   # the names that exist, as the message ends with them: "(known objects: a, b)"
 
     def __str__(self) -> str:
         return f"{self.severity}: {self.message}"
+
+    @property
+    def short(self) -> str:
+        """The message without the list of names that exist (``summary`` lists them once)."""
+        return self.message.removesuffix(f" ({self.known})") if self.known else self.message
+
+
+# How many names a summary lists before "... and N more".
+SUMMARY_NAMES = 12
+
+
+def summary(findings: Iterable[Finding]) -> str:
+    """The findings one per line without their lists of known names, then each list once (cut at
+    SUMMARY_NAMES names, with a count): loading a foreign agenda into a scene of 26 people used
+    to give 3,000 characters that listed the 26 names five times."""
+    findings = list(findings)
+    if len(findings) == 1:
+        return findings[0].message
+    lines: list[str] = []
+    known: dict[str, str] = {}
+    by_activity: dict[str, list[str]] = {}     # "activity 'x' (name, file:line)" -> its problems
+    for finding in findings:
+        label, sep, problem = finding.short.partition(": ")
+        if sep and label.startswith("activity "):
+            problems = by_activity.setdefault(label, [])
+            problem = problem.replace("; did you mean ", " (did you mean ").replace("?", "?)") \
+                if "; did you mean " in problem else problem
+            if problem not in problems:
+                problems.append(problem)
+        elif finding.short not in lines:
+            lines.append(finding.short)
+        if finding.known:
+            what, _, names = finding.known.partition(": ")
+            known.setdefault(what, names)
+    lines += [f"{label}: {'; '.join(problems)}" for label, problems in by_activity.items()]
+    for what, names in known.items():
+        items = names.split(", ")
+        rest = len(items) - SUMMARY_NAMES
+        lines.append(f"{what}: {', '.join(items[:SUMMARY_NAMES])}" + (f" ... and {rest} more" if rest > 0 else ""))
+    return "\n".join(lines)
 
 
 @dataclass(frozen=True)
@@ -101,11 +142,15 @@ def _label(activity: ActivityLike) -> str:
     return f"activity {shown(activity.id, 60)!r} ({shown(activity.name, 60)}, {shown(activity.source, 200)})"
 
 
+def _known(kind: str, known: Collection[str]) -> str:
+    """``known objects: a, b`` (what a Finding's ``known`` holds)."""
+    return f"{kind}: {', '.join(sorted(known)) if known else 'none'}"
+
+
 def _unknown(kind: str, value: str, known: Collection[str]) -> str:
     close = difflib.get_close_matches(value, list(known), n=1)
     hint = f"; did you mean {close[0]!r}?" if close else ""
-    listed = ", ".join(sorted(known)) if known else "none"
-    return f"no {kind} named {shown(value, 60)!r} in the centre{hint} (known {kind}s: {listed})"
+    return f"no {kind} named {shown(value, 60)!r} in the centre{hint} ({_known(f'known {kind}s', known)})"
 
 
 def _bad_names(item: ActivityLike) -> list[str]:
@@ -155,20 +200,20 @@ def validate_activities(activities: Iterable[ActivityLike], known_objects: Colle
         if known_objects is not None and item.object not in known_objects:
             findings.append(Finding(Severity.ERROR, "unknown_object",
                                     f"{_label(item)}: {_unknown('object', item.object, known_objects)}",
-                                    item.id, item.source))
+                                    item.id, item.source, _known("known objects", known_objects)))
         if known_rooms is not None and item.room is not None and item.room not in known_rooms:
             findings.append(Finding(Severity.ERROR, "unknown_room",
                                     f"{_label(item)}: {_unknown('room', item.room, known_rooms)}",
-                                    item.id, item.source))
+                                    item.id, item.source, _known("known rooms", known_rooms)))
         if known_people is not None:
             for person in item.participants:
                 if person not in known_people:
                     close = difflib.get_close_matches(person, list(known_people), n=1)
                     hint = f"; did you mean {close[0]!r}?" if close else ""
-                    listed = ", ".join(sorted(known_people)) or "none"
+                    people = _known("people", known_people)
                     findings.append(Finding(Severity.ERROR, "unknown_participant",
                                             f"{_label(item)}: participant {shown(person, 60)!r} is not a person of "
-                                            f"the scene{hint} (people: {listed})", item.id, item.source))
+                                            f"the scene{hint} ({people})", item.id, item.source, people))
     findings.extend(_overlaps(items))
     return ValidationReport(tuple(findings))
 
