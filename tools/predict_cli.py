@@ -28,14 +28,16 @@ def register(app: typer.Typer) -> None:
 
     @predict_app.command("evaluate")
     def evaluate_cmd(
-        files: list[Path] = typer.Argument(..., help="ETH/UCY text files ('frame id x y' a line, frames 0.4 s "
-                                                     "apart) or a run's people.csv",
-                                           show_default=False),
+        files: list[Path] | None = typer.Argument(None, help="ETH/UCY text files ('frame id x y' a line, frames "
+                                                            "0.4 s apart) or a run's people.csv; default: the two "
+                                                            "UCY sequences shipped in scenes/data/pedestrians",
+                                                  show_default=False),
         obs: int = typer.Option(8, "--obs", min=2, max=1000, help="observed steps (the tracker sees these)"),
         pred: int = typer.Option(12, "--pred", min=1, max=1000, help="predicted steps"),
         dt: float = typer.Option(0.4, "--dt", help="seconds between frames"),
-        noise: float = typer.Option(0.0, "--noise", help="detection noise, m (standard deviation per axis); "
-                                                         "the observer's default is 0.02"),
+        noise: float | None = typer.Option(None, "--noise", help="detection noise, m (standard deviation per "
+                                                                "axis); default: the live observer's, 0.02",
+                                           show_default=False),
         seed: int = typer.Option(0, "--seed", help="seed of the detection noise"),
         scene: str | None = typer.Option(None, "--scene", help="for a run's people.csv: the run's scene, so the "
                                                               "prediction knows its walls, doors and agenda"),
@@ -52,9 +54,14 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
         baseline on the true positions (same windows, same run) and the ratio (< 1: better)."""
-        from tools.prediction_eval import PedestrianFileError, SceneContext, evaluate_files, summary
+        from agents.lib.perception.tracking import OBSERVER_NOISE_M
+        from tools.prediction_eval import (PedestrianFileError, SceneContext, evaluate_files, shipped_pedestrian_files,
+                                           summary)
 
         _positive(dt, "--dt")
+        noise_origin = "given" if noise is not None else "the live observer's default"
+        noise = OBSERVER_NOISE_M if noise is None else noise
+        files = files or shipped_pedestrian_files()
         if not (math.isfinite(noise) and 0 <= noise <= 1.0):
             raise typer.BadParameter("must be between 0 and 1 m", param_hint="--noise")
         if not (math.isfinite(min_speed) and min_speed >= 0):
@@ -79,6 +86,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         report = summary(results)
+        report["noise_m"] = noise
         if as_json:
             typer.echo(json.dumps(report))
             return
@@ -87,12 +95,16 @@ def register(app: typer.Typer) -> None:
         known += f"; {detect_every} detections per frame" if detect_every > 1 else ""
         known += f"; walker model {model}" if model is not None else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
-                   f"detection noise {noise:g} m (seed {seed}){known}")
+                   f"detection noise {noise:g} m ({noise_origin}; seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
-                   f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
+                   f"{'ADE/CV':>7s} {'FDE/CV':>7s} {'ADE/CVd':>7s} {'FDE/CVd':>7s}")
         for name, r in results.items():
             typer.echo(f"{name:28s} {r.tracks:8d} {r.ade:7.3f} {r.fde:7.3f} {r.cv_ade:7.3f} {r.cv_fde:7.3f} "
                        f"{r.ade / r.cv_ade if r.cv_ade else math.nan:7.3f} "
-                       f"{r.fde / r.cv_fde if r.cv_fde else math.nan:7.3f}")
+                       f"{r.fde / r.cv_fde if r.cv_fde else math.nan:7.3f} "
+                       f"{r.ade / r.cv_det_ade if r.cv_det_ade else math.nan:7.3f} "
+                       f"{r.fde / r.cv_det_fde if r.cv_det_fde else math.nan:7.3f}")
         typer.echo(f"average over the files: ADE/CV {report['ade_over_cv']}, FDE/CV {report['fde_over_cv']} "
-                   "(CV: constant velocity from the last true step)")
+                   "(CV: constant velocity from the last true step); "
+                   f"ADE/CVd {report['ade_over_cv_same_detections']}, FDE/CVd {report['fde_over_cv_same_detections']} "
+                   "(CVd: constant velocity from the same last two noisy detections)")

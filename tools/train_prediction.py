@@ -14,7 +14,7 @@ constant-velocity rollout of the corrected velocity and the true future at the 1
 itself) plus ``--weight-decay`` x the squared weights; nothing random but the seeded noise and the
 seeded start, so the same command gives the same file.
 
-Data rules (../shared/data/pedestrians/SOURCES.md): only the two UCY tuning files; the shipped
+Data rules (scenes/data/pedestrians/SOURCES.md): only the two UCY tuning files; the shipped
 model is trained on both.  Cross-file figures (docs/prediction.md): train on one (``--out`` a temp
 file), then ``chronav predict evaluate OTHER --noise 0.02 --model THAT``.
 
@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_FILES = sorted((REPO.parent / "shared" / "data" / "pedestrians").glob("*.txt"))
+DEFAULT_FILES = sorted((REPO / "scenes" / "data" / "pedestrians").glob("*.txt"))   # shipped (SOURCES.md there)
 OBS, PRED, DT = 8, 12, 0.4
 
 
@@ -209,7 +209,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                              "by a model trained without it (blocked)")
     args = parser.parse_args(argv)
     if not args.files:
-        raise SystemExit("no pedestrian files given and none in ../shared/data/pedestrians")
+        raise SystemExit("no pedestrian files given and none in scenes/data/pedestrians")
     sys.path.insert(0, str(REPO))
     if args.blocked:
         print(json.dumps(blocked(args.files, args.blocked, args.noise, args.noise_seeds, args.seed, hidden=args.hidden,

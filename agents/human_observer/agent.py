@@ -19,7 +19,7 @@ import zlib
 import numpy as np
 import shapely
 
-from agents.lib.perception.tracking import Detection, observer_tracker
+from agents.lib.perception.tracking import OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
@@ -46,7 +46,7 @@ class HumanObserverAgent(Agent):
     def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
-        self.noise_xy = float(self.config.option("noise_xy", "0.02"))
+        self.noise_xy = float(self.config.option("noise_xy", str(OBSERVER_NOISE_M)))
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
         self.seed = int(self.config.option("seed", "7"))
         self.lockstep = self.config.option("perception_lockstep", "0") == "1"

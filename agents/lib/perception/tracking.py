@@ -60,6 +60,9 @@ STILL_MPS = 0.1             # an estimated speed below this is sensor noise on a
 MIN_SIGMA_M = 0.01          # the measurement noise the tracker assumes at least (a perfect sensor is never perfect)
 SMOOTHING_S = 1.2           # at most this many seconds of detections in the velocity's line fit
 VELOCITY_SIGMA_MPS = 0.04   # the velocity noise the fit aims at: as few detections as reach it (module doc)
+#: the human observer's default detector: 2 cm of position noise per axis (its ``noise_xy`` option),
+#: what ``chronav predict evaluate`` assumes unless told otherwise (one value, so the two agree)
+OBSERVER_NOISE_M = 0.02
 MODEL_WINDOW_S = (walker_model.LAGS - 0.5) * walker_model.GRID_S   # the detections the walker model reads
 
 
