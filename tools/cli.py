@@ -26,6 +26,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.ros.export_cli",       # chronav export (a run as rosbag2 MCAP)
     "tools.ros.bridge_cli",       # chronav ros bridge (the ROS 2 bridge against a running system)
     "tools.predict_cli",          # chronav predict evaluate (people prediction on real pedestrians)
+    "tools.scene.crowd_cli",      # chronav scene from-crowd (recorded pedestrians; after tools.scene.scene_cli)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

@@ -19,13 +19,13 @@ import zlib
 import numpy as np
 import shapely
 
-from agents.lib.perception.tracking import OBSERVER_NOISE_M, Detection, observer_tracker
+from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap.motion import MotionParams, predict_many
 from agents.world.dsr_readers import dsr_people, running_activities
-from agents.world.dsr_writers import write_interactions, write_person
+from agents.world.dsr_writers import remove_person, write_interactions, write_person
 from agents.world.freshness import mark_observed, observed_up_to
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
 from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
@@ -95,8 +95,15 @@ class HumanObserverAgent(Agent):
                 rng = self._noise(name, now_s, (x, y, theta) if math.hypot(vx, vy) < TRUTH_STILL_MPS else None)
                 detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
                                             theta + rng.normal(0, self.noise_theta)))
-            for name in self.tracker.update(now_s, detections):
+            tracks = self.tracker.update(now_s, detections)
+            for name in [n for n, track in tracks.items() if now_s - track.updated_s > LOST_S]:
+                del tracks[name]          # not detected for LOST_S: they left (a replayed record ended)
+            for name in tracks:
                 estimates[name] = self.tracker.estimate(name, now_s)
+        for name in [n for n in self.published if n not in estimates]:
+            remove_person(self.graph, name)     # left the scene: the social map forgets them too
+            del self.published[name]
+            self.trails.pop(name, None)
         for name, estimate in estimates.items():
             self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}
