@@ -19,6 +19,7 @@ import zlib
 import numpy as np
 import shapely
 
+from agents.lib.perception import prediction_log
 from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
@@ -60,6 +61,33 @@ class HumanObserverAgent(Agent):
         walls = [shapely.LineString(w) for w in self.scene.walls if len(w) >= 2]
         self._walls = shapely.union_all(walls) if walls else None
         self._motion = MotionParams()
+        self._predicted_slot = -1
+        self._predictions = self._open_predictions()
+
+    def _open_predictions(self):
+        """The live prediction log (agents/lib/perception/prediction_log.py) in the run's directory,
+        appended (a restarted observer continues it)."""
+        if self.config.run_dir is None:
+            return None
+        return (self.config.run_dir / prediction_log.PREDICTIONS_FILE).open("a", encoding="utf-8", buffering=1 << 16)
+
+    def teardown(self) -> None:
+        if self._predictions is not None:
+            self._predictions.close()
+            self._predictions = None
+
+    def _log_predictions(self, now_s: float) -> None:
+        """Every EVERY_S of sim time, what the social map predicts for each walker, from what this
+        agent published (read back as the navigation reads it: walls, agenda and all)."""
+        slot = math.floor(now_s / prediction_log.EVERY_S + 1e-6)
+        if self._predictions is None or slot == self._predicted_slot:
+            return
+        self._predicted_slot = slot
+        people = dsr_people(self.graph)
+        lines = [prediction_log.record(now_s, p.name, p.x, p.y, found.times.tolist(), found.points.tolist())
+                 for p, found in zip(people, predict_many(people, self._motion, self._walls), strict=True)
+                 if found is not None and len(found.times)]
+        self._predictions.writelines(lines)
 
     def _truth(self) -> tuple[float, list[tuple[str, str, float, float, float, float, float]]] | None:
         node = self.graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
@@ -112,6 +140,7 @@ class HumanObserverAgent(Agent):
                                                          [*scene_conversations(self.scene),
                                                           *observed_conversations(seen)]))
         mark_observed(self.graph, self.config.name, now_s)
+        self._log_predictions(now_s)
         self._draw(now_s, estimates)
 
     def _draw(self, now_s: float, estimates: dict[str, tuple[float, float, float, float, float]]) -> None:

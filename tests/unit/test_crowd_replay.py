@@ -5,6 +5,7 @@ robot does; reactive: round the robot), through the scene check and an in-proces
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -164,6 +165,9 @@ def test_an_in_process_run_of_a_generated_scene_replays_the_record_exactly(tmp_p
                              env={"CHRONAV_RUNS": str(runs)})
     assert launched.exit_code == 0, launched.output
     people = next(runs.glob("*/people.csv"))
+    prediction = json.loads(next(runs.glob("*/result.json")).read_text(encoding="utf-8"))["prediction"]
+    assert prediction["predictions"] > 0 and 0 < prediction["ade_m"] < prediction["fde_m"], \
+        "the observer's predictions of the replayed walkers, scored against people.csv"
     recording = read_recording(data)
     start = parse_clock(load_world(out).scene.recordings[0].start or "09:00")
     rows = list(csv.DictReader(people.open(encoding="utf-8")))
