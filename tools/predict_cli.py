@@ -26,6 +26,71 @@ def register(app: typer.Typer) -> None:
                               no_args_is_help=True)
     app.add_typer(predict_app, name="predict")
 
+    @predict_app.command("train")
+    def train_cmd(
+        files: list[Path] | None = typer.Argument(None, help="ETH/UCY text files or runs' people.csv to learn "
+                                                            "from; default: the two UCY sequences shipped in "
+                                                            "scenes/data/pedestrians", show_default=False),
+        out: Path = typer.Option(..., "--out", help="the model file to write (JSON)"),
+        seed: int = typer.Option(0, "--seed", min=0, max=2**31 - 1, help="seed of the network's starting weights"),
+        noise: float | None = typer.Option(None, "--noise", help="detection noise the model is trained for, m; "
+                                                                "default: the live observer's, 0.02",
+                                           show_default=False),
+        noise_seeds: str = typer.Option("1,2", "--noise-seeds", help="comma-separated seeds of the noise draws "
+                                                                     "(each a copy of the data seen through other noise)"),
+        iterations: int = typer.Option(400, "--iterations", min=1, max=100_000, help="L-BFGS iterations"),
+        dt: float = typer.Option(0.4, "--dt", help="seconds between frames (people.csv: the grid it is taken on)"),
+        force: bool = typer.Option(False, "--force", help="overwrite --out"),
+        as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    ) -> None:
+        """Train the walker model (the tracker's learned velocity correction, docs/prediction.md) on
+        a site's own recordings: seeded and reproducible, the training data's provenance (files and
+        sha256, windows, seeds, command) in the model file.  Use it with --model in launch, evaluate
+        and predict evaluate."""
+        import shlex
+        import sys
+
+        from agents.lib.perception.tracking import OBSERVER_NOISE_M
+        from tools.prediction_eval import PedestrianFileError, shipped_pedestrian_files
+        from tools.train_prediction import DT, train
+
+        if not math.isclose(_positive(dt, "--dt"), DT):
+            raise typer.BadParameter(f"the walker model reads a {DT:g} s grid; other steps are not supported yet",
+                                     param_hint="--dt")
+        noise = OBSERVER_NOISE_M if noise is None else noise
+        if not (math.isfinite(noise) and 0 < noise <= 1.0):
+            raise typer.BadParameter("must be above 0 and at most 1 m (a perfect detector needs no model)",
+                                     param_hint="--noise")
+        try:
+            seeds = tuple(int(v) for v in noise_seeds.split(",") if v.strip())
+        except ValueError:
+            raise typer.BadParameter("comma-separated whole numbers, e.g. 1,2", param_hint="--noise-seeds") from None
+        if not seeds or len(seeds) > 20 or any(v < 0 for v in seeds):
+            raise typer.BadParameter("1 to 20 seeds of 0 or more", param_hint="--noise-seeds")
+        if out.exists() and not force:
+            typer.echo(f"error: {out} exists; pass --force to overwrite it", err=True)
+            raise typer.Exit(2)
+        files = files or shipped_pedestrian_files()
+        command = shlex.join(["chronav", *sys.argv[1:]]) if sys.argv[1:3] == ["predict", "train"] else \
+            shlex.join(["chronav", "predict", "train", *map(str, files), "--out", str(out), "--seed", str(seed)])
+        try:
+            model = train(files, noise=noise, noise_seeds=seeds, seed=seed, iterations=iterations, command=command)
+        except PedestrianFileError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(2) from None
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_text(json.dumps(model, indent=1) + "\n", encoding="utf-8")
+        except OSError as exc:
+            typer.echo(f"error: cannot write {out}: {exc.strerror or exc}", err=True)
+            raise typer.Exit(2) from None
+        provenance = model["provenance"]
+        if as_json:
+            typer.echo(json.dumps({"out": str(out), **provenance}))       # type: ignore[dict-item]
+            return
+        typer.echo(f"{out}: walker model trained on {provenance['examples']} walker windows of "   # type: ignore[index]
+                   f"{len(files)} file(s) at {noise:g} m noise, seed {seed}; use it with --model {out}")
+
     @predict_app.command("evaluate")
     def evaluate_cmd(
         files: list[Path] | None = typer.Argument(None, help="ETH/UCY text files ('frame id x y' a line, frames "

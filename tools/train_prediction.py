@@ -138,7 +138,10 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
     per_file = [parts[i * len(noise_seeds):(i + 1) * len(noise_seeds)] for i in range(len(files))]
     features = np.concatenate([p[0] for p in parts])
     if len(features) == 0:
-        raise SystemExit("no window to train on: the files hold no walker seen for 20 consecutive frames")
+        from tools.prediction_eval import PedestrianFileError
+
+        raise PedestrianFileError(f"{', '.join(p.name for p in files)}: no window to train on (no walker seen for "
+                                  f"{OBS + PRED} consecutive frames at {noise:g} m of noise)")
     params, losses = fit(features, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
                          hidden, weight_decay, seed, iterations)
     provenance = {

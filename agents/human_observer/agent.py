@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import math
 import zlib
+from pathlib import Path
 
 import numpy as np
 import shapely
 
-from agents.lib.perception import prediction_log
+from agents.lib.perception import prediction_log, walker_model
 from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
@@ -52,7 +53,8 @@ class HumanObserverAgent(Agent):
         self.seed = int(self.config.option("seed", "7"))
         self.lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
-        self.tracker = observer_tracker(self.noise_xy)
+        model_path = self.config.option("walker_model", "")   # chronav launch/evaluate --model FILE
+        self.tracker = observer_tracker(self.noise_xy, walker_model.load(Path(model_path)) if model_path else None)
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None

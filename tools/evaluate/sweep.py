@@ -64,10 +64,11 @@ class RunSpec:
     scene: str     # absolute path of the scene file
     planner: str
     seed: int
+    model: str = ""   # the observer's walker model file (evaluate --model); "" the shipped one
 
     @property
     def key(self) -> str:
-        return f"{self.scene}|{self.planner}|{self.seed}"
+        return f"{self.scene}|{self.planner}|{self.seed}" + (f"|{self.model}" if self.model else "")
 
     @property
     def label(self) -> str:
@@ -82,12 +83,12 @@ class RunSpec:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunSpec:
-        return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]))
+        return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]), str(data.get("model") or ""))
 
 
-def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int]) -> list[RunSpec]:
+def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int], model: str = "") -> list[RunSpec]:
     """Every combination, seed by seed: a sweep stopped half way already holds whole seeds."""
-    return [RunSpec(str(scene), planner, seed) for seed in seeds for scene in scenes for planner in planners]
+    return [RunSpec(str(scene), planner, seed, model) for seed in seeds for scene in scenes for planner in planners]
 
 
 def agent_options(spec: RunSpec) -> dict[str, list[str]]:
@@ -97,6 +98,8 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
 
     options = {name: [f"seed={spec.seed}", *LOCKSTEP_OPTIONS.get(name, [])] for name in AGENTS}
     options["social_navigation"].append(f"planner={spec.planner}")
+    if spec.model:
+        options["human_observer"].append(f"walker_model={spec.model}")
     # Lockstep without wall-clock escapes: sim time waits while the agents plan and perceive, and a
     # late command (a slow replan on a loaded machine) is waited for instead of braking after 1 wall s.
     options["sim_robot"] += [f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]

@@ -41,7 +41,8 @@ def _status_table(status: dict[str, Any]) -> Table:
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
                       as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
                       startup_timeout_s: float | None = None, ros_domain: int | None = None,
-                      robot: str = "sim", in_process: bool = False) -> int:
+                      robot: str = "sim", in_process: bool = False,
+                      agent_options: dict[str, list[str]] | None = None) -> int:
     """Run the system with a progress display; print the result (and the metrics report); exit code.
 
     Exit codes: 0 every mission done; 1 a mission not done, a timeout or an agent given up;
@@ -58,6 +59,8 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     interactive = sys.stderr.isatty() and not as_json
     limits = {k: v for k, v in (("hang_timeout_s", hang_timeout_s), ("startup_timeout_s", startup_timeout_s),
                                 ("ros_domain", ros_domain), ("robot", robot)) if v is not None and not in_process}
+    if agent_options:    # e.g. launch --model: the observer's walker model
+        limits["agent_options"] = agent_options
     plain_tick = _PlainProgress(err)
     try:
         if interactive:

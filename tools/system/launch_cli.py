@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import typer
 
+from tools.walker_models import model_options
 from tools.launch import (DEFAULT_HANG_TIMEOUT_S, DEFAULT_SCENE, DEFAULT_STARTUP_TIMEOUT_S, LaunchError, check_rate,
                           check_timeout)
 
@@ -53,6 +55,8 @@ def register(app: typer.Typer) -> None:
                in_process: bool = typer.Option(False, "--in-process",
                                                help="every agent in this process, stepped in lockstep on one graph "
                                                     "(no router, no restarts; as fast as the machine allows)"),
+               model: Path | None = typer.Option(None, "--model", help="walker model file for the human observer "
+                                                                        "(chronav predict train; default: the shipped one)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -73,7 +77,7 @@ def register(app: typer.Typer) -> None:
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
-                                 robot=robot, in_process=in_process)
+                                 robot=robot, in_process=in_process, agent_options=model_options(model))
         raise typer.Exit(code)
 
     @app.command("demo")
