@@ -49,3 +49,23 @@ def test_each_standard_scenario_runs_in_process(tmp_path: Path, name: str) -> No
     assert result["missions"]["cross"]["state"] == "done"
     people = next(tmp_path.glob("*/people.csv")).read_text(encoding="utf-8").splitlines()
     assert len(people) > 10, "the robot drove among the people"
+
+
+@pytest.mark.parametrize(("scene", "data"), [("ucy_uni_examples", "uni_examples.txt"),
+                                             ("ucy_zara03", "crowds_zara03.txt")])
+def test_the_shipped_ucy_scenes_are_from_crowds_output(tmp_path: Path, scene: str, data: str) -> None:
+    """scenes/crowds/ucy_*.yaml are `chronav scene from-crowd scenes/data/pedestrians/FILE --out
+    scenes/crowds/ucy_*.yaml --missions 3 --seed 0` (their first comment line says so), and pass the check."""
+    shipped = (SHIPPED / f"{scene}.yaml").read_text(encoding="utf-8")
+    assert shipped.startswith(f"# Written by `chronav scene from-crowd scenes/data/pedestrians/{data} --out "
+                              f"scenes/crowds/{scene}.yaml --missions 3 --seed 0`")
+    out = tmp_path / "crowds" / f"{scene}.yaml"
+    out.parent.mkdir()
+    result = runner.invoke(app, ["scene", "from-crowd", str(REPO_ROOT / "scenes" / "data" / "pedestrians" / data),
+                                 "--out", str(out), "--missions", "3", "--seed", "0"])
+    assert result.exit_code == 0, result.output
+    body = out.read_text(encoding="utf-8")
+    # the same scene; only the recording's reference differs (absolute from a temporary directory)
+    assert body[body.index("\nname:"):] == shipped[shipped.index("\nname:"):].replace(
+        "file: ../data/pedestrians/", f"file: {(REPO_ROOT / 'scenes' / 'data' / 'pedestrians').resolve()}/")
+    assert runner.invoke(app, ["scene", "check", str(SHIPPED / f"{scene}.yaml")]).exit_code == 0
