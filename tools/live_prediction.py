@@ -14,7 +14,7 @@ benchmark's baseline, docs/prediction.md).
 
 from __future__ import annotations
 
-import math
+import csv
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +22,18 @@ import numpy as np
 HORIZON_S = 4.8
 STEP_S = 0.4
 MATCH_S = 0.06          # a truth sample this close to the wanted time (people.csv: every 0.1 s)
+
+
+def _tracks(people: Path) -> dict[str, np.ndarray]:
+    """Each person's rows of a (checked) people.csv: (n, 5) arrays of t, x, y, vx, vy, in time order.
+    Only the rows written: a person who left (a replayed record ended) has none after that time
+    (``read_people_csv``'s tracks hold a missing person at their last state, which would score a
+    prediction of someone gone against where they left)."""
+    rows: dict[str, list[tuple[float, ...]]] = {}
+    with people.open(encoding="utf-8", newline="") as handle:
+        for record in csv.DictReader(handle):
+            rows.setdefault(record["name"], []).append(tuple(float(record[k]) for k in ("t", "x", "y", "vx", "vy")))
+    return {name: np.array(values) for name, values in rows.items()}
 
 
 def live_prediction(run_dir: Path) -> dict[str, object] | None:
@@ -34,40 +46,32 @@ def live_prediction(run_dir: Path) -> dict[str, object] | None:
     if not log.exists() or not people.exists():
         return None
     try:
-        tracks = read_people_csv(people)
-    except (TrajectoryFormatError, OSError):
+        read_people_csv(people)            # the one reader's checks (file and line on a bad row)
+        tracks = _tracks(people)
+    except (TrajectoryFormatError, OSError, ValueError, KeyError):
         return None
-    if len(tracks.times) == 0:
-        return None
-    index = {name: i for i, name in enumerate(tracks.names)}
     ahead = np.arange(1, round(HORIZON_S / STEP_S) + 1) * STEP_S
     errors, cv_errors = [], []
     for p in read(log):
-        col = index.get(p.name)
-        if col is None or not p.times:
+        track = tracks.get(p.name)
+        if track is None or not p.times or len(track) < 2:
             continue
+        times = track[:, 0]
         wanted = np.concatenate([[p.t], p.t + ahead])
-        rows = np.searchsorted(tracks.times, wanted)
-        rows = np.clip(rows, 1, len(tracks.times) - 1)
-        nearer = np.where(np.abs(tracks.times[rows - 1] - wanted) < np.abs(tracks.times[rows] - wanted), rows - 1, rows)
-        if np.any(np.abs(tracks.times[nearer] - wanted) > MATCH_S):
-            continue
-        tx, ty = tracks.x[nearer, col], tracks.y[nearer, col]
-        if not (np.all(np.isfinite(tx)) and np.all(np.isfinite(ty))):
-            continue
+        rows = np.clip(np.searchsorted(times, wanted), 1, len(times) - 1)
+        nearer = np.where(np.abs(times[rows - 1] - wanted) < np.abs(times[rows] - wanted), rows - 1, rows)
+        if np.any(np.abs(times[nearer] - wanted) > MATCH_S):
+            continue                        # the truth does not cover the horizon (robot parked, person gone)
+        tx, ty = track[nearer, 1], track[nearer, 2]
         known_t = np.concatenate([[0.0], p.times])
         known = np.concatenate([[[p.x, p.y]], np.array(p.points)])
         px, py = np.interp(ahead, known_t, known[:, 0]), np.interp(ahead, known_t, known[:, 1])
         errors.append(np.hypot(px - tx[1:], py - ty[1:]))
-        vx, vy = tracks.vx[nearer[0], col], tracks.vy[nearer[0], col]
-        if math.isfinite(vx) and math.isfinite(vy):
-            cv_errors.append(np.hypot(tx[0] + vx * ahead - tx[1:], ty[0] + vy * ahead - ty[1:]))
+        vx, vy = track[nearer[0], 3], track[nearer[0], 4]
+        cv_errors.append(np.hypot(tx[0] + vx * ahead - tx[1:], ty[0] + vy * ahead - ty[1:]))
     if not errors:
         return None
-    e = np.array(errors)
-    out: dict[str, object] = {"predictions": len(errors), "horizon_s": HORIZON_S, "step_s": STEP_S,
-                              "ade_m": round(float(e.mean()), 4), "fde_m": round(float(e[:, -1].mean()), 4)}
-    if cv_errors:
-        c = np.array(cv_errors)
-        out.update(cv_true_ade_m=round(float(c.mean()), 4), cv_true_fde_m=round(float(c[:, -1].mean()), 4))
-    return out
+    e, c = np.array(errors), np.array(cv_errors)
+    return {"predictions": len(errors), "horizon_s": HORIZON_S, "step_s": STEP_S,
+            "ade_m": round(float(e.mean()), 4), "fde_m": round(float(e[:, -1].mean()), 4),
+            "cv_true_ade_m": round(float(c.mean()), 4), "cv_true_fde_m": round(float(c[:, -1].mean()), 4)}

@@ -178,3 +178,19 @@ def test_an_in_process_run_of_a_generated_scene_replays_the_record_exactly(tmp_p
         assert track.start_s - 1e-3 <= rel <= track.end_s + 1e-3
         x, y, _, _ = track.at(rel)
         assert math.hypot(float(row["x"]) - x, float(row["y"]) - y) < 2e-3
+
+
+def test_a_person_entering_where_another_left_gets_their_own_track() -> None:
+    """Regression (corridor_counterflow): p4's record ended at the corridor's end; 1.2 s later p3
+    entered there and walked off, and the tracker took p3's detections for p4 (inside p4's gate,
+    only the name-mismatch cost against it), so "p4" walked away with p3.  A track missed for
+    ASSOCIATE_S is now matched by its own name only."""
+    from agents.lib.perception.tracking import Detection, observer_tracker
+
+    tracker = observer_tracker(0.02)
+    for k in range(30):                                   # p4 walks west, then stands at (1.0, 1.67) for 2 s
+        tracker.update(0.1 * k, [Detection("p4", max(2.0 - 0.1 * k, 1.0), 1.67, 3.14)])
+    for k in range(30):                                   # p4 has left; 1.2 s later p3 enters there, walks east
+        tracker.update(4.1 + 0.1 * k, [Detection("p3", 1.0 + 0.11 * k, 1.67, 0.0)])
+    assert "p3" in tracker.tracks and tracker.tracks["p3"].x > 3.5
+    assert tracker.tracks["p4"].x < 1.5, "the gone person's track stays where they left"

@@ -47,6 +47,21 @@ def test_a_prediction_stopping_short_holds_its_last_point(tmp_path: Path) -> Non
     assert found is not None and found["fde_m"] == pytest.approx(4.8 - 0.8, abs=1e-3)
 
 
+def test_a_person_who_left_is_not_scored_against_where_they_left(tmp_path: Path) -> None:
+    """bob is in people.csv for 2 s only (a replayed record that ended): a prediction of him at
+    1 s has no truth for its horizon and is not scored; ann's are."""
+    run = _run(tmp_path)
+    rows = (run / "people.csv").read_text(encoding="utf-8").splitlines()
+    rows[1:22] = [line for k in range(21) for line in
+                  (rows[1 + k], f"{k / 10:.3f},bob,visitor,5.0000,{k / 10:.4f},1.5708,0.0000,1.0000,")]
+    (run / "people.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    with (run / prediction_log.PREDICTIONS_FILE).open("a", encoding="utf-8") as handle:
+        handle.write("\n" + prediction_log.record(1.0, "bob", 5.0, 1.0, [0.4 * k for k in range(1, 13)],
+                                                  [[5.0, 1.0 + 0.4 * k] for k in range(1, 13)]))
+    found = live_prediction(run)
+    assert found is not None and found["predictions"] == 2
+
+
 def test_no_log_or_nothing_scored_is_none(tmp_path: Path) -> None:
     assert live_prediction(tmp_path) is None
     run = _run(tmp_path)
