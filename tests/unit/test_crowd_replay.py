@@ -194,3 +194,23 @@ def test_a_person_entering_where_another_left_gets_their_own_track() -> None:
         tracker.update(4.1 + 0.1 * k, [Detection("p3", 1.0 + 0.11 * k, 1.67, 0.0)])
     assert "p3" in tracker.tracks and tracker.tracks["p3"].x > 3.5
     assert tracker.tracks["p4"].x < 1.5, "the gone person's track stays where they left"
+
+
+def test_the_scene_check_refuses_a_record_outside_the_rooms_or_a_missing_track(tmp_path: Path) -> None:
+    """Nobody is moved silently: a record that leaves the rooms, or a track the file does not
+    hold, is refused at the person's line with the reason."""
+    out, _ = _from_crowd(tmp_path, str(_walkers(tmp_path / "w.txt")), "--missions", "0")
+    text = out.read_text(encoding="utf-8")
+    narrow = tmp_path / "narrow.yaml"
+    walls = text[text.index("walls:"):text.index("rooms:")]
+    narrow.write_text(text.replace(walls, "walls:\n- [[-2, -2], [8, -2], [8, 8], [-2, 8], [-2, -2]]\n")
+                      .replace(text[text.index("rooms:"):text.index("crowd:")],
+                               "rooms:\n- name: plaza\n  polygon: [[-2, -2], [8, -2], [8, 8], [-2, 8]]\n"),
+                      encoding="utf-8")
+    result = runner.invoke(app, ["scene", "check", str(narrow)])
+    assert result.exit_code != 0 and "'w_1' walks outside the scene's rooms at (8.10, 3.00)" in result.output
+    assert "people[0].track" in result.output or "narrow.yaml:" in result.output
+    missing = tmp_path / "missing.yaml"
+    missing.write_text(text.replace("  track: 3\n", "  track: 99\n"), encoding="utf-8")
+    result = runner.invoke(app, ["scene", "check", str(missing)])
+    assert result.exit_code != 0 and "person 99 is not in recording 'w'" in result.output
