@@ -15,6 +15,8 @@ Prints ONE flat JSON object:
                          model: each file measured (2 cm, seed 0) with a model trained by
                          tools/train_prediction.py on the OTHER files only (the shipped model saw
                          both tuning files, so the keys above are in-sample); needs two files or more
+  pred_ade_over_cv_same_detections_crossfile / pred_fde_over_cv_same_detections_crossfile   the
+                         same cross-file models over constant velocity fed the same noisy detections
   pred_ade_m / pred_fde_m / cv_ade_m / cv_fde_m       the file-averaged errors, metres
   track_predict_ms_30    one observer cycle for 30 walking people at 10 Hz with 2 cm noise: the
                          tracker's update, every person's estimate (the walker model included) and the social map's
@@ -79,7 +81,9 @@ def cross_file(files: list[Path]) -> dict[str, object]:
         model = from_json(trained, Path(f"trained without {held_out.name}"))
         results.update(evaluate_files([held_out], noise=NOISE_M, seed=0, model=model))
     report = summary(results)
-    return {"pred_ade_over_cv_crossfile": report["ade_over_cv"], "pred_fde_over_cv_crossfile": report["fde_over_cv"]}
+    return {"pred_ade_over_cv_crossfile": report["ade_over_cv"], "pred_fde_over_cv_crossfile": report["fde_over_cv"],
+            "pred_ade_over_cv_same_detections_crossfile": report["ade_over_cv_same_detections"],
+            "pred_fde_over_cv_same_detections_crossfile": report["fde_over_cv_same_detections"]}
 
 
 def person_from(name: str, estimate: tuple[float, float, float, float, float]) -> object:
