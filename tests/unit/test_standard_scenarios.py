@@ -51,18 +51,22 @@ def test_each_standard_scenario_runs_in_process(tmp_path: Path, name: str) -> No
     assert len(people) > 10, "the robot drove among the people"
 
 
-@pytest.mark.parametrize(("scene", "data"), [("ucy_uni_examples", "uni_examples.txt"),
-                                             ("ucy_zara03", "crowds_zara03.txt")])
-def test_the_shipped_ucy_scenes_are_from_crowds_output(tmp_path: Path, scene: str, data: str) -> None:
+@pytest.mark.parametrize(("scene", "data", "replay"), [("ucy_uni_examples", "uni_examples.txt", ""),
+                                                       ("ucy_zara03", "crowds_zara03.txt", ""),
+                                                       ("ucy_uni_examples_reactive", "uni_examples.txt", "reactive"),
+                                                       ("ucy_zara03_reactive", "crowds_zara03.txt", "reactive")])
+def test_the_shipped_ucy_scenes_are_from_crowds_output(tmp_path: Path, scene: str, data: str, replay: str) -> None:
     """scenes/crowds/ucy_*.yaml are `chronav scene from-crowd scenes/data/pedestrians/FILE --out
-    scenes/crowds/ucy_*.yaml --missions 3 --seed 0` (their first comment line says so), and pass the check."""
+    scenes/crowds/ucy_*.yaml --missions 3 --seed 0 [--replay reactive]` (their first comment line
+    says so), and pass the check."""
     shipped = (SHIPPED / f"{scene}.yaml").read_text(encoding="utf-8")
+    extra = ["--replay", replay] if replay else []
     assert shipped.startswith(f"# Written by `chronav scene from-crowd scenes/data/pedestrians/{data} --out "
-                              f"scenes/crowds/{scene}.yaml --missions 3 --seed 0`")
+                              f"scenes/crowds/{scene}.yaml --missions 3 --seed 0{' '.join(['', *extra])}`")
     out = tmp_path / "crowds" / f"{scene}.yaml"
     out.parent.mkdir()
     result = runner.invoke(app, ["scene", "from-crowd", str(REPO_ROOT / "scenes" / "data" / "pedestrians" / data),
-                                 "--out", str(out), "--missions", "3", "--seed", "0"])
+                                 "--out", str(out), "--missions", "3", "--seed", "0", *extra])
     assert result.exit_code == 0, result.output
     body = out.read_text(encoding="utf-8")
     # the same scene; only the recording's reference differs (absolute from a temporary directory)
