@@ -55,6 +55,10 @@ class HumanObserverAgent(Agent):
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
         model_path = self.config.option("walker_model", "")   # chronav launch/evaluate --model FILE
         self.tracker = observer_tracker(self.noise_xy, walker_model.load(Path(model_path)) if model_path else None)
+        if model_path:
+            self.log.info("walker model %s (%s)", model_path,
+                          "applies" if self.tracker.model is not None else
+                          f"not used: trained for another detector noise than {self.noise_xy:g} m")
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
