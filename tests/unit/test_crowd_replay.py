@@ -214,3 +214,14 @@ def test_the_scene_check_refuses_a_record_outside_the_rooms_or_a_missing_track(t
     missing.write_text(text.replace("  track: 3\n", "  track: 99\n"), encoding="utf-8")
     result = runner.invoke(app, ["scene", "check", str(missing)])
     assert result.exit_code != 0 and "person 99 is not in recording 'w'" in result.output
+
+
+def test_from_crowd_says_how_many_crossings_fit(tmp_path: Path) -> None:
+    """A 16 s recording has room for one crossing only: --json reports the missions written."""
+    out = tmp_path / "short.yaml"
+    result = runner.invoke(app, ["scene", "from-crowd", str(_walkers(tmp_path / "w.txt")), "--out", str(out),
+                                 "--missions", "3", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["missions"] == len(load_world(out).scene.missions) == 1
+    assert summary["people"] == 3 and summary["rows"] == 40 + 30 + 20

@@ -63,14 +63,17 @@ def from_crowd(files: list[Path] = typer.Argument(..., help="ETH/UCY text files 
         _fail(str(exc))
         return
     _write_checked_scene(text, out)
+    from scenes.loader import load_scene
+
+    planned = len(load_scene(out).scene.missions)     # fewer than asked when the busy times are too close
     people = sum(len(r.tracks) for r in recordings)
-    result = {"out": str(out), "people": people, "missions": missions, "replay": replay,
-              "duration_s": max(r.duration_s for r in recordings), "rows": sum(r.rows for r in recordings)}
+    result = {"out": str(out), "people": people, "missions": planned, "replay": replay,
+              "duration_s": round(max(r.duration_s for r in recordings), 3), "rows": sum(r.rows for r in recordings)}
     if as_json:
         typer.echo(json.dumps(result))
         return
     typer.echo(f"{out}: {people} recorded people replayed {replay} over {result['duration_s']:g} s, "
-               f"{missions} robot crossing(s); run it with `chronav launch {out} --in-process`")
+               f"{planned} robot crossing(s){f' (of {missions} asked: the busy times are too close together)' if planned < missions else ''}; run it with `chronav launch {out} --in-process`")
 
 
 def register(app: typer.Typer) -> None:
