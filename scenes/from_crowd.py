@@ -210,7 +210,6 @@ def scene_text(recordings: list[Recording], out: Path, name: str, *, margin_m: f
                                      f"{format_clock(c.busy_s)} ({c.busy_count} person-samples in {CELL_M:g} m x "
                                      f"{BIN_S:g} s)"}
                      for k, c in enumerate(crossings)],
-        "people": people,
     }
     header = (f"# Written by `{command or 'chronav scene from-crowd'}`.\n"
               "# An open plaza (the recordings' extent plus a margin) where recorded pedestrians walk their\n"
@@ -218,5 +217,7 @@ def scene_text(recordings: list[Recording], out: Path, name: str, *, margin_m: f
               "# starts on them and avoids the robot). Missions cross the busiest places at their busy times\n"
               "# (seeded). docs/crowds.md. ETH/UCY data: cite its source (UCY: Lerner, Chrysanthou,\n"
               "# Lischinski, \"Crowds by Example\", 2007; see scenes/data/pedestrians/SOURCES.md).\n")
-    return header + yaml.dump(body, Dumper=_NoAliases, sort_keys=False, default_flow_style=None, width=120,
-                              allow_unicode=True)
+    lines = "".join(f"- {yaml.dump(p, Dumper=_NoAliases, sort_keys=False, default_flow_style=True, width=10_000, allow_unicode=True)}"
+                    for p in people)           # one person a line: hundreds of them stay readable
+    return (header + yaml.dump(body, Dumper=_NoAliases, sort_keys=False, default_flow_style=None, width=120,
+                               allow_unicode=True) + "people:\n" + lines)

@@ -211,7 +211,7 @@ def test_the_scene_check_refuses_a_record_outside_the_rooms_or_a_missing_track(t
     assert result.exit_code != 0 and "'w_1' walks outside the scene's rooms at (8.10, 3.00)" in result.output
     assert "people[0].track" in result.output or "narrow.yaml:" in result.output
     missing = tmp_path / "missing.yaml"
-    missing.write_text(text.replace("  track: 3\n", "  track: 99\n"), encoding="utf-8")
+    missing.write_text(text.replace("track: 3,", "track: 99,"), encoding="utf-8")
     result = runner.invoke(app, ["scene", "check", str(missing)])
     assert result.exit_code != 0 and "person 99 is not in recording 'w'" in result.output
 
