@@ -225,3 +225,34 @@ def test_from_crowd_says_how_many_crossings_fit(tmp_path: Path) -> None:
     summary = json.loads(result.stdout)
     assert summary["missions"] == len(load_world(out).scene.missions) == 1
     assert summary["people"] == 3 and summary["rows"] == 40 + 30 + 20
+
+
+@pytest.mark.parametrize("noise", ["0", "0.02"])
+def test_the_observer_forgets_a_person_who_left(noise: str) -> None:
+    """A replayed person whose record ended is no longer in the simulator's truth: the observer
+    drops their track (at once with a perfect sensor, after tracking.LOST_S with a noisy one) and
+    their person node leaves the DSR, so the social map forgets them; the others stay."""
+    from agents.lib.crowd.model import PersonTruth
+    from agents.lib.perception.tracking import LOST_S
+    from agents.runtime.recording import Recorder
+    from agents.world.dsr_writers import write_building, write_ground_truth
+    from dsr import DSRGraph
+    from tools.inprocess import build_agents
+
+    scene_path = REPO_ROOT / "scenes" / "crowds" / "perpendicular_crossing.yaml"
+    observer = build_agents(scene_path, ["human_observer"], options={"human_observer": {"noise_xy": noise}})[0]
+    graph = DSRGraph(agent="test_observer_leave")
+    observer.setup(graph, Recorder("human_observer", None, None))
+    write_building(graph, load_world(scene_path).scene, {})
+    t0 = 32400.0
+    for k in range(60):
+        t = t0 + 0.1 * k
+        people = [PersonTruth("p1", "visitor", 0.0, -6.0 + 1.0 * 0.1 * k, 1.57, 0.0, 1.0)]
+        if k < 20:
+            people.append(PersonTruth("p2", "visitor", 1.0, -6.0 + 1.0 * 0.1 * k, 1.57, 0.0, 1.0))
+        write_ground_truth(graph, people, t)
+        observer.step()
+        if k == 19:
+            assert graph.get_node_by_name("p2") is not None
+    assert graph.get_node_by_name("p1") is not None
+    assert graph.get_node_by_name("p2") is None, f"p2 left {4.0:g} s ago (> {LOST_S:g} s)"
