@@ -9,7 +9,8 @@ Prints ONE flat JSON object:
   pred_ade_over_cv_same_detections / pred_fde_over_cv_same_detections   the same over the other
                          baseline: constant velocity fed the same noisy detections (issue 40's goal:
                          <= 0.80 on average, <= 1.0 on every file)
-  pred_ade_over_cv_<file> / pred_fde_over_cv_<file>   the same per file
+  pred_ade_over_cv_<file> / pred_fde_over_cv_<file>   the same per file (and
+                         pred_*_over_cv_same_detections_<file>)
   pred_clean_ade_over_cv / pred_clean_fde_over_cv     without detection noise
   pred_ade_over_cv_crossfile / pred_fde_over_cv_crossfile   the honest figure of the learned walker
                          model: each file measured (2 cm, seed 0) with a model trained by
@@ -57,6 +58,8 @@ def accuracy(files: list[Path]) -> dict[str, object]:
         stem = Path(name).stem
         out[f"pred_ade_over_cv_{stem}"] = round(r.ade / r.cv_ade, 4)
         out[f"pred_fde_over_cv_{stem}"] = round(r.fde / r.cv_fde, 4)
+        out[f"pred_ade_over_cv_same_detections_{stem}"] = round(r.ade / r.cv_det_ade, 4)
+        out[f"pred_fde_over_cv_same_detections_{stem}"] = round(r.fde / r.cv_det_fde, 4)
     clean = summary(evaluate_files(files, noise=0.0, seed=0))
     out["pred_clean_ade_over_cv"] = clean["ade_over_cv"]
     out["pred_clean_fde_over_cv"] = clean["fde_over_cv"]
