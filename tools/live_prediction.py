@@ -38,7 +38,16 @@ def _tracks(people: Path) -> dict[str, np.ndarray]:
 
 def live_prediction(run_dir: Path) -> dict[str, object] | None:
     """``result.json``'s ``prediction`` entry (module doc), or None when the run logged no
-    prediction that the truth covers (no walker while the robot drove, or no run directory)."""
+    prediction that the truth covers (no walker while the robot drove, or no run directory).
+    Never raises on what a run left behind: result.json is written however the run ended (a
+    crash can leave a log or a people.csv cut short)."""
+    try:
+        return _scored(run_dir)
+    except (OSError, ValueError, KeyError, IndexError, TypeError):
+        return None
+
+
+def _scored(run_dir: Path) -> dict[str, object] | None:
     from agents.lib.perception.prediction_log import PREDICTIONS_FILE, read
     from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv
 
@@ -54,7 +63,7 @@ def live_prediction(run_dir: Path) -> dict[str, object] | None:
     errors, cv_errors = [], []
     for p in read(log):
         track = tracks.get(p.name)
-        if track is None or not p.times or len(track) < 2:
+        if track is None or not p.times or len(p.points) != len(p.times) or len(track) < 2:
             continue
         times = track[:, 0]
         wanted = np.concatenate([[p.t], p.t + ahead])

@@ -64,6 +64,11 @@ def test_a_person_who_left_is_not_scored_against_where_they_left(tmp_path: Path)
 
 def test_no_log_or_nothing_scored_is_none(tmp_path: Path) -> None:
     assert live_prediction(tmp_path) is None
+    (tmp_path / "people.csv").write_text("t,name,role,x,y,theta,vx,vy,group\n1.0,ann,visitor,x,0,0,0,0,\n",
+                                         encoding="utf-8")
+    (tmp_path / prediction_log.PREDICTIONS_FILE).write_text('{"t": 1, "name": "ann", "x": 0, "y": 0, '
+                                                           '"times": [0.4], "points": []}\n', encoding="utf-8")
+    assert live_prediction(tmp_path) is None, "a broken people.csv: no figure, and no exception"
     run = _run(tmp_path)
     (run / prediction_log.PREDICTIONS_FILE).write_text(
         prediction_log.record(9.0, "ann", 9.0, 0.0, [0.4], [[9.4, 0.0]]), encoding="utf-8")
