@@ -30,7 +30,7 @@ from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import remove_person, write_interactions, write_person
 from agents.world.freshness import mark_observed, observed_up_to
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
-from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
+from agents.world.vocabulary import CLOCK, GROUND_TRUTH_PEOPLE, WORLD, ClockMode
 from scenes.geometry import angle_difference
 
 TRAIL_S = 20.0               # the recording shows each person's last 20 s of track (a crowd stays legible)
@@ -83,10 +83,14 @@ class HumanObserverAgent(Agent):
             self._predictions = None
 
     def _log_predictions(self, now_s: float) -> None:
-        """Every EVERY_S of sim time, what the social map predicts for each walker, from what this
+        """Every EVERY_S of sim time while the robot drives (when the simulator writes people.csv, the
+        truth they are scored against), what the social map predicts for each walker, from what this
         agent published (read back as the navigation reads it: walls, agenda and all)."""
         slot = math.floor(now_s / prediction_log.EVERY_S + 1e-6)
         if self._predictions is None or slot == self._predicted_slot:
+            return
+        clock = self.graph.get_node_by_name(CLOCK)
+        if clock is None or clock.attrs.get("mode") != ClockMode.DRIVING:
             return
         self._predicted_slot = slot
         people = dsr_people(self.graph)
