@@ -256,3 +256,18 @@ def test_the_observer_forgets_a_person_who_left(noise: str) -> None:
             assert graph.get_node_by_name("p2") is not None
     assert graph.get_node_by_name("p1") is not None
     assert graph.get_node_by_name("p2") is None, f"p2 left {4.0:g} s ago (> {LOST_S:g} s)"
+
+
+def test_from_crowd_dt_sets_the_recordings_time_step(tmp_path: Path) -> None:
+    """--dt is the seconds per annotated frame step: 0.8 s makes the same 40 frames last twice as long."""
+    data = _walkers(tmp_path / "w.txt")
+    durations = []
+    for dt in ("0.4", "0.8"):
+        out = tmp_path / f"dt{dt.replace('.', '_')}.yaml"
+        result = runner.invoke(app, ["scene", "from-crowd", str(data), "--out", str(out), "--dt", dt, "--json"])
+        assert result.exit_code == 0, result.output
+        durations.append(json.loads(result.stdout)["duration_s"])
+        assert load_world(out).scene.recordings[0].dt == float(dt)
+    assert durations == [pytest.approx(15.6), pytest.approx(31.2)]
+    bad = runner.invoke(app, ["scene", "from-crowd", str(data), "--out", str(tmp_path / "x.yaml"), "--dt", "0"])
+    assert bad.exit_code == 2 and "--dt" in bad.output
