@@ -14,7 +14,6 @@ benchmark's baseline, docs/prediction.md).
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
@@ -22,18 +21,6 @@ import numpy as np
 HORIZON_S = 4.8
 STEP_S = 0.4
 MATCH_S = 0.06          # a truth sample this close to the wanted time (people.csv: every 0.1 s)
-
-
-def _tracks(people: Path) -> dict[str, np.ndarray]:
-    """Each person's rows of a (checked) people.csv: (n, 5) arrays of t, x, y, vx, vy, in time order.
-    Only the rows written: a person who left (a replayed record ended) has none after that time
-    (``read_people_csv``'s tracks hold a missing person at their last state, which would score a
-    prediction of someone gone against where they left)."""
-    rows: dict[str, list[tuple[float, ...]]] = {}
-    with people.open(encoding="utf-8", newline="") as handle:
-        for record in csv.DictReader(handle):
-            rows.setdefault(record["name"], []).append(tuple(float(record[k]) for k in ("t", "x", "y", "vx", "vy")))
-    return {name: np.array(values) for name, values in rows.items()}
 
 
 def live_prediction(run_dir: Path) -> dict[str, object] | None:
@@ -50,13 +37,14 @@ def live_prediction(run_dir: Path) -> dict[str, object] | None:
 def _scored(run_dir: Path) -> dict[str, object] | None:
     from agents.lib.perception.prediction_log import PREDICTIONS_FILE, read
     from agents.lib.socialmap.metrics import TrajectoryFormatError, read_people_csv
+    from tools.prediction_eval import people_rows
 
     log, people = run_dir / PREDICTIONS_FILE, run_dir / "people.csv"
     if not log.exists() or not people.exists():
         return None
     try:
         read_people_csv(people)            # the one reader's checks (file and line on a bad row)
-        tracks = _tracks(people)
+        tracks = people_rows(people)       # who was really there (prediction_eval.people_rows)
     except (TrajectoryFormatError, OSError, ValueError, KeyError):
         return None
     ahead = np.arange(1, round(HORIZON_S / STEP_S) + 1) * STEP_S

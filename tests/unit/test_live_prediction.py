@@ -88,3 +88,23 @@ def test_the_evaluate_report_section_averages_the_runs(tmp_path: Path) -> None:
     html = "".join(live_prediction_html(runs))
     assert "<h2>Live prediction</h2>" in html
     assert "<td>circle_crossing</td><td>social</td><td>2 / 3</td><td>40</td><td>0.300</td><td>0.600</td>" in html
+
+
+def test_predict_evaluate_on_a_runs_people_csv_counts_only_who_was_there(tmp_path: Path) -> None:
+    """A replayed person who left the run (bob, 5 s) gives no window: read_people_csv's tracks
+    would hold him at his exit for the rest of the file (22 windows of a ghost standing still)."""
+    from typer.testing import CliRunner
+
+    from tools.cli import app
+
+    rows = ["t,name,role,x,y,theta,vx,vy,group"]
+    for k in range(161):
+        t = 32400 + 0.1 * k
+        rows.append(f"{t:.3f},ann,visitor,{0.1 * k:.4f},0.0000,0.00000,1.0000,0.0000,")
+        if k <= 50:
+            rows.append(f"{t:.3f},bob,visitor,5.0000,{0.1 * k:.4f},1.57080,0.0000,1.0000,")
+    data = tmp_path / "people.csv"
+    data.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    result = CliRunner().invoke(app, ["predict", "evaluate", str(data), "--noise", "0", "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["files"]["people.csv"]["tracks"] == 41 - 20 + 1, "ann's windows only"
