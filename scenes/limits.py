@@ -70,6 +70,10 @@ ACTIVITIES_PER_DAY = Limit("activities_per_day", 2_000, "activities", "activitie
 GRID_CELLS = Limit("grid_cells", 16_000_000, "cells",
                    "cells of a scene's cost grid (64 MB per layer at 4 bytes a cell)")
 TRAJECTORY_SAMPLES = Limit("trajectory_samples", 2_000_000, "samples", "rows of a trajectory CSV")
+CROWD_ROWS = Limit("crowd_rows", 500_000, "annotations",
+                   "lines of one recorded-pedestrian file a scene replays (scene from-crowd, routine: replay)")
+CROWD_PEOPLE = Limit("crowd_people", 2_000, "people", "distinct people in one recorded-pedestrian file")
 
 LIMITS: tuple[Limit, ...] = (YAML_BYTES, YAML_DEPTH, YAML_NODES, YAML_INT_DIGITS, TEXT_CHARS, NAME_CHARS,
-                             ICS_BYTES, RECURRENCE_STEPS, RECURRENCE_DATES, ACTIVITIES_PER_DAY, GRID_CELLS, TRAJECTORY_SAMPLES)
+                             ICS_BYTES, RECURRENCE_STEPS, RECURRENCE_DATES, ACTIVITIES_PER_DAY, GRID_CELLS, TRAJECTORY_SAMPLES,
+                             CROWD_ROWS, CROWD_PEOPLE)

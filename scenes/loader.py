@@ -313,17 +313,19 @@ def _check_goal_poses(scene: Scene, solids: _Solids) -> None:
 def _check_bodies_apart(scene: Scene, located: LocatedYaml) -> None:
     """No two people, and not the robot and a person, start where their bodies overlap: two people
     on one spot, or a robot started on a resident, is a typing mistake (``path`` then says the
-    robot's start is blocked), not a scene."""
+    robot's start is blocked), not a scene.  Replayed people (``routine: replay``) are left out:
+    their pose is where their record starts, at its own time, and the record decides."""
     robot = scene.robot
-    for person in scene.people:
+    people = [(i, p) for i, p in enumerate(scene.people) if p.routine != "replay"]
+    for _, person in people:
         gap = math.hypot(person.pose.x - robot.pose.x, person.pose.y - robot.pose.y)
         if gap < robot.radius + PERSON_BODY_RADIUS_M:
             raise located.error(("robot", "pose"), f"robot at ({robot.pose.x:g}, {robot.pose.y:g}) starts on person "
                                 f"{person.name!r} at ({person.pose.x:g}, {person.pose.y:g}): {gap:.2f} m apart, closer "
                                 f"than the robot's radius plus a person's body ({robot.radius + PERSON_BODY_RADIUS_M:g} m); "
                                 "move one of them")
-    for i, person in enumerate(scene.people):
-        for other in scene.people[:i]:
+    for k, (i, person) in enumerate(people):
+        for _, other in people[:k]:
             gap = math.hypot(person.pose.x - other.pose.x, person.pose.y - other.pose.y)
             if gap < 2 * PERSON_BODY_RADIUS_M:
                 raise located.error(("people", i, "pose"), f"person {person.name!r} at ({person.pose.x:g}, "

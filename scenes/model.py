@@ -164,7 +164,10 @@ class Waypoint(Strict):
 MIN_WALK_SPEED_MPS = 0.4
 MAX_WALK_SPEED_MPS = 1.5
 
-Routine = Literal["stay", "wander", "staff", "visitor"]
+Routine = Literal["stay", "wander", "staff", "visitor", "replay"]
+#: how a ``routine: replay`` person follows their record (docs/crowds.md): ``exact`` walks it whatever the
+#: robot does (SocNavBench); ``reactive`` starts on it and heads along it to its end, avoiding the robot (ORCA)
+Replay = Literal["exact", "reactive"]
 
 
 class PersonSpec(Strict):
@@ -192,10 +195,17 @@ class PersonSpec(Strict):
     escort: bool = Field(False, description="staff fetch this person to their activities")
     dwell: tuple[Real, Real] | None = Field(None, description="min and max seconds spent at one place")
     visits: Name | None = Field(None, description="visitor: the person they keep company with")
+    track: WholeNumber | None = Field(None, ge=0, description="replay: the person's id in the recording")
+    recording: Name | None = Field(None, description="replay: which of the scene's recordings (default: the only one)")
+    replay: Replay | None = Field(None, description="replay: exact or reactive (default: the crowd's)")
 
     @model_validator(mode="after")
     def _routine_fields(self) -> PersonSpec:
         moving = self.routine != "stay"
+        if self.routine == "replay" and self.track is None:
+            raise ValueError("routine 'replay' needs 'track': the person's id in the scene's recording")
+        if self.routine != "replay" and (self.track is not None or self.recording or self.replay):
+            raise ValueError("track, recording and replay belong to routine 'replay'")
         if moving and self.waypoints:
             raise ValueError(f"routine {self.routine!r} walks by itself: timed waypoints go with routine 'stay'")
         if self.visits is not None and self.routine != "visitor":
@@ -323,6 +333,18 @@ class CrowdSpec(Strict):
     """How the people with a walking routine are simulated (agents/lib/crowd)."""
 
     seed: WholeNumber = Field(0, ge=0, le=2**31 - 1, description="one seed gives one day, exactly")
+    replay: Replay = Field("exact", description="how routine 'replay' people follow their record, "
+                                                 "unless they say otherwise")
+
+
+class RecordingSpec(Strict):
+    """Recorded pedestrians (ETH/UCY text ``frame id x y``, scenes/crowd_recording.py) that the
+    scene's ``routine: replay`` people walk; the file is relative to the scene."""
+
+    name: Name
+    file: str = Field(min_length=1, description="ETH/UCY text file, relative to the scene file")
+    dt: Real = Field(0.4, gt=0, le=10.0, description="seconds between two annotated frames")
+    start: ClockTime | None = Field(None, description="clock time of the file's first frame (default: the day's start)")
 
 
 class MapRef(Strict):
@@ -350,6 +372,8 @@ class Scene(Strict):
     objects: list[SceneObject] = []
     people: list[PersonSpec] = []
     crowd: CrowdSpec = CrowdSpec()
+    recordings: list[RecordingSpec] = Field(default_factory=list, description="recorded pedestrians replayed "
+                                                                               "by routine 'replay' people")
     robot: RobotSpec
     agenda: list[dict[str, Any]] = Field(default_factory=list, description="activities, see docs/agenda.md")
     agenda_file: str | None = Field(None, description=".yaml or .ics, relative to the scene file")

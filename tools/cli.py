@@ -28,6 +28,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "tools.predict_cli",          # chronav predict evaluate (people prediction on real pedestrians)
     "tools.plugins_cli",          # chronav plugins (every installed extension)
     "tools.system.report_cli",    # chronav report (a finished run's per-mission tables)
+    "tools.scene.crowd_cli",      # chronav scene from-crowd (recorded pedestrians; after tools.scene.scene_cli)
 )
 
 app = typer.Typer(help="chronav: agenda-aware social navigation on a replicated DSR graph.",

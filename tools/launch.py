@@ -446,12 +446,15 @@ def _report(scene_path: Path, run_dir: Path, missions: dict[str, dict[str, objec
 
 
 def _write_result(result: RunResult) -> None:
+    from tools.live_prediction import live_prediction   # the observer's predictions against people.csv
+
     (result.run_dir / "result.json").write_text(json.dumps({
         "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
         "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
         "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error,
         "problems": result.problems,
-        "scene_path": str(result.scene_path.resolve()) if result.scene_path else None}, indent=2))
+        "scene_path": str(result.scene_path.resolve()) if result.scene_path else None,
+        "prediction": live_prediction(result.run_dir)}, indent=2))
     from tools.system.mission_slices import ensure_mission_slices
 
     ensure_mission_slices(result.run_dir, result.missions)   # missions/<id>.csv, .people.csv, .json

@@ -26,16 +26,83 @@ def register(app: typer.Typer) -> None:
                               no_args_is_help=True)
     app.add_typer(predict_app, name="predict")
 
+    @predict_app.command("train")
+    def train_cmd(
+        files: list[Path] | None = typer.Argument(None, help="ETH/UCY text files or runs' people.csv to learn "
+                                                            "from; default: the two UCY sequences shipped in "
+                                                            "scenes/data/pedestrians", show_default=False),
+        out: Path = typer.Option(..., "--out", help="the model file to write (JSON)"),
+        seed: int = typer.Option(0, "--seed", min=0, max=2**31 - 1, help="seed of the network's starting weights"),
+        noise: float | None = typer.Option(None, "--noise", help="detection noise the model is trained for, m; "
+                                                                "default: the live observer's, 0.02",
+                                           show_default=False),
+        noise_seeds: str = typer.Option("1,2", "--noise-seeds", help="comma-separated seeds of the noise draws "
+                                                                     "(each a copy of the data seen through other noise)"),
+        iterations: int = typer.Option(400, "--iterations", min=1, max=100_000, help="L-BFGS iterations"),
+        dt: float = typer.Option(0.4, "--dt", help="seconds between frames (people.csv: the grid it is taken on)"),
+        force: bool = typer.Option(False, "--force", help="overwrite --out"),
+        as_json: bool = typer.Option(False, "--json", help="print one JSON object"),
+    ) -> None:
+        """Train the walker model (the tracker's learned velocity correction, docs/prediction.md) on
+        a site's own recordings: seeded and reproducible, the training data's provenance (files and
+        sha256, windows, seeds, command) in the model file.  Use it with --model in launch, evaluate
+        and predict evaluate."""
+        import shlex
+        import sys
+
+        from agents.lib.perception.tracking import OBSERVER_NOISE_M
+        from tools.prediction_eval import PedestrianFileError, shipped_pedestrian_files
+        from tools.train_prediction import DT, train
+
+        if not math.isclose(_positive(dt, "--dt"), DT):
+            raise typer.BadParameter(f"the walker model reads a {DT:g} s grid; other steps are not supported yet",
+                                     param_hint="--dt")
+        noise = OBSERVER_NOISE_M if noise is None else noise
+        if not (math.isfinite(noise) and 0 < noise <= 1.0):
+            raise typer.BadParameter("must be above 0 and at most 1 m (a perfect detector needs no model)",
+                                     param_hint="--noise")
+        try:
+            seeds = tuple(int(v) for v in noise_seeds.split(",") if v.strip())
+        except ValueError:
+            raise typer.BadParameter("comma-separated whole numbers, e.g. 1,2", param_hint="--noise-seeds") from None
+        if not seeds or len(seeds) > 20 or any(v < 0 for v in seeds):
+            raise typer.BadParameter("1 to 20 seeds of 0 or more", param_hint="--noise-seeds")
+        if out.exists() and not force:
+            typer.echo(f"error: {out} exists; pass --force to overwrite it", err=True)
+            raise typer.Exit(2)
+        files = files or shipped_pedestrian_files()
+        command = shlex.join(["chronav", *sys.argv[1:]]) if sys.argv[1:3] == ["predict", "train"] else \
+            shlex.join(["chronav", "predict", "train", *map(str, files), "--out", str(out), "--seed", str(seed)])
+        try:
+            model = train(files, noise=noise, noise_seeds=seeds, seed=seed, iterations=iterations, command=command)
+        except PedestrianFileError as exc:
+            typer.echo(f"error: {exc}", err=True)
+            raise typer.Exit(2) from None
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_text(json.dumps(model, indent=1) + "\n", encoding="utf-8")
+        except OSError as exc:
+            typer.echo(f"error: cannot write {out}: {exc.strerror or exc}", err=True)
+            raise typer.Exit(2) from None
+        provenance = model["provenance"]
+        if as_json:
+            typer.echo(json.dumps({"out": str(out), **provenance}))       # type: ignore[dict-item]
+            return
+        typer.echo(f"{out}: walker model trained on {provenance['examples']} walker windows of "   # type: ignore[index]
+                   f"{len(files)} file(s) at {noise:g} m noise, seed {seed}; use it with --model {out}")
+
     @predict_app.command("evaluate")
     def evaluate_cmd(
-        files: list[Path] = typer.Argument(..., help="ETH/UCY text files ('frame id x y' a line, frames 0.4 s "
-                                                     "apart) or a run's people.csv",
-                                           show_default=False),
+        files: list[Path] | None = typer.Argument(None, help="ETH/UCY text files ('frame id x y' a line, frames "
+                                                            "0.4 s apart) or a run's people.csv; default: the two "
+                                                            "UCY sequences shipped in scenes/data/pedestrians",
+                                                  show_default=False),
         obs: int = typer.Option(8, "--obs", min=2, max=1000, help="observed steps (the tracker sees these)"),
         pred: int = typer.Option(12, "--pred", min=1, max=1000, help="predicted steps"),
         dt: float = typer.Option(0.4, "--dt", help="seconds between frames"),
-        noise: float = typer.Option(0.0, "--noise", help="detection noise, m (standard deviation per axis); "
-                                                         "the observer's default is 0.02"),
+        noise: float | None = typer.Option(None, "--noise", help="detection noise, m (standard deviation per "
+                                                                "axis); default: the live observer's, 0.02",
+                                           show_default=False),
         seed: int = typer.Option(0, "--seed", help="seed of the detection noise"),
         scene: str | None = typer.Option(None, "--scene", help="for a run's people.csv: the run's scene, so the "
                                                               "prediction knows its walls, doors and agenda"),
@@ -54,9 +121,14 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """ADE/FDE of the deployed tracker + prediction per file, beside the constant-velocity
         baseline on the true positions (same windows, same run) and the ratio (< 1: better)."""
-        from tools.prediction_eval import PedestrianFileError, SceneContext, evaluate_files, summary
+        from agents.lib.perception.tracking import OBSERVER_NOISE_M
+        from tools.prediction_eval import (PedestrianFileError, SceneContext, evaluate_files, shipped_pedestrian_files,
+                                           summary)
 
         _positive(dt, "--dt")
+        noise_origin = "given" if noise is not None else "the live observer's default"
+        noise = OBSERVER_NOISE_M if noise is None else noise
+        files = files or shipped_pedestrian_files()
         if not (math.isfinite(noise) and 0 <= noise <= 1.0):
             raise typer.BadParameter("must be between 0 and 1 m", param_hint="--noise")
         if not (math.isfinite(min_speed) and min_speed >= 0):
@@ -88,6 +160,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(2) from None
         report = summary(results)
+        report["noise_m"] = noise
         if as_json:
             typer.echo(json.dumps(report))
             return
@@ -97,12 +170,16 @@ def register(app: typer.Typer) -> None:
         known += f"; walker model {model}" if model is not None else ""
         known += f"; predictor {predictor}" if predictor != "chronav" else ""
         typer.echo(f"observe {obs} x {dt:g} s, predict {pred} x {dt:g} s, "
-                   f"detection noise {noise:g} m (seed {seed}){known}")
+                   f"detection noise {noise:g} m ({noise_origin}; seed {seed}){known}")
         typer.echo(f"{'file':28s} {'windows':>8s} {'ADE m':>7s} {'FDE m':>7s} {'CV ADE':>7s} {'CV FDE':>7s} "
-                   f"{'ADE/CV':>7s} {'FDE/CV':>7s}")
+                   f"{'ADE/CV':>7s} {'FDE/CV':>7s} {'ADE/CVd':>7s} {'FDE/CVd':>7s}")
         for name, r in results.items():
             typer.echo(f"{name:28s} {r.tracks:8d} {r.ade:7.3f} {r.fde:7.3f} {r.cv_ade:7.3f} {r.cv_fde:7.3f} "
                        f"{r.ade / r.cv_ade if r.cv_ade else math.nan:7.3f} "
-                       f"{r.fde / r.cv_fde if r.cv_fde else math.nan:7.3f}")
+                       f"{r.fde / r.cv_fde if r.cv_fde else math.nan:7.3f} "
+                       f"{r.ade / r.cv_det_ade if r.cv_det_ade else math.nan:7.3f} "
+                       f"{r.fde / r.cv_det_fde if r.cv_det_fde else math.nan:7.3f}")
         typer.echo(f"average over the files: ADE/CV {report['ade_over_cv']}, FDE/CV {report['fde_over_cv']} "
-                   "(CV: constant velocity from the last true step)")
+                   "(CV: constant velocity from the last true step); "
+                   f"ADE/CVd {report['ade_over_cv_same_detections']}, FDE/CVd {report['fde_over_cv_same_detections']} "
+                   "(CVd: constant velocity from the same last two noisy detections)")

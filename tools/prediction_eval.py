@@ -11,7 +11,9 @@ horizon and step are set to the question's (``--pred`` x ``--dt``, ``--dt``): th
 deployed ones.  The constant-velocity baseline (Schöller et al. 2020, "What the constant velocity
 model can teach us about pedestrian motion prediction": the last observed step repeated) is
 computed in the same run from the *true* positions, so the ratio says how much the deployed
-pipeline, noise included, gains or loses against the simplest honest predictor.
+pipeline, noise included, gains or loses against the simplest honest predictor; a second baseline,
+constant velocity fed the *same noisy detections* (the last two observed ones), says how much the
+tracker and predictor gain over the simplest predictor given the same sensor.
 
 Windows are the standard loader's (Social-GAN's ``TrajectoryDataset``): the file's distinct frames
 in order; every run of ``obs + pred`` consecutive frames in which a person is present in all of
@@ -43,6 +45,16 @@ from agents.lib.socialmap.types import Person
 from scenes.limits import TRAJECTORY_SAMPLES
 
 
+#: the two UCY sequences shipped with chronav (scenes/data/pedestrians/SOURCES.md: provenance, citation
+#: and what they may be used for): the default files of ``predict evaluate``, ``predict train`` and the bench
+SHIPPED_PEDESTRIANS_DIR = Path(__file__).resolve().parents[1] / "scenes" / "data" / "pedestrians"
+
+
+def shipped_pedestrian_files() -> list[Path]:
+    """The shipped UCY files, sorted by name (crowds_zara03.txt, uni_examples.txt)."""
+    return sorted(SHIPPED_PEDESTRIANS_DIR.glob("*.txt"))
+
+
 class PedestrianFileError(ValueError):
     """A pedestrian file that cannot be evaluated: the message names the file and the line."""
 
@@ -70,10 +82,13 @@ class FileResult:
     cv_fde: float
     tracks: int
     seconds: float
+    cv_det_ade: float = math.nan      # constant velocity fed the same noisy detections
+    cv_det_fde: float = math.nan
 
     def as_json(self) -> dict[str, float | int]:
         return {"ade": round(self.ade, 4), "fde": round(self.fde, 4), "cv_ade": round(self.cv_ade, 4),
-                "cv_fde": round(self.cv_fde, 4), "tracks": self.tracks}
+                "cv_fde": round(self.cv_fde, 4), "cv_same_detections_ade": round(self.cv_det_ade, 4),
+                "cv_same_detections_fde": round(self.cv_det_fde, 4), "tracks": self.tracks}
 
 
 def read_annotations(path: Path, dt: float = 0.4) -> Annotations:
@@ -140,10 +155,26 @@ def read_people_csv_frames(path: Path, dt: float) -> Annotations:
     on_grid = np.flatnonzero(np.abs(grid - k) < 0.2)
     frames, first = np.unique(k[on_grid], return_index=True)
     rows = on_grid[first]
+    present = people_rows(path)       # the rows written: the reader holds a person who left at their last state
+    written = {(name, float(t)) for name, track in present.items() for t in track[:, 0]}
     people = [{pid: (float(tracks.x[r, pid]), float(tracks.y[r, pid])) for pid in range(len(tracks.names))
-               if np.isfinite(tracks.x[r, pid])} for r in rows.tolist()]
+               if (tracks.names[pid], float(tracks.times[r])) in written} for r in rows.tolist()]
     return Annotations(path.name, frames, people, tracks.times[rows], tuple(tracks.names),
                        tuple(tracks.roles) or ("resident",) * len(tracks.names))
+
+
+def people_rows(path: Path) -> dict[str, NDArray[np.float64]]:
+    """Each person's rows of a (checked) people.csv as written: (n, 5) arrays of t, x, y, vx, vy in
+    time order.  Why not ``read_people_csv``'s tracks: they hold a person missing from the file at
+    their nearest known state, and a replayed person who left (or has not entered yet) is not
+    standing there; the benchmark and the live prediction need who was really present."""
+    import csv
+
+    rows: dict[str, list[tuple[float, ...]]] = {}
+    with path.open(encoding="utf-8", newline="") as handle:
+        for record in csv.DictReader(handle):
+            rows.setdefault(record["name"], []).append(tuple(float(record[k]) for k in ("t", "x", "y", "vx", "vy")))
+    return {name: np.array(values) for name, values in rows.items()}
 
 
 def windows(data: Annotations, length: int) -> list[tuple[int, int]]:
@@ -245,7 +276,7 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
             if np.hypot(*(b - a)) < min_speed * (obs - 1) * dt:
                 continue
         by_start.setdefault(start, []).append(pid)
-    errors, cv_errors = [], []
+    errors, cv_errors, cv_det_errors = [], [], []
     for start, pids in by_start.items():
         tracker = observer_tracker(noise, model)
         for k in range(start, start + obs):
@@ -278,26 +309,34 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
             future = truth[obs:]
             errors.append(np.linalg.norm(ahead - future, axis=1))
             cv_errors.append(np.linalg.norm(constant_velocity(truth[:obs], pred) - future, axis=1))
+            seen = np.array([noisy[k][pid] for k in (start + obs - 2, start + obs - 1)])
+            cv_det_errors.append(np.linalg.norm(constant_velocity(seen, pred) - future, axis=1))
     if not errors:
         raise PedestrianFileError(f"{data.name}: no person is present in {obs + pred} consecutive frames "
                                   f"(--obs {obs} + --pred {pred})"
                                   + (f" walking at {min_speed:g} m/s or faster" if min_speed > 0 else "")
                                   + "; nothing to evaluate")
-    e, c = np.array(errors), np.array(cv_errors)
+    e, c, d = np.array(errors), np.array(cv_errors), np.array(cv_det_errors)
     return FileResult(float(e.mean()), float(e[:, -1].mean()), float(c.mean()), float(c[:, -1].mean()),
-                      len(errors), time.perf_counter() - started)
+                      len(errors), time.perf_counter() - started, float(d.mean()), float(d[:, -1].mean()))
 
 
 def summary(results: dict[str, FileResult]) -> dict[str, object]:
     """The ``--json`` object: per file, and the file-averaged ADE/FDE over the file-averaged baseline
-    (the literature's "average over the sequences", each file counting once)."""
-    ade = np.mean([r.ade for r in results.values()])
-    fde = np.mean([r.fde for r in results.values()])
-    cv_ade = np.mean([r.cv_ade for r in results.values()])
-    cv_fde = np.mean([r.cv_fde for r in results.values()])
+    (the literature's "average over the sequences", each file counting once), for both baselines:
+    constant velocity on the true positions (``*_over_cv``) and fed the same noisy detections
+    (``*_over_cv_same_detections``)."""
+    def mean(attr: str) -> float:
+        return float(np.mean([getattr(r, attr) for r in results.values()]))
+
+    def ratio(a: str, b: str) -> float | None:
+        top, bottom = mean(a), mean(b)
+        return round(top / bottom, 4) if bottom > 0 and math.isfinite(bottom) else None
+
     return {"files": {name: r.as_json() for name, r in results.items()},
-            "ade_over_cv": round(float(ade / cv_ade), 4) if cv_ade > 0 else None,
-            "fde_over_cv": round(float(fde / cv_fde), 4) if cv_fde > 0 else None}
+            "ade_over_cv": ratio("ade", "cv_ade"), "fde_over_cv": ratio("fde", "cv_fde"),
+            "ade_over_cv_same_detections": ratio("ade", "cv_det_ade"),
+            "fde_over_cv_same_detections": ratio("fde", "cv_det_fde")}
 
 
 def evaluate_files(paths: Sequence[Path], dt: float = 0.4, **options: object) -> dict[str, FileResult]:

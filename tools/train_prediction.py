@@ -14,7 +14,7 @@ constant-velocity rollout of the corrected velocity and the true future at the 1
 itself) plus ``--weight-decay`` x the squared weights; nothing random but the seeded noise and the
 seeded start, so the same command gives the same file.
 
-Data rules (../shared/data/pedestrians/SOURCES.md): only the two UCY tuning files; the shipped
+Data rules (scenes/data/pedestrians/SOURCES.md): only the two UCY tuning files; the shipped
 model is trained on both.  Cross-file figures (docs/prediction.md): train on one (``--out`` a temp
 file), then ``chronav predict evaluate OTHER --noise 0.02 --model THAT``.
 
@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_FILES = sorted((REPO.parent / "shared" / "data" / "pedestrians").glob("*.txt"))
+DEFAULT_FILES = sorted((REPO / "scenes" / "data" / "pedestrians").glob("*.txt"))   # shipped (SOURCES.md there)
 OBS, PRED, DT = 8, 12, 0.4
 
 
@@ -138,7 +138,10 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
     per_file = [parts[i * len(noise_seeds):(i + 1) * len(noise_seeds)] for i in range(len(files))]
     features = np.concatenate([p[0] for p in parts])
     if len(features) == 0:
-        raise SystemExit("no window to train on: the files hold no walker seen for 20 consecutive frames")
+        from tools.prediction_eval import PedestrianFileError
+
+        raise PedestrianFileError(f"{', '.join(p.name for p in files)}: no window to train on (no walker seen for "
+                                  f"{OBS + PRED} consecutive frames at {noise:g} m of noise)")
     params, losses = fit(features, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts]),
                          hidden, weight_decay, seed, iterations)
     provenance = {
@@ -209,7 +212,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                              "by a model trained without it (blocked)")
     args = parser.parse_args(argv)
     if not args.files:
-        raise SystemExit("no pedestrian files given and none in ../shared/data/pedestrians")
+        raise SystemExit("no pedestrian files given and none in scenes/data/pedestrians")
     sys.path.insert(0, str(REPO))
     if args.blocked:
         print(json.dumps(blocked(args.files, args.blocked, args.noise, args.noise_seeds, args.seed, hidden=args.hidden,

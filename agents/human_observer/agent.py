@@ -15,20 +15,22 @@ from __future__ import annotations
 
 import math
 import zlib
+from pathlib import Path
 
 import numpy as np
 import shapely
 
-from agents.lib.perception.tracking import Detection, observer_tracker
+from agents.lib.perception import prediction_log, walker_model
+from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap.motion import MotionParams, predict_many
 from agents.world.dsr_readers import dsr_people, running_activities
-from agents.world.dsr_writers import write_interactions, write_person
+from agents.world.dsr_writers import remove_person, write_interactions, write_person
 from agents.world.freshness import mark_observed, observed_up_to
 from agents.world.interactions import interaction_pairs, observed_conversations, scene_conversations
-from agents.world.vocabulary import GROUND_TRUTH_PEOPLE, WORLD
+from agents.world.vocabulary import CLOCK, GROUND_TRUTH_PEOPLE, WORLD, ClockMode
 from scenes.geometry import angle_difference
 
 TRAIL_S = 20.0               # the recording shows each person's last 20 s of track (a crowd stays legible)
@@ -46,12 +48,17 @@ class HumanObserverAgent(Agent):
     def setup(self, graph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
-        self.noise_xy = float(self.config.option("noise_xy", "0.02"))
+        self.noise_xy = float(self.config.option("noise_xy", str(OBSERVER_NOISE_M)))
         self.noise_theta = float(self.config.option("noise_theta", "0.03"))
         self.seed = int(self.config.option("seed", "7"))
         self.lockstep = self.config.option("perception_lockstep", "0") == "1"
         self.perfect = self.noise_xy == 0.0 and self.noise_theta == 0.0
-        self.tracker = observer_tracker(self.noise_xy)
+        model_path = self.config.option("walker_model", "")   # chronav launch/evaluate --model FILE
+        self.tracker = observer_tracker(self.noise_xy, walker_model.load(Path(model_path)) if model_path else None)
+        if model_path:
+            self.log.info("walker model %s (%s)", model_path,
+                          "applies" if self.tracker.model is not None else
+                          f"not used: trained for another detector noise than {self.noise_xy:g} m")
         self.roles: dict[str, str] = {}
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
@@ -60,6 +67,37 @@ class HumanObserverAgent(Agent):
         walls = [shapely.LineString(w) for w in self.scene.walls if len(w) >= 2]
         self._walls = shapely.union_all(walls) if walls else None
         self._motion = MotionParams()
+        self._predicted_slot = -1
+        self._predictions = self._open_predictions()
+
+    def _open_predictions(self):
+        """The live prediction log (agents/lib/perception/prediction_log.py) in the run's directory,
+        appended (a restarted observer continues it)."""
+        if self.config.run_dir is None:
+            return None
+        return (self.config.run_dir / prediction_log.PREDICTIONS_FILE).open("a", encoding="utf-8", buffering=1 << 16)
+
+    def teardown(self) -> None:
+        if self._predictions is not None:
+            self._predictions.close()
+            self._predictions = None
+
+    def _log_predictions(self, now_s: float) -> None:
+        """Every EVERY_S of sim time while the robot drives (when the simulator writes people.csv, the
+        truth they are scored against), what the social map predicts for each walker, from what this
+        agent published (read back as the navigation reads it: walls, agenda and all)."""
+        slot = math.floor(now_s / prediction_log.EVERY_S + 1e-6)
+        if self._predictions is None or slot == self._predicted_slot:
+            return
+        clock = self.graph.get_node_by_name(CLOCK)
+        if clock is None or clock.attrs.get("mode") != ClockMode.DRIVING:
+            return
+        self._predicted_slot = slot
+        people = dsr_people(self.graph)
+        lines = [prediction_log.record(now_s, p.name, p.x, p.y, found.times.tolist(), found.points.tolist())
+                 for p, found in zip(people, predict_many(people, self._motion, self._walls), strict=True)
+                 if found is not None and len(found.times)]
+        self._predictions.writelines(lines)
 
     def _truth(self) -> tuple[float, list[tuple[str, str, float, float, float, float, float]]] | None:
         node = self.graph.get_node_by_name(GROUND_TRUTH_PEOPLE)
@@ -95,8 +133,15 @@ class HumanObserverAgent(Agent):
                 rng = self._noise(name, now_s, (x, y, theta) if math.hypot(vx, vy) < TRUTH_STILL_MPS else None)
                 detections.append(Detection(name, x + rng.normal(0, self.noise_xy), y + rng.normal(0, self.noise_xy),
                                             theta + rng.normal(0, self.noise_theta)))
-            for name in self.tracker.update(now_s, detections):
+            tracks = self.tracker.update(now_s, detections)
+            for name in [n for n, track in tracks.items() if now_s - track.updated_s > LOST_S]:
+                del tracks[name]          # not detected for LOST_S: they left (a replayed record ended)
+            for name in tracks:
                 estimates[name] = self.tracker.estimate(name, now_s)
+        for name in [n for n in self.published if n not in estimates]:
+            remove_person(self.graph, name)     # left the scene: the social map forgets them too
+            del self.published[name]
+            self.trails.pop(name, None)
         for name, estimate in estimates.items():
             self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}
@@ -105,6 +150,7 @@ class HumanObserverAgent(Agent):
                                                          [*scene_conversations(self.scene),
                                                           *observed_conversations(seen)]))
         mark_observed(self.graph, self.config.name, now_s)
+        self._log_predictions(now_s)
         self._draw(now_s, estimates)
 
     def _draw(self, now_s: float, estimates: dict[str, tuple[float, float, float, float, float]]) -> None:

@@ -11,19 +11,64 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from agents.lib.crowd.model import ROLE_SPEED_MPS, ROUTINE_DWELL_S, WALKER_SPEED_MPS, Building, Thing, Walker
+from agents.lib.crowd.model import (BODY_RADIUS_M, ROLE_SPEED_MPS, ROUTINE_DWELL_S, WALKER_SPEED_MPS, Building,
+                                    Thing, Walker)
 from agents.lib.crowd.routes import NoRoute, Router
 from agents.world.building import door_segment
 from agents.world.motion import person_at
 from scenes.clock import parse_clock
+from scenes.crowd_recording import Recording, RecordingError, Track, read_recording
 from scenes.geometry import posed_polygon
 from scenes.loader import LoadedScene
-from scenes.model import PersonSpec, Scene, Trapezoid
+from scenes.model import PersonSpec, RecordingSpec, Scene, Trapezoid
+
+_RECORDINGS: dict[tuple[str, float, float, int], Recording] = {}   # (path, dt, mtime, size): read once a process
 
 
-def walker_of(scene: Scene, person: PersonSpec) -> Walker:
-    """A scene person with the defaults of their role and routine applied."""
+def scene_recordings(loaded: LoadedScene) -> dict[str, tuple[RecordingSpec, Recording]]:
+    """The scene's recordings by name, read (scenes/crowd_recording.py); a bad file is a SourceError
+    at its ``recordings`` entry, with the file's own line in the message."""
+    out = {}
+    for i, spec in enumerate(loaded.scene.recordings):
+        path = loaded.resolve(spec.file)
+        try:
+            stat = path.stat()
+            key = (str(path.resolve()), float(spec.dt), stat.st_mtime, stat.st_size)
+            if key not in _RECORDINGS:
+                if len(_RECORDINGS) > 8:
+                    _RECORDINGS.clear()
+                _RECORDINGS[key] = read_recording(path, spec.dt)
+            out[spec.name] = (spec, _RECORDINGS[key])
+        except FileNotFoundError:
+            raise loaded.error(("recordings", i, "file"), f"recording file {spec.file!r} not found "
+                               f"(looked for {path})") from None
+        except (RecordingError, OSError) as exc:
+            raise loaded.error(("recordings", i, "file"), f"recording {spec.name!r}: {exc}") from None
+    return out
+
+
+def _replayed(scene: Scene, person: PersonSpec, recordings: dict[str, tuple[RecordingSpec, Recording]]) -> Walker:
+    """A ``routine: replay`` person: their record on the scene's clock (the recording's ``start``,
+    default the day's start, is its first frame)."""
+    spec, recording = recordings[person.recording or next(iter(recordings))]
+    track: Track = recording.tracks[int(person.track or 0)]
+    offset = parse_clock(spec.start) if spec.start is not None else scene.clock.start_s
+    x, y, _, _ = track.at(track.start_s)
+    reactive = (person.replay or scene.crowd.replay) == "reactive"
+    return Walker(person.name, person.role, "replay", (x, y, person.pose.theta),
+                  record=lambda t, tr=track, o=offset: tr.at(t - o),
+                  present=(offset + track.start_s, offset + track.end_s), reactive=reactive)
+
+
+def walker_of(scene: Scene, person: PersonSpec,
+              recordings: dict[str, tuple[RecordingSpec, Recording]] | None = None) -> Walker:
+    """A scene person with the defaults of their role and routine applied (``recordings``: the
+    scene's, read by ``scene_recordings``, for its ``routine: replay`` people)."""
     pose = (person.pose.x, person.pose.y, person.pose.theta)
+    if person.routine == "replay":
+        if not recordings:
+            raise ValueError(f"{person.name!r} replays a recording, but none was read (scene_recordings)")
+        return _replayed(scene, person, recordings)
     if person.routine == "stay":
         moves = tuple(_moves(person))
         script = (lambda t, p=person: _pose(person_at(p, t))) if person.waypoints else None
@@ -67,7 +112,8 @@ def check_people(loaded: LoadedScene) -> None:
     cells are not walls for them yet), someone fetches those marked ``escort``, and each reaches
     every room of their routine from where they start (SourceError at the person's key)."""
     scene = loaded.scene
-    walking = [(i, p) for i, p in enumerate(scene.people) if p.routine != "stay"]
+    check_replayed(loaded)
+    walking = [(i, p) for i, p in enumerate(scene.people) if p.routine not in ("stay", "replay")]
     if not walking:
         return
     if scene.map is not None:
@@ -95,6 +141,48 @@ def check_people(loaded: LoadedScene) -> None:
                 raise loaded.error(key, f"{person.name!r} cannot walk from ({start[0]:g}, {start[1]:g}) to room "
                                    f"{room!r}: walls or furniture close the way (is a door missing or narrower "
                                    "than 0.6 m?)") from None
+
+
+def check_replayed(loaded: LoadedScene) -> None:
+    """The ``routine: replay`` people name a recording the scene has and an id in it, and their
+    whole record lies inside the scene's rooms, clear of the walls (a person whose record starts
+    inside a wall is refused with the reason, never moved silently); SourceError at the key."""
+    scene = loaded.scene
+    replayed = [(i, p) for i, p in enumerate(scene.people) if p.routine == "replay"]
+    names = [r.name for r in scene.recordings]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise loaded.error(("recordings", names.index(dup), "name"), f"two recordings are named {dup!r}")
+    if not replayed:
+        return
+    recordings = scene_recordings(loaded)
+    rooms = shapely.union_all([shapely.Polygon(r.polygon) for r in scene.rooms])
+    walls = shapely.MultiLineString([list(w) for w in scene.walls if len(w) >= 2]) if scene.walls else None
+    for i, person in replayed:
+        if person.recording is None and len(recordings) != 1:
+            raise loaded.error(("people", i), f"{person.name!r} replays a track, but the scene has "
+                               f"{len(recordings)} recordings: say which with 'recording: NAME'")
+        if person.recording is not None and person.recording not in recordings:
+            raise loaded.error(("people", i, "recording"), f"no recording named {person.recording!r} "
+                               f"(the scene's: {', '.join(recordings) or 'none'})")
+        spec, recording = recordings[person.recording or next(iter(recordings))]
+        if person.track not in recording.tracks:
+            raise loaded.error(("people", i, "track"), f"{person.name!r}: person {person.track} is not in "
+                               f"recording {spec.name!r} ({spec.file})")
+        track = recording.tracks[int(person.track or 0)]
+        inside = shapely.contains_xy(rooms, track.xy[:, 0], track.xy[:, 1])
+        if not inside.all():
+            k = int(np.flatnonzero(~inside)[0])
+            raise loaded.error(("people", i, "track"), f"{person.name!r} walks outside the scene's rooms at "
+                               f"({track.xy[k, 0]:.2f}, {track.xy[k, 1]:.2f}), {track.t[k]:.1f} s into recording "
+                               f"{spec.name!r} (its line {track.first_line} onwards): widen the rooms or leave "
+                               "this person out")
+        if walls is not None:
+            near = shapely.distance(walls, shapely.points(track.xy[:1])) < BODY_RADIUS_M
+            if near.any():
+                raise loaded.error(("people", i, "track"), f"{person.name!r} starts inside a wall (within "
+                                   f"{BODY_RADIUS_M} m of it) at ({track.xy[0, 0]:.2f}, {track.xy[0, 1]:.2f}): "
+                                   "move the wall or leave this person out")
 
 
 def _free_point(room: shapely.Polygon, router: Router) -> tuple[float, float] | None:

@@ -170,6 +170,16 @@ def write_person(graph: GraphWriter, name: str, role: str, pose: tuple[float, fl
         _set_in_room(graph, node.id, room)
 
 
+def remove_person(graph: GraphWriter, name: str) -> bool:
+    """A person the observer no longer perceives (they left the scene: a replayed recording says
+    so) leaves the graph, their edges with them; True when there was one."""
+    node = graph.get_node_by_name(name)
+    if node is None or node.type != NodeType.PERSON:
+        return False
+    graph.delete_node(node.id)
+    return True
+
+
 def write_interactions(graph: GraphWriter, pairs: Iterable[tuple[str, str]]) -> bool:
     """Exactly these ``interacting`` edges (person -> person | object), by name; True if any changed."""
     wanted: set[tuple[int, int]] = set()

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from agents.lib.agenda import AgendaChangeError, AgendaDay, apply_change, parse_change
 from agents.lib.crowd.crowd import Crowd
 from agents.lib.crowd.model import Agenda, Appointment, PersonTruth, RobotBody
-from agents.world.crowd_scene import building_of, walker_of
+from agents.world.crowd_scene import building_of, scene_recordings, walker_of
 from agents.world.scene_world import SceneWorld
 from agents.world.timeline import agenda_at, doors_at
 from scenes.clock import parse_clock
@@ -36,7 +36,8 @@ MEMO_WORLDS = 4             # offline: how many scenes' days are kept
 
 def new_crowd(world: SceneWorld) -> Crowd:
     scene = world.scene
-    return Crowd(building_of(scene), [walker_of(scene, p) for p in scene.people], seed=scene.crowd.seed,
+    recordings = scene_recordings(world.loaded) if scene.recordings else None
+    return Crowd(building_of(scene), [walker_of(scene, p, recordings) for p in scene.people], seed=scene.crowd.seed,
                  start_s=scene.clock.start_s, robot_radius_m=scene.robot.radius)
 
 

@@ -65,16 +65,22 @@ def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: 
     with all weights zero), and the ratios are the file-averaged errors over the baseline's."""
     data = tmp_path / "circles.txt"
     _write_walkers(data)
-    clean = _evaluate(str(data))
-    assert set(clean) == {"files", "ade_over_cv", "fde_over_cv"}
+    clean = _evaluate(str(data), "--noise", "0")
+    assert set(clean) == {"files", "ade_over_cv", "fde_over_cv", "ade_over_cv_same_detections",
+                          "fde_over_cv_same_detections", "noise_m"}
     row = clean["files"]["circles.txt"]
-    assert set(row) == {"ade", "fde", "cv_ade", "cv_fde", "tracks"}
+    assert set(row) == {"ade", "fde", "cv_ade", "cv_fde", "cv_same_detections_ade", "cv_same_detections_fde", "tracks"}
+    assert row["cv_same_detections_ade"] == row["cv_ade"], "without noise the detections are the truth"
     assert row["tracks"] == 2 * (30 - 20 + 1)
     assert row["cv_ade"] > 0.05 and row["cv_fde"] > row["cv_ade"]
     assert row["ade"] == pytest.approx(row["cv_ade"], abs=1e-3) and row["fde"] == pytest.approx(row["cv_fde"], abs=1e-3)
     noisy = _evaluate(str(data), "--noise", "0.02", "--seed", "3")
     row = noisy["files"]["circles.txt"]
     assert row["ade"] > row["cv_ade"], "noise costs something"
+    assert row["cv_same_detections_ade"] != row["cv_ade"], "the second baseline sees the noisy detections"
+    assert noisy["ade_over_cv_same_detections"] == pytest.approx(row["ade"] / row["cv_same_detections_ade"], abs=2e-3)
+    default = _evaluate(str(data), "--seed", "3")
+    assert default == noisy, "the default noise is the live observer's 2 cm"
     fit_only = tmp_path / "zero.json"
     fit_only.write_text(json.dumps(_zero_model()), encoding="utf-8")
     bare = _evaluate(str(data), "--noise", "0.02", "--seed", "3", "--model", str(fit_only))["files"]["circles.txt"]
@@ -85,6 +91,9 @@ def test_predict_evaluate_reports_each_file_against_constant_velocity(tmp_path: 
     assert fast["cv_ade"] == row["cv_ade"] and fast["ade"] < row["ade"], "the observer's 10 Hz averages the noise"
     text = runner.invoke(app, ["predict", "evaluate", str(data), "--obs", "4", "--pred", "6"])
     assert text.exit_code == 0 and "circles.txt" in text.stdout and "ADE/CV" in text.stdout
+    assert "detection noise 0.02 m (the live observer's default" in text.stdout
+    given = runner.invoke(app, ["predict", "evaluate", str(data), "--obs", "4", "--pred", "6", "--noise", "0"])
+    assert "detection noise 0 m (given" in given.stdout
 
 
 @pytest.mark.parametrize(("content", "expected"), [
@@ -209,13 +218,13 @@ def test_a_runs_people_csv_is_evaluated_with_the_scenes_walls(tmp_path: Path) ->
         rows.append(f"{t0 + t:.3f},bob,staff,3.0000,1.0000,0.00000,0.0000,0.0000,")
     data = tmp_path / "people.csv"
     data.write_text("\n".join(rows) + "\n", encoding="utf-8")
-    bare = _evaluate(str(data))["files"]["people.csv"]
+    bare = _evaluate(str(data), "--noise", "0")["files"]["people.csv"]
     assert bare["tracks"] == 2 * (35 - 20 + 1), "14 s of 0.4 s frames before the gap, 1.6 s after: no window"
     scene = str(REPO_ROOT / "tests" / "data" / "crowd_small.yaml")
-    known = _evaluate(str(data), "--scene", scene)["files"]["people.csv"]
+    known = _evaluate(str(data), "--noise", "0", "--scene", scene)["files"]["people.csv"]
     assert known["cv_ade"] == bare["cv_ade"] and known["tracks"] == bare["tracks"]
     assert known["fde"] < bare["fde"] - 0.1 and known["ade"] < bare["ade"], "the wall stops the prediction"
-    walking = _evaluate(str(data), "--min-speed", "0.5")["files"]["people.csv"]
+    walking = _evaluate(str(data), "--noise", "0", "--min-speed", "0.5")["files"]["people.csv"]
     assert walking["tracks"] == 35 - 20 + 1, "ann walks in every observed stretch, bob in none"
     eth = tmp_path / "eth.txt"
     _write_walkers(eth)
@@ -263,10 +272,9 @@ def test_the_shipped_walker_model_is_the_training_scripts_on_the_two_ucy_files()
     assert [f["name"] for f in provenance["files"]] == ["crowds_zara03.txt", "uni_examples.txt"]
     assert provenance["seed"] == 0 and provenance["noise_m"] == 0.02 and 0 not in provenance["noise_seeds"], \
         "the benchmark's noise seed 0 is never trained on"
-    shared = REPO_ROOT.parent / "shared" / "data" / "pedestrians"
-    if not all((shared / f["name"]).exists() for f in provenance["files"]):
-        pytest.skip("the UCY tuning files are not next to this checkout (../shared/data/pedestrians)")
     import hashlib
+
+    shared = REPO_ROOT / "scenes" / "data" / "pedestrians"     # shipped: a fresh clone has them
 
     paths = [shared / f["name"] for f in provenance["files"]]
     assert [hashlib.sha256(p.read_bytes()).hexdigest() for p in paths] == [f["sha256"] for f in provenance["files"]]
@@ -348,7 +356,7 @@ def test_predict_evaluate_scores_any_registered_predictor(tmp_path: Path) -> Non
     unknown name is refused listing the installed ones with their packages."""
     data = tmp_path / "circles.txt"
     _write_walkers(data)
-    row = _evaluate(str(data), "--predictor", "constant_velocity")["files"]["circles.txt"]
+    row = _evaluate(str(data), "--predictor", "constant_velocity", "--noise", "0")["files"]["circles.txt"]
     assert (row["ade"], row["fde"]) == pytest.approx((row["cv_ade"], row["cv_fde"]), abs=1e-4)
     bad = runner.invoke(app, ["predict", "evaluate", str(data), "--predictor", "nope"])
     assert bad.exit_code == 2 and "constant_velocity (chronav)" in " ".join(bad.output.replace("│", " ").split())

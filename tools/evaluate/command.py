@@ -26,6 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
+from tools.walker_models import checked_model
+
 if TYPE_CHECKING:
     from tools.evaluate.sweep import RunSpec
 
@@ -233,8 +235,9 @@ MAX_SEEDS = 10_000   # seeds per scene and planner in one study (docs/limits.md)
 
 def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int | None,
              out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
-             mode: str = "in-process", record: bool = True, controllers: str | None = None) -> dict[str, Any]:
-    """The whole study; returns what ``--json`` prints."""
+             mode: str = "in-process", record: bool = True, controllers: str | None = None,
+             model: Path | None = None) -> dict[str, Any]:
+    """The whole study; returns what ``--json`` prints (``model``: the observer's walker model file)."""
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
     from tools.evaluate.executors import parse_executor
@@ -249,7 +252,7 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     scene_paths = resolve_scenes(scenes)
     out_dir = prepare_out_dir(out, resume)
     seed_list = list(range(first_seed, first_seed + seeds))
-    specs = plan_sweep(scene_paths, chosen, seed_list, drivers)
+    specs = plan_sweep(scene_paths, chosen, seed_list, drivers, str(model.resolve()) if model is not None else "")
     try:
         executor = parse_executor(executor_text, jobs, mode, record)
     except ValueError as exc:
@@ -361,6 +364,8 @@ def evaluate_command(
         executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
         resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
         timeout: float = typer.Option(900.0, "--timeout", help="wall-clock limit of each run in seconds"),
+        model: Path = typer.Option(None, "--model", help="walker model file for the human observer (chronav "
+                                                         "predict train; default: the shipped one)"),
         as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
     """Run every SCENE x planner x seed, then write the table and DIR/report.html.
 
@@ -375,7 +380,7 @@ def evaluate_command(
     try:
         summary = evaluate(scenes, planners=planners, controllers=controllers, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
                            executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                           command=command, mode=mode, record=not no_record)
+                           command=command, mode=mode, record=not no_record, model=checked_model(model))
     except EvaluateError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         raise typer.Exit(2) from None

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.world.vocabulary import MissionState
+from tools.evaluate.prediction_section import live_prediction_html
 from tools.evaluate.stats import REFERENCE, PairedTest, Summary, missions_of, paired_tests, planners_of, summarise
 
 REPORT = "report.html"
@@ -258,6 +259,7 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     parts.append("<h2>Summary</h2>" + _summary_table(summaries, rows, planners, metrics))
     parts += _per_mission_html(summaries, rows, planners, metrics)
     parts += _tests_html(tests)
+    parts += live_prediction_html(runs)       # tools/evaluate/prediction_section.py
     parts += _figures_html(figures, main)
     parts += _runs_html(runs, out_dir)
     path = out_dir / REPORT

@@ -75,6 +75,7 @@ class RunSpec:
     planner: str
     seed: int
     controller: str = DEFAULT_CONTROLLER
+    model: str = ""   # the observer's walker model file (evaluate --model); "" the shipped one
 
     @property
     def method(self) -> str:
@@ -83,7 +84,7 @@ class RunSpec:
     @property
     def key(self) -> str:
         extra = "" if self.controller == DEFAULT_CONTROLLER else f"|{self.controller}"
-        return f"{self.scene}|{self.planner}|{self.seed}{extra}"
+        return f"{self.scene}|{self.planner}|{self.seed}{extra}" + (f"|{self.model}" if self.model else "")
 
     @property
     def label(self) -> str:
@@ -99,13 +100,13 @@ class RunSpec:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> RunSpec:
         return cls(str(data["scene"]), str(data["planner"]), int(data["seed"]),
-                   str(data.get("controller", DEFAULT_CONTROLLER)))
+                   str(data.get("controller", DEFAULT_CONTROLLER)), str(data.get("model") or ""))
 
 
 def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[int],
-               controllers: Sequence[str] = (DEFAULT_CONTROLLER,)) -> list[RunSpec]:
+               controllers: Sequence[str] = (DEFAULT_CONTROLLER,), model: str = "") -> list[RunSpec]:
     """Every combination, seed by seed: a sweep stopped half way already holds whole seeds."""
-    return [RunSpec(str(scene), planner, seed, controller) for seed in seeds for scene in scenes
+    return [RunSpec(str(scene), planner, seed, controller, model) for seed in seeds for scene in scenes
             for planner in planners for controller in controllers]
 
 
@@ -116,6 +117,8 @@ def agent_options(spec: RunSpec) -> dict[str, list[str]]:
 
     options = {name: [f"seed={spec.seed}", *LOCKSTEP_OPTIONS.get(name, [])] for name in AGENTS}
     options["social_navigation"] += [f"planner={spec.planner}", f"controller={spec.controller}"]
+    if spec.model:
+        options["human_observer"].append(f"walker_model={spec.model}")
     # Lockstep without wall-clock escapes: sim time waits while the agents plan and perceive, and a
     # late command (a slow replan on a loaded machine) is waited for instead of braking after 1 wall s.
     options["sim_robot"] += [f"watchdog_s={LOCKSTEP_WATCHDOG_S}"]

@@ -51,7 +51,8 @@ def problems_text(problems: dict[str, str]) -> str:
 def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, record: bool, restart_limit: int,
                       as_json: bool, with_report: bool, hang_timeout_s: float | None = None,
                       startup_timeout_s: float | None = None, ros_domain: int | None = None,
-                      robot: str = "sim", in_process: bool = False, controller: str | None = None) -> int:
+                      robot: str = "sim", in_process: bool = False, controller: str | None = None,
+                      agent_options: dict[str, list[str]] | None = None) -> int:
     """Run the system with a progress display; print the result (and the metrics report); exit code.
     ``controller`` names the navigation's local controller (checked by the caller).
 
@@ -71,8 +72,11 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
                                                                                      startup_timeout_s),
                                                 ("ros_domain", ros_domain), ("robot", robot))
                               if v is not None and not in_process}
+    options = {name: list(values) for name, values in (agent_options or {}).items()}   # e.g. launch --model
     if controller is not None:
-        limits["agent_options"] = {"social_navigation": [f"controller={controller}"]}
+        options.setdefault("social_navigation", []).append(f"controller={controller}")
+    if options:
+        limits["agent_options"] = options
     plain_tick = _PlainProgress(err)
     try:
         if interactive:

@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import typer
 
+from tools.walker_models import model_options
 from tools.launch import (DEFAULT_HANG_TIMEOUT_S, DEFAULT_SCENE, DEFAULT_STARTUP_TIMEOUT_S, LaunchError, check_rate,
                           check_timeout)
 
@@ -70,6 +72,8 @@ def register(app: typer.Typer) -> None:
                controller: str = typer.Option(None, "--controller",
                                               help="the robot's local controller, a registered one (`chronav "
                                                    "plugins` lists them; default elastic_band)"),
+               model: Path | None = typer.Option(None, "--model", help="walker model file for the human observer "
+                                                                        "(chronav predict train; default: the shipped one)"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -92,7 +96,8 @@ def register(app: typer.Typer) -> None:
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,
-                                 robot=robot, in_process=in_process, controller=controller)
+                                 robot=robot, in_process=in_process, controller=controller,
+                                 agent_options=model_options(model))
         raise typer.Exit(code)
 
     @app.command("demo")

@@ -48,6 +48,7 @@ from agents.lib.crowd.escorts import Escorts
 from agents.lib.crowd.model import Agenda, Building, PersonTruth, RobotBody, Walker
 from agents.lib.crowd.motion import Motion
 from agents.lib.crowd.person import FIRST_DECISION, Person, Task, person_rng
+from agents.lib.crowd.replay import Replayed
 from agents.lib.crowd.routines import Routines
 from agents.lib.crowd.schedule import ARRIVE_EARLY_S, Schedule
 
@@ -82,6 +83,8 @@ class Crowd:
         self.escorts = Escorts(building, self.people, self.motion, self.schedule, self.routines)
         self.motion.pick_up = self.escorts.pick_up
         self.motion.rejoin = self.routines.rejoin
+        self.replayed = Replayed([self.people[w.name] for w in self.walkers if w.routine == "replay"], self.motion)
+        self.replayed.stage(self.start_s)
 
     def _first_move_s(self, walker: Walker) -> float:
         """People do not all get up at the start of the day: the first stay lasts a part of a dwell."""
@@ -121,11 +124,13 @@ class Crowd:
 
     def next_event_s(self, t_s: float) -> float:
         """The next routine event after ``t_s``: someone standing decides to move on (their stay or
-        chat ends, an activity calls them) or a scripted walk starts; inf when none is known.
+        chat ends, an activity calls them), a scripted walk starts or a recorded person enters; inf when
+        none is known.
         Why: the simulator's idle skip stops there, so the DSR shows each event at its time."""
         times = [p.next_check_s for p in self._dynamic if p.task.kind == "stand" and p.next_check_s > t_s + 1e-9]
         times += [t0 for p in self._scripted for t0, _ in p.spec.moves if t0 > t_s + 1e-9]
-        return min(times, default=math.inf)
+        times.append(self.replayed.next_entry_s(t_s))
+        return min(times)
 
     def at(self, t_s: float) -> tuple[PersonTruth, ...]:
         """Everyone at ``t_s`` in [t - step, t] of the latest state, linearly interpolated."""
@@ -134,6 +139,11 @@ class Crowd:
         out = []
         for w in self.walkers:
             person = self.people[w.name]
+            if w.routine == "replay":
+                truth = self.replayed.truth(person, t_s, f)
+                if truth is not None:       # None: not in the scene at this time (the record says)
+                    out.append(truth)
+                continue
             if not w.dynamic:
                 out.append(self._scripted_truth(w, t_s))
                 continue
@@ -170,16 +180,19 @@ class Crowd:
                            if any(t0 - self.step_s < t < t1 + self.step_s for t0, t1 in p.spec.moves)]
         standing = [p for p in self._dynamic if p.task.kind == "stand"]
         turning = motion.turning(standing)
-        if not walking and not scripted_moving and not turning and (robot is None or not robot.driving):
+        t1 = self.start_s + (self.k + 1) * self.step_s
+        if not walking and not scripted_moving and not turning and (robot is None or not robot.driving) \
+                and not self.replayed.busy(t, t1):
             self._quiet_jump(t, agenda, until_s)
             return
-        t1 = self.start_s + (self.k + 1) * self.step_s
+        self.replayed.before_step(t)
         motion.step(t, t1, walking, scripted_moving, turning, standing, self._scripted, robot)
+        self.replayed.after_step(t1)
         self.k += 1
 
     def _quiet_jump(self, t: float, agenda: Agenda, until_s: float) -> None:
         """Nobody moves: jump to the step where the next decision is due (or the caller's time)."""
-        due = min([p.next_check_s for p in self._dynamic] + [agenda.next_change_s])
+        due = min([p.next_check_s for p in self._dynamic] + [agenda.next_change_s, self.replayed.next_entry_s(t)])
         for person in self._scripted:
             for t0, _ in person.spec.moves:
                 if t0 > t:

@@ -44,11 +44,17 @@ class Walker:
     visits: str | None = None
     script: Callable[[float], Pose] | None = field(default=None, compare=False)   # stay: pose at t
     moves: tuple[tuple[float, float], ...] = ()   # stay: the [t0, t1) intervals the script walks
+    # replay (replay.py): position and velocity (x, y, vx, vy) along the record at a clock time, the
+    # [t0, t1] the person is in the scene, and whether they avoid the robot (reactive) or not (exact)
+    record: Callable[[float], tuple[float, float, float, float]] | None = field(default=None, compare=False)
+    present: tuple[float, float] | None = None
+    reactive: bool = False
 
     @property
     def dynamic(self) -> bool:
-        """Walks by itself (the behaviour decides); a ``stay`` person only follows their script."""
-        return self.routine != "stay"
+        """Walks by itself (the behaviour decides); a ``stay`` person only follows their script, a
+        ``replay`` one their record."""
+        return self.routine not in ("stay", "replay")
 
     @property
     def radius_m(self) -> float:

@@ -56,10 +56,14 @@ GATE_CHI2 = 9.21            # 2 degrees of freedom, 99 %
 NAME_MISMATCH_CHI2 = 6.0    # association cost of a detection named after someone else (module doc)
 MAX_GAP_S = 2.0
 LOST_S = 3.0                # a track not updated for this long reports no velocity
+ASSOCIATE_S = 1.0           # a track not updated for this long is matched by its own name only
 STILL_MPS = 0.1             # an estimated speed below this is sensor noise on a still person
 MIN_SIGMA_M = 0.01          # the measurement noise the tracker assumes at least (a perfect sensor is never perfect)
 SMOOTHING_S = 1.2           # at most this many seconds of detections in the velocity's line fit
 VELOCITY_SIGMA_MPS = 0.04   # the velocity noise the fit aims at: as few detections as reach it (module doc)
+#: the human observer's default detector: 2 cm of position noise per axis (its ``noise_xy`` option),
+#: what ``chronav predict evaluate`` assumes unless told otherwise (one value, so the two agree)
+OBSERVER_NOISE_M = 0.02
 MODEL_WINDOW_S = (walker_model.LAGS - 0.5) * walker_model.GRID_S   # the detections the walker model reads
 
 
@@ -139,10 +143,13 @@ class Tracker:
         if gap > MAX_GAP_S or gap < 0:
             self.tracks = {d.name: self._new(d, t_s) for d in detections}
             return self.tracks
-        names = sorted(self.tracks)
-        tracks = [self.tracks[n] for n in names]
-        for track in tracks:
+        for track in self.tracks.values():
             self._predict(track, gap)
+        # A track missed for ASSOCIATE_S takes part in the assignment no more: only a detection named
+        # after it re-acquires it (below).  Else a person entering where another left (a replayed
+        # crowd) was taken for them, and the gone person's track walked off with the newcomer.
+        names = sorted(n for n, track in self.tracks.items() if t_s - track.updated_s <= ASSOCIATE_S)
+        tracks = [self.tracks[n] for n in names]
         unmatched = list(range(len(detections)))
         matched: set[str] = set()
         if tracks and detections:

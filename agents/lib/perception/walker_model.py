@@ -160,7 +160,7 @@ def load(path: Path | str | None = None) -> WalkerModel:
         raw = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise WalkerModelError(f"{path}: no such file (the walker model; train it with "
-                               f"tools/train_prediction.py)") from None
+                               f"chronav predict train)") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise WalkerModelError(f"{path}: cannot be read as JSON ({exc.__class__.__name__}: {exc})") from None
     return from_json(raw, path)
