@@ -20,6 +20,7 @@ import shapely
 import shapely.ops
 
 from scenes.clock import parse_clock
+from scenes.days import day_number, scene_dates
 from scenes.geometry import posed_polygon
 
 from scenes.model import PersonSpec, Pose, Room, Scene
@@ -103,6 +104,20 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
         _check_waypoint_order(i, person, located)
         _check_person_references(i, person, located, names)
     _check_mission_references(scene, located, names)
+    _check_change_days(scene, located)
+
+
+def _check_change_days(scene: Scene, located: LocatedYaml) -> None:
+    """A scripted change names a day of the scene (1 to clock.days, or a date among them)."""
+    first, days = scene.clock.date, scene.clock.days
+    for section, changes in (("agenda_changes", scene.agenda_changes), ("door_changes", scene.door_changes)):
+        for i, change in enumerate(changes):
+            number = day_number(change.day, first)
+            if not 1 <= number <= days:
+                last = scene_dates(first, days)[-1]
+                raise located.error((section, i, "day"), f"day {change.day} is not a day of this scene: it spans "
+                                    f"{days} day{'s' if days > 1 else ''}, {first.isoformat()} to "
+                                    f"{last.isoformat()} (set clock.days, or name a day 1 to {days})")
 
 
 def _check_unique_names(scene: Scene, located: LocatedYaml) -> None:
