@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Sequence
 from dataclasses import dataclass
+from datetime import date
 from pathlib import Path
 from typing import Protocol
 
@@ -110,12 +111,14 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
 def _check_change_days(scene: Scene, located: LocatedYaml) -> None:
     """A scripted change names a day of the scene (1 to clock.days, or a date among them)."""
     first, days = scene.clock.date, scene.clock.days
-    for section, changes in (("agenda_changes", scene.agenda_changes), ("door_changes", scene.door_changes)):
-        for i, change in enumerate(changes):
-            number = day_number(change.day, first)
+    named: list[tuple[str, list[date | int | None]]] = [
+        ("agenda_changes", [c.day for c in scene.agenda_changes]), ("door_changes", [c.day for c in scene.door_changes])]
+    for section, changes in named:
+        for i, day in enumerate(changes):
+            number = day_number(day, first)
             if not 1 <= number <= days:
                 last = scene_dates(first, days)[-1]
-                raise located.error((section, i, "day"), f"day {change.day} is not a day of this scene: it spans "
+                raise located.error((section, i, "day"), f"day {day} is not a day of this scene: it spans "
                                     f"{days} day{'s' if days > 1 else ''}, {first.isoformat()} to "
                                     f"{last.isoformat()} (set clock.days, or name a day 1 to {days})")
 

@@ -16,7 +16,7 @@ def register(app: typer.Typer) -> None:
               as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
         """Validate scenes: schema, names, geometry, reachability and agenda. Exit 1 if any file has an error;
         notes (overlapping activities) are printed but allowed."""
-        from agents.world.scene_world import load_world
+        from agents.world.scene_world import load_world, resolve_world
         from scenes.yamlio import SourceError
 
         results: dict[str, str] = {}
@@ -25,6 +25,8 @@ def register(app: typer.Typer) -> None:
         for file in files:
             try:
                 loaded = load_world(file)
+                for day in range(2, loaded.scene.clock.days + 1):   # a scene that spans days: each day's agenda
+                    resolve_world(loaded.loaded, day)
             except SourceError as exc:
                 typer.echo(str(exc), err=True)
                 results[str(file)] = str(exc)

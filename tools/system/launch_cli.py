@@ -29,6 +29,13 @@ def _option_check(check: Callable[..., Any], option: str) -> Callable[[Any], Any
     return callback
 
 
+def _spans_days(scene: str) -> bool:
+    """Whether SCENE's clock spans more than one day (its days then run one after the other)."""
+    from tools.week import scene_days
+
+    return scene_days(scene) > 1
+
+
 def register(app: typer.Typer) -> None:
     @app.command("launch")
     def launch(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
@@ -53,6 +60,10 @@ def register(app: typer.Typer) -> None:
                in_process: bool = typer.Option(False, "--in-process",
                                                help="every agent in this process, stepped in lockstep on one graph "
                                                     "(no router, no restarts; as fast as the machine allows)"),
+               days: int = typer.Option(None, "--days", min=1, help="run this many days from the scene's date "
+                                        "(default: its clock.days); one recording per day (docs/long_runs.md)"),
+               keep_days: int = typer.Option(None, "--keep-days", min=1, help="of a run of days, keep the "
+                                             "recordings and logs of the newest K days only"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -70,6 +81,15 @@ def register(app: typer.Typer) -> None:
             except ValueError:
                 raise typer.BadParameter(f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID')!r} is not a number; "
                                          "set it to 0-232 or give --ros-domain N") from None
+        if days is not None or keep_days is not None or _spans_days(scene):
+            from tools.system.week_console import run_days_with_progress
+
+            supervision = {} if in_process else {"restart_limit": restart_limit, "hang_timeout_s": hang_timeout,
+                                                 "startup_timeout_s": startup_timeout, "ros_domain": domain,
+                                                 "robot": robot}
+            raise typer.Exit(run_days_with_progress(scene, days=days, keep_days=keep_days, in_process=in_process,
+                                                    as_json=as_json, rate=rate, timeout_s=timeout,
+                                                    record=not no_record, **supervision))
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,

@@ -1,0 +1,139 @@
+"""Runs that span days (issue 41): each day's agenda, missions and scripted changes, the per-day
+accounting of result.json, the index of day recordings, retention, bad days and a full disk.
+
+The runs are in-process on tests/data/week_tiny.yaml (two days of one room, a few seconds), through
+`chronav launch` as a user types it."""
+
+from __future__ import annotations
+
+import datetime as dt
+import errno
+import json
+import os
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from agents.world.scene_world import load_world, resolve_world
+from scenes.days import day_scene_data, on_day, parse_weekday, week_seconds
+from scenes.loader import load_scene
+from scenes.yamlio import SourceError
+from tools.cli import app
+from tools.week_index import read_index, recording_of_day
+
+WEEK = Path(__file__).resolve().parents[1] / "data" / "week_tiny.yaml"
+
+
+def _variant(tmp_path: Path, *, days: int, extra_agenda: str = "", extra_missions: str = "") -> Path:
+    """week_tiny with more days and more lines in its agenda and missions."""
+    text = WEEK.read_text().replace("days: 2,", f"days: {days},")
+    text = text.replace("\nagenda_changes:", f"{extra_agenda}\nagenda_changes:")
+    text = text.rstrip("\n") + "\n" + extra_missions
+    path = tmp_path / "week_variant.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_days_of_the_week_and_the_week_clock() -> None:
+    assert parse_weekday("Monday") == "mon" and parse_weekday("TUE") == "tue"
+    with pytest.raises(ValueError, match="not a day of the week"):
+        parse_weekday("lunes")
+    tuesday = dt.date(2026, 12, 1)
+    assert on_day([], [], tuesday) and on_day(["tue"], [], tuesday) and not on_day(["mon"], [], tuesday)
+    assert on_day(["mon"], [tuesday], tuesday)
+    assert week_seconds(1, 9 * 3600) == 86400 + 32400
+
+
+def test_each_day_has_the_agenda_missions_and_changes_of_its_date() -> None:
+    loaded = load_scene(WEEK)
+    monday = day_scene_data(loaded.located.data, 1, WEEK.parent, first=loaded.scene.clock.date)
+    tuesday = day_scene_data(loaded.located.data, 2, WEEK.parent, first=loaded.scene.clock.date, seed_offset=1)
+    assert [a["id"] for a in monday["agenda"]] == ["game"] and [m["id"] for m in monday["missions"]] == ["cross"]
+    assert monday["agenda_changes"] == [] and tuesday["agenda_changes"][0]["id"] == "music"
+    assert [a["id"] for a in tuesday["agenda"]] == ["music"] and [m["id"] for m in tuesday["missions"]] == ["back"]
+    assert tuesday["clock"]["date"] == dt.date(2026, 12, 1) and "days" not in tuesday["clock"]
+    assert tuesday["crowd"]["seed"] == 1 and "weekdays" not in tuesday["agenda"][0]
+    # The scene placed on its second day: Tuesday's agenda, the change that names day 2.
+    world = resolve_world(loaded, 2)
+    assert [a.id for a in world.agenda.activities] == ["music"] and len(world.scripted) == 1
+    assert [a.id for a in load_world(WEEK).agenda.activities] == ["game"] and load_world(WEEK).scripted == ()
+
+
+def test_a_change_on_a_day_the_scene_does_not_have_is_located(tmp_path: Path) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text(WEEK.read_text().replace("day: 2, op: move", "day: 5, op: move"))
+    with pytest.raises(SourceError) as caught:
+        load_scene(path)
+    assert caught.value.key == "agenda_changes[0].day" and "spans 2 days" in caught.value.message
+
+
+def test_scene_check_checks_every_day_and_names_the_bad_one(tmp_path: Path) -> None:
+    bad = _variant(tmp_path, days=2, extra_agenda='\n  - {id: piano_class, name: Piano, object: piano, start: "09:00", '
+                                                  'end: "09:30", dates: [2026-12-01]}')
+    result = CliRunner().invoke(app, ["scene", "check", str(bad)])
+    assert result.exit_code == 1
+    assert "piano" in result.output and "(on day 2, tue 2026-12-01)" in result.output
+
+
+def test_two_days_in_process_leave_a_day_each_and_their_accounting(tmp_path: Path,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    monkeypatch.setenv("RERUN", "on")
+    result = CliRunner().invoke(app, ["launch", str(WEEK), "--in-process", "--json", "--keep-days", "1"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["ok"] and summary["days_planned"] == 2 and summary["restarts_total"] == 0
+    monday, tuesday = summary["days"]
+    assert (monday["weekday"], tuesday["weekday"], tuesday["offset_s"]) == ("mon", "tue", 86400.0)
+    assert list(monday["missions"]) == ["cross"] and list(tuesday["missions"]) == ["back"]
+    assert tuesday["missions"]["back"]["state"] == "done" and tuesday["missions_summary"]["done"] == 1
+    for day in (monday, tuesday):
+        assert day["agents"]["in_process"]["rss_mb"] > 0 and day["agents"]["in_process"]["cpu_s"] > 0
+        assert day["dsr"]["nodes"] > 0 and day["dsr"]["edges"] > 0 and day["dsr"]["tombstones"] >= 0
+        assert day["bytes_written"] >= day["rrd_bytes"] > 0 and day["metrics"]["path_length_m"] > 0
+    # Day 2 ran Tuesday's agenda: its own scene holds the music session and the change naming day 2.
+    run_dir = Path(summary["run_dir"])
+    tuesday_world = load_world(run_dir / "days" / "day2.yaml")
+    assert [a.id for a in tuesday_world.agenda.activities] == ["music"] and len(tuesday_world.scripted) == 1
+    # One recording per day; --keep-days 1 removed Monday's files but kept its accounting.
+    index = read_index(Path(summary["index"]))
+    assert [e["status"] for e in index["entries"]] == ["ok", "ok"] and index["entries"][0].get("removed")
+    assert monday["removed"] and monday["rrd"] is None and tuesday["rrd"]
+    assert recording_of_day(Path(summary["index"]), None) == run_dir / tuesday["rrd"]
+    assert len(list(run_dir.glob("*.rrd"))) == 1
+    assert [p.name for p in run_dir.iterdir() if p.is_dir() and p.name != "days"] == [tuesday["run_dir"]]
+
+
+def test_a_day_whose_agenda_cannot_be_loaded_is_refused_and_the_run_goes_on(tmp_path: Path,
+                                                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    scene = _variant(tmp_path, days=3,
+                     extra_agenda='\n  - {id: piano_class, name: Piano, object: piano, start: "09:00", end: "09:30", '
+                                  'dates: [2026-12-01]}',
+                     extra_missions='  - {id: wed_cross, time: "09:10", goal: {pose: [5.2, 1.2, 0]}, weekdays: [wed]}\n')
+    result = CliRunner().invoke(app, ["launch", str(scene), "--in-process", "--json", "--no-record"])
+    assert result.exit_code == 1, result.output
+    summary = json.loads(result.stdout)
+    assert [d["status"] for d in summary["days"]] == ["ok", "refused", "ok"]
+    assert "piano" in summary["days"][1]["reason"] and "on day 2" in summary["days"][1]["reason"]
+    assert summary["days"][2]["missions"]["wed_cross"]["state"] == "done"
+
+
+def test_a_disk_that_fills_while_rotating_ends_the_run_cleanly(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    replace = os.replace
+
+    def full_disk(src: str, dst: str) -> None:
+        if str(dst).endswith("day2.yaml"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        replace(src, dst)
+
+    monkeypatch.setattr("tools.week_index.os.replace", full_disk)
+    result = CliRunner().invoke(app, ["launch", str(WEEK), "--in-process", "--json", "--no-record"])
+    assert result.exit_code == 1
+    summary = json.loads(result.stdout)
+    assert "the disk is full" in summary["error"] and "day2.yaml" in summary["error"]
+    assert [d["day"] for d in summary["days"]] == [1] and summary["outcome"] == "error"
+    run_dir = Path(summary["run_dir"])
+    assert not list(run_dir.rglob("*.tmp")) and not (run_dir / "days" / "day2.yaml").exists()
