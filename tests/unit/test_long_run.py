@@ -137,3 +137,22 @@ def test_a_disk_that_fills_while_rotating_ends_the_run_cleanly(tmp_path: Path, m
     assert [d["day"] for d in summary["days"]] == [1] and summary["outcome"] == "error"
     run_dir = Path(summary["run_dir"])
     assert not list(run_dir.rglob("*.tmp")) and not (run_dir / "days" / "day2.yaml").exists()
+
+
+def test_the_index_opens_a_day_of_the_run_in_the_screenshot_tool_and_the_viewer(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tools.screenshot import main as screenshot
+    from tools.week_index import INDEX_KIND, main as list_days, write_json
+
+    for day in (1, 2):
+        (tmp_path / f"day{day}.rrd").write_bytes(b"rrd")
+    index = tmp_path / "index.json"
+    write_json(index, {"kind": INDEX_KIND, "entries": [
+        {"day": 1, "rrd": "day1.rrd"}, {"day": 2, "rrd": "day2.rrd"}, {"day": 3, "rrd": None, "removed": True}]})
+    assert recording_of_day(index, 1) == tmp_path / "day1.rrd" and recording_of_day(index, None) == tmp_path / "day2.rrd"
+    assert screenshot([str(index), str(tmp_path / "out.png"), "--day", "3"]) == 1
+    assert "day 3 has no recording; days with one: 1, 2" in capsys.readouterr().err
+    assert list_days([str(index)]) == 0
+    assert capsys.readouterr().out.split() == [str(tmp_path / "day1.rrd"), str(tmp_path / "day2.rrd")]
+    (tmp_path / "other.json").write_text("{}")
+    assert list_days([str(tmp_path / "other.json")]) == 1 and "not an index of a long run" in capsys.readouterr().err
