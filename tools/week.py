@@ -71,14 +71,18 @@ class LongRunResult:
 
 
 def scene_days(scene: str | Path) -> int:
-    """How many days a scene spans (its ``clock.days``); 1 if it cannot be read (the launch says why)."""
-    from scenes.loader import load_scene
-    from scenes.yamlio import SourceError
+    """How many days a scene says it spans (its ``clock.days``), read without validating the scene
+    (every launch asks); 1 if it cannot be read or says nothing usable (the launch then says why)."""
+    from scenes.loader import resolve_scene_path
+    from scenes.yamlio import SourceError, load_located_file
 
     try:
-        return load_scene(scene).scene.clock.days
+        data = load_located_file(resolve_scene_path(scene)).data
     except SourceError:
         return 1
+    clock = data.get("clock") if isinstance(data, dict) else None
+    days = clock.get("days") if isinstance(clock, dict) else None
+    return days if isinstance(days, int) and not isinstance(days, bool) and days > 1 else 1
 
 
 def check_days(days: int | None, keep_days: int | None) -> None:

@@ -156,3 +156,24 @@ def test_the_index_opens_a_day_of_the_run_in_the_screenshot_tool_and_the_viewer(
     assert capsys.readouterr().out.split() == [str(tmp_path / "day1.rrd"), str(tmp_path / "day2.rrd")]
     (tmp_path / "other.json").write_text("{}")
     assert list_days([str(tmp_path / "other.json")]) == 1 and "not an index of a long run" in capsys.readouterr().err
+
+
+def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    tiny = WEEK.parent / "eval_tiny.yaml"
+    result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "2", "--no-record", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert [(d["date"], d["status"], list(d["missions"])) for d in summary["days"]] == [
+        ("2026-11-25", "ok", ["cross"]), ("2026-11-26", "ok", ["cross"])]
+    refused = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "0"])
+    assert refused.exit_code == 2 and "--days" in refused.output
+
+
+def test_a_day_scene_points_at_the_scene_folders_files() -> None:
+    data = {"name": "s", "clock": {"date": dt.date(2026, 11, 30), "days": 3}, "agenda_file": "agenda.ics",
+            "map": {"file": "maps/ward.yaml"}}
+    day = day_scene_data(data, 3, Path("/centre/scenes"), first=dt.date(2026, 11, 30))
+    assert day["agenda_file"] == "/centre/scenes/agenda.ics" and day["map"]["file"] == "/centre/scenes/maps/ward.yaml"
+    assert day["clock"] == {"date": dt.date(2026, 12, 2)} and day["name"] == "s-day3"
