@@ -177,3 +177,24 @@ def test_a_day_scene_points_at_the_scene_folders_files() -> None:
     day = day_scene_data(data, 3, Path("/centre/scenes"), first=dt.date(2026, 11, 30))
     assert day["agenda_file"] == "/centre/scenes/agenda.ics" and day["map"]["file"] == "/centre/scenes/maps/ward.yaml"
     assert day["clock"] == {"date": dt.date(2026, 12, 2)} and day["name"] == "s-day3"
+
+
+def test_the_days_of_a_launched_run_share_one_restart_budget(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A crash loop late on day 1 still counts early on day 2: every day's launch gets the same budget."""
+    from tools.launch import RunResult
+    from tools.week import run_days
+
+    budgets = []
+
+    def fake_launch(scene: Path, *, restart_budget: object, runs_dir: Path, **_: object) -> RunResult:
+        budgets.append(restart_budget)
+        restart_budget.take("agenda", "exited with 1")          # type: ignore[attr-defined]
+        run_dir = runs_dir / Path(scene).stem
+        run_dir.mkdir()
+        return RunResult(scene="s", run_dir=run_dir, rrd_path=None, missions={}, events=[], restarts={}, wall_s=0.1)
+
+    monkeypatch.setattr("tools.launch.run_system", fake_launch)
+    result = run_days(WEEK, runs_dir=tmp_path, restart_limit=3)
+    assert len(budgets) == 2 and budgets[0] is budgets[1] and budgets[0].used("agenda") == 2
+    summary = json.loads((result.run_dir / "result.json").read_text())
+    assert summary["restarts_total"] == 2 and summary["restart_budget"] == "3 per rolling hour"
