@@ -110,16 +110,24 @@ def rerun_binary() -> Path:
 
 
 def merge_recordings(parts: list[Path], out: Path) -> Path | None:
-    """`rerun rrd optimize` = merge + compaction + footer; parts of killed agents are accepted."""
+    """`rerun rrd optimize` = merge + compaction + footer; parts of killed agents are accepted.
+
+    Written to a hidden partial file and renamed: a disk that fills during the merge leaves no
+    half-written recording under the run's name (the partial file is removed)."""
     if not parts:
         return None
+    partial = out.with_name(f".{out.stem}.partial{out.suffix}")
     try:
-        result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(out)],
+        result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(partial)],
                                 capture_output=True, text=True, timeout=300, check=False)
+        if result.returncode == 0 and partial.exists():
+            os.replace(partial, out)
     except (OSError, subprocess.TimeoutExpired) as exc:
+        partial.unlink(missing_ok=True)
         sys.stderr.write(f"warning: could not merge recordings: {exc}\n")
         return None
     if result.returncode != 0 or not out.exists():
+        partial.unlink(missing_ok=True)
         sys.stderr.write(f"warning: could not merge recordings: {result.stderr.strip()[-500:]}\n")
         return None
     return out

@@ -198,3 +198,22 @@ def test_the_days_of_a_launched_run_share_one_restart_budget(tmp_path: Path, mon
     assert len(budgets) == 2 and budgets[0] is budgets[1] and budgets[0].used("agenda") == 2
     summary = json.loads((result.run_dir / "result.json").read_text())
     assert summary["restarts_total"] == 2 and summary["restart_budget"] == "3 per rolling hour"
+
+
+def test_a_merge_that_fails_half_way_leaves_no_recording_behind(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """The day's recording is merged into a partial file and renamed: a disk that fills during the
+    merge (the viewer's CLI writes half, then fails) leaves neither a truncated .rrd nor the partial."""
+    from tools.launch import merge_recordings
+
+    fake = tmp_path / "rerun"
+    fake.write_text('#!/bin/sh\nfor last; do :; done\nprintf half > "$last"\necho "No space left on device" >&2\nexit 1\n')
+    fake.chmod(0o755)
+    monkeypatch.setattr("tools.launch.rerun_binary", lambda: fake)
+    part = tmp_path / "rrd" / "sim_robot-1.rrd"
+    part.parent.mkdir()
+    part.write_bytes(b"part")
+    out = tmp_path / "day1.rrd"
+    assert merge_recordings([part], out) is None
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rerun", "rrd"]
+    assert "No space left on device" in capsys.readouterr().err
