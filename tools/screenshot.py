@@ -304,7 +304,8 @@ def run(args: argparse.Namespace) -> list[Path]:
         from tools.week_index import recording_of_day
 
         try:
-            recording = recording_of_day(recording, getattr(args, "day", None))
+            recording = recording_of_day(recording, getattr(args, "day", None),
+                                         parse_clock(args.at) if args.at else None)
         except ValueError as exc:
             raise ScreenshotError(str(exc)) from None
     if not recording.is_file():

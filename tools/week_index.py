@@ -88,18 +88,20 @@ def apply_retention(entries: list[dict[str, Any]], base: Path, keep_days: int | 
     directory go.  Returns the day numbers removed now."""
     if keep_days is None:
         return []
-    with_files = [e for e in entries if e.get("rrd") or e.get("run_dir")]
+    with_files = [e for e in entries if e.get("rrd") or e.get("run_dir") or e.get("hours")]
     removed: list[int] = []
     for entry in with_files[:max(0, len(with_files) - keep_days)]:
-        for key in ("rrd", "run_dir"):
-            value = entry.get(key)
+        files = [entry.get("rrd"), entry.get("run_dir"), *(h.get("rrd") for h in entry.get("hours") or [])]
+        for value in files:
             if value:
                 target = base / value
                 if target.is_dir():
                     shutil.rmtree(target, ignore_errors=True)
                 else:
                     target.unlink(missing_ok=True)
-            entry[key] = None
+        entry.update(rrd=None, run_dir=None)
+        if entry.get("hours"):
+            entry["hours"] = []
         entry["removed"] = True
         removed.append(int(entry["day"]))
     return removed
@@ -116,25 +118,32 @@ def read_index(path: Path) -> dict[str, Any]:
     return data
 
 
-def day_recordings(index_path: Path) -> list[tuple[int, Path]]:
-    """(day, recording) of every day of the index that still has its recording, in day order."""
+def day_recordings(index_path: Path) -> list[tuple[int, float, Path]]:
+    """(day, start_s, recording) of every recording the index still has, in order: one per day, or
+    one per hour of a real-time day (``hours``: its start on the day's clock)."""
     data = read_index(index_path)
     base = index_path.parent
-    return [(int(e["day"]), base / e["rrd"]) for e in data["entries"] if e.get("rrd") and (base / e["rrd"]).is_file()]
+    found: list[tuple[int, float, Path]] = []
+    for entry in data["entries"]:
+        parts = [(0.0, entry["rrd"])] if entry.get("rrd") else [
+            (float(h.get("start_s", 0.0)), h["rrd"]) for h in entry.get("hours") or [] if h.get("rrd")]
+        found += [(int(entry["day"]), start, base / rrd) for start, rrd in parts if (base / rrd).is_file()]
+    return found
 
 
-def recording_of_day(index_path: Path, day: int | None) -> Path:
-    """The recording of ``day`` (1-based; None: the last day that has one) in an index."""
+def recording_of_day(index_path: Path, day: int | None, at_s: float | None = None) -> Path:
+    """The recording of ``day`` (1-based; None: the last day that has one) in an index; of a day
+    recorded hour by hour, the hour holding ``at_s`` (seconds of that day's clock; None: the last)."""
     found = day_recordings(index_path)
     if not found:
         raise ValueError(f"{index_path}: no day of this run has a recording (removed by --keep-days, or not recorded)")
-    if day is None:
-        return found[-1][1]
-    for number, path in found:
-        if number == day:
-            return path
-    raise ValueError(f"{index_path}: day {day} has no recording; days with one: "
-                     f"{', '.join(str(n) for n, _ in found)}")
+    number = found[-1][0] if day is None else day
+    ofday = [(start, path) for n, start, path in found if n == number]
+    if not ofday:
+        raise ValueError(f"{index_path}: day {day} has no recording; days with one: "
+                         f"{', '.join(str(n) for n in sorted({n for n, _, _ in found}))}")
+    before = [path for start, path in ofday if at_s is None or start <= at_s]
+    return before[-1] if before else ofday[0][1]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -144,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         print("usage: python -m tools.week_index INDEX.json", file=sys.stderr)
         return 2
     try:
-        for _, path in day_recordings(Path(args[0])):
+        for _, _, path in day_recordings(Path(args[0])):
             print(path)
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)

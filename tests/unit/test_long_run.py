@@ -217,3 +217,57 @@ def test_a_merge_that_fails_half_way_leaves_no_recording_behind(tmp_path: Path, 
     assert merge_recordings([part], out) is None
     assert sorted(p.name for p in tmp_path.iterdir()) == ["rerun", "rrd"]
     assert "No space left on device" in capsys.readouterr().err
+
+
+def _entities(recording: Path) -> set[str]:
+    """The entity paths of a recording, as `rerun rrd print` lists its chunks."""
+    import subprocess
+
+    from tools.launch import rerun_binary
+
+    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    return {part.split()[0] for part in out.split(" - /")[1:]}
+
+
+def test_a_recorder_rotates_its_part_every_slot_and_each_part_has_the_static_rows(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import rerun as rr
+
+    from agents.runtime.recording import ROTATE_ENV, Recorder, part_slot
+
+    monkeypatch.setenv(ROTATE_ENV, "3600")
+    monkeypatch.setenv("RERUN", "on")
+    recorder = Recorder("sim_robot", tmp_path, "rid", day=dt.date(2026, 12, 1))
+    recorder.line_strip("world/map/walls", [[0, 0], [6, 0]], color=[0, 0, 0], static=True)
+    for sim_s in (9 * 3600 + 5.0, 9 * 3600 + 60.0, 10 * 3600 + 1.0):
+        recorder.set_time(sim_s)
+        recorder.log("world/truth/robot", rr.Points2D([[sim_s / 3600, 0]]))
+    recorder.close()
+    parts = sorted((tmp_path / "rrd").glob("*.rrd"))
+    assert [part_slot(p) for p in parts] == [9, 10]            # the unslotted first part is gone
+    for part in parts:
+        assert {"world/map/walls", "world/truth/robot"} <= _entities(part)
+    monkeypatch.setenv(ROTATE_ENV, "5")
+    with pytest.raises(ValueError, match="at least 60 sim seconds"):
+        Recorder("sim_robot", tmp_path, "rid")
+
+
+@pytest.mark.slow
+def test_a_real_time_day_is_recorded_hour_by_hour(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    monkeypatch.setenv("RERUN", "on")
+    monkeypatch.delenv("CHRONAV_RECORDING_ROTATE_S", raising=False)
+    result = CliRunner().invoke(app, ["launch", str(WEEK), "--in-process", "--rate", "1", "--days", "1", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    (entry,) = read_index(Path(summary["index"]))["entries"]
+    assert entry["rrd"] is None and [h["hour"] for h in entry["hours"]] == ["09:00", "10:00"]
+    run_dir = Path(summary["run_dir"])
+    assert sorted(p.name for p in run_dir.glob("*.rrd")) == sorted(h["rrd"] for h in entry["hours"])
+    for hour in entry["hours"]:
+        assert "world/map/walls" in _entities(run_dir / hour["rrd"])      # each hour opens on its own
+    assert summary["days"][0]["rrd_bytes"] == sum((run_dir / h["rrd"]).stat().st_size for h in entry["hours"])
+    at_1001 = recording_of_day(Path(summary["index"]), 1, 10 * 3600 + 60)
+    assert at_1001 == run_dir / entry["hours"][1]["rrd"]
+    assert "CHRONAV_RECORDING_ROTATE_S" not in os.environ                 # only for that day's agents
