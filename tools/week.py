@@ -227,6 +227,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
     in-process run takes ``rate`` and ``agent_options`` only."""
     from agents.lib.agenda import AgendaError
     from agents.world.scene_world import resolve_world
+    from dsr import DSRError
     from scenes.loader import load_scene
     from scenes.yamlio import SourceError
     from tools.launch import _make_run_dir
@@ -261,10 +262,18 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
             day_file = run_dir / "days" / f"day{number}.yaml"
             _write_day_scene(day_file, loaded, number)
             sampler = ResourceSampler(in_process)
-            with _rotation(HOUR_S if realtime else None):
-                day_result = _run_one_day(day_file, number, planned, date, sampler, in_process=in_process,
-                                          runs_dir=run_dir, timeout_s=timeout_s, record=record, budget=budget,
-                                          on_tick=on_tick, stop=stop, launch_options=launch_options)
+            try:
+                with _rotation(HOUR_S if realtime else None):
+                    day_result = _run_one_day(day_file, number, planned, date, sampler, in_process=in_process,
+                                              runs_dir=run_dir, timeout_s=timeout_s, record=record, budget=budget,
+                                              on_tick=on_tick, stop=stop, launch_options=launch_options)
+            except (LaunchError, DSRError) as exc:
+                if number == 1:
+                    raise          # bad options or environment: the run could not start (exit 2)
+                entry.update(status="error", reason=str(exc))   # a later day that could not start
+                run.days.append({**entry})
+                run.write()
+                continue
             sampler.finish()
             entry.update(status=_outcome(day_result), rrd=_rel(day_result.rrd_path, run_dir),
                          run_dir=_rel(day_result.run_dir, run_dir))

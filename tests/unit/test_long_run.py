@@ -271,3 +271,28 @@ def test_a_real_time_day_is_recorded_hour_by_hour(tmp_path: Path, monkeypatch: p
     at_1001 = recording_of_day(Path(summary["index"]), 1, 10 * 3600 + 60)
     assert at_1001 == run_dir / entry["hours"][1]["rrd"]
     assert "CHRONAV_RECORDING_ROTATE_S" not in os.environ                 # only for that day's agents
+
+
+def test_a_later_day_that_cannot_start_is_an_error_of_that_day_and_the_run_goes_on(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from tools.launch import LaunchError, RunResult
+    from tools.week import run_days
+
+    calls = []
+
+    def flaky_launch(scene: Path, *, runs_dir: Path, **_: object) -> RunResult:
+        calls.append(Path(scene).name)
+        if len(calls) == 2:
+            raise LaunchError("the Zenoh router did not listen on tcp/127.0.0.1:1234")
+        run_dir = runs_dir / Path(scene).stem
+        run_dir.mkdir()
+        return RunResult(scene="s", run_dir=run_dir, rrd_path=None, missions={"m": {"state": "done"}}, events=[],
+                         restarts={}, wall_s=0.1)
+
+    monkeypatch.setattr("tools.launch.run_system", flaky_launch)
+    scene = _variant(tmp_path, days=3)
+    result = run_days(scene, runs_dir=tmp_path / "runs")
+    assert calls == ["day1.yaml", "day2.yaml", "day3.yaml"]
+    assert [(d["status"], d.get("reason")) for d in result.days] == [
+        ("ok", None), ("error", "the Zenoh router did not listen on tcp/127.0.0.1:1234"), ("ok", None)]
+    assert not result.ok and result.outcome == "failed"
