@@ -260,7 +260,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
                 run.write()
                 continue
             day_file = run_dir / "days" / f"day{number}.yaml"
-            _write_day_scene(day_file, loaded, number)
+            write_day_scene(day_file, loaded, number)
             sampler = ResourceSampler(in_process)
             try:
                 with _rotation(HOUR_S if realtime else None):
@@ -338,7 +338,7 @@ def _hourly_recordings(result: RunResult, base: Path) -> list[dict[str, Any]]:
     return hours
 
 
-def _write_day_scene(day_file: Path, loaded: Any, number: int) -> None:
+def write_day_scene(day_file: Path, loaded: Any, number: int) -> None:
     """Day ``number``'s single-day scene, written whole or not at all."""
     import yaml
 

@@ -296,3 +296,14 @@ def test_a_later_day_that_cannot_start_is_an_error_of_that_day_and_the_run_goes_
     assert [(d["status"], d.get("reason")) for d in result.days] == [
         ("ok", None), ("error", "the Zenoh router did not listen on tcp/127.0.0.1:1234"), ("ok", None)]
     assert not result.ok and result.outcome == "failed"
+
+
+def test_scene_day_writes_one_day_of_a_scene_for_the_offline_commands(tmp_path: Path) -> None:
+    out = tmp_path / "tuesday.yaml"
+    result = CliRunner().invoke(app, ["scene", "day", str(WEEK), "2", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "2026-12-01 (1 activities, 1 missions)" in result.output
+    world = load_world(out)
+    assert [m.id for m in world.scene.missions] == ["back"] and [a.id for a in world.agenda.activities] == ["music"]
+    missing = CliRunner().invoke(app, ["scene", "day", str(tmp_path / "nope.yaml"), "2", "--out", str(out)])
+    assert missing.exit_code == 1 and "no such scene file" in missing.output
