@@ -307,3 +307,18 @@ def test_scene_day_writes_one_day_of_a_scene_for_the_offline_commands(tmp_path: 
     assert [m.id for m in world.scene.missions] == ["back"] and [a.id for a in world.agenda.activities] == ["music"]
     missing = CliRunner().invoke(app, ["scene", "day", str(tmp_path / "nope.yaml"), "2", "--out", str(out)])
     assert missing.exit_code == 1 and "no such scene file" in missing.output
+
+
+def test_bench_week_summarizes_growth_from_the_day_records() -> None:
+    from tools.bench_week import summarize
+
+    def day(number: int, rss: float, nodes: int, tombstones: int, status: str = "ok") -> dict[str, object]:
+        return {"day": number, "status": status, "wall_s": 30.0, "rrd_bytes": 3 * 1024 * 1024,
+                "bytes_written": 6 * 1024 * 1024, "agents": {"in_process": {"rss_mb": rss, "cpu_s": 1.0}},
+                "dsr": {"nodes": nodes, "edges": 10, "tombstones": tombstones},
+                "missions_summary": {"total": 2, "done": 2}}
+
+    report = summarize([day(1, 400.0, 60, 0), {"day": 2, "status": "refused"}, day(3, 440.0, 66, 3)], 90.0, 3)
+    assert report["rss_growth_day3_over_day1"] == 1.1 and report["dsr_growth_day3_over_day1"] == 3.0
+    assert report["week_wall_min"] is None and report["week_wall_min_projected"] == 3.5
+    assert (report["days_ok"], report["missions"], report["rrd_mb_per_day"]) == (2, 4, 3.0)
