@@ -723,6 +723,11 @@ class DSRGraph:
         """How many removed elements this replica still remembers."""
         return len(self._node_table.dead) + len(self._edge_table.dead)
 
+    def counts(self) -> dict[str, int]:
+        """Visible nodes and edges and remembered tombstones: what a long run watches for growth."""
+        with self._lock:
+            return {"nodes": len(self._view), "edges": len(self._visible_edges), "tombstones": self.tombstones()}
+
     def state_equals(self, other: DSRGraph) -> bool:
         """True if both replicas hold the same CRDT state (tests)."""
         with self._lock:

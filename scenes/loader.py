@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Sequence
 from dataclasses import dataclass
+from datetime import date
 from pathlib import Path
 from typing import Protocol
 
@@ -20,6 +21,7 @@ import shapely
 import shapely.ops
 
 from scenes.clock import parse_clock
+from scenes.days import day_number, scene_dates
 from scenes.geometry import posed_polygon
 
 from scenes.model import PersonSpec, Pose, Room, Scene
@@ -103,6 +105,22 @@ def _check_references(scene: Scene, located: LocatedYaml) -> None:
         _check_waypoint_order(i, person, located)
         _check_person_references(i, person, located, names)
     _check_mission_references(scene, located, names)
+    _check_change_days(scene, located)
+
+
+def _check_change_days(scene: Scene, located: LocatedYaml) -> None:
+    """A scripted change names a day of the scene (1 to clock.days, or a date among them)."""
+    first, days = scene.clock.date, scene.clock.days
+    named: list[tuple[str, list[date | int | None]]] = [
+        ("agenda_changes", [c.day for c in scene.agenda_changes]), ("door_changes", [c.day for c in scene.door_changes])]
+    for section, changes in named:
+        for i, day in enumerate(changes):
+            number = day_number(day, first)
+            if not 1 <= number <= days:
+                last = scene_dates(first, days)[-1]
+                raise located.error((section, i, "day"), f"day {day} is not a day of this scene: it spans "
+                                    f"{days} day{'s' if days > 1 else ''}, {first.isoformat()} to "
+                                    f"{last.isoformat()} (set clock.days, or name a day 1 to {days})")
 
 
 def _check_unique_names(scene: Scene, located: LocatedYaml) -> None:

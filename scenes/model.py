@@ -16,6 +16,7 @@ from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Di
                       PlainValidator, PrivateAttr, Tag, ValidationInfo, field_validator, model_validator)
 
 from scenes.clock import ClockTime, parse_clock
+from scenes.days import MAX_DAYS, DateItem, Weekday
 from scenes.geometry import Circle, Rectangle, Trapezoid, shape_from_spec, shape_to_dict
 from scenes.geometry import Shape as GeometryShape
 from scenes.names import Name
@@ -80,6 +81,8 @@ class Clock(Strict):
     end: ClockTime = "14:00"
     rate: Real = Field(60.0, ge=MIN_CLOCK_RATE, le=1_000_000, description="sim seconds per wall second")
     skip_idle: bool = Field(True, description="jump the clock to the next mission when the robot is idle")
+    days: int = Field(1, ge=1, le=MAX_DAYS, strict=True,
+                      description="days the run spans, from date on (docs/long_runs.md); each day start-end")
 
 
     @field_validator("date")
@@ -285,11 +288,17 @@ Goal = Annotated[Annotated[PoseGoal, Tag("pose")] | Annotated[RoomGoal, Tag("roo
                                                     "or {wait: ACTIVITY}")]
 
 
+# The day of a scripted change in a multi-day scene: 1-based (``day: 2``) or a date; None: the first day.
+DayRef = Annotated[int, Field(ge=1, le=MAX_DAYS, strict=True)] | DateItem | None
+
+
 class Mission(Strict):
     id: Name
     time: ClockTime
     goal: Goal
     description: str = ""
+    weekdays: list[Weekday] = Field(default_factory=list, description="days of the week it is given (default: every day)")
+    dates: list[DateItem] = Field(default_factory=list, description="dates it is given (default: every day)")
 
 
     def goal_text(self) -> str:
@@ -313,6 +322,7 @@ class AgendaChange(Strict):
     """A staff edit scripted at a sim time (as if typed with `chronav agenda` during the run)."""
 
     at: ClockTime
+    day: DayRef = Field(None, description="the day it happens on: 1-based or a date (default: the first)")
     op: Literal["add", "cancel", "move"]
     activity: dict[str, Any] | None = None
     id: str | None = None
@@ -324,6 +334,7 @@ class DoorChange(Strict):
     """A door opened or closed at a sim time (a world event the simulator carries out)."""
 
     at: ClockTime
+    day: DayRef = Field(None, description="the day it happens on: 1-based or a date (default: the first)")
     door: Name
     open: bool
 

@@ -154,7 +154,7 @@ class _InProcessRun:
         return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
                 "clock_mode": None if clock is None else clock.attrs.get("mode"),
                 "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
-                "missions": found, "agents": {name: ("up", 0) for name in AGENTS},
+                "missions": found, "agents": {name: ("up", 0) for name in AGENTS}, "dsr": graph.counts(),
                 "wall_s": time.monotonic() - self.started,
                 "run": {"run_dir": str(self.run_dir), "endpoint": "in-process", "graph": graph.graph_name}}
 

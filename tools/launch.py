@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 
 from tools.ports import free_port, wait_for_port
+from tools.system.restart_budget import RestartBudget
 from tools.system.runs import RunSecurity, prepare_run_security, runs_dir as default_runs_dir, write_connect_file
 from tools.system.supervisor import ManagedProcess, ProgressWatch, Supervisor
 
@@ -74,6 +75,8 @@ class RunResult:
     error: str | None = None
     #: what an agent still reported as keeping it from its job when the run ended (agent -> words)
     problems: dict[str, str] = field(default_factory=dict)
+    #: every restart of this run: agent, reason, wall time (tools/system/restart_budget.py)
+    restart_log: list[dict[str, object]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -109,28 +112,47 @@ def rerun_binary() -> Path:
     return Path(rerun_cli.__file__).parent / "rerun"
 
 
-def merge_recordings(parts: list[Path], out: Path) -> Path | None:
+def merge_recordings(parts: list[Path], out: Path, remove_parts: bool | None = None) -> Path | None:
     """`rerun rrd optimize` = merge + compaction + footer; parts of killed agents are accepted.
 
-    Once merged the per-agent parts are removed (they held 39 MB beside the 12 MB merged file
-    of a center_day run); a failed merge keeps them, to open or merge by hand."""
+    Written to a hidden partial file and renamed: a disk that fills during the merge leaves no
+    half-written recording under the run's name (the partial file is removed). Once merged the
+    per-agent parts are removed (they held 39 MB beside the 12 MB merged file of a center_day
+    run); a failed merge keeps them, to open or merge by hand. ``remove_parts`` None: removed
+    unless they are rotated parts (``-sNNN``, agents/runtime/recording.py), which a long run then
+    merges hour by hour itself (tools/week.py)."""
     if not parts:
         return None
+    if remove_parts is None:
+        from agents.runtime.recording import part_slot
+
+        remove_parts = all(part_slot(part) is None for part in parts)
+    partial = out.with_name(f".{out.stem}.partial{out.suffix}")
     try:
-        result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(out)],
+        result = subprocess.run([str(rerun_binary()), "rrd", "optimize", *map(str, parts), "-o", str(partial)],
                                 capture_output=True, text=True, timeout=300, check=False)
+        if result.returncode == 0 and partial.exists():
+            os.replace(partial, out)
     except (OSError, subprocess.TimeoutExpired) as exc:
+        partial.unlink(missing_ok=True)
         sys.stderr.write(f"warning: could not merge recordings: {exc}\n")
         return None
     if result.returncode != 0 or not out.exists():
+        partial.unlink(missing_ok=True)
         sys.stderr.write(f"warning: could not merge recordings: {result.stderr.strip()[-500:]}\n")
         return None
+    if remove_parts:
+        remove_recording_parts(parts)
+    return out
+
+
+def remove_recording_parts(parts: list[Path]) -> None:
+    """The per-agent parts, once merged, and their folder when nothing else lives there."""
     for part in parts:
         part.unlink(missing_ok=True)
     for folder in {part.parent for part in parts}:
         with contextlib.suppress(OSError):    # not empty: something else lives there, keep it
             folder.rmdir()
-    return out
 
 
 def write_pids(run_dir: Path, supervisor: Supervisor, router_pid: int | None) -> None:
@@ -202,6 +224,7 @@ class _Run:
     router: ManagedProcess
     record: bool
     started: float = 0.0
+    restart_log_from: int = 0       # the shared budget's log before this run (a long run's earlier days)
     missions: dict[str, dict[str, object]] = field(default_factory=dict)
     metrics: dict[str, object] = field(default_factory=dict)
     problems: dict[str, str] = field(default_factory=dict)
@@ -234,20 +257,23 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                startup_timeout_s: float = DEFAULT_STARTUP_TIMEOUT_S,
                agent_options: dict[str, list[str]] | None = None,
                on_tick: Callable[[dict[str, object]], None] | None = None,
-               metrics_report: bool = True, ros_domain: int | None = None, robot: str = "sim") -> RunResult:
+               metrics_report: bool = True, ros_domain: int | None = None, robot: str = "sim",
+               restart_budget: RestartBudget | None = None) -> RunResult:
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C.
 
     ``metrics_report=False`` skips the social-vs-baseline metrics the demo logs into the recording
     (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
     the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
-    instead of the simulated one (docs/ros2.md)."""
+    instead of the simulated one (docs/ros2.md).  ``restart_budget``: one shared by the days of a
+    long run (restarts per rolling hour, tools/system/restart_budget.py)."""
     from agents.runtime.recording import Recorder
     from dsr import DSRError
 
     _check_options(rate=rate, robot=robot, ros_domain=ros_domain, timeout_s=timeout_s,
                    hang_timeout_s=hang_timeout_s, startup_timeout_s=startup_timeout_s)
     run = _prepare_run(scene, rate=rate, runs_dir=runs_dir, record=record, restart_limit=restart_limit,
-                       agent_options=agent_options, ros_domain=ros_domain, robot=robot)
+                       agent_options=agent_options, ros_domain=ros_domain, robot=robot,
+                       restart_budget=restart_budget)
     watch = ProgressWatch(hang_s=hang_timeout_s, startup_s=startup_timeout_s)
     run.started = time.monotonic()
     stop = _StopRequest()
@@ -285,7 +311,7 @@ def _check_options(*, rate: float | None, robot: str, ros_domain: int | None, ti
 
 def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None, record: bool,
                  restart_limit: int, agent_options: dict[str, list[str]] | None, ros_domain: int | None,
-                 robot: str) -> _Run:
+                 robot: str, restart_budget: RestartBudget | None = None) -> _Run:
     """Load the scene and the write policy, make the run directory, credentials and environment,
     and register the router and the agents with a supervisor (none started yet)."""
     from agents.world.write_policy import policy_from_env
@@ -303,7 +329,7 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     # the bridge's identity always: `chronav ros bridge --run` may join the run later
     security = prepare_run_security(run_dir, graph_name, (*AGENTS, ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
-    supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit)
+    supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit, budget=restart_budget)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]
     for name in agents:
@@ -312,7 +338,8 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
         supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
     return _Run(spec=spec, scene_path=loaded.path, policy=policy, run_id=run_id, graph_name=graph_name,
                 run_dir=run_dir, port=port, endpoint=endpoint, agents=agents, security=security, env=env,
-                supervisor=supervisor, router=router, record=record)
+                supervisor=supervisor, router=router, record=record,
+                restart_log_from=len(supervisor.budget.log))
 
 
 def _agent_options(name: str, *, rate: float | None, ros_domain: int | None, robot: str,
@@ -411,7 +438,8 @@ def _finish(run: _Run, recorder: Recorder) -> RunResult:
                        restarts={n: m.restarts for n, m in run.supervisor.processes.items()},
                        wall_s=time.monotonic() - run.started, interrupted=run.interrupted,
                        timed_out=run.timed_out, metrics=run.metrics, scene_path=run.scene_path, error=run.error,
-                       problems=dict(run.problems))
+                       problems=dict(run.problems),
+                       restart_log=[r.as_json() for r in run.supervisor.budget.log[run.restart_log_from:]])
     _write_result(result)
     return result
 
@@ -450,7 +478,7 @@ def _write_result(result: RunResult) -> None:
 
     (result.run_dir / "result.json").write_text(json.dumps({
         "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
-        "restarts": result.restarts, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
+        "restarts": result.restarts, "restart_log": result.restart_log, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
         "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error,
         "problems": result.problems,
         "scene_path": str(result.scene_path.resolve()) if result.scene_path else None,
@@ -473,6 +501,7 @@ def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:
         "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
         "missions": missions,
         "agents": {name: ("up" if m.alive else "down", m.restarts) for name, m in supervisor.processes.items()},
+        "dsr": graph.counts(),   # the launcher's replica: nodes, edges, tombstones (long runs, tools/week.py)
         "pids": {name: m.pid for name, m in supervisor.processes.items()},  # fault injection (tools/chaos/command.py)
         # what an agent reports as keeping it from its job (the ROS side unreachable...), for the console
         "problems": {name: p for name in supervisor.processes if name != "router" and (p := read_problem(graph, name))},

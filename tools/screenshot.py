@@ -3,6 +3,7 @@
 Usage:
   python -m tools.screenshot RECORDING.rrd OUT.png [--at HH:MM[:SS]] [--size 1600x900]
   python -m tools.screenshot RECORDING.rrd OUT_DIR --tour [--size 1600x900]
+  python -m tools.screenshot RUN/index.json OUT.png --day 2 [--at HH:MM]   (a run of days, docs/long_runs.md)
 
 Without ``--at`` the picture is at the recording's last instant (its last ``sim_time`` row).
 ``--tour`` writes three PNGs per mission into OUT_DIR: its start (the first path the navigation
@@ -272,7 +273,9 @@ def _hhmmss(sim_s: float) -> str:
 # ----------------------------------------------------------------------------- command line
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m tools.screenshot", description=__doc__.splitlines()[0])
-    parser.add_argument("recording", type=Path)
+    parser.add_argument("recording", type=Path, help="a .rrd, or the index.json of a run of days (with --day)")
+    parser.add_argument("--day", type=int, default=None,
+                        help="with an index.json: the day (1-based) to open (default: the last day recorded)")
     parser.add_argument("out", type=Path, help="the PNG to write (with --tour: the folder for the PNGs)")
     parser.add_argument("--at", default=None, help="sim time HH:MM[:SS] (default: the recording's last instant)")
     parser.add_argument("--size", type=parse_size, default=parse_size(DEFAULT_SIZE),
@@ -297,6 +300,14 @@ def run(args: argparse.Namespace) -> list[Path]:
     from scenes.clock import parse_clock
 
     recording: Path = args.recording
+    if recording.suffix == ".json":        # a run of days: its index names one recording per day
+        from tools.week_index import recording_of_day
+
+        try:
+            recording = recording_of_day(recording, getattr(args, "day", None),
+                                         parse_clock(args.at) if args.at else None)
+        except ValueError as exc:
+            raise ScreenshotError(str(exc)) from None
     if not recording.is_file():
         raise ScreenshotError(f"{recording}: no such recording file")
     store = load_store(recording)

@@ -26,6 +26,8 @@ APP_ID = "chronav"
 TIMELINE = "sim_time"
 CLOCK_TIMELINE = "clock"
 DEFAULT_DAY = dt.date(2026, 11, 25)   # only when no scene date is given (the scenes' own default)
+#: sim seconds per recording part (a run at real time rotates hourly, tools/week.py); unset: one part
+ROTATE_ENV = "CHRONAV_RECORDING_ROTATE_S"
 
 
 def clock_epoch_s(day: dt.date | None) -> float:
@@ -44,6 +46,13 @@ class Recorder:
         self._rec: Any = None
         self.path: Path | None = None
         self._epoch_s = clock_epoch_s(day)
+        # Rotation (docs/long_runs.md): a new part file per slot of rotate_s sim seconds, named
+        # <agent>-<pid>-s<slot>.rrd; static rows and the blueprint are written again into each part,
+        # so every part opens on its own.
+        self.rotate_s = _rotate_s()
+        self._slot: int | None = None
+        self._statics: list[tuple[str, tuple[Any, ...]]] = []
+        self._blueprint: Any = None
         if not self.enabled:
             return
         import rerun as rr
@@ -65,13 +74,34 @@ class Recorder:
         if self._rec is not None:
             import rerun as rr
 
+            if self.rotate_s is not None and int(sim_s // self.rotate_s) != self._slot:
+                self._rotate(int(sim_s // self.rotate_s))
+
             rr.set_time(TIMELINE, duration=sim_s, recording=self._rec)
             # Integer nanoseconds: float epoch seconds would round 0.1 s steps to ~200 ns.
             rr.set_time(CLOCK_TIMELINE, timestamp=_ns(self._epoch_s, sim_s), recording=self._rec)
 
+    def _rotate(self, slot: int) -> None:
+        """Close the current part and go on in the part of ``slot``; the unslotted first part
+        (rows logged before the clock was set) is dropped once rotated: its static rows follow."""
+        assert self.path is not None
+        first = self._slot is None
+        previous = self.path
+        self.path = previous.parent / f"{self.agent}-{os.getpid()}-s{slot:03d}.rrd"
+        self._rec.save(self.path)
+        self._slot = slot
+        if self._blueprint is not None:
+            self._rec.send_blueprint(self._blueprint)
+        for entity, archetypes in self._statics:
+            self._rec.log(entity, *archetypes, static=True)
+        if first:
+            previous.unlink(missing_ok=True)
+
     def log(self, entity: str, *archetypes: Any, static: bool = False) -> None:
         if self._rec is not None:
             self._rec.log(entity, *archetypes, static=static)
+            if static and self.rotate_s is not None:
+                self._statics.append((entity, archetypes))
 
     def scalar(self, entity: str, value: float) -> None:
         if self._rec is not None:
@@ -94,8 +124,7 @@ class Recorder:
         if self._rec is not None and len(points) >= 2:
             import rerun as rr
 
-            self._rec.log(entity, rr.LineStrips2D([list(map(list, points))], colors=[color], radii=radius),
-                          static=static)
+            self.log(entity, rr.LineStrips2D([list(map(list, points))], colors=[color], radii=radius), static=static)
 
     def clear(self, entity: str, recursive: bool = True) -> None:
         """Nothing is at ``entity`` from now on (a layer that stopped being true)."""
@@ -107,6 +136,7 @@ class Recorder:
     def send_blueprint(self, blueprint: Any) -> None:
         if self._rec is not None:
             self._rec.send_blueprint(blueprint)
+            self._blueprint = blueprint
 
     def flush(self) -> None:
         if self._rec is not None:
@@ -137,3 +167,23 @@ def _ns(epoch_s: float, sim_s: float) -> Any:
     import numpy as np
 
     return np.datetime64(int(round(epoch_s)) * 1_000_000_000 + int(round(sim_s * 1e9)), "ns")
+
+
+def _rotate_s() -> float | None:
+    """``CHRONAV_RECORDING_ROTATE_S``: sim seconds per part (>= 60), or None (one part)."""
+    raw = os.environ.get(ROTATE_ENV, "").strip()
+    if not raw:
+        return None
+    try:
+        value = float(raw)
+    except ValueError:
+        raise ValueError(f"{ROTATE_ENV}={raw!r}: give the sim seconds per recording part, e.g. 3600") from None
+    if not value >= 60.0:
+        raise ValueError(f"{ROTATE_ENV}={raw!r}: a part spans at least 60 sim seconds")
+    return value
+
+
+def part_slot(path: Path) -> int | None:
+    """The slot of a rotated part (``<agent>-<pid>-s009.rrd`` -> 9), None for an unrotated one."""
+    found = re.search(r"-s(\d{3,})$", path.stem)
+    return int(found.group(1)) if found else None

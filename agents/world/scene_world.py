@@ -9,6 +9,7 @@ scripted change fails at ``chronav scene check`` instead of minutes into a run.
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import re
 from dataclasses import dataclass
@@ -25,6 +26,7 @@ from agents.world.building import PLANNING_MARGIN_M
 from agents.world.crowd_scene import check_people
 from agents.world.vocabulary import activity_id_of
 from scenes.clock import parse_clock
+from scenes.days import day_number, on_day, weekday_of
 from scenes.loader import LoadedScene, load_scene
 from scenes.model import PoseGoal, RoomGoal, Scene, WaitGoal
 from scenes.yamlio import SourceError
@@ -85,7 +87,7 @@ def scripted_changes(scene: Scene) -> tuple[ScriptedChange, ...]:
     """The scene's ``agenda_changes`` in the order they take effect: by time, then as written."""
     out = []
     for index, change in enumerate(scene.agenda_changes):
-        payload = {k: v for k, v in change.model_dump().items() if k != "at" and v is not None}
+        payload = {k: v for k, v in change.model_dump().items() if k not in ("at", "day") and v is not None}
         out.append(ScriptedChange(index, parse_clock(change.at), json.dumps(payload)))
     return tuple(sorted(out, key=lambda c: (c.at_s, c.index)))
 
@@ -161,36 +163,56 @@ def _check_navigable(loaded: LoadedScene) -> tuple[str, ...]:
     return tuple(notes)
 
 
-def resolve_world(loaded: LoadedScene) -> SceneWorld:
+def resolve_world(loaded: LoadedScene, day_index: int = 1) -> SceneWorld:
     """The agenda of a loaded scene placed on its date, and its scripted changes checked by applying
-    them in order (SourceError at the offending ``agenda_changes`` entry)."""
+    them in order (SourceError at the offending ``agenda_changes`` entry).
+
+    ``day_index`` (1-based) places it on that day of a scene that spans days (scenes/days.py): that
+    date's agenda, the scripted changes naming that day, the missions given on it.  The errors of
+    a later day say which day they are about, and stay located in the scene file."""
+    if day_index == 1:
+        return _resolve_day(loaded, 1)
+    try:
+        return _resolve_day(loaded, day_index)
+    except SourceError as exc:
+        date = loaded.scene.clock.date + dt.timedelta(days=day_index - 1)
+        raise SourceError(exc.file, exc.line, exc.column, exc.key,
+                          f"{exc.message} (on day {day_index}, {weekday_of(date)} {date.isoformat()})") from None
+
+
+def _resolve_day(loaded: LoadedScene, day_index: int) -> SceneWorld:
     scene = loaded.scene
-    dock_notes = _check_navigable(loaded)
-    check_people(loaded)
+    date = scene.clock.date + dt.timedelta(days=day_index - 1)
+    dock_notes = _check_navigable(loaded) if day_index == 1 else ()
+    if day_index == 1:
+        check_people(loaded)
     if scene.agenda_file is not None and not loaded.resolve(scene.agenda_file).exists():
         raise loaded.error(("agenda_file",), f"agenda file {scene.agenda_file!r} not found")
     try:
-        day = expand_day(scene_agenda(loaded.located, loaded.path.parent), scene.clock.date, scene.clock.timezone,
+        day = expand_day(scene_agenda(loaded.located, loaded.path.parent), date, scene.clock.timezone,
                          {o.name for o in scene.objects}, known_rooms={r.name for r in scene.rooms},
                          known_people={p.name for p in scene.people})
     except AgendaError as exc:
         raise _agenda_error(exc, loaded) from None
     notes = (*dock_notes, *(f.message for f in validate_day(day, None).infos))
-    world = SceneWorld(loaded, day, scripted_changes(scene), notes)
+    first = scene.clock.date
+    todays = tuple(c for c in scripted_changes(scene)
+                   if day_number(scene.agenda_changes[c.index].day, first) == day_index)
+    world = SceneWorld(loaded, day, todays, notes)
     check = day
     for change in world.scripted:
         try:
             check = world.apply(check, change)
         except AgendaChangeError as exc:
             raise loaded.error(("agenda_changes", change.index), str(exc)) from None
-    _check_wait_missions(loaded, {a.id for a in day.activities} | {a.id for a in check.activities})
+    _check_wait_missions(loaded, {a.id for a in day.activities} | {a.id for a in check.activities}, date)
     return world
 
 
-def _check_wait_missions(loaded: LoadedScene, activity_ids: set[str]) -> None:
-    """A ``wait`` mission names an activity of the day (or one a scripted change adds)."""
+def _check_wait_missions(loaded: LoadedScene, activity_ids: set[str], date: dt.date) -> None:
+    """A ``wait`` mission names an activity of its day (or one a scripted change adds)."""
     for index, mission in enumerate(loaded.scene.missions):
-        if isinstance(mission.goal, WaitGoal):
+        if isinstance(mission.goal, WaitGoal) and on_day(mission.weekdays, mission.dates, date):
             wanted = activity_id_of(mission.goal.wait)
             if wanted not in activity_ids:
                 known = ", ".join(sorted(activity_ids)) or "none"

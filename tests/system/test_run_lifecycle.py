@@ -158,4 +158,8 @@ def test_live_run_is_its_owners_and_a_frozen_agent_is_restarted(procs: ProcessGr
     (event,) = [e for e in summary["events"] if e.startswith("object_recognition")]
     assert "made no progress for" in event and "limit 3 s" in event and "restart 1/3" in event
     assert json.loads((run_dir / "result.json").read_text())["events"] == summary["events"]
+    # every restart with its reason (issue 41: a long life counts them per rolling hour)
+    assert [(r["agent"], "made no progress for" in r["reason"]) for r in summary["restart_log"]] == [
+        ("object_recognition", True)]
+    assert json.loads((run_dir / "result.json").read_text())["restart_log"] == summary["restart_log"]
     assert "Traceback" not in text

@@ -99,6 +99,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
     if as_json:
         print(json.dumps({"scene": result.scene, "ok": result.ok, "outcome": outcome(result),
                           "missions": result.missions, "events": result.events, "restarts": result.restarts,
+                          "restart_log": result.restart_log,
                           "wall_s": round(result.wall_s, 2), "interrupted": result.interrupted,
                           "timed_out": result.timed_out, "error": result.error, "problems": result.problems,
                           "run_dir": str(result.run_dir),

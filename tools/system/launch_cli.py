@@ -45,6 +45,13 @@ def check_controller(name: str, option: str) -> str:
     return name
 
 
+def _spans_days(scene: str) -> bool:
+    """Whether SCENE's clock spans more than one day (its days then run one after the other)."""
+    from tools.week import scene_days
+
+    return scene_days(scene) > 1
+
+
 def register(app: typer.Typer) -> None:
     @app.command("launch")
     def launch(scene: str = typer.Argument(..., help="scene file or name in scenes/"),
@@ -74,6 +81,10 @@ def register(app: typer.Typer) -> None:
                                                    "plugins` lists them; default elastic_band)"),
                model: Path | None = typer.Option(None, "--model", help="walker model file for the human observer "
                                                                         "(chronav predict train; default: the shipped one)"),
+               days: int = typer.Option(None, "--days", min=1, help="run this many days from the scene's date "
+                                        "(default: its clock.days); one recording per day (docs/long_runs.md)"),
+               keep_days: int = typer.Option(None, "--keep-days", min=1, help="of a run of days, keep the "
+                                             "recordings and logs of the newest K days only"),
                as_json: bool = typer.Option(False, "--json", help="print the result as one JSON object")) -> None:
         """Run every agent as its own process on SCENE until the day's missions are done.
 
@@ -93,6 +104,19 @@ def register(app: typer.Typer) -> None:
                                          "set it to 0-232 or give --ros-domain N") from None
         if controller is not None:
             check_controller(controller, "--controller")
+        if days is not None or keep_days is not None or _spans_days(scene):
+            from tools.system.week_console import run_days_with_progress
+
+            chosen = dict(model_options(model) or {})
+            if controller is not None:
+                chosen["social_navigation"] = [f"controller={controller}"]
+            supervision = {} if in_process else {"restart_limit": restart_limit, "hang_timeout_s": hang_timeout,
+                                                 "startup_timeout_s": startup_timeout, "ros_domain": domain,
+                                                 "robot": robot}
+            raise typer.Exit(run_days_with_progress(scene, days=days, keep_days=keep_days, in_process=in_process,
+                                                    as_json=as_json, rate=rate, timeout_s=timeout,
+                                                    record=not no_record, agent_options=chosen or None,
+                                                    **supervision))
         code = run_with_progress(scene, rate=rate, timeout_s=timeout, record=not no_record,
                                  restart_limit=restart_limit, as_json=as_json, with_report=False,
                                  hang_timeout_s=hang_timeout, startup_timeout_s=startup_timeout, ros_domain=domain,

@@ -300,7 +300,8 @@ class RunListing:
 def list_runs(directory: Path) -> RunListing:
     live, ended, others = [], [], []
     candidates = []
-    for path in directory.glob(f"*/{CONNECT_FILE}"):
+    # a long run's days are runs inside its folder (tools/week.py): `--run latest` finds today's
+    for path in [*directory.glob(f"*/{CONNECT_FILE}"), *directory.glob(f"*/*/{CONNECT_FILE}")]:
         try:
             info = path.stat()
         except OSError:

@@ -21,6 +21,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tools.system.restart_budget import RestartBudget
+
 REPO_ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -47,12 +49,16 @@ class ManagedProcess:
 
 
 class Supervisor:
-    """Keeps a set of Python module processes running, restarting crashes up to a limit."""
+    """Keeps a set of Python module processes running, restarting crashes up to ``restart_limit``
+    per agent within any rolling hour of wall time (tools/system/restart_budget.py); ``budget``
+    shares one such budget between supervisors (the days of a long run)."""
 
-    def __init__(self, log_dir: Path, base_env: dict[str, str], restart_limit: int = 3) -> None:
+    def __init__(self, log_dir: Path, base_env: dict[str, str], restart_limit: int = 3,
+                 budget: RestartBudget | None = None) -> None:
         self.log_dir = log_dir
         self.base_env = base_env
-        self.restart_limit = restart_limit
+        self.budget = budget if budget is not None else RestartBudget(limit=restart_limit)
+        self.restart_limit = self.budget.limit
         self.processes: dict[str, ManagedProcess] = {}
         self.events: list[str] = []
         self.stopping = False
@@ -89,13 +95,16 @@ class Supervisor:
             managed.exit_codes.append(code)
             what = (f"{name} {managed.killed_because}; killed" if managed.killed_because
                     else f"{name} exited with {code}")
+            reason = managed.killed_because or f"exited with {code}"
             managed.killed_because = None
-            if managed.restarts >= self.restart_limit:
+            if not self.budget.allows(name):
                 managed.gave_up = True
-                self.events.append(f"{what}; restart limit {self.restart_limit} reached")
+                self.events.append(f"{what}; restart limit {self.restart_limit} reached "
+                                   f"({self.budget.describe()})")
                 continue
             managed.restarts += 1
-            self.events.append(f"{what}; restart {managed.restarts}/{self.restart_limit}")
+            used = self.budget.take(name, reason)
+            self.events.append(f"{what}; restart {used}/{self.restart_limit}")
             self.start(name)
             restarted.append(name)
         return restarted

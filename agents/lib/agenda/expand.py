@@ -22,6 +22,7 @@ from agents.lib.agenda.ics_source import IcsAgenda, IcsOccurrence
 from agents.lib.agenda.model import (SECONDS_PER_DAY, Activity, ActivitySpec, ActivityState, AgendaDay,
                                  AgendaError, load_zone, parse_when, wall_seconds)
 from agents.lib.agenda.validate import ActivityLike, validate_activities
+from scenes.days import on_day as on_date
 
 AgendaSource = ActivitySpec | IcsAgenda
 UTC = dt.UTC
@@ -63,7 +64,10 @@ def _span(start: dt.datetime, end: dt.datetime, exact: bool, day: dt.date,
 
 
 def resolve_spec(spec: ActivitySpec, day: dt.date, zone: dt.tzinfo) -> Draft | None:
-    """Place a YAML/CLI spec on ``day``; None if its ISO date-times put it on another day."""
+    """Place a YAML/CLI spec on ``day``; None if its ISO date-times, or its ``weekdays``/``dates``
+    (scenes/days.py), put it on another day."""
+    if not on_date(spec.weekdays, spec.dates, day):
+        return None
     start, end = parse_when(spec.start), parse_when(spec.end)
     moments: list[float | dt.datetime] = []
     for value in (start, end):

@@ -26,6 +26,7 @@ from pydantic import (AfterValidator, BaseModel, ConfigDict, Field, StringConstr
 
 from agents.lib.states import ActivityState  # the one definition; re-exported (the vocabulary's too)
 from scenes.clock import CLOCK_PATTERN, format_clock, parse_clock
+from scenes.days import DateItem, Weekday
 from scenes.names import check_name, shown
 from scenes.yamlio import SourceError
 
@@ -183,6 +184,8 @@ class ActivitySpec(BaseModel):
     end: NonEmptyStr
     participants: tuple[NonEmptyStr, ...] = ()
     kind: NonEmptyStr | None = None
+    weekdays: tuple[Weekday, ...] = Field((), description="days of the week it happens (default: every day)")
+    dates: tuple[DateItem, ...] = Field((), description="dates it happens (default: every day)")
     source: str = Field("", description="where it was written (file:line); set by loaders")
 
     @field_validator("start", "end", mode="before")

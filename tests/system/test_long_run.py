@@ -1,0 +1,34 @@
+"""Issue 41 (multi-process): a run of two days launched as processes, one day after the other.
+
+Each day is a launch of its own (router, six agents, supervision) on that day's scene; the run's
+result.json holds each agent process's RSS and CPU time per day, the DSR's counts, the bytes
+written, and the index one recording per day; each day has its own logs."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tests.system.launch_helpers import launch_json
+from tools.launch import AGENTS
+
+pytestmark = pytest.mark.slow
+WEEK = Path(__file__).resolve().parents[1] / "data" / "week_tiny.yaml"
+
+
+def test_two_days_launched_as_processes_rotate_and_account_per_day(tmp_path: Path) -> None:
+    result = launch_json(str(WEEK), tmp_path / "launch.log", timeout_s=300, extra=["--keep-days", "5"])
+    assert result["returncode"] == 0 and result["ok"], result
+    assert [d["status"] for d in result["days"]] == ["ok", "ok"] and result["restarts_total"] == 0
+    run_dir = Path(result["run_dir"])
+    index = json.loads((run_dir / "index.json").read_text())
+    for day, entry in zip(result["days"], index["entries"], strict=True):
+        assert set(AGENTS) <= set(day["agents"]), day["agents"]
+        assert all(a["rss_mb"] > 0 and a["cpu_s"] > 0 for a in day["agents"].values())
+        assert day["dsr"]["nodes"] > 0 and day["bytes_written"] > day["rrd_bytes"] > 0
+        assert (run_dir / entry["rrd"]).is_file() and entry["rrd"] == day["rrd"]
+        logs = run_dir / entry["run_dir"] / "logs"
+        assert {f"{name}.log" for name in AGENTS} <= {p.name for p in logs.iterdir()}
+        assert json.loads((run_dir / entry["run_dir"] / "result.json").read_text())["restart_log"] == []

@@ -1,0 +1,99 @@
+"""Benchmark of a week at the centre: center_week's days one after the other (tools/week.py).
+
+Prints ONE flat JSON object:
+
+- ``week_wall_min``: wall minutes of the 7 days (goal: < 15 in-process on 2 cores); with
+  ``--days N`` < 7 it is null and ``week_wall_min_projected`` is the N days' time scaled to 7;
+  ``wall_min`` and ``wall_min_per_day_<d>`` are what was measured;
+- ``rss_growth_day<N>_over_day1``: each agent's RSS at the end of the last day over the end of day 1,
+  the largest over the agents (goal: <= 1.1 at day 7); in-process the agents are the one process,
+  which lives the whole week, so this is where a leak across days shows;
+- ``dsr_growth_day<N>_over_day1``: the DSR's node, edge and tombstone counts at the end of the last
+  day over day 1, the largest of the three (a zero on day 1 counts as 1); each day starts a fresh
+  graph, so this measures a day's state, not an accumulation;
+- ``rrd_mb_per_day`` (goal: <= 20 for center_day's crowd), ``rrd_mb_max_day``,
+  ``bytes_written_mb_per_day`` (recording, people.csv, trajectory, logs);
+- ``missions``, ``missions_done``, ``days_ok``.
+
+Run: ``.venv/bin/python tools/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
+(a full week takes minutes of both cores; ``--days 2`` is the short variant).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+MB = 1024.0 * 1024.0
+
+
+def _ratio(last: float, first: float) -> float:
+    return round(max(last, 1.0) / max(first, 1.0), 3)
+
+
+def summarize(days: list[dict[str, Any]], wall_s: float, planned: int) -> dict[str, object]:
+    """The flat report of a run's day records (result.json ``days``)."""
+    ran = [d for d in days if "agents" in d]
+    report: dict[str, object] = {"days": planned, "days_ok": sum(1 for d in days if d["status"] == "ok"),
+                                 "wall_min": round(wall_s / 60.0, 2),
+                                 "week_wall_min": round(wall_s / 60.0, 2) if planned == 7 else None,
+                                 "week_wall_min_projected": round(wall_s / 60.0 * 7 / max(1, planned), 2)}
+    report.update({f"wall_min_per_day_{d['day']}": round(d["wall_s"] / 60.0, 2) for d in ran})
+    if len(ran) >= 2:
+        first, last = ran[0], ran[-1]
+        shared = set(first["agents"]) & set(last["agents"])
+        rss = [_ratio(last["agents"][a]["rss_mb"], first["agents"][a]["rss_mb"]) for a in shared]
+        report[f"rss_growth_day{last['day']}_over_day1"] = max(rss) if rss else None
+        report[f"dsr_growth_day{last['day']}_over_day1"] = max(
+            _ratio(last["dsr"].get(k, 0), first["dsr"].get(k, 0)) for k in ("nodes", "edges", "tombstones"))
+        report.update({f"rss_mb_day{d['day']}_max_agent": max(a["rss_mb"] for a in d["agents"].values())
+                       for d in ran if d["agents"]})
+        report.update({f"dsr_nodes_day{d['day']}": d["dsr"].get("nodes") for d in ran})
+        report.update({f"dsr_tombstones_day{d['day']}": d["dsr"].get("tombstones") for d in ran})
+    if ran:
+        rrd = [d["rrd_bytes"] / MB for d in ran]
+        report["rrd_mb_per_day"] = round(sum(rrd) / len(rrd), 2)
+        report["rrd_mb_max_day"] = round(max(rrd), 2)
+        report["bytes_written_mb_per_day"] = round(sum(d["bytes_written"] for d in ran) / MB / len(ran), 2)
+    report["missions"] = sum(d["missions_summary"]["total"] for d in ran)
+    report["missions_done"] = sum(d["missions_summary"]["done"] for d in ran)
+    return report
+
+
+def run(scene: str, days: int | None, mode: str, keep: Path | None) -> dict[str, object]:
+    from tools.week import run_days
+
+    os.environ.setdefault("RERUN", "on")    # the recording's size per day is one of the numbers
+    workdir = keep or Path(tempfile.mkdtemp(prefix="chronav-bench-week-"))
+    workdir.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    result = run_days(scene, days=days, in_process=mode == "in-process", runs_dir=workdir, timeout_s=3000.0)
+    wall = time.perf_counter() - started
+    report: dict[str, object] = {"scene": result.scene, "mode": mode, "outcome": result.outcome,
+                                 **summarize(result.days, wall, result.planned_days),
+                                 "restarts_total": len(result.restart_log)}
+    if result.error:
+        report["error"] = result.error
+    return report
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default="center_week")
+    parser.add_argument("--days", type=int, default=None, help="run this many days (default: the scene's, 7)")
+    parser.add_argument("--mode", choices=("in-process", "launch"), default="in-process")
+    parser.add_argument("--keep", type=Path, default=None, help="run in this directory and keep the recordings")
+    args = parser.parse_args()
+    print(json.dumps(run(args.scene, args.days, args.mode, args.keep)))
+
+
+if __name__ == "__main__":
+    main()
