@@ -116,7 +116,7 @@ def test_stats_without_a_running_graph_says_so_on_stderr(world):
                                       "--timeout", "1"])
     assert result.exit_code == 1 and "no member of graph 'nope'" in result.stderr
     result = CliRunner().invoke(app, ["dsr", "stats", "--connect", world])
-    assert result.exit_code == 0 and "1 members" in result.stdout
+    assert result.exit_code == 0 and "1 member\n" in result.stdout
 
 
 def test_dump_follow_prints_changes(world, procs, tmp_path):

@@ -24,6 +24,9 @@ def test_dump_agm_xml_is_an_agm_world(procs, tmp_path):
         robot = graph.insert_node("robot", "robot")
         graph.insert_or_assign_edge(robot.id, room.id, "in", attrs={"since": "09:00"})
         wait_until(lambda: len(graph) == 5, 20, message="writer sees the world")
+        # the dump takes its snapshot from the replica that stays: it must hold the writer's nodes
+        # before the writer leaves (a loaded machine once dumped the world without them)
+        wait_until(lambda: (read_status(status) or {}).get("nodes") == 5, 20, message="the worker sees the writes")
     runner = CliRunner()
     result = runner.invoke(app, ["dsr", "dump", "--format", "agm-xml", "--connect", endpoint])
     assert result.exit_code == 0, result.output

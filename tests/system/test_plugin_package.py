@@ -88,7 +88,7 @@ def test_predict_evaluate_scores_its_predictor(site: Path, tmp_path: Path) -> No
         x += 0.5 * 0.4 * 0.9 ** k
         lines.append(f"{10 * k}\t1\t{x:.6f}\t0.0")
     data.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    code, result = _chronav(site, "predict", "evaluate", str(data), "--predictor", "example_slowing")
+    code, result = _chronav(site, "predict", "evaluate", str(data), "--predictor", "example_slowing", "--noise", "0")
     assert code == 0
     row = result["files"]["line.txt"]
     assert row["tracks"] > 0 and row["ade"] < row["cv_ade"]

@@ -21,13 +21,13 @@ from agents.lib.control.navground_behaviours import (
     NavgroundConfigError,
     NavgroundController,
     OrcaParams,
-    carrot,
     hrvo,
     human_like,
     orca,
     social_force,
 )
 from agents.lib.control import controllers
+from agents.lib.control.control_law import carrot
 from agents.lib.control.protocol import ControlCommand, ControlInput, LocalController, RobotLimits
 from agents.sim_robot.laser import polygon_segments, polyline_segments
 from agents.world.building import footprint_polygons
@@ -259,10 +259,10 @@ def test_parameters_reach_navground_and_bad_ones_are_refused() -> None:
 
 def test_carrot_follows_the_path_round_corners_and_stops_at_the_goal() -> None:
     path = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]])
-    point, remaining = carrot(path, (1.8, -0.2), 0.6)
+    point, remaining = carrot((1.8, -0.2, 0.0), path, 0.6)
     np.testing.assert_allclose(point, [2.0, 0.4])
     assert remaining == pytest.approx(2.2)
-    point, _ = carrot(path, (2.1, 1.9), 0.6)
+    point, _ = carrot((2.1, 1.9, 0.0), path, 0.6)
     np.testing.assert_allclose(point, [2.0, 2.0])
 
 

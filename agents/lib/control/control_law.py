@@ -106,7 +106,7 @@ def carrot(pose: ArrayLike, band: ArrayLike | ElasticBand, lookahead_m: float) -
     target = at + lookahead_m
     if target >= cumulative[-1]:
         return pts[-1].copy(), remaining
-    j = int(np.searchsorted(cumulative, target, side="right")) - 1
+    j = min(int(np.searchsorted(cumulative, target, side="right")) - 1, len(seg) - 1)
     frac = (target - cumulative[j]) / max(seg_len[j], 1e-18)
     return pts[j] + frac * seg[j], remaining
 

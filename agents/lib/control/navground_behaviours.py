@@ -46,6 +46,7 @@ import numpy as np
 from navground.core.behaviors.social_force import SocialForceBehavior
 from pydantic import BaseModel, ConfigDict, Field
 
+from agents.lib.control.control_law import carrot
 from agents.lib.control.protocol import ControlCommand, ControlInput, FloatArray, LocalController, RobotLimits
 from scenes.angles import wrap_angle
 from scenes.geometry import project_on_segments
@@ -310,7 +311,7 @@ class NavgroundController:
         if distance <= p.goal_tolerance_m:
             omega, done = self._final_turn(theta, control_input.goal_theta, limits)
             return ControlCommand(0.0, 0.0, omega, done, distance)
-        target, remaining = carrot(path, (x, y), p.lookahead_m)
+        target, remaining = carrot((x, y, theta), path, p.lookahead_m)   # chronav's control law's carrot
         left = max(remaining, distance)
         behaviour = self._behaviour
         behaviour.optimal_speed = min(limits.max_speed_mps, _stopping_speed(left, p.goal_tolerance_m,
@@ -439,24 +440,6 @@ def social_force(limits: RobotLimits) -> LocalController:
 
 
 # ---------------------------------------------------------------------------------------- helpers
-def carrot(path: FloatArray, xy: tuple[float, float], lookahead_m: float) -> tuple[FloatArray, float]:
-    """The point ``lookahead_m`` along ``path`` (N >= 2, 2) past the projection of ``xy`` on it,
-    or the goal when less is left, and the path length left from that projection (m)."""
-    seg = np.diff(path, axis=0)
-    seg_len = np.hypot(seg[:, 0], seg[:, 1])
-    projection = project_on_segments(xy, path[:-1], path[1:])
-    k = int(np.argmin(projection.distance))
-    cumulative = np.concatenate([[0.0], np.cumsum(seg_len)])
-    at = cumulative[k] + projection.fraction[k] * seg_len[k]
-    remaining = float(cumulative[-1] - at)
-    wanted = at + lookahead_m
-    if wanted >= cumulative[-1]:
-        return path[-1].copy(), remaining
-    j = min(int(np.searchsorted(cumulative, wanted, side="right")) - 1, len(seg) - 1)
-    frac = (wanted - cumulative[j]) / max(seg_len[j], 1e-18)
-    return path[j] + frac * seg[j], remaining
-
-
 def _path(path: FloatArray, xy: tuple[float, float]) -> FloatArray:
     """The path as finite (N >= 2, 2) points; a one-point path is the segment robot -> goal."""
     pts = np.asarray(path, dtype=np.float64).reshape(-1, 2)
