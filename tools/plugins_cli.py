@@ -68,10 +68,22 @@ def register(app: typer.Typer) -> None:
         from rich.console import Console
         from rich.table import Table
 
+        from tools.plain import console_width, is_plain, print_lines, wrapped
+
+        console = Console()
+        if is_plain(console):    # piped: one line per plug-in, its description wrapped between words
+            width = console_width(console)
+            lines = ["chronav plug-ins (docs/extending.md): kind name (package version): what it does"]
+            for row in rows:
+                what = row["summary"] if row["status"] == "ok" else f"REFUSED: {row['reason']}"
+                lines += wrapped(f"{row['kind']} {row['name']} ({row['package']} {row['version']}): {what}",
+                                 width, indent="    ")
+            print_lines(console, lines)
+            return
         table = Table(title="chronav plug-ins (docs/extending.md)")
         for column in ("kind", "name", "package", "version", "what it does"):
             table.add_column(column)
         for row in rows:
             what = row["summary"] if row["status"] == "ok" else f"REFUSED: {row['reason']}"
             table.add_row(row["kind"], row["name"], row["package"], row["version"], what)
-        Console().print(table)
+        console.print(table)

@@ -144,6 +144,9 @@ def test_plugins_lists_every_extension_and_says_why_one_is_refused(broken) -> No
     assert "controller plug-in 'missing_module' from package 'chronav-test-plugins' refused" in result.stderr
     table = CliRunner().invoke(app, ["plugins"])
     assert table.exit_code == 0 and "REFUSED" in table.stdout and "nan_ctrl" in table.stdout
+    # piped (as here): one line per plug-in, names and packages whole, never folded inside a table cell
+    assert "\ncontroller nan_ctrl (chronav-test-plugins " in table.stdout
+    assert "\ncontroller elastic_band (chronav " in table.stdout
 
 
 def test_a_taken_name_keeps_its_first_package_and_a_failing_metric_is_reported(broken, tmp_path) -> None:
