@@ -92,7 +92,7 @@ def mission_table(rows: Sequence[Mapping[str, Any]], scene: str) -> list[str]:
             runs = [r for r in mine if r["mission"] == mission and r["planner"] == method]
             done = [r for r in runs if r.get("state") == MissionState.DONE]
             time = _cell([float(r.get("duration_s", math.nan)) for r in done]).split(" ±")[0]
-            cells.append(f"{len(done)}/{len(runs)}" + (f", {time} s" if done else ""))
+            cells.append(f"{len(done)}/{len(runs)}" + (f", {time} s" if time != "-" else ""))   # a wait: no drive
         lines.append(f"| {mission} | " + " | ".join(cells) + " |")
     return lines
 
@@ -107,7 +107,7 @@ def tests_table(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     for test in paired_tests(rows, REFERENCE):
         if test.metric in headers and math.isfinite(test.p_value) and test.p_value < P_SHOWN:
             lines.append(f"| {headers[test.metric]} | {test.other} | {test.pairs} | "
-                         f"{test.median_difference:+.2f} | {test.p_value:.3g} |")
+                         f"{test.median_difference:+.3g} | {test.p_value:.3g} |")
     return lines
 
 
