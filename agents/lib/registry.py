@@ -164,6 +164,36 @@ def check_callable(obj: Any) -> None:
         raise TypeError(f"the entry point names a {type(obj).__name__}, not a factory (a class or a function)")
 
 
+def build(kind: str, name: str, protocol: type, lacks: str, *args: Any) -> Any:
+    """A new object from the factory ``name`` of ``kind`` registers, called with ``args``.
+
+    RefusedExtension (plug-in, package, reason) when the factory raises or builds something that
+    is not a ``protocol`` (a runtime-checkable Protocol; ``lacks`` names the methods it must have).
+    One place for every kind's refusal, so they all read alike."""
+    make = load(kind, name, check_callable)
+    package = entry(kind, name).package
+    try:
+        built = make(*args)
+    except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
+        raise RefusedExtension(kind, name, package, f"its factory raised {type(exc).__name__}: {exc}") from None
+    if not isinstance(built, protocol):
+        raise RefusedExtension(kind, name, package, f"its factory returned a {type(built).__name__} without {lacks}")
+    return built
+
+
+_BUILT: dict[tuple[str, str, int], Any] = {}
+
+
+def built_once(kind: str, name: str, protocol: type, lacks: str) -> Any:
+    """``build(kind, name, protocol, lacks)`` once per process (planners, predictors, metrics hold no
+    per-run state); keyed by the factory, so a cleared registry builds again."""
+    key = (kind, name, id(load(kind, name, check_callable)))   # the load is cached: a dict read
+    found = _BUILT.get(key)
+    if found is None:
+        found = _BUILT[key] = build(kind, name, protocol, lacks)
+    return found
+
+
 def clear() -> None:
     """Forget the scanned metadata and loaded objects (tests that register entries at run time)."""
     extensions.cache_clear()

@@ -41,17 +41,7 @@ def factory(name: str) -> Any:
 def controller(name: str, limits: RobotLimits) -> LocalController:
     """A new controller ``name`` for a robot with ``limits``; RefusedExtension when its factory
     fails or builds something without reset() and command()."""
-    make = factory(name)
-    package = registry.entry("controller", name).package
-    try:
-        built = make(limits)
-    except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
-        raise registry.RefusedExtension("controller", name, package,
-                                        f"its factory raised {type(exc).__name__}: {exc}") from None
-    if not isinstance(built, LocalController):
-        raise registry.RefusedExtension("controller", name, package,
-                                        f"its factory returned a {type(built).__name__} without reset() and command()")
-    return built
+    return registry.build("controller", name, LocalController, "reset() and command()", limits)
 
 
 def checked(answer: object, name: str) -> ControlCommand:

@@ -44,25 +44,11 @@ class MissionMetric(Protocol):
     def measure(self, run: MissionRun) -> Mapping[str, float]: ...
 
 
-_INSTANCES: dict[tuple[str, int], MissionMetric] = {}
 
 
 def metric(name: str) -> MissionMetric:
     """The metric ``name``, built once per process; UnknownExtension or RefusedExtension."""
-    factory = registry.load("metric", name, registry.check_callable)   # cached: a dict read
-    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
-    if found is None:
-        package = registry.entry("metric", name).package
-        try:
-            found = factory()
-        except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
-            raise registry.RefusedExtension("metric", name, package,
-                                            f"its factory raised {type(exc).__name__}: {exc}") from None
-        if not isinstance(found, MissionMetric):
-            raise registry.RefusedExtension("metric", name, package,
-                                            f"its factory returned a {type(found).__name__} without measure()")
-        _INSTANCES[(name, id(factory))] = found
-    return found
+    return registry.built_once("metric", name, MissionMetric, "measure()")
 
 
 def usable_metrics() -> tuple[dict[str, MissionMetric], list[registry.RefusedExtension]]:

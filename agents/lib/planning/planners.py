@@ -68,7 +68,6 @@ class InflationParams(BaseModel):
     inflation_radius_m: float = Field(1.2, gt=0, description="from the body's edge (ours, module doc)")
 
 
-_INSTANCES: dict[tuple[str, int], GlobalPlanner] = {}
 
 
 def planner_names() -> tuple[str, ...]:
@@ -86,20 +85,7 @@ def check_planner(name: str) -> str:
 def planner(name: str) -> GlobalPlanner:
     """The planner ``name``, built once per process by its factory and checked against the
     protocol; UnknownExtension or RefusedExtension (plug-in, package, reason) otherwise."""
-    factory = registry.load("planner", name, registry.check_callable)   # cached: a dict read
-    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
-    if found is None:
-        ext = registry.entry("planner", name)
-        try:
-            found = factory()
-        except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
-            raise registry.RefusedExtension("planner", name, ext.package,
-                                            f"its factory raised {type(exc).__name__}: {exc}") from None
-        if not isinstance(found, GlobalPlanner):
-            raise registry.RefusedExtension("planner", name, ext.package,
-                                            f"its factory returned a {type(found).__name__} without grid() and plan()")
-        _INSTANCES[(name, id(factory))] = found
-    return found
+    return registry.built_once("planner", name, GlobalPlanner, "grid() and plan()")
 
 
 class GridPlanner:

@@ -73,25 +73,11 @@ def interpolated(person: Person, found: Prediction | None, times: FloatArray) ->
     return np.stack([np.interp(times, known_t, known[:, 0]), np.interp(times, known_t, known[:, 1])], axis=1)
 
 
-_INSTANCES: dict[tuple[str, int], PeoplePredictor] = {}
 
 
 def predictor(name: str) -> PeoplePredictor:
     """The predictor ``name``, built once per process; UnknownExtension or RefusedExtension."""
-    factory = registry.load("predictor", name, registry.check_callable)   # cached: a dict read
-    found = _INSTANCES.get((name, id(factory)))    # keyed by the factory: a cleared registry rebuilds
-    if found is None:
-        package = registry.entry("predictor", name).package
-        try:
-            found = factory()
-        except Exception as exc:  # noqa: BLE001 - a plug-in's failing factory is its refusal, reported
-            raise registry.RefusedExtension("predictor", name, package,
-                                            f"its factory raised {type(exc).__name__}: {exc}") from None
-        if not isinstance(found, PeoplePredictor):
-            raise registry.RefusedExtension("predictor", name, package,
-                                            f"its factory returned a {type(found).__name__} without predict()")
-        _INSTANCES[(name, id(factory))] = found
-    return found
+    return registry.built_once("predictor", name, PeoplePredictor, "predict()")
 
 
 def checked_prediction(name: str, predicted: object, people: int, steps: int) -> FloatArray:
