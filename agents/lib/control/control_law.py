@@ -122,7 +122,7 @@ def differential_command(pose: ArrayLike, band: ArrayLike | ElasticBand, params:
         return ControlOutput(DiffCommand(0.0, omega), done, distance)
     target, remaining = carrot((x, y, theta), pts, params.lookahead_m)
     alpha = wrap_angle(math.atan2(target[1] - y, target[0] - x) - theta)
-    omega = _clip(params.heading_gain * alpha, params.max_angular_speed_radps)
+    omega = clip(params.heading_gain * alpha, params.max_angular_speed_radps)
     v = 0.0
     if abs(alpha) <= math.pi / 2:
         v = params.max_speed_mps * math.exp(-alpha ** 2 / (2.0 * params.heading_sigma_rad ** 2))
@@ -149,7 +149,7 @@ def omni_command(pose: ArrayLike, band: ArrayLike | ElasticBand, params: Control
     wanted = math.atan2(direction[1], direction[0]) if norm > 1e-9 else theta
     if goal_theta is not None and remaining <= params.lookahead_m:
         wanted = goal_theta
-    omega = _clip(params.heading_gain * wrap_angle(wanted - theta), params.max_angular_speed_radps)
+    omega = clip(params.heading_gain * wrap_angle(wanted - theta), params.max_angular_speed_radps)
     return ControlOutput(OmniCommand(vx, vy, omega), False, distance)
 
 
@@ -161,9 +161,9 @@ def limit_acceleration(previous: Command, wanted: Command, dt_s: float,
         raise ControlInputError(f"dt_s: must be a positive finite time step, got {dt_s}")
     max_dv = params.max_accel_mps2 * dt_s
     max_dw = params.max_angular_accel_radps2 * dt_s
-    omega = previous.omega + _clip(wanted.omega - previous.omega, max_dw)
+    omega = previous.omega + clip(wanted.omega - previous.omega, max_dw)
     if isinstance(wanted, DiffCommand) and isinstance(previous, DiffCommand):
-        return DiffCommand(previous.v + _clip(wanted.v - previous.v, max_dv), omega)
+        return DiffCommand(previous.v + clip(wanted.v - previous.v, max_dv), omega)
     if isinstance(wanted, OmniCommand) and isinstance(previous, OmniCommand):
         dvx, dvy = wanted.vx - previous.vx, wanted.vy - previous.vy
         norm = math.hypot(dvx, dvy)
@@ -220,16 +220,29 @@ def integrate(pose: ArrayLike, command: Command, dt_s: float) -> tuple[float, fl
 
 
 def _final_turn(theta: float, goal_theta: float | None, params: ControlParams) -> tuple[float, bool]:
+    return final_turn(theta, goal_theta, params.goal_heading_tolerance_rad, params.heading_gain,
+                      params.max_angular_speed_radps)
+
+
+def final_turn(theta: float, goal_theta: float | None, heading_tolerance_rad: float, heading_gain: float,
+               max_angular_speed_radps: float) -> tuple[float, bool]:
+    """On the goal: (omega, done), turning towards ``goal_theta`` until within the tolerance
+    (done at once without one). Shared by every controller that arrives the way chronav's law does."""
     if goal_theta is None:
         return 0.0, True
     error = wrap_angle(goal_theta - theta)
-    if abs(error) <= params.goal_heading_tolerance_rad:
+    if abs(error) <= heading_tolerance_rad:
         return 0.0, True
-    return _clip(params.heading_gain * error, params.max_angular_speed_radps), False
+    return clip(heading_gain * error, max_angular_speed_radps), False
 
 
 def _stopping_speed(distance_m: float, params: ControlParams) -> float:
-    return math.sqrt(2.0 * params.max_accel_mps2 * max(distance_m - params.goal_tolerance_m / 2, 0.0))
+    return stopping_speed(distance_m, params.goal_tolerance_m, params.max_accel_mps2)
+
+
+def stopping_speed(distance_m: float, goal_tolerance_m: float, max_accel_mps2: float) -> float:
+    """The speed from which braking at ``max_accel_mps2`` stops inside the goal tolerance."""
+    return math.sqrt(2.0 * max_accel_mps2 * max(distance_m - goal_tolerance_m / 2, 0.0))
 
 
 def _is_stopped(command: Command) -> bool:
@@ -238,7 +251,8 @@ def _is_stopped(command: Command) -> bool:
     return all(abs(v) < 1e-9 for v in values)
 
 
-def _clip(value: float, limit: float) -> float:
+def clip(value: float, limit: float) -> float:
+    """``value`` within +-``limit``."""
     return max(-limit, min(limit, value))
 
 

@@ -46,9 +46,8 @@ import numpy as np
 from navground.core.behaviors.social_force import SocialForceBehavior
 from pydantic import BaseModel, ConfigDict, Field
 
-from agents.lib.control.control_law import carrot
+from agents.lib.control.control_law import carrot, clip, final_turn, stopping_speed
 from agents.lib.control.protocol import ControlCommand, ControlInput, FloatArray, LocalController, RobotLimits
-from scenes.angles import wrap_angle
 from scenes.geometry import project_on_segments
 
 
@@ -314,7 +313,7 @@ class NavgroundController:
         target, remaining = carrot((x, y, theta), path, p.lookahead_m)   # chronav's control law's carrot
         left = max(remaining, distance)
         behaviour = self._behaviour
-        behaviour.optimal_speed = min(limits.max_speed_mps, _stopping_speed(left, p.goal_tolerance_m,
+        behaviour.optimal_speed = min(limits.max_speed_mps, stopping_speed(left, p.goal_tolerance_m,
                                                                             limits.max_accel_mps2))
         behaviour.pose = core.Pose2((x, y), theta)
         vx0, vy0, w0 = (float(v) if math.isfinite(v) else 0.0 for v in control_input.velocity)
@@ -342,7 +341,7 @@ class NavgroundController:
         if limits.drive == "differential":
             vy = 0.0
         vx, vy = _limit_acceleration((vx0, vy0), (vx, vy), limits.max_accel_mps2 * control_input.dt_s)
-        omega = _clip(omega, limits.max_angular_speed_radps)
+        omega = clip(omega, limits.max_angular_speed_radps)
         return ControlCommand(vx, vy, omega, False, left)
 
     # -- internals
@@ -406,12 +405,10 @@ class NavgroundController:
             state.static_obstacles = [core.Disc((e[0], e[1]), 0.0) for e in ends]
 
     def _final_turn(self, theta: float, goal_theta: float | None, limits: RobotLimits) -> tuple[float, bool]:
-        if goal_theta is None or not math.isfinite(goal_theta):
-            return 0.0, True
-        error = wrap_angle(goal_theta - theta)
-        if abs(error) <= self.params.goal_heading_tolerance_rad:
-            return 0.0, True
-        return _clip(self.params.heading_gain * error, limits.max_angular_speed_radps), False
+        if goal_theta is not None and not math.isfinite(goal_theta):
+            goal_theta = None     # a goal heading that is not a number: arrive without turning
+        return final_turn(theta, goal_theta, self.params.goal_heading_tolerance_rad, self.params.heading_gain,
+                          limits.max_angular_speed_radps)
 
 
 # -------------------------------------------------------------------------------------- factories
@@ -483,10 +480,6 @@ def _wall_discs(segments: FloatArray, xy: tuple[float, float], reach_m: float, r
     return points[np.hypot(points[:, 0] - xy[0], points[:, 1] - xy[1]) <= reach_m + radius_m]
 
 
-def _stopping_speed(distance_m: float, tolerance_m: float, max_accel_mps2: float) -> float:
-    return math.sqrt(2.0 * max_accel_mps2 * max(distance_m - tolerance_m / 2, 0.0))
-
-
 def _limit_acceleration(previous: tuple[float, float], wanted: tuple[float, float],
                         max_dv: float) -> tuple[float, float]:
     dvx, dvy = wanted[0] - previous[0], wanted[1] - previous[1]
@@ -495,10 +488,6 @@ def _limit_acceleration(previous: tuple[float, float], wanted: tuple[float, floa
         return wanted
     scale = max(max_dv, 0.0) / norm
     return previous[0] + dvx * scale, previous[1] + dvy * scale
-
-
-def _clip(value: float, limit: float) -> float:
-    return max(-limit, min(limit, value))
 
 
 def _same(got: Any, wanted: float | int | bool) -> bool:
