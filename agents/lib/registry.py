@@ -27,6 +27,7 @@ GROUPS: dict[str, str] = {
     "controller": "chronav.controllers",
     "predictor": "chronav.predictors",
     "metric": "chronav.metrics",
+    "agent": "chronav.agents",
 }
 
 
