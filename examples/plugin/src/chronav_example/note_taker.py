@@ -9,8 +9,9 @@ a note to its person, both its own.  chronav's vocabulary and write policy take 
 anything else it tried to write (another agent's ``person``, an undeclared attribute) would be
 refused, as for chronav's own agents (docs/extending.md, section 7).
 
-Option (``-o near_m=2`` on its process's command line): ``near_m``, the distance that counts as
-passing someone (metres, default 1.5).
+Option (``-o near_m=1.5`` on its process's command line): ``near_m``, the distance that counts as
+passing someone (metres between their centres, default 2: a robot that keeps a polite distance
+still passes within it).
 """
 
 from __future__ import annotations
@@ -26,13 +27,15 @@ from agents.runtime.recording import Recorder
 from agents.world.vocabulary import ClockView, NodeType
 
 NOTE, ABOUT = "note", "about"
+#: metres between the robot's and a person's centres that count as passing them
+NEAR_M = 2.0
 #: a person must get this much farther than ``near_m`` before a new pass counts (no note per tick
 #: while the robot lingers at the edge)
 HYSTERESIS_M = 0.5
 
 
 def describe() -> AgentSpec:
-    """Writes a note node each time the robot passes within 1.5 m of a person."""
+    """Writes a note node each time the robot passes within 2 m of a person."""
     return AgentSpec(
         name="note_taker", process="chronav_example.note_taker",
         agent_class="chronav_example.note_taker:NoteTaker", round_order=35,
@@ -49,7 +52,7 @@ class NoteTaker(Agent):
     def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
-        self.near_m = float(self.config.options.get("near_m", 1.5))
+        self.near_m = float(self.config.options.get("near_m", NEAR_M))
         self.passing: set[str] = set()     # people within reach now (noted once per pass)
         self.notes = 0
 
