@@ -394,7 +394,7 @@ def _merge(*parts: dict[str, Attr]) -> dict[str, Attr]:
 _R, _C, _D, _RB = RobotAttr, ClockAttr, DoorAttr, RequestAttr
 _M, _I, _O, _A = MissionAttr, IntentionAttr, ObjectAttr, ActivityAttr
 _G, _P = GroundTruthAttr, PersonAttr
-_HEARTBEAT = {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT, HeartbeatAttr.WALL_S: FLOAT, HeartbeatAttr.PROBLEM: STR}
+_HEARTBEAT: dict[StrEnum, str] = {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT, HeartbeatAttr.WALL_S: FLOAT, HeartbeatAttr.PROBLEM: STR}
 
 NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.WORLD, (SIM_ROBOT,)),
@@ -563,7 +563,8 @@ def take_in(agents: Iterable[tuple[AgentSpec, str]], refused: Iterable[RefusedEx
                 refusals.append(RefusedExtension(AGENT_KIND, agent.name, package, problem))
                 continue
             for decl in agent.nodes:
-                merged[decl.type] = NodeSpec(decl.type, (agent.name,), _attrs(agent.name, dict(decl.attrs)))
+                merged[decl.type] = NodeSpec(decl.type, (agent.name,),
+                                             {key: Attr(kind, (agent.name,)) for key, kind in decl.attrs.items()})
             all_edges += tuple(EdgeSpec(e.type, tuple(e.src), tuple(e.dst), (agent.name,), dict(e.attrs))
                                for e in agent.edges)
         beat = merged[NodeType.HEARTBEAT]
