@@ -174,6 +174,8 @@ def process_missing(found: AgentSpec) -> registry.RefusedExtension | None:
 
     try:
         present = find_spec(found.process) is not None
+    except ModuleNotFoundError:      # its parent package is missing
+        present = False
     except Exception as exc:  # noqa: BLE001 - a failing parent package is the plug-in's refusal
         return registry.RefusedExtension(KIND, found.name, package_of(found.name),
                                          f"cannot find process module {found.process}: {type(exc).__name__}: {exc}")

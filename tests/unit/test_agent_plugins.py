@@ -56,12 +56,18 @@ def not_a_spec():
     return {"name": "not_a_spec"}
 
 
+def lost_process():
+    return AgentSpec(name="lost_process", process="chronav_no_such_module.agent",
+                     agent_class="chronav_test_plugins:Scribe", round_order=60)
+
+
 def bad_class():
     return AgentSpec(name="bad_class", process="chronav_test_plugins",
                      agent_class="chronav_test_plugins:NoSuchClass", round_order=60)
 '''
 ENTRIES = {"chronav.agents": {name: f"chronav_test_plugins:{name}" for name in (
-    "scribe", "claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec", "bad_class")}
+    "scribe", "claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec", "bad_class",
+    "lost_process")}
     | {"missing_module": "chronav_no_such_module:describe"}}
 OWN = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive", "social_navigation")
 
@@ -91,7 +97,7 @@ def test_chronav_registers_its_six_agents_in_round_order_like_any_package() -> N
 
 
 def test_an_outside_agents_types_join_the_vocabulary_and_broken_ones_are_refused(outside) -> None:
-    assert outside.names == (*OWN[:4], "scribe", *OWN[4:], "bad_class")    # round order 35, then 60
+    assert outside.names == (*OWN[:4], "scribe", *OWN[4:], "bad_class", "lost_process")   # 35, then 60
     reasons = {r.name: (r.package, r.reason) for r in outside.refused}
     assert set(reasons) == {"claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec",
                             "missing_module"}
@@ -170,3 +176,14 @@ def test_plugins_lists_agents_and_in_process_leaves_out_a_class_it_cannot_import
     assert "scribe" in round_order() and lockstep_options()["sim_robot"] == ["busy_rate=0", "perception_lockstep=1"]
     assert agent_classes(["bad_class"]) == {}
     assert "agent plug-in 'bad_class' from package 'chronav-test-agents' refused: cannot import" in caplog.text
+
+
+
+def test_a_launch_refuses_an_agent_whose_process_module_is_missing_and_starts_the_rest(outside, caplog) -> None:
+    from tools.launch import process_agents
+
+    assert "lost_process" in outside.names                  # its description is fine...
+    started = [spec.name for spec in process_agents()]
+    assert "lost_process" not in started and {*OWN, "scribe", "bad_class"} <= set(started)   # ...its module is not
+    assert ("agent plug-in 'lost_process' from package 'chronav-test-agents' refused: "
+            "no module chronav_no_such_module.agent to run as its process") in caplog.text
