@@ -120,6 +120,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     scheduler, launcher = _build_scheduler(run, options)
     error: str | None = None
     reason = "done"
+    run.problems = scheduler.dropped      # agent plug-ins that raised and left the run, in the result
     try:
         if record:
             log_scene_static(launcher, spec)
@@ -156,6 +157,8 @@ class _InProcessRun:
         self.missions: dict[str, dict[str, object]] = {}
         #: the agents of the run, in round order (set once they are built)
         self.agents: tuple[str, ...] = ()
+        #: agent -> what keeps it from its job (an agent plug-in that raised and left the run)
+        self.problems: dict[str, str] = {}
 
     def status(self) -> dict[str, object]:
         """What a launch hands ``on_tick``: clock, missions, agents, wall time, where the run is."""
@@ -211,7 +214,7 @@ def _finish(run: _InProcessRun, reason: str, error: str | None) -> RunResult:
                        missions={**scene_missions(run.spec), **run.missions}, events=[],
                        restarts={name: 0 for name in run.agents}, wall_s=time.monotonic() - run.started,
                        interrupted=reason == "interrupted", timed_out=reason == "timed_out",
-                       scene_path=run.scene_path, error=error)
+                       scene_path=run.scene_path, error=error, problems=dict(run.problems))
     _write_result(result)
     return result
 

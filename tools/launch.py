@@ -439,7 +439,8 @@ def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recor
 
 def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeout_s: float) -> bool:
     """Whether the watch ends now: a stop, every mission terminal, the clock finished, the timeout
-    (noted on ``run``), or an agent the supervisor gave up on."""
+    (noted on ``run``), or a process of chronav's the supervisor gave up on (not an agent plug-in's:
+    the run goes on without it, as when it is refused at start)."""
     from agents.world.vocabulary import MissionState
 
     missions = run.missions
@@ -454,7 +455,19 @@ def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeo
     if time.monotonic() - run.started > timeout_s:
         run.timed_out = True
         return True
-    return bool(run.supervisor.given_up())
+    return any(_ends_the_run(name) for name in run.supervisor.given_up() or ())
+
+
+def _ends_the_run(process: str) -> bool:
+    """Whether giving up on ``process`` ends a run: chronav's own agents, the router and the ROS
+    bridge do; an outside package's agent plug-in does not."""
+    from agents.lib.agent_plugins import package_of
+    from agents.lib.registry import OWN_PACKAGE, UnknownExtension
+
+    try:
+        return package_of(process) == OWN_PACKAGE
+    except UnknownExtension:       # the router, the ROS bridge
+        return True
 
 
 def _finish(run: _Run, recorder: Recorder) -> RunResult:

@@ -22,6 +22,26 @@ from tests.plugin_fixtures import install_fake_plugins
 PACKAGE = "chronav-test-agents"
 MODULE = '''"""Agent plug-ins for the tests: one good, the others each broken in one way."""
 from agents.lib.agent_plugins import AgentSpec, EdgeDecl, NodeDecl
+from agents.runtime.base import Agent
+
+
+class Crasher(Agent):
+    """Raises on its second step."""
+
+    kind = "crasher"
+
+    def setup(self, graph, recorder):
+        self.steps = 0
+
+    def step(self):
+        self.steps += 1
+        if self.steps == 2:
+            raise RuntimeError("boom")
+
+
+def crasher():
+    return AgentSpec(name="crasher", process="chronav_test_plugins", agent_class="chronav_test_plugins:Crasher",
+                     round_order=60)
 
 
 def _spec(name, **kw):
@@ -67,7 +87,7 @@ def bad_class():
 '''
 ENTRIES = {"chronav.agents": {name: f"chronav_test_plugins:{name}" for name in (
     "scribe", "claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec", "bad_class",
-    "lost_process")}
+    "lost_process", "crasher")}
     | {"missing_module": "chronav_no_such_module:describe"}}
 OWN = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive", "social_navigation")
 
@@ -97,7 +117,7 @@ def test_chronav_registers_its_six_agents_in_round_order_like_any_package() -> N
 
 
 def test_an_outside_agents_types_join_the_vocabulary_and_broken_ones_are_refused(outside) -> None:
-    assert outside.names == (*OWN[:4], "scribe", *OWN[4:], "bad_class", "lost_process")   # 35, then 60
+    assert outside.names == (*OWN[:4], "scribe", *OWN[4:], "bad_class", "crasher", "lost_process")   # 35, then 60
     reasons = {r.name: (r.package, r.reason) for r in outside.refused}
     assert set(reasons) == {"claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec",
                             "missing_module"}
@@ -184,6 +204,40 @@ def test_a_launch_refuses_an_agent_whose_process_module_is_missing_and_starts_th
 
     assert "lost_process" in outside.names                  # its description is fine...
     started = [spec.name for spec in process_agents()]
-    assert "lost_process" not in started and {*OWN, "scribe", "bad_class"} <= set(started)   # ...its module is not
+    assert "lost_process" not in started and {*OWN, "scribe", "crasher"} <= set(started)   # ...its module is not
     assert ("agent plug-in 'lost_process' from package 'chronav-test-agents' refused: "
             "no module chronav_no_such_module.agent to run as its process") in caplog.text
+
+
+def test_an_agent_plugin_that_raises_leaves_an_in_process_run_and_the_others_go_on(outside, tmp_path) -> None:
+    from tests.support import REPO_ROOT
+    from tools.offline_agents import OfflineAgents
+
+    with OfflineAgents(REPO_ROOT / "tests" / "data" / "eval_tiny.yaml", tmp_path, agents=("sim_robot",)) as run:
+        crasher = run.add("crasher")
+        run.tick()
+        run.tick()                                   # its second step raises: no AgentError, it leaves
+        assert run.lockstep.dropped["crasher"] == (
+            "agent plug-in 'crasher' from package 'chronav-test-agents' failed in step: RuntimeError: boom; "
+            "it left the run, the others go on")
+        assert crasher not in run.lockstep.agents and crasher.steps == 2
+        run.skip_to("10:00")
+        for _ in range(5):
+            run.tick()                               # the simulator goes on, the crasher is not stepped
+        assert crasher.steps == 2 and vocab.now_s(run.graph) >= 36000.0
+
+
+def test_a_launch_goes_on_when_its_supervisor_gives_up_on_an_agent_plugin(outside) -> None:
+    import time
+    from types import SimpleNamespace
+
+    from tools.launch import _run_over
+
+    def over(given_up: list[str]) -> bool:
+        run = SimpleNamespace(missions={}, spec=SimpleNamespace(missions=["cross"]), interrupted=False,
+                              timed_out=False, started=time.monotonic(),
+                              supervisor=SimpleNamespace(given_up=lambda: given_up))
+        return _run_over(run, SimpleNamespace(requested=False), {"clock_finished": False}, 900.0)
+
+    assert not over([]) and not over(["crasher"])
+    assert over(["executive"]) and over(["router"]) and over(["crasher", "sim_robot"])
