@@ -18,6 +18,9 @@ from dsr import DSRGraph
 from dsr.errors import WriteRefusedError
 from dsr.writes import Write
 from tests.plugin_fixtures import install_fake_plugins
+from tests.support import REPO_ROOT
+# imported before any test installs the fake agents: its defaults (every registered agent) stay chronav's
+from tools.offline_agents import OfflineAgents
 
 PACKAGE = "chronav-test-agents"
 MODULE = '''"""Agent plug-ins for the tests: one good, the others each broken in one way."""
@@ -40,12 +43,12 @@ class Crasher(Agent):
 
 
 def crasher():
-    return AgentSpec(name="crasher", process="chronav_test_plugins", agent_class="chronav_test_plugins:Crasher",
+    return AgentSpec(name="crasher", process="chronav_test_agents", agent_class="chronav_test_agents:Crasher",
                      round_order=60)
 
 
 def _spec(name, **kw):
-    return AgentSpec(name=name, process="chronav_test_plugins", agent_class="chronav_test_plugins:Scribe",
+    return AgentSpec(name=name, process="chronav_test_agents", agent_class="chronav_test_agents:Scribe",
                      round_order=35, **kw)
 
 
@@ -78,14 +81,14 @@ def not_a_spec():
 
 def lost_process():
     return AgentSpec(name="lost_process", process="chronav_no_such_module.agent",
-                     agent_class="chronav_test_plugins:Scribe", round_order=60)
+                     agent_class="chronav_test_agents:Scribe", round_order=60)
 
 
 def bad_class():
-    return AgentSpec(name="bad_class", process="chronav_test_plugins",
-                     agent_class="chronav_test_plugins:NoSuchClass", round_order=60)
+    return AgentSpec(name="bad_class", process="chronav_test_agents",
+                     agent_class="chronav_test_agents:NoSuchClass", round_order=60)
 '''
-ENTRIES = {"chronav.agents": {name: f"chronav_test_plugins:{name}" for name in (
+ENTRIES = {"chronav.agents": {name: f"chronav_test_agents:{name}" for name in (
     "scribe", "claims_person", "claims_robot_pose", "wrong_name", "bad_kind", "not_a_spec", "bad_class",
     "lost_process", "crasher")}
     | {"missing_module": "chronav_no_such_module:describe"}}
@@ -100,7 +103,8 @@ def _forget() -> None:
 
 @pytest.fixture
 def outside(tmp_path, monkeypatch):
-    monkeypatch.syspath_prepend(str(install_fake_plugins(tmp_path / "site", ENTRIES, PACKAGE, MODULE)))
+    monkeypatch.syspath_prepend(str(install_fake_plugins(tmp_path / "site", ENTRIES, PACKAGE, MODULE,
+                                                         "chronav_test_agents")))
     _forget()
     yield vocab.vocabulary()
     _forget()
@@ -210,9 +214,6 @@ def test_a_launch_refuses_an_agent_whose_process_module_is_missing_and_starts_th
 
 
 def test_an_agent_plugin_that_raises_leaves_an_in_process_run_and_the_others_go_on(outside, tmp_path) -> None:
-    from tests.support import REPO_ROOT
-    from tools.offline_agents import OfflineAgents
-
     with OfflineAgents(REPO_ROOT / "tests" / "data" / "eval_tiny.yaml", tmp_path, agents=("sim_robot",)) as run:
         crasher = run.add("crasher")
         run.tick()
