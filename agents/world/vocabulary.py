@@ -557,16 +557,16 @@ def take_in(agents: Iterable[tuple[AgentSpec, str]], refused: Iterable[RefusedEx
     accepted: list[AgentSpec] = []
     refusals = list(refused)
     for agent, package in agents:
-        if package != OWN_PACKAGE:
-            problem = _declaration_problem(agent, merged, all_edges, reserved)
-            if problem is not None:
-                refusals.append(RefusedExtension(AGENT_KIND, agent.name, package, problem))
-                continue
-            for decl in agent.nodes:
-                merged[decl.type] = NodeSpec(decl.type, (agent.name,),
-                                             {key: Attr(kind, (agent.name,)) for key, kind in decl.attrs.items()})
-            all_edges += tuple(EdgeSpec(e.type, tuple(e.src), tuple(e.dst), (agent.name,), dict(e.attrs))
-                               for e in agent.edges)
+        # chronav's own agents write the core vocabulary under their names: only a plug-in may not
+        problem = _declaration_problem(agent, merged, all_edges, set() if package == OWN_PACKAGE else reserved)
+        if problem is not None:
+            refusals.append(RefusedExtension(AGENT_KIND, agent.name, package, problem))
+            continue
+        for decl in agent.nodes:
+            merged[decl.type] = NodeSpec(decl.type, (agent.name,),
+                                         {key: Attr(kind, (agent.name,)) for key, kind in decl.attrs.items()})
+        all_edges += tuple(EdgeSpec(e.type, tuple(e.src), tuple(e.dst), (agent.name,), dict(e.attrs))
+                           for e in agent.edges)
         beat = merged[NodeType.HEARTBEAT]
         merged[NodeType.HEARTBEAT] = replace(beat, creators=(*beat.creators, agent.name),
                                              attrs=_merge(dict(beat.attrs), _attrs(agent.name, _HEARTBEAT)))
