@@ -122,6 +122,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
             if len(rows) < 2:
                 continue
             dynamic = maps.measure(rows, float(mission["started_s"]), tracks).dynamic
+            assert dynamic is not None   # measured with the people's tracks: the dynamic metrics are there
             collisions += dynamic.robot_on_person_collisions + dynamic.person_on_robot_collisions
             entries += dynamic.robot_intimate_entries
         report.update({"collisions": collisions, "robot_intimate_entries": entries})

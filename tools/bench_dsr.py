@@ -67,6 +67,12 @@ from agents.world.vocabulary import EdgeType, NodeType  # noqa: E402 - after the
 OBJECT, WORLD, RT = str(NodeType.OBJECT), str(NodeType.WORLD), str(EdgeType.RT)
 
 
+def _has_subscribers(publisher: Any) -> bool:
+    """Whether a zenoh publisher has a matching subscriber.  ``Any``: zenoh's stub types
+    ``matching_status`` as a bool, while at run time it is a MatchingStatus whose ``.matching`` says it."""
+    return bool(publisher.matching_status.matching)
+
+
 def _wait(predicate: Any, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -179,7 +185,7 @@ class WireFloor:
     def __init__(self, session: Any, graph_name: str) -> None:
         self.publisher, self.inbox, self.encoder = _wire_side(session, graph_name, "driver",
                                                               "echo")
-        _wait(lambda: self.publisher.matching_status.matching, 10, "wire-floor echo")
+        _wait(lambda: _has_subscribers(self.publisher), 10, "wire-floor echo")
 
     def round_trip(self, i: int) -> float:
         start = time.perf_counter()
@@ -244,8 +250,7 @@ class BareZenoh:
             f"bench/{graph_name}/tpong", lambda sample: self.handoff.put(sample.payload.to_bytes()))
         self.tpub = self.session.declare_publisher(f"bench/{graph_name}/tping",
                                                    congestion_control=block)
-        _wait(lambda: self.pub.matching_status.matching and self.tpub.matching_status.matching,
-              10, "echo subscribers")
+        _wait(lambda: _has_subscribers(self.pub) and _has_subscribers(self.tpub), 10, "echo subscribers")
 
     def direct(self, i: int) -> float:
         start = time.perf_counter()

@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     parts = list(writer.state_parts())
     updates: list[bytes] = []
     writer.attach(updates.append, linger_s=0.0)
-    node_id = writer.get_node_by_name("marker").id
+    node_id = writer.require_node("marker").id
     for i in range(2000):
         writer.update_node(node_id, {"seq": i})
     writer.attach(None)

@@ -36,8 +36,12 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from agents.lib.socialmap.types import Person
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_FILES = sorted((REPO / "scenes" / "data" / "pedestrians").glob("*.txt"))   # shipped (SOURCES.md there)
@@ -89,7 +93,7 @@ def cross_file(files: list[Path]) -> dict[str, object]:
             "pred_fde_over_cv_same_detections_crossfile": report["fde_over_cv_same_detections"]}
 
 
-def person_from(name: str, estimate: tuple[float, float, float, float, float]) -> object:
+def person_from(name: str, estimate: tuple[float, float, float, float, float]) -> Person:
     from agents.lib.socialmap.types import Person
 
     x, y, theta, vx, vy = estimate

@@ -172,7 +172,7 @@ def social_map_build_ms() -> float:
     maps = NavigationMaps.for_scene(scene)
     graph: DSRGraph = graph_at(world, world.scene.clock.start_s)
     rng = np.random.default_rng(2)
-    world_node = graph.get_node_by_name("world")
+    world_node = graph.require_node("world")
     for i in range(30):
         node = graph.insert_node(NodeType.PERSON, f"bench_{i}", {"role": "resident", "vx": 0.2, "vy": 0.0})
         graph.insert_or_assign_edge(world_node.id, node.id, EdgeType.RT, {"x": float(rng.uniform(2, 48)),
@@ -261,7 +261,7 @@ def latency(endpoint: str, samples: int) -> dict[str, float]:
                 graph.dispatch(timeout=0.02)
             if not lat:
                 raise SystemExit("bench_ros_bridge: no /cmd_vel arrived; bridge stderr:\n"
-                                 + (bridge.stderr.read().decode()[-2000:] if bridge.poll() is not None else ""))
+                                 + (bridge.stderr.read().decode()[-2000:] if bridge.poll() is not None and bridge.stderr else ""))
     finally:
         if bridge is not None:
             _stop(bridge)
