@@ -1,4 +1,4 @@
-"""tools/bench_ros_bridge.wait_for_bridge: the one wait (live and flood benchmarks) for a launch's
+"""tools/bench/bench_ros_bridge.wait_for_bridge: the one wait (live and flood benchmarks) for a launch's
 ros_bridge pid and its 'ROS 2 node' log line, on a fake run directory (no ROS, no processes)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from tools.bench_ros_bridge import BRIDGE_READY_LINE, wait_for_bridge
+from tools.bench.bench_ros_bridge import BRIDGE_READY_LINE, wait_for_bridge
 
 
 def _run(runs: Path, pids: dict[str, int] | None, log: str | None) -> Path:

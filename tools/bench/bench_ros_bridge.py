@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "scenes" / "icra_usecase.yaml"
 
 
@@ -539,7 +539,7 @@ def main() -> None:
         print(json.dumps(out))
         return
     try:
-        sub = subprocess.Popen([sys.executable, "-m", "tools.bench_ros_bridge", "--subscriber", endpoint, "3",
+        sub = subprocess.Popen([sys.executable, "-m", "tools.bench.bench_ros_bridge", "--subscriber", endpoint, "3",
                                 str(args.seconds + 3)], cwd=REPO, stdout=subprocess.PIPE, start_new_session=True)
         try:
             assert sub.stdout is not None and sub.stdout.readline().strip() == b"ready"

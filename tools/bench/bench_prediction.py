@@ -25,7 +25,7 @@ Prints ONE flat JSON object:
   ref_assignment_ms_30   scipy's Hungarian assignment of a 30 x 30 cost matrix, timed in the same
                          run (a yardstick of the machine's load, not part of the goal)
 
-Run: ``.venv/bin/python tools/bench_prediction.py [FILE ...] [--cycles 300]``
+Run: ``.venv/bin/python tools/bench/bench_prediction.py [FILE ...] [--cycles 300]``
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ import numpy as np
 if TYPE_CHECKING:
     from agents.lib.socialmap.types import Person
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 DEFAULT_FILES = sorted((REPO / "scenes" / "data" / "pedestrians").glob("*.txt"))   # shipped (SOURCES.md there)
 NOISE_M = 0.02
 

@@ -38,7 +38,7 @@ here on a free loopback port:
   and the graph changed since (a write right before each join): median of 3 joins.
   join_10k_first_s: the first join ever served by the members, which encode every element.
 
-Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
+Usage: python tools/bench/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
 The machine's 2 cores are shared: run it several times and report the best and median run.
 """
 
@@ -56,7 +56,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
@@ -441,7 +441,7 @@ def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
 
 def fill_graph(graph: Any, nodes: int) -> None:
     """The join benchmark's graph: a world node, objects with an RT edge and 3 attributes each,
-    and a "marker" node, `nodes` nodes in all (tools/bench_dsr_decode.py decodes the same)."""
+    and a "marker" node, `nodes` nodes in all (tools/bench/bench_dsr_decode.py decodes the same)."""
     with graph.transaction():
         world = graph.insert_node(WORLD, "world")
     todo = nodes - len(graph) - 1     # exactly `nodes` nodes, marker included

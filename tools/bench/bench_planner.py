@@ -72,7 +72,7 @@ within 4 m of it (seeded, walking) and 20 wall segments (the room, two tables, a
                          people moved between calls as in a run, the simulated laser's points (91
                          rays, 5 m, as the scenes' robot) in ControlInput.scan (the scan itself is
                          not timed: the simulator makes it)
-Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
+Run: .venv/bin/python tools/bench/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[2]
 if str(REPO_ROOT) not in sys.path:
     sys.path.insert(0, str(REPO_ROOT))
 
