@@ -16,8 +16,8 @@ from typing import Any, Literal
 from tools.launch import AGENTS
 
 PROCESSES: tuple[str, ...] = (*AGENTS, "router")
-ACTIONS: tuple[str, ...] = ("kill", "stop", "agenda")
 Action = Literal["kill", "stop", "agenda"]
+ACTIONS: tuple[Action, ...] = ("kill", "stop", "agenda")
 
 # Bounds of a chaos run (docs/limits.md): each fault waits for the system to converge before the
 # next, so a run of more faults than this would not end in a working day; a schedule file is small.

@@ -6,7 +6,7 @@ once per process and kind (``registry_first_scan_ms``); every later lookup is a 
 (``registry_cached_lookup_us``, ``planner_cached_lookup_us`` as plan() does it once per plan).
 ``help_wall_ms`` / ``help_cpu_ms`` are `chronav --help` in a fresh process (it imports no registry).
 
-    python tools/bench_registry.py [--repeat N]
+    python tools/bench/bench_registry.py [--repeat N]
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 FIRST_SCAN = ("import time; t = time.perf_counter(); from agents.lib import registry; "
               "a = time.perf_counter(); registry.extensions('planner'); b = time.perf_counter(); "
