@@ -38,12 +38,12 @@ test: $(STAMP)
 	test $$unit -eq 0 && test $$rest -eq 0
 
 bench: $(STAMP)
-	$(BIN)/python tools/bench_dsr.py
-	$(BIN)/python tools/bench_dsr_decode.py
-	$(BIN)/python tools/bench_planner.py
-	$(BIN)/python tools/bench_planner_symbolic.py
-	$(BIN)/python tools/bench_day.py
-	$(BIN)/python tools/bench_evaluate.py
+	$(BIN)/python tools/bench/bench_dsr.py
+	$(BIN)/python tools/bench/bench_dsr_decode.py
+	$(BIN)/python tools/bench/bench_planner.py
+	$(BIN)/python tools/bench/bench_planner_symbolic.py
+	$(BIN)/python tools/bench/bench_day.py
+	$(BIN)/python tools/bench/bench_evaluate.py
 
 # After a dependency change: requirements-ci.lock again, from a fresh venv of .[test,eval].
 lock:

@@ -57,7 +57,7 @@ GROWTH_STEPS: tuple[int | None, ...] = (AGM_MAX_WORLD_INCREMENT, 10, None)
 per state) that one search keeps: about 250 MB (measured: 242 MB peak for the whole process).
 Without it a rule that creates a node every time it applies made the kept states grow with the
 square of the expansions (3.8 GB at the default 20,000). For scale, the object mission on 200 rooms
-(tools/bench_planner_symbolic.py) keeps 2,660 facts, about 6 per expansion."""
+(tools/bench/bench_planner_symbolic.py) keeps 2,660 facts, about 6 per expansion."""
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, settings
 
 from tests.support import ProcessGroup, process_group
 
-# Property tests judge results, not speed (speed goals live in tools/bench_*.py): no per-example
+# Property tests judge results, not speed (speed goals live in tools/bench/bench_*.py): no per-example
 # deadline, which a loaded 2-core machine would turn into flaky failures.
 settings.register_profile("chronav", deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("chronav")

@@ -162,10 +162,12 @@ class _InProcessRun:
 
     def status(self) -> dict[str, object]:
         """What a launch hands ``on_tick``: clock, missions, agents, wall time, where the run is."""
+        from dsr.attr_values import as_float
+
         graph = self.graph
         clock = graph.get_node_by_name("clock")
         found = {str(n.attrs.get("mission_id", n.name)): dict(n.attrs) for n in graph.nodes_of_type(NodeType.MISSION)}
-        return {"now_s": None if clock is None else float(clock.attrs.get("now_s", 0.0)),
+        return {"now_s": None if clock is None else as_float(clock.attrs.get("now_s", 0.0)),
                 "clock_mode": None if clock is None else clock.attrs.get("mode"),
                 "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
                 "missions": found, "agents": {name: ("up", 0) for name in self.agents}, "dsr": graph.counts(),

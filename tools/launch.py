@@ -541,7 +541,7 @@ def _write_result(result: RunResult) -> None:
     ensure_mission_slices(result.run_dir, result.missions)   # missions/<id>.csv, .people.csv, .json
 
 
-def _status(graph, supervisor: Supervisor, started: float) -> dict[str, object]:
+def _status(graph, supervisor: Supervisor, started: float) -> dict[str, Any]:   # JSON-like, as on_tick gets it
     from agents.runtime.heartbeat import read_problem
     from agents.world.vocabulary import NodeType
     clock = graph.get_node_by_name("clock")

@@ -10,9 +10,22 @@ from __future__ import annotations
 
 import textwrap
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, Final, TypedDict
 
 DEFAULT_WIDTH = 80
+
+
+class PrintOptions(TypedDict):
+    """Keyword options of ``rich.console.Console.print`` (typed, so ``print(text, **WHOLE_LINE)`` checks)."""
+
+    highlight: bool
+    markup: bool
+    soft_wrap: bool
+
+
+#: A message printed as it is: no colouring guessed from its text, no markup read in it (a path or
+#: a name with brackets stays whole), and not folded at the console's width (the terminal wraps).
+WHOLE_LINE: Final[PrintOptions] = {"highlight": False, "markup": False, "soft_wrap": True}
 
 
 def plural(count: int, noun: str, plural_form: str | None = None) -> str:

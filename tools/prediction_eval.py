@@ -181,7 +181,7 @@ def windows(data: Annotations, length: int) -> list[tuple[int, int]]:
     """(start frame index, person id) of every run of ``length`` consecutive frames in which the
     person is present in all of them (the standard loader's windows; on a people.csv's time grid
     consecutive means one ``dt`` apart)."""
-    out = []
+    out: list[tuple[int, int]] = []
     present: dict[int, int] = {}    # person id -> consecutive frames present, ending at the current one
     for i, frame in enumerate(data.people):
         if data.times is not None and i > 0 and data.frames[i] != data.frames[i - 1] + 1:
@@ -298,7 +298,7 @@ def evaluate(data: Annotations, obs: int = 8, pred: int = 12, dt: float = 0.4, n
             x, y, theta, vx, vy = tracker.estimate(name, now)
             people.append(Person(name, x, y, theta, role=data.roles[pid] if data.roles else "resident", vx=vx, vy=vy))
         walls = None
-        if context is not None:
+        if context is not None and data.times is not None:   # (a context without times was refused above)
             people, walls = context.people_and_walls(float(data.times[start + obs - 1]), people)
         if predictor == DEFAULT_PREDICTOR:   # chronav's, with this evaluation's motion parameters
             predicted = ChronavPredictor(motion).predict(people, times, walls)

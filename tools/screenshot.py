@@ -317,7 +317,8 @@ def run(args: argparse.Namespace) -> list[Path]:
         if not stops:
             raise ScreenshotError(f"{recording}: no mission started in this recording (no executive events)")
         args.out.mkdir(parents=True, exist_ok=True)
-        shots, seen = [], {}
+        shots = []
+        seen: dict[str, int] = {}
         for stop in stops:
             seen[stop.mission] = seen.get(stop.mission, 0) + 1
             shots.append((stop.sim_s, args.out / f"{stop.mission}-{seen[stop.mission]}-{stop.what}-"

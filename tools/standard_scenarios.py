@@ -129,7 +129,7 @@ def doorway_bottleneck(seed: int) -> Scenario:
         start = (float(rng.uniform(8.0, 11.0)), float(rng.uniform(1.0, 5.0)))
         goal = (float(rng.uniform(1.0, 4.0)), float(rng.uniform(1.0, 5.0)))
         walks.append(Walk((start, (6.6, 3.0), (5.4, 3.0), goal), float(rng.uniform(0.9, 1.2)), 1.5 * k))
-    walls = [[(0, 0), (12, 0), (12, 6), (0, 6), (0, 0)], [(6, 0), (6, 2.4)], [(6, 3.6), (6, 6)]]
+    walls: list[list[tuple[float, float]]] = [[(0, 0), (12, 0), (12, 6), (0, 6), (0, 0)], [(6, 0), (6, 2.4)], [(6, 3.6), (6, 6)]]
     return Scenario("doorway_bottleneck", "the bottleneck of pedestrian dynamics (Helbing, Farkas, Vicsek 2000; "
                     "Seyfried et al. 2009); 'narrow doorway' in Francis et al. 2023",
                     "Doorway bottleneck: five people in the east room walk through a 1.2 m door to the west room "

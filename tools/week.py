@@ -163,7 +163,9 @@ def mission_summary(result: RunResult) -> dict[str, Any]:
     from agents.world.vocabulary import MissionState
 
     states = [str(m.get("state")) for m in result.missions.values()]
-    durations = [float(m["finished_s"]) - float(m["started_s"]) for m in result.missions.values()
+    from dsr.attr_values import as_float
+
+    durations = [as_float(m["finished_s"]) - as_float(m["started_s"]) for m in result.missions.values()
                  if "finished_s" in m and "started_s" in m]
     return {"total": len(states), "done": states.count(MissionState.DONE),
             "failed": states.count(MissionState.FAILED),

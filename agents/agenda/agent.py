@@ -22,6 +22,8 @@ from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
 from agents.world.freshness import mark_observed
 from agents.world.vocabulary import ClockView, NodeType, RequestState
+from dsr.attr_values import as_strs
+from dsr.model import Attrs
 from scenes.clock import format_clock
 
 
@@ -42,7 +44,7 @@ class AgendaAgent(Agent):
     def _restore_runtime_changes(self) -> None:
         """Replay the accepted changes recorded in the DSR (a restarted agent keeps staff edits)."""
         node = agenda_log(self.graph)
-        for text in node.attrs.get("changes", []):
+        for text in as_strs(node.attrs.get("changes", [])):
             try:
                 self.day = apply_change(self.day, parse_change(text), known_objects=self.world.object_names,
                                         known_rooms=self.world.room_names,
@@ -52,9 +54,9 @@ class AgendaAgent(Agent):
 
     def _remember(self, change_json: str, scripted_key: str | None = None) -> None:
         node = agenda_log(self.graph)
-        attrs: dict[str, object] = {"changes": [*node.attrs.get("changes", []), change_json]}
+        attrs: Attrs = {"changes": [*as_strs(node.attrs.get("changes", [])), change_json]}
         if scripted_key is not None:
-            attrs["applied"] = [*node.attrs.get("applied", []), scripted_key]
+            attrs["applied"] = [*as_strs(node.attrs.get("applied", [])), scripted_key]
         self.graph.update_node(node.id, attrs=attrs)
 
     # ----------------------------------------------------------------- loop
@@ -97,7 +99,7 @@ class AgendaAgent(Agent):
     def _scripted_changes(self, now_s: float) -> None:
         """Scene ``agenda_changes``: staff edits scripted at a sim time (applied once, restart-safe),
         in the order agents/world/timeline.py applies them offline."""
-        applied = set(agenda_log(self.graph).attrs.get("applied", []))
+        applied = set(as_strs(agenda_log(self.graph).attrs.get("applied", [])))
         for change in self.world.scripted:
             if change.key in applied or change.at_s > now_s:
                 continue
@@ -109,7 +111,7 @@ class AgendaAgent(Agent):
 
     def _remember_skip(self, key: str) -> None:
         node = agenda_log(self.graph)
-        self.graph.update_node(node.id, attrs={"applied": [*node.attrs.get("applied", []), key]})
+        self.graph.update_node(node.id, attrs={"applied": [*as_strs(node.attrs.get("applied", [])), key]})
 
     def _requests(self, now_s: float) -> None:
         for request in self.graph.nodes_of_type(NodeType.AGENDA_REQUEST):

@@ -29,7 +29,7 @@ _LISTED = 12   # names listed in an error message, at most
 # mistake, refused before it is parsed and echoed (docs/limits.md).
 MAX_MISSION_CHARS = 1_000
 ECHO_CHARS = 80   # how much of a mission text an error message shows (scenes.names.shown)
-_PLURAL = {NodeType.PERSON: "people"}
+_PLURAL: dict[str, str] = {NodeType.PERSON: "people"}
 
 
 class MissionStringError(ValueError):

@@ -69,7 +69,8 @@ class MissionPlanner:
     def plan(self, graph: GraphReader, goal_text: str) -> MissionPlan:
         """Plan ``goal_text`` on ``graph`` (a DSR replica). MissionStringError for a malformed
         mission; NoMissionPlan (a StepFailed) when the world offers no plan."""
-        from grammar import MissionError, plan_mission
+        from grammar import MissionError, NoPlan, plan_mission
+        from grammar.missions import DEFAULT_MAX_EXPANSIONS
 
         request = parse_mission(goal_text)
         problem = check_names(request, graph)
@@ -83,12 +84,13 @@ class MissionPlanner:
                 raise NoMissionPlan(f"mission {shown(goal_text, ECHO_CHARS)!r}: ({request.pose[0]:g}, {request.pose[1]:g}) is in no "
                                     f"room of scene {self.scene.name!r}")
         grammar_mission = request.grammar_mission(room)
-        options = {} if self.max_expansions is None else {"max_expansions": self.max_expansions}
+        expansions = DEFAULT_MAX_EXPANSIONS if self.max_expansions is None else self.max_expansions
         try:
-            result = plan_mission(self.grammar, symbolic_view(graph), grammar_mission, robot=self.robot, **options)
+            result = plan_mission(self.grammar, symbolic_view(graph), grammar_mission, robot=self.robot,
+                                  max_expansions=expansions)
         except MissionError as exc:  # the grammar refused a form this module accepted: a bug, said plainly
             raise MissionStringError(str(exc)) from None
-        if not result.found:
+        if isinstance(result, NoPlan):
             raise NoMissionPlan(result.reason, result)
         return MissionPlan(request, grammar_mission, result, executable_steps(request, result.steps))
 

@@ -21,6 +21,7 @@ from agents.missions.goals import (SOCIAL_DISTANCE_M, FreeSpace, GoalError, Goal
                                    pose_facing_person, pose_in_room, pose_near_object, pose_past_door)
 from agents.world.dsr_readers import dsr_objects, dsr_people
 from agents.world.vocabulary import ActivityView, EdgeType, IntentionKind, NodeType, activities, activity_id_of
+from dsr.attr_values import as_float
 from dsr.protocols import GraphReader
 from scenes.geometry import angle_difference, posed_polygon
 from scenes.model import Scene
@@ -229,7 +230,7 @@ def _still(graph: GraphReader, name: str) -> bool:
     if node is None:
         return False
     try:
-        return math.hypot(float(node.attrs.get("vx", 0.0)), float(node.attrs.get("vy", 0.0))) < PERSON_STILL_MPS
+        return math.hypot(as_float(node.attrs.get("vx", 0.0)), as_float(node.attrs.get("vy", 0.0))) < PERSON_STILL_MPS
     except (TypeError, ValueError):
         return False
 

@@ -185,7 +185,7 @@ class RosNode:
             options["publisher_detection"] = True
             if reliable:
                 options["sample_miss_detection"] = ext.MissDetectionConfig(
-                    sporadic_heartbeat=MISS_DETECTION_HEARTBEAT_S)
+                    heartbeat=None, sporadic_heartbeat=MISS_DETECTION_HEARTBEAT_S)
         publisher = ext.declare_advanced_publisher(self.session, key, **options)
         token = self.session.liveliness().declare_token(token_key)
         pub = RosPublisher(topic, type_name, qos, key, gid_of(token_key), publisher, token, itertools.count(1),
@@ -204,6 +204,7 @@ class RosNode:
         def on_sample(sample: zenoh.Sample) -> None:
             on_payload(sample.payload.to_bytes())
 
+        sub: ext.AdvancedSubscriber[None] | zenoh.Subscriber[None]
         if qos.durability == "transient_local":
             sub = ext.declare_advanced_subscriber(self.session, key, on_sample,
                                                   history=ext.HistoryConfig(detect_late_publishers=True,

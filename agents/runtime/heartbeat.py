@@ -17,6 +17,7 @@ import os
 import time
 
 from agents.world.vocabulary import NodeType, heartbeat_name
+from dsr.model import Attrs
 from dsr.protocols import GraphReader, GraphWriter
 
 #: wall seconds between two stamps: 6 agents -> 6 small deltas a second
@@ -39,7 +40,7 @@ class Heartbeat:
             return
         self._last = now
         self.beat += 1
-        attrs: dict[str, object] = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
+        attrs: Attrs = {"beat": self.beat, "pid": os.getpid(), "wall_s": time.time()}
         if problem != self._problem:
             attrs["problem"] = self._problem = problem
         node = self.graph.get_node_by_name(heartbeat_name(self.agent))

@@ -17,6 +17,9 @@ With ``-o robot=ros`` (``chronav launch --robot ros``) the robot is a ROS 2 robo
 velocity and laser come through the ROS bridge (agents/ros_bridge), which also sends it the
 navigation's commands; this agent then only runs the clock at real time and the simulated world
 (people, doors), with the robot's reported pose as their robot.
+
+This agent decides the mode from the DSR; how fast each mode runs is ``ClockPace``
+(agents/sim_robot/clock.py).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ import numpy as np
 from agents.runtime.base import Agent
 from agents.runtime.drawing.bodies import log_robot, log_true_people
 from agents.runtime.recording import Recorder
+from agents.sim_robot.clock import ClockPace
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
 from agents.lib.crowd.model import PersonTruth, RobotBody
@@ -47,7 +51,6 @@ CONTROL_DT_S = 0.1
 PEOPLE_HEADER = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
 WATCHDOG_WALL_S = 1.0
 BUSY_RATE = 1.0
-MAX_SKIP_S = 900.0       # an idle skip moves the clock at most this far per loop
 AGENDA_HOLD_WALL_S = 2.0  # the idle clock waits this long (wall) for the agenda agent to apply a due change
 
 
@@ -73,12 +76,13 @@ class SimRobotAgent(Agent):
         self._occupancy = scene_occupancy(scene)   # a building map's wall cells, if the scene has a map
         self.laser = Laser(self._fixed_segments, robot.laser_rays, robot.laser_range, occupancy=self._occupancy)
         self._closed_doors: frozenset[str] = frozenset()
-        self.rate = float(self.config.option("rate", str(scene.clock.rate)))
-        # Sim seconds per wall second while agents plan (busy); 0 holds the clock until they are done,
-        # so a run's sim times do not depend on how fast this machine plans (chronav evaluate).
-        self.busy_rate = float(self.config.option("busy_rate", str(BUSY_RATE)))
         self.watchdog_s = float(self.config.option("watchdog_s", str(WATCHDOG_WALL_S)))
         self.control_dt = float(self.config.option("control_dt", str(CONTROL_DT_S)))
+        # busy_rate: sim seconds per wall second while agents plan; 0 holds the clock until they are
+        # done, so a run's sim times do not depend on how fast this machine plans (chronav evaluate).
+        self.clock = ClockPace(rate=float(self.config.option("rate", str(scene.clock.rate))),
+                               busy_rate=float(self.config.option("busy_rate", str(BUSY_RATE))),
+                               control_dt=self.control_dt, skip_idle=scene.clock.skip_idle)
         self.external = self.config.option("robot", "sim") == "ros"   # a ROS 2 robot reports its own pose
         # Perception in lockstep (-o perception_lockstep=1, chronav evaluate and in-process runs): the
         # clock moves on only once every perceiver (and the executive after them) has processed the
@@ -97,8 +101,7 @@ class SimRobotAgent(Agent):
         self.feed = WorldFeed(self.world)
         self._people: tuple[PersonTruth, ...] = ()
         self._people_file = self._open_people()
-        self._wall_anchor = self.wall_clock()
-        self._sim_anchor = self.now_s
+        self._reanchor()
         self._waiting_since: float | None = None
         self._agenda_hold: tuple[tuple[str, ...], float] | None = None
         self._trajectory_file = self._open_trajectory()
@@ -115,7 +118,7 @@ class SimRobotAgent(Agent):
         with g.transaction():
             write_building(g, scene, doors_at(scene, scene.clock.start_s))
             if g.get_node_by_name(CLOCK) is None:
-                write_clock(g, scene, scene.clock.start_s, self.rate)
+                write_clock(g, scene, scene.clock.start_s, self.clock.rate)
 
     def _resume_or_start(self) -> tuple[RobotState, float]:
         """A restarted simulator continues from the replicated pose and clock, not from the scene."""
@@ -163,7 +166,7 @@ class SimRobotAgent(Agent):
         elif mode == ClockMode.DRIVING:
             robot = self.graph.get_node_by_name(self.scene.robot.name)
             fresh = float(robot.attrs.get("cmd_stamp", -1.0)) >= float(robot.attrs.get("pose_stamp", 0.0))
-            if not self._rate_allows(wall_now, self.control_dt):
+            if not self.clock.driving_allows(wall_now, self.now_s):
                 return
             if fresh:
                 self._waiting_since = None
@@ -178,28 +181,26 @@ class SimRobotAgent(Agent):
         elif mode == ClockMode.STARTING:
             return
         elif mode == ClockMode.BUSY:
-            dt = min(self.control_dt, max(0.0, (wall_now - self._wall_anchor) * self.busy_rate - (self.now_s - self._sim_anchor)))
+            dt = self.clock.busy_step(wall_now, self.now_s)
             if dt > 0:
                 self._advance(dt, Velocity())
         else:
             if self._holding_for_agenda(wall_now):
                 return
-            target = self._next_deadline()
             event = self._next_event()
-            if self.scene.clock.skip_idle and target is not None and target > self.now_s:
-                # In pieces: the people walk through every skipped second (agents/world/people.py), and
-                # an hour of a busy centre is seconds of work; the loop beats its heartbeat between pieces.
-                # A scheduled event (agenda change, door, crowd routine) ends a piece: it fires on time.
+            target = self.clock.idle_skip(self.now_s, self._next_deadline(), end_s, event)
+            if target is not None:
+                # In pieces (ClockPace.idle_skip): the people walk through every skipped second
+                # (agents/world/people.py); a scheduled event (agenda change, door, crowd routine) ends a piece.
                 skipped_from = self.now_s
-                self.skip_to(min(target, end_s, self.now_s + MAX_SKIP_S, event))
+                self.skip_to(target)
                 self.rec.event(f"{format_clock(self.now_s)} idle: clock skipped from {format_clock(skipped_from)} "
                                f"to {format_clock(self.now_s)}")
             else:
                 # A mission is due and the executive is starting it: time runs as while agents plan.
-                rate = self.busy_rate if self._due_now() else self.rate
-                dt = (wall_now - self._wall_anchor) * rate - (self.now_s - self._sim_anchor)
+                dt = self.clock.idle_step(wall_now, self.now_s, self._due_now(), event)
                 if dt > 0:
-                    self._advance(min(dt, 5.0, max(event - self.now_s, 1e-3)), Velocity())
+                    self._advance(dt, Velocity())
 
     def _next_event(self) -> float:
         """The next scheduled event after now: a scripted agenda change or door event, or a crowd
@@ -224,8 +225,8 @@ class SimRobotAgent(Agent):
         """--robot ros: real time, the robot where the bridge last put it (no lockstep, no skips)."""
         if mode == ClockMode.STARTING:
             return
-        dt = (wall_now - self._wall_anchor) - (self.now_s - self._sim_anchor)
-        if dt < self.control_dt:
+        dt = self.clock.external_step(wall_now, self.now_s)
+        if dt <= 0:
             return
         g = self.graph
         robot, world = g.get_node_by_name(self.scene.robot.name), g.get_node_by_name(WORLD)
@@ -234,7 +235,7 @@ class SimRobotAgent(Agent):
             a = robot.attrs
             self.state = RobotState(float(edge.attrs["x"]), float(edge.attrs["y"]), float(edge.attrs["theta"]),
                                     Velocity(float(a.get("v", 0.0)), float(a.get("vy", 0.0)), float(a.get("omega", 0.0))))
-        self.now_s += min(dt, 1.0)
+        self.now_s += dt
         self._publish()
         if self._trajectory_file is not None and mode == ClockMode.DRIVING:
             s = self.state
@@ -267,12 +268,8 @@ class SimRobotAgent(Agent):
         self._reanchor()
         self._publish()
 
-    def _rate_allows(self, wall_now: float, dt: float) -> bool:
-        return (self.now_s + dt - self._sim_anchor) <= (wall_now - self._wall_anchor) * self.rate + dt
-
     def _reanchor(self) -> None:
-        self._wall_anchor = self.wall_clock()
-        self._sim_anchor = self.now_s
+        self.clock.reanchor(self.wall_clock(), self.now_s)
 
     def _mode(self) -> ClockMode:
         g = self.graph

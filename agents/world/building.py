@@ -29,11 +29,11 @@ PLANNING_MARGIN_M = 0.15
 
 
 def scene_walls(scene: Scene) -> list[Wall]:
-    return [Wall(points=tuple(map(tuple, wall)), name=f"wall{i}") for i, wall in enumerate(scene.walls)]
+    return [Wall(points=tuple((x, y) for x, y in wall), name=f"wall{i}") for i, wall in enumerate(scene.walls)]
 
 
 def scene_rooms(scene: Scene) -> list[Room]:
-    return [Room(name=room.name, polygon=tuple(map(tuple, room.polygon))) for room in scene.rooms]
+    return [Room(name=room.name, polygon=tuple((x, y) for x, y in room.polygon)) for room in scene.rooms]
 
 
 def door_segment(scene: Scene, door_name: str) -> tuple[tuple[float, float], tuple[float, float]]:

@@ -56,7 +56,7 @@ def _replayed(scene: Scene, person: PersonSpec, recordings: dict[str, tuple[Reco
     x, y, _, _ = track.at(track.start_s)
     reactive = (person.replay or scene.crowd.replay) == "reactive"
     return Walker(person.name, person.role, "replay", (x, y, person.pose.theta),
-                  record=lambda t, tr=track, o=offset: tr.at(t - o),
+                  record=lambda t: track.at(t - offset),
                   present=(offset + track.start_s, offset + track.end_s), reactive=reactive)
 
 
@@ -104,7 +104,7 @@ def building_of(scene: Scene) -> Building:
               for obj in scene.objects}
     leaves = {door.name: door_segment(scene, door.name) for door in scene.doors}
     doors = {door.name: (float(door.position[0]), float(door.position[1])) for door in scene.doors}
-    return Building(rooms, [list(map(tuple, wall)) for wall in scene.walls], things, leaves, doors)
+    return Building(rooms, [[(x, y) for x, y in wall] for wall in scene.walls], things, leaves, doors)
 
 
 def check_people(loaded: LoadedScene) -> None:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from agents.lib.agenda.model import ActivityWindow, AgendaError
 from agents.lib.socialmap.types import Person, SocialMapInputError, SocialObject
 from agents.world.vocabulary import CLOCK, ActivityState, EdgeType, NodeType
+from dsr.attr_values import as_float, as_strs
 from dsr.protocols import GraphReader
 from scenes.geometry import SHAPE_FIELDS, GeometryError, Shape, shape_from_spec, shape_keys
 
@@ -63,7 +64,7 @@ def dsr_people(graph: GraphReader) -> list[Person]:
             goal = heading_to.get(node.id)
             out.append(Person(name=node.name, x=x, y=y, theta=theta, role=str(node.attrs.get("role", "resident")),
                               interacting_with=tuple(sorted(interacting.get(node.id, ()))),
-                              vx=float(node.attrs.get("vx", 0.0)), vy=float(node.attrs.get("vy", 0.0)),
+                              vx=as_float(node.attrs.get("vx", 0.0)), vy=as_float(node.attrs.get("vy", 0.0)),
                               destination=goal,
                               via=doors.via((x, y), goal) if doors is not None and goal is not None else ()))
         except (SocialMapInputError, KeyError, LookupError, ValueError, TypeError):
@@ -83,14 +84,14 @@ def destinations(graph: GraphReader) -> dict[int, tuple[float, float]]:
         activity = graph.get_node(edge.dst)
         if activity is None or activity.attrs.get("state") not in (ActivityState.UPCOMING, ActivityState.RUNNING):
             continue
-        if isinstance(now_s, (int, float)) and float(activity.attrs.get("start_s", 0.0)) - now_s > DUE_BEFORE_S:
+        if isinstance(now_s, (int, float)) and as_float(activity.attrs.get("start_s", 0.0)) - now_s > DUE_BEFORE_S:
             continue   # not due yet: the participant is not on the way (motion.py)
         obj = graph.get_node_by_name(str(activity.attrs.get("object", "")))
         if obj is None:
             continue
         try:
             x, y, _ = graph.world_pose(obj.id)
-            start = float(activity.attrs.get("start_s", 0.0))
+            start = as_float(activity.attrs.get("start_s", 0.0))
         except (KeyError, LookupError, ValueError, TypeError):
             continue
         if edge.src not in out or start < out[edge.src][2]:
@@ -148,7 +149,7 @@ class DoorGraph:
         rooms = {}
         for node in graph.nodes_of_type(NodeType.ROOM):
             xs, ys = node.attrs.get("polygon_x"), node.attrs.get("polygon_y")
-            if xs and ys and len(xs) == len(ys) and len(xs) >= 3:
+            if isinstance(xs, list) and isinstance(ys, list) and len(xs) == len(ys) and len(xs) >= 3:
                 rooms[node.name] = shapely.Polygon(list(zip(xs, ys, strict=True)))
         doors = {}
         for node in graph.nodes_of_type(NodeType.DOOR):
@@ -156,7 +157,7 @@ class DoorGraph:
             if a.get("open") is False:
                 continue
             try:
-                doors[node.name] = (float(a["x"]), float(a["y"]), tuple(str(r) for r in a["rooms"]))
+                doors[node.name] = (as_float(a["x"]), as_float(a["y"]), tuple(as_strs(a["rooms"])))
             except (KeyError, TypeError, ValueError):
                 continue
         return cls(rooms, doors)
@@ -173,7 +174,7 @@ class DoorGraph:
         here, there = self.room_at(*start), self.room_at(*goal)
         if here is None or there is None or here == there:
             return ()
-        best: tuple[float, list[str]] | None = None
+        best: tuple[float, tuple[str, str]] | None = None
         for a, (ax, ay, a_rooms) in self.doors.items():
             if here not in a_rooms:
                 continue
@@ -191,8 +192,8 @@ def dsr_activity_windows(graph: GraphReader) -> list[ActivityWindow]:
     for node in graph.nodes_of_type(NodeType.ACTIVITY):
         attrs = node.attrs
         try:
-            out.append(ActivityWindow(object=str(attrs["object"]), start_s=float(attrs["start_s"]),
-                                      end_s=float(attrs["end_s"]), cancelled=attrs.get("state") == ActivityState.CANCELLED))
+            out.append(ActivityWindow(object=str(attrs["object"]), start_s=as_float(attrs["start_s"]),
+                                      end_s=as_float(attrs["end_s"]), cancelled=attrs.get("state") == ActivityState.CANCELLED))
         except (KeyError, ValueError, TypeError, AgendaError):
             continue
     return out
@@ -228,5 +229,5 @@ def running_activities(graph: GraphReader) -> list[tuple[str, tuple[float, float
             x, y, _ = graph.world_pose(obj.id)
         except (KeyError, LookupError, ValueError):
             continue
-        out.append((obj.name, (x, y), tuple(str(p) for p in node.attrs.get("participants", []))))
+        out.append((obj.name, (x, y), tuple(as_strs(node.attrs.get("participants", [])))))
     return out

@@ -67,7 +67,7 @@ def write_building(graph: GraphWriter, scene: Scene, doors_open: Mapping[str, bo
                 graph.insert_node(type=NodeType.DOOR, name=door.name,
                                   attrs={"x": door.position[0], "y": door.position[1], "width": door.width,
                                          "rooms": list(door.between), "open": doors_open.get(door.name, True)})
-            a, b = (graph.get_node_by_name(name) for name in door.between)
+            a, b = (graph.require_node(name) for name in door.between)
             # One `connected` edge per room pair (edges are keyed by type): it lists all their doors.
             doors = [d.name for d in scene.doors if set(d.between) == set(door.between)]
             for src, dst in ((a, b), (b, a)):
@@ -146,7 +146,7 @@ def write_object(graph: GraphWriter, obj: SceneObject, room: str | None) -> bool
         world = _world(graph)
         node = graph.get_node_by_name(obj.name)
         new = node is None
-        if new:
+        if node is None:
             node = graph.insert_node(type=NodeType.OBJECT, name=obj.name, attrs=attrs)
         elif any(node.attrs.get(k) != v for k, v in attrs.items()):
             graph.update_node(node.id, attrs=attrs)
@@ -191,10 +191,10 @@ def write_interactions(graph: GraphWriter, pairs: Iterable[tuple[str, str]]) -> 
     if wanted == current:
         return False
     with graph.transaction():
-        for src, dst in current - wanted:
-            graph.delete_edge(src, dst, EdgeType.INTERACTING)
-        for src, dst in wanted - current:
-            graph.insert_or_assign_edge(src, dst, EdgeType.INTERACTING, attrs={})
+        for src_id, dst_id in current - wanted:
+            graph.delete_edge(src_id, dst_id, EdgeType.INTERACTING)
+        for src_id, dst_id in wanted - current:
+            graph.insert_or_assign_edge(src_id, dst_id, EdgeType.INTERACTING, attrs={})
     return True
 
 

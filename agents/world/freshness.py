@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from agents.world.vocabulary import (AGENDA_AGENT, EXECUTIVE, OBSERVER, ActivityState, EdgeType, NodeType,
                                      SensorAttr, sensor_name)
+from dsr.attr_values import as_float
 from dsr.protocols import GraphReader, GraphWriter
 
 PERCEIVERS: tuple[str, ...] = (OBSERVER, AGENDA_AGENT)
@@ -34,7 +35,7 @@ def observed_s(graph: GraphReader, agent: str) -> float | None:
     if node is None:
         return None
     try:
-        return float(node.attrs.get("observed_s"))
+        return as_float(node.attrs.get("observed_s"))
     except (TypeError, ValueError):
         return None
 
@@ -43,7 +44,7 @@ def observed_up_to(graph: GraphReader, now_s: float, agents: tuple[str, ...] = P
     """True when every perceiver has processed a clock value within ``slack_s`` of ``now_s``."""
     for agent in agents:
         node = graph.get_node_by_name(sensor_name(agent))
-        if node is None or float(node.attrs.get("observed_s", -1e9)) < now_s - slack_s:
+        if node is None or as_float(node.attrs.get("observed_s", -1e9)) < now_s - slack_s:
             return False
     return True
 

@@ -37,6 +37,7 @@ from agents.world.people import world_at
 from dsr import DSRGraph
 from scenes.clock import format_clock
 from scenes.loader import LoadedScene
+from scenes.model import Scene
 from scenes.yamlio import SourceError
 
 
@@ -134,7 +135,7 @@ class SceneMaps:
         return self.__dict__["_obstacles"]
 
 
-def scene_obstacles(scene: LoadedScene) -> BaseGeometry:
+def scene_obstacles(scene: Scene) -> BaseGeometry:
     """A scene's walls and object footprints as one geometry (what pushes in the social force model)."""
     walls = [shapely.LineString(w) for w in scene.walls if len(w) >= 2]
     return shapely.union_all([*walls, *footprint_polygons(scene)])

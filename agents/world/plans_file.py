@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import logging
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
@@ -57,7 +57,7 @@ class PlansWriter:
             except OSError as exc:
                 log.warning("cannot keep the adopted plans in %s: %s", Path(run_dir) / PLANS_FILE, exc)
 
-    def adopted(self, t_s: float, xs: Sequence[float], ys: Sequence[float], cost: float, reason: str) -> None:
+    def adopted(self, t_s: float, xs: Iterable[float], ys: Iterable[float], cost: float, reason: str) -> None:
         if self._handle is None:
             return
         line = {"t_s": round(float(t_s), 3), "x": [round(float(v), 4) for v in xs],

@@ -464,7 +464,7 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.HEARTBEAT, (ROS_BRIDGE,), _attrs(ROS_BRIDGE, _HEARTBEAT), deleters=()),
 )}
 
-_POSE = {PoseAttr.X: FLOAT, PoseAttr.Y: FLOAT, PoseAttr.THETA: FLOAT}
+_POSE: dict[str, str] = {PoseAttr.X: FLOAT, PoseAttr.Y: FLOAT, PoseAttr.THETA: FLOAT}
 
 EDGES: tuple[EdgeSpec, ...] = (
     EdgeSpec(EdgeType.RT, (NodeType.WORLD,), (NodeType.ROOM, NodeType.ROBOT, NodeType.DOOR), (SIM_ROBOT,), _POSE),

@@ -1,4 +1,4 @@
-"""tools/bench_dsr.py runs end to end (router, echo and joiner processes on a free loopback port)
+"""tools/bench/bench_dsr.py runs end to end (router, echo and joiner processes on a free loopback port)
 and prints one flat JSON object holding every key the issue's goals are read from, the
 wire-floor split and the same round trip without dispatch() polling.  No speed is asserted: the goals are checked by running the benchmark."""
 
@@ -15,7 +15,7 @@ from tests.support import REPO_ROOT
 
 def test_small_run_prints_every_goal_key() -> None:
     result = subprocess.run(
-        [sys.executable, "tools/bench_dsr.py", "--rounds", "100", "--updates", "3000",
+        [sys.executable, "tools/bench/bench_dsr.py", "--rounds", "100", "--updates", "3000",
          "--join-nodes", "600"],
         cwd=REPO_ROOT, capture_output=True, text=True, timeout=240, check=True)
     lines = result.stdout.strip().splitlines()

@@ -3,7 +3,7 @@ of every kind among twenty people who live their day (they walk to the agenda's 
 fetch residents, and an activity the staff add at 10:45 draws its participants).
 
 The representative part of the day: the scene as shipped up to 11:00 (its first six missions and the
-first agenda change); the whole 09:00-18:00 day, eleven missions, runs in tools/bench_day.py.
+first agenda change); the whole 09:00-18:00 day, eleven missions, runs in tools/bench/bench_day.py.
 
 Asserted from the run's result (the missions as the DSR held them), the simulator's ground-truth
 trajectory and the people's trajectories beside it (people.csv): every mission done, and what each

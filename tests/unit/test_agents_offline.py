@@ -175,7 +175,7 @@ def test_a_drive_through_a_door_keeps_off_the_jamb_and_within_its_time_budget(
     spec = nav.map.spec
     robot = graph.get_node_by_name("robot")
     sim = centre.sim
-    sim.rate = 1e6                     # lockstep as fast as the test can go
+    sim.clock.rate = 1e6               # lockstep as fast as the test can go
     in_walls = []
     for _ in range(1500):
         centre.tick("sim_robot", "social_navigation")

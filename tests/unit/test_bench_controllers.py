@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from scenes.geometry import project_on_segments
-from tools.bench_planner import controller_scene
+from tools.bench.bench_planner import controller_scene
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -28,7 +28,7 @@ def test_the_scene_has_30_people_near_the_robot_and_20_wall_segments() -> None:
 
 
 def test_only_controllers_prints_one_flat_json_object_with_the_five_keys() -> None:
-    out = subprocess.run([sys.executable, "tools/bench_planner.py", "--only", "controllers", "--repeats", "1"],
+    out = subprocess.run([sys.executable, "tools/bench/bench_planner.py", "--only", "controllers", "--repeats", "1"],
                          cwd=REPO, capture_output=True, text=True, check=True, timeout=120)
     result = json.loads(out.stdout)
     names = ("orca", "hrvo", "hl", "social_force", "elastic_band")

@@ -1,4 +1,4 @@
-"""tools/bench_dsr_decode.py prints one flat JSON object of the receive path's costs.
+"""tools/bench/bench_dsr_decode.py prints one flat JSON object of the receive path's costs.
 
 Run as a user runs it, in its own process (in the test process its collections would walk the
 whole suite's heap: 5 s instead of 1)."""
@@ -13,7 +13,7 @@ from tests.support import REPO_ROOT
 
 
 def test_prints_one_flat_json_object() -> None:
-    result = subprocess.run([sys.executable, "tools/bench_dsr_decode.py", "--nodes", "300", "--repeat", "1"],
+    result = subprocess.run([sys.executable, "tools/bench/bench_dsr_decode.py", "--nodes", "300", "--repeat", "1"],
                             cwd=REPO_ROOT, capture_output=True, text=True, timeout=120, check=True)
     lines = result.stdout.strip().splitlines()
     assert len(lines) == 1

@@ -6,7 +6,7 @@ Why a subprocess: imports are paid once per process, and pytest has imported eve
 The child runs the console script's ``main()`` and, at exit, writes the names in ``sys.modules``.
 A package a command does not need (the live system's zenoh and rerun, the calendar parser, the
 symbolic planner's networkx, dask) showing up there is a regression of the command's start-up
-time.  No time is asserted: tools/bench_planner.py measures ``path_cli_s_map``.
+time.  No time is asserted: tools/bench/bench_planner.py measures ``path_cli_s_map``.
 """
 
 from __future__ import annotations

@@ -310,7 +310,7 @@ def test_scene_day_writes_one_day_of_a_scene_for_the_offline_commands(tmp_path: 
 
 
 def test_bench_week_summarizes_growth_from_the_day_records() -> None:
-    from tools.bench_week import summarize
+    from tools.bench.bench_week import summarize
 
     def day(number: int, rss: float, nodes: int, tombstones: int, status: str = "ok") -> dict[str, object]:
         return {"day": number, "status": status, "wall_s": 30.0, "rrd_bytes": 3 * 1024 * 1024,

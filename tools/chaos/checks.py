@@ -19,6 +19,11 @@ def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dic
 
     from dsr import DSRGraph, wire
 
+    class ProbedCopy(DSRGraph):
+        """A member's state as an offline graph, with the ``writers`` table it served (replica -> agent)."""
+
+        served_table: dict[str, str]
+
     copies: dict[str, Any] = {}
     replies = session.get(wire.state_key(graph_name, "*"), target=zenoh.QueryTarget.ALL,
                           consolidation=zenoh.ConsolidationMode.NONE, timeout=timeout_s)
@@ -26,7 +31,7 @@ def probe_replicas(session: Any, graph_name: str, timeout_s: float = 2.0) -> dic
         if reply.ok is None:
             continue
         message = wire.decode(reply.ok.payload.to_bytes())
-        copy = DSRGraph("probe", graph=graph_name)
+        copy = ProbedCopy("probe", graph=graph_name)
         copy.apply_message(message)
         copy.served_table = dict(message.writers)    # what that member vouches for (below)
         copies[message.agent] = copy

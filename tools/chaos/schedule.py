@@ -21,8 +21,8 @@ def processes() -> tuple[str, ...]:
     return (*agent_names(), "router")
 
 
-ACTIONS: tuple[str, ...] = ("kill", "stop", "agenda")
 Action = Literal["kill", "stop", "agenda"]
+ACTIONS: tuple[Action, ...] = ("kill", "stop", "agenda")
 
 # Bounds of a chaos run (docs/limits.md): each fault waits for the system to converge before the
 # next, so a run of more faults than this would not end in a working day; a schedule file is small.

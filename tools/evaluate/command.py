@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
+from tools.plain import WHOLE_LINE
 from tools.walker_models import checked_model
 
 if TYPE_CHECKING:
@@ -398,7 +399,7 @@ def register(app: typer.Typer) -> None:
 
 
 def _print_summary(summary: dict[str, Any], out: Any) -> None:
-    line = {"highlight": False, "markup": False, "soft_wrap": True}
+    line = WHOLE_LINE    # paths and messages stay whole
     for failure in summary["failed"]:
         out.print(f"not ok: {failure['run']}: {failure['outcome']}"
                   + (f" ({failure['error']})" if failure.get("error") else ""), **line)

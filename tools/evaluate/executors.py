@@ -16,10 +16,13 @@ import uuid
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from tools.evaluate.pool import InProcessPool, WorkerMismatch, dask_task, default_jobs, sweep_fingerprint
 from tools.evaluate.sweep import DEFAULT_MODE, MODES, RunSpec, failed_result, run_isolated
+
+if TYPE_CHECKING:
+    from dask.typing import Key
 
 
 
@@ -89,7 +92,7 @@ class DaskExecutor:
 
         sweep = uuid.uuid4().hex[:8]
         fingerprints = {scene: sweep_fingerprint(scene) for scene in sorted({s.scene for s in specs})}
-        by_key: dict[str, tuple[RunSpec, int]] = {}
+        by_key: dict[Key, tuple[RunSpec, int]] = {}
 
         def submit(spec: RunSpec, index: int, attempt: int) -> Any:
             future = self.client.submit(dask_task, spec.to_dict(), str(runs_dir), timeout_s, self.mode,

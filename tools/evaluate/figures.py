@@ -204,6 +204,7 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], mission: MissionKey, maps: A
                  path: Path) -> Path:
     """Every planner's trajectories (one line per seed) over the map at the mission's time."""
     plt = _pyplot()
+    from matplotlib.artist import Artist
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -214,7 +215,7 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], mission: MissionKey, maps: A
     width = 9.5
     fig, ax = plt.subplots(figsize=(width, max(3.0, 0.7 * width * (ymax - ymin) / (xmax - xmin)) + 0.8))
     draw_world(ax, maps, t_s)
-    handles = []
+    handles: list[Artist] = []
     for order, planner in enumerate(planners):
         colour = planner_colour(planner, planners)
         # Planners often drive the same way: each is drawn thinner than the one before, on top of
@@ -329,7 +330,7 @@ def all_figures(rows: Sequence[Mapping[str, Any]], scenes: Mapping[str, Any], ou
             figures["paths"].append(paths_figure(rows, (scene, mission), scenes[scene], planners,
                                                  out_dir / f"paths_{slug(scene)}_{slug(mission)}.png"))
     for scene, maps in scenes.items():
-        times = {}
+        times: dict[str, float] = {}
         for row in rows:
             if row["scene"] == scene:
                 times.setdefault(row["mission"], float(row["mission_time_s"]))

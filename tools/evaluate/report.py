@@ -155,7 +155,8 @@ def _mission_table(summaries: Sequence[Summary], scene: str, mission: str, plann
     head = "".join(f"<th>{html.escape(p)}</th>" for p in planners)
     from tools.evaluate.figures import METADATA_COLUMNS
 
-    body, meta = [], []
+    body: list[str] = []
+    meta: list[str] = []
     for metric in metrics:
         if not any((p, metric) in cells for p in planners):
             continue

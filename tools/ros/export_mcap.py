@@ -25,6 +25,7 @@ import json
 import math
 import shutil
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -177,13 +178,18 @@ def _robot(traj: np.ndarray, epoch: float, fr: Any, write: Any) -> None:
                                                  msgs.transform(fr.odom, fr.base, x, y, theta, stamp)]))
 
 
+@dataclass(frozen=True, slots=True)
 class _Person:
-    __slots__ = ("name", "role", "x", "y", "theta", "vx", "vy", "interacting_with")
+    """What ``msgs.people`` reads of a person, from a people.csv row (no interactions recorded there)."""
 
-    def __init__(self, **values: Any) -> None:
-        for key, value in values.items():
-            setattr(self, key, value)
-        self.interacting_with = ()
+    name: str
+    role: str
+    x: float
+    y: float
+    theta: float
+    vx: float
+    vy: float
+    interacting_with: tuple[str, ...] = ()
 
 
 def _people(tracks: Any, epoch: float, fr: Any, write: Any) -> None:

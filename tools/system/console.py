@@ -17,7 +17,7 @@ from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
-from tools.plain import plural
+from tools.plain import WHOLE_LINE, plural
 
 if TYPE_CHECKING:
     from tools.launch import RunResult
@@ -174,7 +174,7 @@ def print_result(result: Any, out: Console) -> None:
                       format_clock(float(m["started_s"])) if "started_s" in m else "-",
                       format_clock(float(m["finished_s"])) if "finished_s" in m else "-", reason)
     out.print(table)
-    line = {"highlight": False, "markup": False, "soft_wrap": True}    # paths and messages stay whole
+    line = WHOLE_LINE    # paths and messages stay whole
     for event in result.events:
         out.print(f"[supervisor] {event}", **line)
     if result.error:

@@ -16,6 +16,7 @@ from rich.console import Console
 from rich.table import Table
 
 from agents.world.vocabulary import MissionState
+from tools.plain import WHOLE_LINE
 
 
 def build_report(scene: str | Path, run_dir: Path, missions: dict[str, dict[str, Any]]) -> dict[str, Any]:
@@ -158,7 +159,7 @@ def render_report(report: dict[str, Any], console: Console) -> None:
         console.print(f"no metrics: {report['error']}", style="yellow", markup=False, highlight=False)
         return
     notes = _Notes()
-    line = {"markup": False, "highlight": False, "soft_wrap": True}
+    line = WHOLE_LINE    # paths and messages stay whole
     for title, rows in mission_tables(report, notes):
         if console.is_terminal:
             table = Table(title=title)

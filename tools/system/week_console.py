@@ -18,6 +18,7 @@ from rich.table import Table
 
 from agents.world.vocabulary import MissionState
 from scenes.clock import format_clock
+from tools.plain import WHOLE_LINE
 
 #: wall seconds between two progress lines
 PROGRESS_EVERY_S = 5.0
@@ -89,7 +90,7 @@ def _print_days(result: Any, out: Console) -> None:
                       f"{rss:.0f}" if rss is not None else "-",
                       f"{dsr.get('nodes', '-')}/{dsr.get('edges', '-')}/{dsr.get('tombstones', '-')}")
     out.print(table)
-    line = {"highlight": False, "markup": False, "soft_wrap": True}
+    line = WHOLE_LINE    # paths and messages stay whole
     for day in result.days:
         if day["status"] == "refused":
             out.print(f"day {day['day']} ({day['date']}) refused: {day['reason']}", **line)

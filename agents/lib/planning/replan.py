@@ -45,7 +45,7 @@ Cost: a pass comparing bounds (over the whole grid, 0.3 ms at 1000^2; over the w
 when the grid is the one the replanner's ``costs`` (incremental.py) built from its previous grid,
 plus the interaction spaces' windows when the table's row minima moved), the repair (proportional
 to the cells whose cost-to-go fell), and A* expanding the path plus the cells whose old
-cost-to-go lies within the cost increase of the optimum (tools/bench_planner.py: replan_*; building
+cost-to-go lies within the cost increase of the optimum (tools/bench/bench_planner.py: replan_*; building
 the arrival-time grid from the map, also incremental, is timed there too). When a plan expands
 (or repairs) more than ``refresh_fraction`` of what the last refresh closed, the next plan
 refreshes: about 2.5 plain A*s at 1000^2 (from the goal's side, plus the margin), paid once per

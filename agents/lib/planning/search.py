@@ -81,7 +81,7 @@ class GridPath:
 # An indexed 4-ary min-heap of (key, cell) in two parallel arrays plus ``pos`` (cell -> slot), so that
 # a cheaper path to an open cell moves its entry up (decrease-key) instead of pushing a duplicate:
 # on the 1000^2 benchmark half of all pushes were duplicates and half of all pops stale, and the
-# indexed heap halved the search time (tools/bench_planner.py, 1000^2: 97.7k cells expanded either way).
+# indexed heap halved the search time (tools/bench/bench_planner.py, 1000^2: 97.7k cells expanded either way).
 # The heap code is written out inside the kernel: numba calls that take arrays cost reference
 # counting on every call, which was measured to double the time of this loop.
 # Indices into the big arrays are cast to unsigned (U): numba then skips its negative-index check.

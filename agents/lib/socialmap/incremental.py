@@ -3,7 +3,7 @@
 Why: after a person moved, a replan (replan.py) expands a thousand cells, but composing the
 arrival-time grid afresh (a copy of the static grid, every patch, every interaction space encoded:
 arrival.time_costs) and then comparing every cell's lower bound took about half of the 3 ms
-replan (tools/bench_planner.py, 1000^2). A planning agent rebuilds its social map for each
+replan (tools/bench/bench_planner.py, 1000^2). A planning agent rebuilds its social map for each
 replan, but most of it is what it was 0.2 s ago.
 
 Between two maps on the same static grid (the same array, which is never written), what can

@@ -23,6 +23,8 @@ from typing import Any
 
 from agents.runtime.drawing.labels import short_id
 from agents.world.vocabulary import ActivityState, EdgeType, NodeType
+from dsr.attr_values import as_floats
+from dsr.model import Node
 from dsr.protocols import GraphReader
 
 TYPE_COLOURS: dict[str, tuple[int, int, int]] = {
@@ -78,7 +80,7 @@ def label(node_type: str, name: str, state: str) -> str:
     return f"{text} [{state}]" if state and node_type in (NodeType.ACTIVITY, NodeType.MISSION) else text
 
 
-def _room_of(graph: GraphReader, node: Any, rooms: dict[int, int]) -> int | None:
+def _room_of(graph: GraphReader, node: Node, rooms: dict[int, int]) -> int | None:
     """The column of the room ``node`` is ``in`` (its ``in`` edge), or None."""
     for edge in graph.edges_from(node.id, EdgeType.IN):
         if edge.dst in rooms:
@@ -88,11 +90,11 @@ def _room_of(graph: GraphReader, node: Any, rooms: dict[int, int]) -> int | None
 
 def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]:
     """Column per room (west to east), objects then people under it; missions in a last column."""
-    nodes = {i: graph.get_node(i) for i in node_ids}
+    nodes = {i: node for i in node_ids if (node := graph.get_node(i)) is not None}   # gone since: placed apart
     room_nodes = [n for n in nodes.values() if n.type == NodeType.ROOM]
 
-    def centre_x(node: Any) -> float:
-        xs = node.attrs.get("polygon_x") or [0.0]
+    def centre_x(node: Node) -> float:
+        xs = as_floats(node.attrs.get("polygon_x") or [0.0])
         return sum(xs) / len(xs)
 
     room_nodes.sort(key=lambda n: (centre_x(n), n.name))
@@ -114,9 +116,9 @@ def layout(graph: GraphReader, node_ids: list[int]) -> list[tuple[float, float]]
             col = extra if obj is None else round(placed[obj][0] / COLUMN_PX)
             placed[node.id] = (col * COLUMN_PX + ACTIVITY_INDENT_PX, rows[col] * ROW_PX)
             rows[col] += 1.0
-    people = [(n, _room_of(graph, n, rooms)) for n in sorted(nodes.values(), key=lambda n: n.name)
-              if n.type == NodeType.PERSON]
-    people = [(n, extra if col is None else col) for n, col in people]
+    people_rooms = [(n, _room_of(graph, n, rooms)) for n in sorted(nodes.values(), key=lambda n: n.name)
+                    if n.type == NodeType.PERSON]
+    people = [(n, extra if col is None else col) for n, col in people_rooms]
     per_room = {col: sum(1 for _, c in people if c == col) for _, col in people}
     counts: dict[int, int] = {}
     for node, col in people:   # a grid of two only where a room is crowded: labels need the width

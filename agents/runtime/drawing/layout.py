@@ -12,6 +12,7 @@ panel beside the other views fills a third of it; above them it fills the width.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 from agents.runtime.drawing import bodies, social_map
@@ -47,11 +48,10 @@ def blueprint(scene: Any | None = None) -> Any:
         day_axis = rrb.TimeAxis(view_range=rrb.TimeRange(
             start=rrb.TimeRangeBoundary.absolute(nanos=epoch_ns + int(scene.clock.start_s * 1e9)),
             end=rrb.TimeRangeBoundary.absolute(nanos=epoch_ns + int(scene.clock.end_s * 1e9))))
-    series = {"time_ranges": [whole_day], "axis_x": day_axis}
-    r_of_t = rrb.TimeSeriesView(origin="metrics/objects", name="R(t) per object (whole day)",
-                                plot_legend=rrb.Corner2D.LeftTop, **series)
-    robot = rrb.TimeSeriesView(origin="metrics/robot", name="Robot speed (m/s)", **series)
-    missions = rrb.TimeSeriesView(origin="metrics/missions", name="Mission metrics", **series)
+    series = partial(rrb.TimeSeriesView, time_ranges=[whole_day], axis_x=day_axis)
+    r_of_t = series(origin="metrics/objects", name="R(t) per object (whole day)", plot_legend=rrb.Corner2D.LeftTop)
+    robot = series(origin="metrics/robot", name="Robot speed (m/s)")
+    missions = series(origin="metrics/missions", name="Mission metrics")
     graph = rrb.GraphView(origin="dsr", name="DSR (rooms, objects, activities, people, missions)")
     legend = rrb.Spatial2DView(origin="legend", name="Legend", visual_bounds=rrb.VisualBounds2D(
         x_range=[-0.4, LEGEND_WIDTH], y_range=[-0.7, LEGEND_ROWS * LEGEND_ROW_M - 0.3]))
@@ -130,6 +130,7 @@ def log_legend(recorder: Any, scene: Any = None) -> None:
     for i, (kind, text, colour) in enumerate(LEGEND):
         x0, y = (i // LEGEND_ROWS) * LEGEND_COLUMN_M, (i % LEGEND_ROWS) * LEGEND_ROW_M
         path = f"legend/{i:02d}"
+        swatch: rr.Points2D | rr.LineStrips2D
         if kind == "point":
             swatch = rr.Points2D([[x0 + 0.4, y]], radii=0.3, colors=[colour])
         else:   # a stroke, or a thick one as a filled patch (2-D boxes are outlines only)

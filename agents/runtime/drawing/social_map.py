@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import shapely
@@ -130,7 +130,9 @@ def zone_rings(smap: Any) -> dict[str, list[np.ndarray]]:
     spec = smap.spec
     generator = contourpy.contour_generator(z=level, name="serial", line_type="Separate")
     for zone, threshold in (("social", 0.5), ("personal", 1.5), ("intimate", 2.5)):
-        for line in generator.lines(threshold):
+        # line_type="Separate" returns a list of (n, 2) float arrays (contourpy's LineType docs); its
+        # stubs type lines() as the union over every line type
+        for line in cast("list[np.ndarray]", generator.lines(threshold)):
             # padded column j is grid column c0 + j - 1, whose centre is x0 + (c0 + j - 0.5) * res
             xy = np.empty(line.shape, dtype=float)
             xy[:, 0] = spec.x0 + (line[:, 0] + c0 - 0.5) * spec.resolution

@@ -13,7 +13,7 @@ two objects and two people per room, and running group activities in ~10% of the
 the agenda rules forbid entering: the robot, in the first room, is sent to the room farthest
 from it, so plans must detour around busy rooms.
 
-Run: ``.venv/bin/python tools/bench_planner_symbolic.py [--repeat 7]``
+Run: ``.venv/bin/python tools/bench/bench_planner_symbolic.py [--repeat 7]``
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import networkx as nx
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from agents.world.vocabulary import ActivityState
 from grammar.missions import plan_mission

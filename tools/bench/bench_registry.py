@@ -10,7 +10,7 @@ once per process and kind (``registry_first_scan_ms``); every later lookup is a 
 vocabulary module already imported); ``vocabulary_check_us``: one checked write's vocabulary
 check (the merged vocabulary is cached: a dict read).
 
-    python tools/bench_registry.py [--repeat N]
+    python tools/bench/bench_registry.py [--repeat N]
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 FIRST_SCAN = ("import time; t = time.perf_counter(); from agents.lib import registry; "
               "a = time.perf_counter(); registry.extensions('planner'); b = time.perf_counter(); "

@@ -19,7 +19,7 @@ compare figures of one run only; ``load_avg_1min_*`` says how busy it was):
   ``center_day_speedup`` (goal >= 3) and ``..._first_run``, ``identical_metrics_center_day``
   (seed 1 in both modes).  ``--no-center-day`` skips this part (minutes), ``--no-tiny`` the rest.
 
-Run: ``.venv/bin/python tools/bench_evaluate.py [--jobs 2] [--seeds 8] [--launch-seeds 1]``
+Run: ``.venv/bin/python tools/bench/bench_evaluate.py [--jobs 2] [--seeds 8] [--launch-seeds 1]``
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from typing import Any
 
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "tests" / "data" / "eval_tiny.yaml"
 
 def _chronav_planners() -> str:

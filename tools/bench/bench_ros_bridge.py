@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "scenes" / "icra_usecase.yaml"
 
 
@@ -172,7 +172,7 @@ def social_map_build_ms() -> float:
     maps = NavigationMaps.for_scene(scene)
     graph: DSRGraph = graph_at(world, world.scene.clock.start_s)
     rng = np.random.default_rng(2)
-    world_node = graph.get_node_by_name("world")
+    world_node = graph.require_node("world")
     for i in range(30):
         node = graph.insert_node(NodeType.PERSON, f"bench_{i}", {"role": "resident", "vx": 0.2, "vy": 0.0})
         graph.insert_or_assign_edge(world_node.id, node.id, EdgeType.RT, {"x": float(rng.uniform(2, 48)),
@@ -261,7 +261,7 @@ def latency(endpoint: str, samples: int) -> dict[str, float]:
                 graph.dispatch(timeout=0.02)
             if not lat:
                 raise SystemExit("bench_ros_bridge: no /cmd_vel arrived; bridge stderr:\n"
-                                 + (bridge.stderr.read().decode()[-2000:] if bridge.poll() is not None else ""))
+                                 + (bridge.stderr.read().decode()[-2000:] if bridge.poll() is not None and bridge.stderr else ""))
     finally:
         if bridge is not None:
             _stop(bridge)
@@ -270,6 +270,29 @@ def latency(endpoint: str, samples: int) -> dict[str, float]:
     bare.sort()
     return {"cmd_vel_latency_p50_ms": statistics.median(lat), "cmd_vel_latency_p90_ms": lat[int(0.9 * len(lat))],
             "cmd_vel_samples": len(lat), "zenoh_oneway_p50_ms": statistics.median(bare)}
+
+
+BRIDGE_READY_LINE = "ROS 2 node"   # what the ros_bridge logs once its node is declared on the ROS side
+
+
+def wait_for_bridge(runs: Path, timeout_s: float, poll_s: float = 1.0) -> dict[str, int]:
+    """The pids of a launch under ``runs`` (``<run>/pids.json``, agent name -> pid) once the
+    ros_bridge has one and its log (``<run>/logs/ros_bridge.log``) says its ROS 2 node is up.
+    TimeoutError, naming what was missing, if that takes more than ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    pids: dict[str, int] = {}
+    while True:
+        for path in runs.glob("*/pids.json"):   # written whole (tools/launch.write_pids renames it in place)
+            pids = json.loads(path.read_text())
+        log = next(runs.glob("*/logs/ros_bridge.log"), None)
+        if pids.get("ros_bridge") and log is not None and BRIDGE_READY_LINE in log.read_text(errors="replace"):
+            return pids
+        if time.monotonic() >= deadline:
+            missing = ("no ros_bridge pid in a pids.json" if not pids.get("ros_bridge") else
+                       f"no {BRIDGE_READY_LINE!r} line in ros_bridge.log")
+            raise TimeoutError(f"bench_ros_bridge: the launch under {runs} did not start its bridge within "
+                               f"{timeout_s:g} s ({missing})")
+        time.sleep(poll_s)
 
 
 def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, float]:
@@ -285,15 +308,7 @@ def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, 
                                      "--no-record", "--timeout", str(seconds + 240)], cwd=REPO, env=env,
                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         try:
-            deadline = time.monotonic() + 180
-            pids: dict[str, int] = {}
-            while time.monotonic() < deadline and not pids.get("ros_bridge"):
-                time.sleep(1.0)
-                for path in Path(runs).glob("*/pids.json"):
-                    pids = json.loads(path.read_text())
-            logs = next(Path(runs).glob("*/logs"))
-            while time.monotonic() < deadline and "ROS 2 node" not in (logs / "ros_bridge.log").read_text():
-                time.sleep(1.0)
+            pids = wait_for_bridge(Path(runs), timeout_s=180)
             time.sleep(10.0)   # warm-up: numba compilation, first maps
             procs = {name: psutil.Process(pids[name]) for name in ("ros_bridge", "social_navigation")}
             before = {name: sum(p.cpu_times()[:2]) for name, p in procs.items()}
@@ -444,15 +459,7 @@ def flood(endpoint: str, seconds: float, rate: float) -> dict[str, Any]:
                                     cwd=REPO, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                     start_new_session=True)
         try:
-            deadline = time.monotonic() + 240
-            pids: dict[str, int] = {}
-            while time.monotonic() < deadline and not pids.get("ros_bridge"):
-                time.sleep(1.0)
-                for path in Path(runs).glob("*/pids.json"):
-                    pids = json.loads(path.read_text())
-            logs = next(Path(runs).glob("*/logs"))
-            while time.monotonic() < deadline and "ROS 2 node" not in (logs / "ros_bridge.log").read_text():
-                time.sleep(1.0)
+            pids = wait_for_bridge(Path(runs), timeout_s=240)
             time.sleep(5.0)   # warm-up
             bridge = psutil.Process(pids["ros_bridge"])
             refused_before = refused["value"]
@@ -532,7 +539,7 @@ def main() -> None:
         print(json.dumps(out))
         return
     try:
-        sub = subprocess.Popen([sys.executable, "-m", "tools.bench_ros_bridge", "--subscriber", endpoint, "3",
+        sub = subprocess.Popen([sys.executable, "-m", "tools.bench.bench_ros_bridge", "--subscriber", endpoint, "3",
                                 str(args.seconds + 3)], cwd=REPO, stdout=subprocess.PIPE, start_new_session=True)
         try:
             assert sub.stdout is not None and sub.stdout.readline().strip() == b"ready"

@@ -25,7 +25,7 @@ Prints ONE flat JSON object:
   ref_assignment_ms_30   scipy's Hungarian assignment of a 30 x 30 cost matrix, timed in the same
                          run (a yardstick of the machine's load, not part of the goal)
 
-Run: ``.venv/bin/python tools/bench_prediction.py [FILE ...] [--cycles 300]``
+Run: ``.venv/bin/python tools/bench/bench_prediction.py [FILE ...] [--cycles 300]``
 """
 
 from __future__ import annotations
@@ -36,10 +36,14 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+if TYPE_CHECKING:
+    from agents.lib.socialmap.types import Person
+
+REPO = Path(__file__).resolve().parents[2]
 DEFAULT_FILES = sorted((REPO / "scenes" / "data" / "pedestrians").glob("*.txt"))   # shipped (SOURCES.md there)
 NOISE_M = 0.02
 
@@ -89,7 +93,7 @@ def cross_file(files: list[Path]) -> dict[str, object]:
             "pred_fde_over_cv_same_detections_crossfile": report["fde_over_cv_same_detections"]}
 
 
-def person_from(name: str, estimate: tuple[float, float, float, float, float]) -> object:
+def person_from(name: str, estimate: tuple[float, float, float, float, float]) -> Person:
     from agents.lib.socialmap.types import Person
 
     x, y, theta, vx, vy = estimate

@@ -15,7 +15,7 @@ Prints ONE flat JSON object:
   ``bytes_written_mb_per_day`` (recording, people.csv, trajectory, logs);
 - ``missions``, ``missions_done``, ``days_ok``.
 
-Run: ``.venv/bin/python tools/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
+Run: ``.venv/bin/python tools/bench/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
 (a full week takes minutes of both cores; ``--days 2`` is the short variant).
 """
 
@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 MB = 1024.0 * 1024.0
 

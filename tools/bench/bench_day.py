@@ -13,7 +13,7 @@ Prints ONE flat JSON object:
 - ``collisions``, ``robot_intimate_entries``: summed over the missions from the run's trajectory.csv
   and people.csv (agents/lib/metrics/dynamic_metrics.py).
 
-Run: ``.venv/bin/python tools/bench_day.py [--scene center_day] [--rate R]`` (it launches the
+Run: ``.venv/bin/python tools/bench/bench_day.py [--scene center_day] [--rate R]`` (it launches the
 system in a temporary directory; the run's recording is kept there if ``--keep`` is given).
 """
 
@@ -32,7 +32,7 @@ from pathlib import Path
 
 import psutil
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from agents.world.people import people_at
 from agents.world.scene_world import load_world
@@ -76,7 +76,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
     if rate is not None:
         command += ["--rate", str(rate)]
     env = {**os.environ, "RERUN": os.environ.get("RERUN", "off"),
-           "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH", "")])}
+           "PYTHONPATH": os.pathsep.join([str(Path(__file__).resolve().parents[2]), os.environ.get("PYTHONPATH", "")])}
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     wall0 = time.perf_counter()
     process = subprocess.Popen(command, cwd=workdir, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -124,6 +124,7 @@ def run(scene: str, rate: float | None, keep: Path | None) -> dict[str, object]:
             if len(rows) < 2:
                 continue
             dynamic = maps.measure(rows, float(mission["started_s"]), tracks).dynamic
+            assert dynamic is not None   # measured with the people's tracks: the dynamic metrics are there
             collisions += dynamic.robot_on_person_collisions + dynamic.person_on_robot_collisions
             entries += dynamic.robot_intimate_entries
         report.update({"collisions": collisions, "robot_intimate_entries": entries})

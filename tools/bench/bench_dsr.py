@@ -38,7 +38,7 @@ here on a free loopback port:
   and the graph changed since (a write right before each join): median of 3 joins.
   join_10k_first_s: the first join ever served by the members, which encode every element.
 
-Usage: python tools/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
+Usage: python tools/bench/bench_dsr.py [--rounds 1000] [--updates 200000] [--join-nodes 10000]
 The machine's 2 cores are shared: run it several times and report the best and median run.
 """
 
@@ -56,7 +56,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
@@ -65,6 +65,12 @@ from agents.world.vocabulary import EdgeType, NodeType  # noqa: E402 - after the
 # Plain strings from the vocabulary: this benchmark measures the DSR, whose writes it makes with
 # synthetic attributes on these types (it never runs through an agent's checked graph).
 OBJECT, WORLD, RT = str(NodeType.OBJECT), str(NodeType.WORLD), str(EdgeType.RT)
+
+
+def _has_subscribers(publisher: Any) -> bool:
+    """Whether a zenoh publisher has a matching subscriber.  ``Any``: zenoh's stub types
+    ``matching_status`` as a bool, while at run time it is a MatchingStatus whose ``.matching`` says it."""
+    return bool(publisher.matching_status.matching)
 
 
 def _wait(predicate: Any, timeout: float, what: str) -> None:
@@ -179,7 +185,7 @@ class WireFloor:
     def __init__(self, session: Any, graph_name: str) -> None:
         self.publisher, self.inbox, self.encoder = _wire_side(session, graph_name, "driver",
                                                               "echo")
-        _wait(lambda: self.publisher.matching_status.matching, 10, "wire-floor echo")
+        _wait(lambda: _has_subscribers(self.publisher), 10, "wire-floor echo")
 
     def round_trip(self, i: int) -> float:
         start = time.perf_counter()
@@ -244,8 +250,7 @@ class BareZenoh:
             f"bench/{graph_name}/tpong", lambda sample: self.handoff.put(sample.payload.to_bytes()))
         self.tpub = self.session.declare_publisher(f"bench/{graph_name}/tping",
                                                    congestion_control=block)
-        _wait(lambda: self.pub.matching_status.matching and self.tpub.matching_status.matching,
-              10, "echo subscribers")
+        _wait(lambda: _has_subscribers(self.pub) and _has_subscribers(self.tpub), 10, "echo subscribers")
 
     def direct(self, i: int) -> float:
         start = time.perf_counter()
@@ -436,7 +441,7 @@ def build_graph(graph: Any, nodes: int, pong_id: int) -> None:
 
 def fill_graph(graph: Any, nodes: int) -> None:
     """The join benchmark's graph: a world node, objects with an RT edge and 3 attributes each,
-    and a "marker" node, `nodes` nodes in all (tools/bench_dsr_decode.py decodes the same)."""
+    and a "marker" node, `nodes` nodes in all (tools/bench/bench_dsr_decode.py decodes the same)."""
     with graph.transaction():
         world = graph.insert_node(WORLD, "world")
     todo = nodes - len(graph) - 1     # exactly `nodes` nodes, marker included

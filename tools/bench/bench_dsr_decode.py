@@ -12,7 +12,7 @@ from), so the two compare on equal terms.
 - decode_update_us / parse_update_orjson_us: one single-attribute update delta;
 - state_parts, state_bytes: the size of what is decoded.
 
-Usage: python tools/bench_dsr_decode.py [--nodes 10000] [--repeat 7]
+Usage: python tools/bench/bench_dsr_decode.py [--nodes 10000] [--repeat 7]
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
@@ -61,13 +61,13 @@ def main(argv: list[str] | None = None) -> int:
     import orjson
 
     from dsr import DSRGraph, wire
-    from tools.bench_dsr import fill_graph
+    from tools.bench.bench_dsr import fill_graph
     writer = DSRGraph("w")
     fill_graph(writer, args.nodes)
     parts = list(writer.state_parts())
     updates: list[bytes] = []
     writer.attach(updates.append, linger_s=0.0)
-    node_id = writer.get_node_by_name("marker").id
+    node_id = writer.require_node("marker").id
     for i in range(2000):
         writer.update_node(node_id, {"seq": i})
     writer.attach(None)

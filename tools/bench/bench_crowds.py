@@ -14,7 +14,7 @@ Prints ONE flat JSON object:
                            of the whole run, setup included; goal >= 50)
   replay_wall_s            that run's wall time
 
-Run: ``.venv/bin/python tools/bench_crowds.py [--replay exact|reactive]``
+Run: ``.venv/bin/python tools/bench/bench_crowds.py [--replay exact|reactive]``
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 ZARA = REPO / "scenes" / "data" / "pedestrians" / "crowds_zara03.txt"
 
 

@@ -72,7 +72,7 @@ within 4 m of it (seeded, walking) and 20 wall segments (the room, two tables, a
                          people moved between calls as in a run, the simulated laser's points (91
                          rays, 5 m, as the scenes' robot) in ControlInput.scan (the scan itself is
                          not timed: the simulator makes it)
-Run: .venv/bin/python tools/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
+Run: .venv/bin/python tools/bench/bench_planner.py [--sizes 200,500] [--repeats 7] [--skip-map] [--only controllers]
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = Path(__file__).resolve().parents[2]
 if str(REPO_ROOT) not in sys.path:
     sys.path.insert(0, str(REPO_ROOT))
 
@@ -106,7 +106,7 @@ def bench_scene(seed: int = 7) -> dict[str, Any]:
     """A seeded random WORLD_M x WORLD_M centre: walls, people, objects, activities."""
     from agents.lib.agenda.model import ActivityWindow
     from agents.lib.socialmap.types import Person, SocialObject, Wall
-    from scenes.geometry import Circle, Rectangle, Trapezoid
+    from scenes.geometry import Circle, Rectangle, Shape, Trapezoid
 
     rng = np.random.default_rng(seed)
     size = WORLD_M
@@ -125,7 +125,7 @@ def bench_scene(seed: int = 7) -> dict[str, Any]:
                 return float(x), float(y), float(rng.uniform(-math.pi, math.pi))
 
     people = [Person(f"p{i}", *pose(), role=("resident", "staff", "new_resident")[i % 3]) for i in range(N_PEOPLE)]
-    kinds = [("tv", Rectangle(0.2, 1.2), Trapezoid(2.8, 1.2, 3.2)),
+    kinds: list[tuple[str, Shape, Shape]] = [("tv", Rectangle(0.2, 1.2), Trapezoid(2.8, 1.2, 3.2)),
              ("table", Rectangle(1.6, 0.9), Rectangle(2.8, 2.4)),
              ("round_table", Circle(0.7), Circle(1.5)),
              ("bed", Rectangle(2.0, 0.9), Rectangle(2.8, 1.9))]
@@ -286,9 +286,10 @@ def bench_replan(n: int, repeats: int, scene: dict[str, Any], params: Any, stati
     agenda_ms, (_, agenda_stats) = median_ms_after(lambda: after_plan(scene["people"], activities), replan, repeats)
     ratios: dict[str, list[float]] = {"person": [], "agenda": []}
     for _ in range(max(3, repeats)):   # alternated with a full plan on the same changed map: load-proof
-        for name, changed in (("person", (people, scene["activities"])), ("agenda", (scene["people"], activities))):
-            prepared = after_plan(*changed)
-            full = social_map(*changed, T_S + 0.2)
+        for name, (people_now, activities_now) in (("person", (people, scene["activities"])),
+                                                   ("agenda", (scene["people"], activities))):
+            prepared = after_plan(people_now, activities_now)
+            full = social_map(people_now, activities_now, T_S + 0.2)
             started = time.perf_counter()
             plan(full, robot, goal, workspace=ws)
             full_ms = time.perf_counter() - started
