@@ -102,10 +102,12 @@ DEFAULT_ENTRIES: dict[str, dict[str, str]] = {
 
 
 def install_fake_plugins(root: Path, entries: Mapping[str, Mapping[str, str]] | None = None,
-                         name: str = "chronav-test-plugins", module: str = BROKEN_MODULE) -> Path:
-    """Write the package under ``root`` (put ``root`` on sys.path or PYTHONPATH) and return ``root``."""
+                         name: str = "chronav-test-plugins", module: str = BROKEN_MODULE,
+                         module_name: str = "chronav_test_plugins") -> Path:
+    """Write the package under ``root`` (put ``root`` on sys.path or PYTHONPATH) and return ``root``.
+    Another ``module`` needs another ``module_name``: a test session imports each name once."""
     root.mkdir(parents=True, exist_ok=True)
-    (root / "chronav_test_plugins.py").write_text(module, encoding="utf-8")
+    (root / f"{module_name}.py").write_text(module, encoding="utf-8")
     info = root / f"{name.replace('-', '_')}-0.1.dist-info"
     info.mkdir(exist_ok=True)
     (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n", encoding="utf-8")

@@ -1,4 +1,4 @@
-"""`chronav launch SCENE --in-process`: the six agents in this process, in lockstep, on one graph.
+"""`chronav launch SCENE --in-process`: every registered agent in this process, in lockstep, on one graph.
 
 Why beside tools/launch.py and not inside it: a launch supervises processes, a router and their
 credentials; an in-process run has none of them, only the agents (the same classes, built from
@@ -24,37 +24,45 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from agents.world.vocabulary import MissionState, NodeType
-from tools.launch import AGENTS, LaunchError, RunResult, check_rate, check_timeout
+from tools.launch import LaunchError, RunResult, agent_names, check_rate, check_timeout
 
 if TYPE_CHECKING:
     from agents.runtime.lockstep import Lockstep
     from agents.runtime.recording import Recorder
     from scenes.model import Scene
 
-#: the order of a round: the clock first, then who perceives the tick, then who acts on it
-ROUND_ORDER: tuple[str, ...] = ("sim_robot", "object_recognition", "agenda", "human_observer", "executive",
-                                "social_navigation")
-#: options that make a run independent of wall time (also given to the processes of an evaluate launch)
-LOCKSTEP_OPTIONS: dict[str, list[str]] = {
-    "sim_robot": ["busy_rate=0", "perception_lockstep=1"],
-    "social_navigation": ["perception_lockstep=1"],
-    "executive": ["perception_lockstep=1"],
-    "human_observer": ["perception_lockstep=1"],
-}
-assert sorted(ROUND_ORDER) == sorted(AGENTS)
+def round_order() -> tuple[str, ...]:
+    """The order of a round, each registered agent's ``round_order`` (agents/lib/agent_plugins.py):
+    the clock first, then who perceives the tick, then who acts on it."""
+    return agent_names()
 
 
-def agent_classes() -> dict[str, type[Any]]:
-    """The agent classes by name (imported here: the tools layer may know the agent processes)."""
-    from agents.agenda.agent import AgendaAgent
-    from agents.executive.agent import ExecutiveAgent
-    from agents.human_observer.agent import HumanObserverAgent
-    from agents.object_recognition.agent import ObjectRecognitionAgent
-    from agents.sim_robot.agent import SimRobotAgent
-    from agents.social_navigation.agent import SocialNavigationAgent
+def lockstep_options() -> dict[str, list[str]]:
+    """Each agent's options that make a run independent of wall time (also given to the processes
+    of an evaluate launch), as its registration declares them."""
+    from agents.world.vocabulary import vocabulary
 
-    return {cls.kind: cls for cls in (SimRobotAgent, ObjectRecognitionAgent, HumanObserverAgent, AgendaAgent,
-                                      ExecutiveAgent, SocialNavigationAgent)}
+    return {spec.name: list(spec.lockstep_options) for spec in vocabulary().agents if spec.lockstep_options}
+
+
+def agent_classes(names: Sequence[str] | None = None) -> dict[str, type[Any]]:
+    """The classes of the agents ``names`` (all registered ones by default), imported now.  A
+    plug-in whose class cannot be imported (or is not its agent) is left out with a warning naming
+    it, its package and why; the rest runs."""
+    import logging
+
+    from agents.lib.agent_plugins import agent_class
+    from agents.lib.registry import RefusedExtension
+    from agents.world.vocabulary import vocabulary
+
+    vocab = vocabulary()
+    classes: dict[str, type[Any]] = {}
+    for name in agent_names() if names is None else names:
+        try:
+            classes[name] = agent_class(vocab.spec(name))
+        except RefusedExtension as exc:
+            logging.getLogger("chronav.plugins").warning("%s; the rest runs without it", exc)
+    return classes
 
 
 def build_agents(scene: Path, names: Sequence[str], *, graph_name: str = "chronav", run_dir: Path | None = None,
@@ -65,16 +73,16 @@ def build_agents(scene: Path, names: Sequence[str], *, graph_name: str = "chrona
     Shared by ``run_in_process`` and the offline-agents harness (tools/offline_agents.py)."""
     from agents.runtime.config import AgentConfig
 
-    classes = agent_classes()
+    classes = agent_classes(names)
     return [classes[name](AgentConfig(name=name, scene=scene, graph=graph_name, run_dir=run_dir,
                                       recording_id=recording_id, options=dict((options or {}).get(name, {}))))
-            for name in names]
+            for name in names if name in classes]
 
 
 def merged_options(agent_options: dict[str, list[str]] | None, rate: float | None) -> dict[str, dict[str, str]]:
     """Each agent's ``-o KEY=VALUE`` options as a dict: the lockstep ones, then the caller's."""
-    merged: dict[str, dict[str, str]] = {name: {} for name in AGENTS}
-    for source in (LOCKSTEP_OPTIONS, agent_options or {}):
+    merged: dict[str, dict[str, str]] = {name: {} for name in agent_names()}
+    for source in (lockstep_options(), agent_options or {}):
         for name, items in source.items():
             for item in items:
                 key, sep, value = item.partition("=")
@@ -96,7 +104,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
     from agents.runtime.lockstep import AgentError
     from agents.world.scene_world import load_world
-    from tools.launch import _make_run_dir, log_scene_static
+    from tools.launch import _make_run_dir, log_scene_static, write_final_graph
     from tools.system.runs import runs_dir as default_runs_dir
 
     check_rate(rate)
@@ -112,6 +120,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     scheduler, launcher = _build_scheduler(run, options)
     error: str | None = None
     reason = "done"
+    run.problems = scheduler.dropped      # agent plug-ins that raised and left the run, in the result
     try:
         if record:
             log_scene_static(launcher, spec)
@@ -126,6 +135,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     finally:
         scheduler.teardown()
         launcher.close()
+        write_final_graph(run.run_dir, run.graph)
     return _finish(run, reason, error)
 
 
@@ -145,6 +155,10 @@ class _InProcessRun:
         self.on_tick = on_tick
         self.graph = DSRGraph(agent="lockstep", graph=run_id.replace(".", "_"))
         self.missions: dict[str, dict[str, object]] = {}
+        #: the agents of the run, in round order (set once they are built)
+        self.agents: tuple[str, ...] = ()
+        #: agent -> what keeps it from its job (an agent plug-in that raised and left the run)
+        self.problems: dict[str, str] = {}
 
     def status(self) -> dict[str, object]:
         """What a launch hands ``on_tick``: clock, missions, agents, wall time, where the run is."""
@@ -156,7 +170,7 @@ class _InProcessRun:
         return {"now_s": None if clock is None else as_float(clock.attrs.get("now_s", 0.0)),
                 "clock_mode": None if clock is None else clock.attrs.get("mode"),
                 "clock_finished": bool(clock is not None and clock.attrs.get("finished")),
-                "missions": found, "agents": {name: ("up", 0) for name in AGENTS}, "dsr": graph.counts(),
+                "missions": found, "agents": {name: ("up", 0) for name in self.agents}, "dsr": graph.counts(),
                 "wall_s": time.monotonic() - self.started,
                 "run": {"run_dir": str(self.run_dir), "endpoint": "in-process", "graph": graph.graph_name}}
 
@@ -181,9 +195,10 @@ def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> 
 
     recording_id = run.run_id if run.record else None
     recording_dir = run.run_dir if run.record else None
-    agents = build_agents(run.scene_path.resolve(), ROUND_ORDER, graph_name=run.graph.graph_name,
+    agents = build_agents(run.scene_path.resolve(), round_order(), graph_name=run.graph.graph_name,
                           run_dir=run.run_dir, recording_id=recording_id, options=options)
-    recorders = [Recorder(name, recording_dir, recording_id, day=run.spec.clock.date) for name in ROUND_ORDER]
+    run.agents = tuple(agent.config.name for agent in agents)
+    recorders = [Recorder(name, recording_dir, recording_id, day=run.spec.clock.date) for name in run.agents]
     scheduler = Lockstep(run.graph, agents, recorders, policy=policy_from_env())
     launcher = Recorder("launcher", recording_dir, recording_id, day=run.spec.clock.date)
     return scheduler, launcher
@@ -199,9 +214,9 @@ def _finish(run: _InProcessRun, reason: str, error: str | None) -> RunResult:
                                     run.run_dir.parent / f"{run.run_id}.rrd")
     result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path,
                        missions={**scene_missions(run.spec), **run.missions}, events=[],
-                       restarts={name: 0 for name in AGENTS}, wall_s=time.monotonic() - run.started,
+                       restarts={name: 0 for name in run.agents}, wall_s=time.monotonic() - run.started,
                        interrupted=reason == "interrupted", timed_out=reason == "timed_out",
-                       scene_path=run.scene_path, error=error)
+                       scene_path=run.scene_path, error=error, problems=dict(run.problems))
     _write_result(result)
     return result
 

@@ -37,13 +37,14 @@ from tools.system.runs import RunSecurity, prepare_run_security, runs_dir as def
 from tools.system.supervisor import ManagedProcess, ProgressWatch, Supervisor
 
 if TYPE_CHECKING:
+    from agents.lib.agent_plugins import AgentSpec
     from agents.runtime.recording import Recorder
 
-AGENTS: tuple[str, ...] = ("sim_robot", "object_recognition", "human_observer", "agenda", "social_navigation",
-                           "executive")
 #: started with `--ros` (agents/ros_bridge): the run's topics over rmw_zenoh, /goal_pose -> missions
 ROS_BRIDGE = "ros_bridge"
 DEFAULT_SCENE = "icra_usecase"
+#: the graph as a run ended, in the run directory (write_final_graph)
+FINAL_GRAPH = "graph.json"
 NOT_STARTED = "not started"
 #: an agent whose heartbeat stops for this long (wall s) is killed and restarted
 DEFAULT_HANG_TIMEOUT_S = 60.0
@@ -57,6 +58,34 @@ _INHERITED_ZENOH = ("CHRONAV_ZENOH_LEASE_MS",)
 
 class LaunchError(Exception):
     """The run could not be started as asked (bad option, unwritable directory, no router)."""
+
+
+def agent_names() -> tuple[str, ...]:
+    """The agents a run starts, in round order: every agent registered through the ``chronav.agents``
+    entry points (chronav's six and the installed plug-ins) that was not refused at start (each
+    refusal is logged as a warning naming the plug-in, its package and why).  Why a function: the
+    registry is read on the first launch, not when ``chronav --help`` imports this module."""
+    from agents.world.vocabulary import vocabulary
+
+    return vocabulary().names
+
+
+def process_agents() -> tuple[AgentSpec, ...]:
+    """The agents a launch runs as processes: ``agent_names()``'s, less a plug-in whose process module
+    cannot be found (refused with a warning naming it, its package and why; the rest runs)."""
+    import logging
+
+    from agents.lib.agent_plugins import process_missing
+    from agents.world.vocabulary import vocabulary
+
+    found = []
+    for spec in vocabulary().agents:
+        refusal = process_missing(spec)
+        if refusal is None:
+            found.append(spec)
+        else:
+            logging.getLogger("chronav.plugins").warning("%s; the rest runs without it", refusal)
+    return tuple(found)
 
 
 @dataclass
@@ -325,9 +354,12 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
-    agents = AGENTS if ros_domain is None else (*AGENTS, ROS_BRIDGE)
+    processes = {spec.name: spec.process for spec in process_agents()}
+    if ros_domain is not None:
+        processes[ROS_BRIDGE] = f"agents.{ROS_BRIDGE}"
+    agents = tuple(processes)
     # the bridge's identity always: `chronav ros bridge --run` may join the run later
-    security = prepare_run_security(run_dir, graph_name, (*AGENTS, ROS_BRIDGE))
+    security = prepare_run_security(run_dir, graph_name, (*agent_names(), ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit, budget=restart_budget)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
@@ -335,7 +367,7 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     for name in agents:
         options = _agent_options(name, rate=rate, ros_domain=ros_domain, robot=robot,
                                  extra=(agent_options or {}).get(name, []))
-        supervisor.add(name, f"agents.{name}", [*common, *options], env=security.agent_env(name))
+        supervisor.add(name, processes[name], [*common, *options], env=security.agent_env(name))
     return _Run(spec=spec, scene_path=loaded.path, policy=policy, run_id=run_id, graph_name=graph_name,
                 run_dir=run_dir, port=port, endpoint=endpoint, agents=agents, security=security, env=env,
                 supervisor=supervisor, router=router, record=record,
@@ -402,11 +434,13 @@ def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recor
             if _run_over(run, stop, status, timeout_s):
                 break
         graph_logger.maybe_log(graph, status.get("now_s"), force=True)
+        write_final_graph(run.run_dir, graph)
 
 
 def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeout_s: float) -> bool:
     """Whether the watch ends now: a stop, every mission terminal, the clock finished, the timeout
-    (noted on ``run``), or an agent the supervisor gave up on."""
+    (noted on ``run``), or a process of chronav's the supervisor gave up on (not an agent plug-in's:
+    the run goes on without it, as when it is refused at start)."""
     from agents.world.vocabulary import MissionState
 
     missions = run.missions
@@ -421,7 +455,19 @@ def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeo
     if time.monotonic() - run.started > timeout_s:
         run.timed_out = True
         return True
-    return bool(run.supervisor.given_up())
+    return any(_ends_the_run(name) for name in run.supervisor.given_up() or ())
+
+
+def _ends_the_run(process: str) -> bool:
+    """Whether giving up on ``process`` ends a run: chronav's own agents, the router and the ROS
+    bridge do; an outside package's agent plug-in does not."""
+    from agents.lib.agent_plugins import package_of
+    from agents.lib.registry import OWN_PACKAGE, UnknownExtension
+
+    try:
+        return package_of(process) == OWN_PACKAGE
+    except UnknownExtension:       # the router, the ROS bridge
+        return True
 
 
 def _finish(run: _Run, recorder: Recorder) -> RunResult:
@@ -471,6 +517,13 @@ def _report(scene_path: Path, run_dir: Path, missions: dict[str, dict[str, objec
     metrics = build_report(scene_path, run_dir, missions)
     log_report(recorder, metrics, missions)
     return metrics
+
+
+def write_final_graph(run_dir: Path, graph: Any) -> None:
+    """``<run>/graph.json``: the DSR graph as the run ended (``chronav dsr dump --json``'s nodes and
+    edges), so what the agents wrote, a plug-in agent's nodes among them, can be read after the run.
+    A launch writes its watching replica's, which took in only the writes the policy allowed."""
+    (run_dir / FINAL_GRAPH).write_text(graph.to_json())
 
 
 def _write_result(result: RunResult) -> None:

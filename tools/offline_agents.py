@@ -26,12 +26,14 @@ from agents.runtime.recording import Recorder
 from dsr import DSRGraph
 from scenes.clock import parse_clock
 from scenes.loader import resolve_scene_path
-from tools.inprocess import ROUND_ORDER, build_agents
+from agents.world.vocabulary import vocabulary
+from tools.inprocess import build_agents
 
-#: the agents that perceive a tick, in the order a round steps them (the agenda before the
-#: observer: the observer's links follow the agenda)
-PERCEIVERS: tuple[str, ...] = tuple(name for name in ROUND_ORDER
-                                    if name in ("object_recognition", "agenda", "human_observer"))
+#: every registered agent, in the order a round steps them
+ROUND_ORDER: tuple[str, ...] = vocabulary().names
+#: the agents that perceive a tick (their registrations say ``perceiver``), in the order a round
+#: steps them (the agenda before the observer: the observer's links follow the agenda)
+PERCEIVERS: tuple[str, ...] = tuple(spec.name for spec in vocabulary().agents if spec.perceiver)
 #: everything but the social navigation: a test then plays the navigation's part
 WITHOUT_NAVIGATION: tuple[str, ...] = tuple(name for name in ROUND_ORDER if name != "social_navigation")
 

@@ -25,7 +25,20 @@ def _loaders() -> dict[str, Callable[[str], Any]]:
 
     generic = RobotLimits(radius_m=0.3, max_speed_mps=0.6, max_angular_speed_radps=1.2)
     return {"planner": planner, "controller": lambda name: controller(name, generic), "predictor": predictor,
-            "metric": metric}
+            "metric": metric, "agent": _agent}
+
+
+def _agent(name: str) -> Any:
+    """An agent's description, checked as a run checks it: its shape, then what it declares it
+    writes against the vocabulary (a refusal there is raised as the loaders' refusals are)."""
+    from agents.lib.agent_plugins import spec
+    from agents.world.vocabulary import vocabulary
+
+    found = spec(name)
+    for refusal in vocabulary().refused:
+        if refusal.name == name:
+            raise refusal
+    return found
 
 
 def inventory() -> list[dict[str, Any]]:
@@ -55,7 +68,7 @@ def inventory() -> list[dict[str, Any]]:
 def register(app: typer.Typer) -> None:
     @app.command("plugins")
     def plugins(as_json: bool = typer.Option(False, "--json", help="one JSON object on stdout")) -> None:
-        """List every installed planner, controller, predictor and metric (chronav's and other
+        """List every installed planner, controller, predictor, metric and agent (chronav's and other
         packages'), with its package, version and what it does; refused ones say why."""
         rows = inventory()
         refused = [r for r in rows if r["status"] != "ok"]

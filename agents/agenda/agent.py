@@ -17,6 +17,7 @@ from agents.lib.agenda.changes import AgendaChangeError, apply_change, parse_cha
 from agents.lib.agenda.chronemics import UPCOMING_WINDOW_S, ChronemicsParams
 from agents.lib.agenda.model import AgendaDay
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.series import log_series_styles
 from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
@@ -30,7 +31,7 @@ from scenes.clock import format_clock
 class AgendaAgent(Agent):
     kind = "agenda"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.params = ChronemicsParams()

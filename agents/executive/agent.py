@@ -23,6 +23,7 @@ from agents.missions.kinds import MissionStringError
 from agents.missions.planning import MissionPlanner, intention_end, remaining_route, route_rooms
 from agents.missions.steps import PlanStep, StepFailed
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.recording import Recorder
 from agents.world.freshness import interactions_follow_activities, mark_observed, observed_up_to
 from agents.world.vocabulary import (ActivityView, ClockView, EdgeType, IntentionKind, IntentionState,
@@ -38,7 +39,7 @@ FAILURE, WORLD = "failure", "world"
 class ExecutiveAgent(Agent):
     kind = "executive"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.planner = MissionPlanner(self.scene, grammar_file=self.config.options.get("grammar"))

@@ -23,6 +23,7 @@ import shapely
 from agents.lib.perception import prediction_log, walker_model
 from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, observer_tracker
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.bodies import log_people
 from agents.runtime.recording import Recorder
 from agents.lib.socialmap.motion import MotionParams, predict_many
@@ -45,7 +46,7 @@ TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing 
 class HumanObserverAgent(Agent):
     kind = "human_observer"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self.noise_xy = float(self.config.option("noise_xy", str(OBSERVER_NOISE_M)))

@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
-from importlib.metadata import EntryPoint, entry_points
+from importlib.metadata import Distribution, EntryPoint, entry_points
 from typing import Any
 
 #: kind -> entry point group
@@ -27,6 +27,7 @@ GROUPS: dict[str, str] = {
     "controller": "chronav.controllers",
     "predictor": "chronav.predictors",
     "metric": "chronav.metrics",
+    "agent": "chronav.agents",
 }
 
 
@@ -65,9 +66,7 @@ def extensions(kind: str) -> dict[str, Extension]:
     study's back), else the first found on sys.path; the other is listed by ``shadowed``."""
     found: dict[str, Extension] = {}
     for ep in entry_points(group=_group(kind)):
-        dist = ep.dist
-        package = dist.metadata["Name"] if dist is not None else "?"
-        version = dist.version if dist is not None else "?"
+        package, version = _package(ep.dist)
         ext = Extension(kind, ep.name, package, version, ep.value, ep)
         if ep.name in found:
             if package == OWN_PACKAGE and found[ep.name].package != OWN_PACKAGE:
@@ -78,6 +77,21 @@ def extensions(kind: str) -> dict[str, Extension]:
     return dict(sorted(found.items()))
 
 
+def _package(dist: Distribution | None) -> tuple[str, str]:
+    """(name, version) of the distribution that registers an entry.  Cached per distribution (by its
+    metadata directory; each scan makes new Distribution objects): a read parses its METADATA file,
+    which was most of a scan's time when each of chronav's 20-odd entries read it twice."""
+    if dist is None:
+        return "?", "?"
+    key: object = getattr(dist, "_path", None) or dist
+    found = _PACKAGES.get(key)
+    if found is None:
+        metadata = dist.metadata
+        found = _PACKAGES[key] = (metadata["Name"], metadata["Version"])
+    return found
+
+
+_PACKAGES: dict[object, tuple[str, str]] = {}
 _SHADOWED: dict[str, list[Extension]] = {}
 _LOADED: dict[tuple[str, str], Any] = {}
 
@@ -197,6 +211,7 @@ def built_once(kind: str, name: str, protocol: type, lacks: str) -> Any:
 def clear() -> None:
     """Forget the scanned metadata and loaded objects (tests that register entries at run time)."""
     extensions.cache_clear()
+    _PACKAGES.clear()
     _SHADOWED.clear()
     _LOADED.clear()
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.recording import Recorder
 from agents.world.dsr_writers import write_object
 from agents.world.vocabulary import WORLD, ClockView
@@ -21,7 +22,7 @@ CHECK_PERIOD_S = 5.0
 class ObjectRecognitionAgent(Agent):
     kind = "object_recognition"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         self._last_check = -math.inf

@@ -54,6 +54,7 @@ from agents.ros_bridge.inbox import GOAL_POSE, ODOM, SCAN, TYPES, Inbox, Receive
 from agents.ros_bridge.maps import Grid, RosMaps
 from agents.ros_bridge.wire import RosNode, RosPublisher, fully_qualified, ros_session_config
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.recording import Recorder
 from agents.world.dsr_readers import closed_doors, dsr_people
 from agents.world.vocabulary import WORLD, EdgeType, MissionState, NodeType, activities, mission_name, now_s
@@ -76,7 +77,7 @@ ODOM_WAIT_S = 5.0        # wall s after joining the ROS side before a silent rob
 class RosBridgeAgent(Agent):
     kind = "ros_bridge"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         try:

@@ -22,6 +22,7 @@ no run depends on how fast this machine is.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -29,6 +30,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from agents.lib.agent_plugins import package_of
+from agents.lib.registry import OWN_PACKAGE, UnknownExtension
 from agents.runtime.base import Agent
 from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.recording import Recorder
@@ -36,6 +39,7 @@ from agents.runtime.recording import Recorder
 if TYPE_CHECKING:   # the scheduler drives the concrete graph: its dispatch loop and local write policy
     from dsr import DSRGraph
 
+log = logging.getLogger("chronav.lockstep")
 #: virtual wall seconds per round: the period every agent process loops at
 ROUND_PERIOD_S = 0.02
 #: rounds in which nothing changes in the graph before the run is declared stalled
@@ -90,10 +94,12 @@ class Lockstep:
         self.clock = VirtualClock()
         self.rounds = 0
         self._set_up: list[Agent] = []
+        #: agent plug-ins that raised and left the run: name -> what happened (plug-in, package, error)
+        self.dropped: dict[str, str] = {}
 
     def setup(self) -> None:
         """Set every agent up in order (the simulator first: it writes the building and the clock)."""
-        for agent, recorder in zip(self.agents, self.recorders, strict=True):
+        for agent, recorder in list(zip(self.agents, self.recorders, strict=True)):   # a plug-in may leave
             self._set_up_one(agent, recorder)
 
     def add(self, agent: Agent, recorder: Recorder) -> None:
@@ -108,26 +114,50 @@ class Lockstep:
             with self._as(agent):
                 agent.setup(CheckedGraph(self.graph, agent.config.name), recorder)
         except Exception as exc:
-            raise AgentError(agent.config.name, exc) from exc
+            if not self._drop_plugin(agent, exc, "setup"):
+                raise AgentError(agent.config.name, exc) from exc
+            return
         self._set_up.append(agent)
         self.graph.dispatch()
 
     def round(self, agents: Sequence[Agent] | None = None) -> None:
         """One tick: every agent (or ``agents``, in that order) steps once, the graph's signals
         delivered after each; then the virtual wall clock moves one period."""
-        for agent in self.agents if agents is None else agents:
+        for agent in list(self.agents) if agents is None else agents:
             self.step(agent)
         self.clock.advance(self.period_s)
         self.rounds += 1
 
     def step(self, agent: Agent) -> None:
         """``agent`` steps once (writing as itself) and the graph's signals are delivered."""
+        if agent.config.name in self.dropped:
+            return
         try:
             with self._as(agent):
                 agent.step()
         except Exception as exc:
-            raise AgentError(agent.config.name, exc) from exc
+            if not self._drop_plugin(agent, exc, "step"):
+                raise AgentError(agent.config.name, exc) from exc
         self.graph.dispatch()
+
+    def _drop_plugin(self, agent: Agent, exc: Exception, where: str) -> bool:
+        """Whether ``agent`` is an outside package's agent plug-in, now out of the run: one that raises
+        is logged (naming it, its package and the error) and the others go on, as a launch goes on
+        without a plug-in it refused at start.  chronav's own agents' errors end the run (False)."""
+        name = agent.config.name
+        try:
+            package = package_of(name)
+        except UnknownExtension:       # built outside the registry (a test's agent): as chronav's own
+            return False
+        if package == OWN_PACKAGE:
+            return False
+        self.dropped[name] = (f"agent plug-in {name!r} from package {package!r} failed in {where}: "
+                              f"{type(exc).__name__}: {exc}; it left the run, the others go on")
+        log.warning("%s", self.dropped[name])
+        if agent in self.agents:
+            self.agents.remove(agent)
+        self.graph.dispatch()
+        return True
 
     @contextmanager
     def _as(self, agent: Agent) -> Iterator[None]:

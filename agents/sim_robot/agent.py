@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from agents.runtime.base import Agent
+from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.bodies import log_robot, log_true_people
 from agents.runtime.recording import Recorder
 from agents.sim_robot.clock import ClockPace
@@ -65,7 +66,7 @@ class RobotState:
 class SimRobotAgent(Agent):
     kind = "sim_robot"
 
-    def setup(self, graph, recorder: Recorder) -> None:
+    def setup(self, graph: CheckedGraph, recorder: Recorder) -> None:
         self.graph = graph
         self.rec = recorder
         scene = self.scene

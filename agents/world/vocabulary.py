@@ -23,12 +23,18 @@ re-exported here and by ``agents.lib.agenda``.
 from __future__ import annotations
 
 import enum
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+import logging
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
+from functools import cache
 from typing import Any, NamedTuple
 
+from agents.lib.agent_plugins import KIND as AGENT_KIND, AgentSpec, package_of, specs as agent_specs
+from agents.lib.registry import OWN_PACKAGE, RefusedExtension
 from agents.lib.states import ActivityState
+
+log = logging.getLogger("chronav.plugins")
 
 
 class NodeType(StrEnum):
@@ -312,10 +318,10 @@ def heartbeat_name(agent: str) -> str:
 # Attribute value kinds as the DSR stores them (docs/dsr_wire_format.md).
 FLOAT, INT, BOOL, STR, FLOATS, STRS = "float", "int", "bool", "str", "floats", "strs"
 
-# The agents (writers) by their process names.
+# The writers of chronav's core vocabulary by their process names.  Which agents a run has is the
+# registry's (``chronav.agents`` entry points, ``vocabulary().agents``), not a list here.
 SIM_ROBOT, OBSERVER, RECOGNITION = "sim_robot", "human_observer", "object_recognition"
 AGENDA_AGENT, EXECUTIVE, NAVIGATION, AGENDA_TOOL = "agenda", "executive", "social_navigation", "agenda_tool-*"
-ALL_AGENTS = (SIM_ROBOT, OBSERVER, RECOGNITION, AGENDA_AGENT, NAVIGATION, EXECUTIVE)
 #: the optional ROS 2 bridge (chronav launch --ros): it creates pose missions from /goal_pose
 ROS_BRIDGE = "ros_bridge"
 
@@ -388,6 +394,7 @@ def _merge(*parts: dict[str, Attr]) -> dict[str, Attr]:
 _R, _C, _D, _RB = RobotAttr, ClockAttr, DoorAttr, RequestAttr
 _M, _I, _O, _A = MissionAttr, IntentionAttr, ObjectAttr, ActivityAttr
 _G, _P = GroundTruthAttr, PersonAttr
+_HEARTBEAT: dict[StrEnum, str] = {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT, HeartbeatAttr.WALL_S: FLOAT, HeartbeatAttr.PROBLEM: STR}
 
 NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     NodeSpec(NodeType.WORLD, (SIM_ROBOT,)),
@@ -452,11 +459,9 @@ NODES: dict[str, NodeSpec] = {spec.type: spec for spec in (
     # (agents/world/freshness.py)
     NodeSpec(NodeType.SENSOR, (OBSERVER, RECOGNITION, AGENDA_AGENT, EXECUTIVE),
              _attrs((OBSERVER, RECOGNITION, AGENDA_AGENT, EXECUTIVE), {SensorAttr.OBSERVED_S: FLOAT})),
-    # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them
-    NodeSpec(NodeType.HEARTBEAT, (*ALL_AGENTS, ROS_BRIDGE),
-             _attrs((*ALL_AGENTS, ROS_BRIDGE), {HeartbeatAttr.BEAT: INT, HeartbeatAttr.PID: INT,
-                                                HeartbeatAttr.WALL_S: FLOAT, HeartbeatAttr.PROBLEM: STR}),
-             deleters=()),
+    # every agent's loop stamps its own (agents/runtime/heartbeat.py); the launcher watches them.
+    # Each registered agent is added as a writer by ``vocabulary()``
+    NodeSpec(NodeType.HEARTBEAT, (ROS_BRIDGE,), _attrs(ROS_BRIDGE, _HEARTBEAT), deleters=()),
 )}
 
 _POSE: dict[str, str] = {PoseAttr.X: FLOAT, PoseAttr.Y: FLOAT, PoseAttr.THETA: FLOAT}
@@ -478,10 +483,125 @@ EDGES: tuple[EdgeSpec, ...] = (
 )
 
 
+# ------------------------------------------------------------------- the agents' declarations
+@dataclass(frozen=True)
+class Vocabulary:
+    """The vocabulary a run uses: chronav's core table (``NODES``, ``EDGES``), each registered
+    agent as a heartbeat writer, and the node and edge types plug-in agents declare (each owned by
+    its agent alone).  ``agents``: the agents a run starts, in round order; ``refused``: the agent
+    plug-ins refused at start (a broken description, or a declaration that claims another's type)."""
+
+    nodes: Mapping[str, NodeSpec]
+    edges: tuple[EdgeSpec, ...]
+    agents: tuple[AgentSpec, ...] = ()
+    refused: tuple[RefusedExtension, ...] = ()
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The agents' names, in round order."""
+        return tuple(spec.name for spec in self.agents)
+
+    def spec(self, name: str) -> AgentSpec:
+        """The description of agent ``name``; KeyError listing the agents when it is not one."""
+        for found in self.agents:
+            if found.name == name:
+                return found
+        raise KeyError(f"no agent {name!r}; the agents are {', '.join(self.names)}")
+
+
+def _owners(spec: NodeSpec) -> str:
+    return ", ".join(spec.creators) or "nobody"
+
+
+def _declaration_problem(agent: AgentSpec, nodes: Mapping[str, NodeSpec], edges: tuple[EdgeSpec, ...],
+                         reserved: set[str]) -> str | None:
+    """Why ``agent``'s declared types cannot join the vocabulary ``nodes``/``edges`` (None: they can).
+    A plug-in owns what it declares: never a type, or an edge between types, that is another's."""
+    if agent.name in reserved:
+        return f"the name {agent.name!r} is a writer of chronav's own vocabulary"
+    own: set[str] = set()
+    for decl in agent.nodes:
+        taken = nodes.get(decl.type)
+        if taken is not None:
+            return f"node type {decl.type!r} belongs to {_owners(taken)}: an agent declares only new types"
+        if decl.type in own:
+            return f"node type {decl.type!r} is declared twice"
+        own.add(decl.type)
+    for edge in agent.edges:
+        for end in (*edge.src, *edge.dst):
+            if end not in nodes and end not in own:
+                return f"edge type {edge.type!r} names node type {end!r}, which no agent declares"
+        existing = [spec for spec in edges if spec.type == edge.type]
+        if existing and not (set(edge.src) <= own or set(edge.dst) <= own):
+            writers = sorted({w for spec in existing for w in spec.writers})
+            return (f"edge type {edge.type!r} belongs to {', '.join(writers)}: an agent writes it only from or "
+                    "to node types it declares")
+        kinds = {key: kind for spec in existing for key, kind in spec.attrs.items()}
+        for key, kind in edge.attrs.items():
+            if kinds.get(key, kind) != kind:
+                return f"{edge.type} edge .{key} is {kinds[key]} in chronav's vocabulary, declared {kind}"
+    return None
+
+
+def take_in(agents: Iterable[tuple[AgentSpec, str]], refused: Iterable[RefusedExtension] = (),
+            *, nodes: Mapping[str, NodeSpec] | None = None, edges: tuple[EdgeSpec, ...] | None = None) -> Vocabulary:
+    """The core vocabulary (or ``nodes``/``edges``) with ``agents`` (description, package) taken in, in
+    the order given: each a heartbeat writer; a plug-in's declared types added as its own, or the
+    plug-in refused (RefusedExtension naming it, its package and why) and the rest taken in.  Pure:
+    the same agents give the same vocabulary on every replica."""
+    merged = dict(NODES if nodes is None else nodes)
+    all_edges = EDGES if edges is None else edges
+    reserved = {w for spec in merged.values() for w in (*spec.creators, *spec.may_delete)} | {
+        w for spec in merged.values() for attr in spec.attrs.values() for w in (*attr.writers, *attr.init_by)} | {
+        w for spec in all_edges for w in spec.writers}
+    accepted: list[AgentSpec] = []
+    refusals = list(refused)
+    for agent, package in agents:
+        # chronav's own agents write the core vocabulary under their names: only a plug-in may not
+        problem = _declaration_problem(agent, merged, all_edges, set() if package == OWN_PACKAGE else reserved)
+        if problem is not None:
+            refusals.append(RefusedExtension(AGENT_KIND, agent.name, package, problem))
+            continue
+        for decl in agent.nodes:
+            merged[decl.type] = NodeSpec(decl.type, (agent.name,),
+                                         {key: Attr(kind, (agent.name,)) for key, kind in decl.attrs.items()})
+        all_edges += tuple(EdgeSpec(e.type, tuple(e.src), tuple(e.dst), (agent.name,), dict(e.attrs))
+                           for e in agent.edges)
+        beat = merged[NodeType.HEARTBEAT]
+        merged[NodeType.HEARTBEAT] = replace(beat, creators=(*beat.creators, agent.name),
+                                             attrs=_merge(dict(beat.attrs), _attrs(agent.name, _HEARTBEAT)))
+        accepted.append(agent)
+    for refusal in refusals:
+        log.warning("%s; the rest runs without it", refusal)
+    return Vocabulary(merged, all_edges, tuple(accepted), tuple(refusals))
+
+
+def _registered(own_only: bool) -> Vocabulary:
+    found, refused = agent_specs()
+    pairs = [(spec, package_of(spec.name)) for spec in found]
+    if own_only:
+        return take_in([(s, p) for s, p in pairs if p == OWN_PACKAGE])
+    return take_in(pairs, refused)
+
+
+@cache
+def vocabulary() -> Vocabulary:
+    """The vocabulary of this installation: the core, chronav's agents and every installed agent
+    plug-in's declarations (read from the ``chronav.agents`` entry points once per process)."""
+    return _registered(own_only=False)
+
+
+@cache
+def own_vocabulary() -> Vocabulary:
+    """The core and chronav's own agents only: what the shipped write policy holds, whatever else is
+    installed."""
+    return _registered(own_only=True)
+
+
 def edge_attrs(edge_type: str) -> dict[str, str]:
     """Every attribute an edge of ``edge_type`` may carry, with its kind (any end types)."""
     out: dict[str, str] = {}
-    for spec in EDGES:
+    for spec in vocabulary().edges:
         if spec.type == edge_type:
             out.update(spec.attrs)
     return out
@@ -515,9 +635,10 @@ def _known(names: Any) -> str:
 
 def check_node_type(node_type: str) -> NodeSpec:
     """The spec of ``node_type``, or VocabularyError listing the known types."""
-    spec = NODES.get(node_type)
+    nodes = vocabulary().nodes
+    spec = nodes.get(node_type)
     if spec is None:
-        raise VocabularyError(f"unknown node type {node_type!r}; known: {_known(NODES)}")
+        raise VocabularyError(f"unknown node type {node_type!r}; known: {_known(nodes)}")
     return spec
 
 
@@ -539,8 +660,9 @@ def check_attrs(node_type: str, attrs: Mapping[str, Any]) -> None:
 def check_edge(edge_type: str, attrs: Mapping[str, Any]) -> None:
     """VocabularyError naming an unknown edge type, or an attribute it does not carry / of the wrong kind."""
     kinds = edge_attrs(edge_type)
-    if not any(spec.type == edge_type for spec in EDGES):
-        raise VocabularyError(f"unknown edge type {edge_type!r}; known: {_known({e.type for e in EDGES})}")
+    edges = vocabulary().edges
+    if not any(spec.type == edge_type for spec in edges):
+        raise VocabularyError(f"unknown edge type {edge_type!r}; known: {_known({e.type for e in edges})}")
     for key, value in attrs.items():
         kind = kinds.get(key)
         if kind is None:

@@ -6,7 +6,8 @@ chronav's business.  The table ships as package data next to this module
 (``write_policy.yaml``), so an installed (non-editable) chronav finds it; ``CHRONAV_WRITE_POLICY``
 names another file, or ``allow-all`` to switch enforcement off.
 
-The table is generated from the vocabulary (``vocabulary_rules``): each grant names its attributes
+The table is generated from chronav's own vocabulary (``vocabulary_rules``; the grants of
+installed agent plug-ins are added when it is loaded, ``with_plugin_grants``): each grant names its attributes
 (no ``*``), and a creator may give at creation only the attributes the vocabulary lists.  The
 shipped YAML is kept for operators to read and edit a copy of; ``tests/unit/test_vocabulary.py``
 fails when it differs from what the vocabulary generates.  Regenerate it with
@@ -23,7 +24,7 @@ from typing import Any
 from dsr.errors import PolicyError
 from dsr.policy import AllowAll, WritePolicy
 from dsr.policy_rules import FORMAT, PolicyDocument, Rule, RulePolicy
-from agents.world.vocabulary import EDGES, NODES, EdgeSpec, NodeSpec
+from agents.world.vocabulary import EdgeSpec, NodeSpec, Vocabulary, own_vocabulary, vocabulary
 from scenes.yamlio import SourceError, load_located_file, validate_located
 
 ENV_POLICY = "CHRONAV_WRITE_POLICY"
@@ -54,7 +55,23 @@ def policy_from_env(environ: Mapping[str, str] | None = None) -> WritePolicy:
     if not path.is_file():
         where = f"{ENV_POLICY}={value!r}" if value else f"default policy {path}"
         raise PolicyError(f"{where}: no such file (set {ENV_POLICY} to a policy YAML file, or to 'allow-all')")
-    return load_policy(path)
+    return with_plugin_grants(load_policy(path))
+
+
+def with_plugin_grants(policy: RulePolicy, vocab: Vocabulary | None = None) -> RulePolicy:
+    """``policy`` with the grants of the installed agent plug-ins added (what they declared they
+    write, and their heartbeats), taken from the vocabulary of this installation.
+
+    Why at load and not in the file: the shipped table is chronav's own (generated, tested); a
+    plug-in's grants come with its installation, alike on every machine that has it installed.  A
+    replica on a machine without it holds no grant for that agent and drops its writes: safe."""
+    vocab = vocabulary() if vocab is None else vocab
+    own = set(own_vocabulary().names)
+    plugins = [name for name in vocab.names if name not in own]
+    if not plugins:
+        return policy
+    rules = [Rule.model_validate(grant) for grant in _grants(vocab, set(plugins))]
+    return RulePolicy([*policy.rules, *rules], source=f"{policy.source} + agent plug-ins {', '.join(plugins)}")
 
 
 # ------------------------------------------------------------------ generated from the vocabulary
@@ -86,19 +103,26 @@ def _edge_grant(spec: EdgeSpec) -> dict[str, Any]:
             "attrs": [str(key) for key in spec.attrs], "init_attrs": []}
 
 
-def vocabulary_grants() -> list[dict[str, Any]]:
-    """The write policy as plain data, in the vocabulary's order; grants that differ only by
-    writer are merged (every agent's heartbeat: one grant)."""
+def _grants(vocab: Vocabulary, only: set[str] | None = None) -> list[dict[str, Any]]:
+    """``vocab``'s grants as plain data, in its order (those of the writers ``only`` when given);
+    grants that differ only by writer are merged (every agent's heartbeat: one grant)."""
     grants: list[dict[str, Any]] = []
-    for spec in NODES.values():
+    for spec in vocab.nodes.values():
         for grant in _node_grants(spec):
+            if only is not None and grant["writers"][0] not in only:
+                continue
             same = next((g for g in grants if {**g, "writers": None} == {**grant, "writers": None}), None)
             if same is None:
                 grants.append(grant)
             else:
                 same["writers"] += grant["writers"]
-    grants += [_edge_grant(spec) for spec in EDGES]
+    grants += [_edge_grant(spec) for spec in vocab.edges if only is None or set(spec.writers) <= only]
     return grants
+
+
+def vocabulary_grants() -> list[dict[str, Any]]:
+    """The shipped write policy as plain data: chronav's core vocabulary and its own agents."""
+    return _grants(own_vocabulary())
 
 
 def vocabulary_rules() -> list[Rule]:

@@ -25,7 +25,7 @@ from scenes.loader import load_scene
 from scenes.clock import parse_clock
 from tests.system.launch_helpers import run_json
 from tools.chaos.command import ChaosError, Fault, load_schedule, lost_writes, random_schedule
-from tools.launch import AGENTS
+from tools.launch import agent_names
 
 MISSIONS = ("m0930", "m1045", "m1115", "m1315")
 EXTRA = {"op": "add", "activity": {"id": "faults_extra", "name": "Stretching", "object": "stretcher",
@@ -139,7 +139,7 @@ def test_every_process_killed_during_a_mission_and_the_missions_complete(kill_ru
     for fault in kill_run["faults"]:
         assert fault["mission"] is not None, f"{fault['what']} was not during a mission"
         assert fault["converged_s"] is not None, f"replicas did not converge after {fault['what']}"
-    assert kill_run["restarts"] == dict.fromkeys([*AGENTS, "router"], 1)
+    assert kill_run["restarts"] == dict.fromkeys([*agent_names(), "router"], 1)
     assert kill_run["final_converged"]
 
 
@@ -152,7 +152,7 @@ def test_no_member_refuses_an_honest_one_after_the_restarts(kill_run: dict[str, 
     trust = kill_run["trust"]
     assert trust["refusals_total"] == 0, trust["refusals"]
     assert trust["unproven_claims_served"] == [], trust["unproven_claims_served"]
-    assert set(AGENTS) <= set(trust["fetches"])
+    assert set(agent_names()) <= set(trust["fetches"])
     # Digest-triggered fetches: at most 5 per member in a first burst (pauses 2, 4, 8, 16 s),
     # then one per 30 s (dsr/transport.py _fetch_allowed), whatever the load.
     wall, members = kill_run["wall_s"], len(trust["fetches"]) - 1

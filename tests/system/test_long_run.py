@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from tests.system.launch_helpers import launch_json
-from tools.launch import AGENTS
+from tools.launch import agent_names
 
 pytestmark = pytest.mark.slow
 WEEK = Path(__file__).resolve().parents[1] / "data" / "week_tiny.yaml"
@@ -25,10 +25,10 @@ def test_two_days_launched_as_processes_rotate_and_account_per_day(tmp_path: Pat
     run_dir = Path(result["run_dir"])
     index = json.loads((run_dir / "index.json").read_text())
     for day, entry in zip(result["days"], index["entries"], strict=True):
-        assert set(AGENTS) <= set(day["agents"]), day["agents"]
+        assert set(agent_names()) <= set(day["agents"]), day["agents"]
         assert all(a["rss_mb"] > 0 and a["cpu_s"] > 0 for a in day["agents"].values())
         assert day["dsr"]["nodes"] > 0 and day["bytes_written"] > day["rrd_bytes"] > 0
         assert (run_dir / entry["rrd"]).is_file() and entry["rrd"] == day["rrd"]
         logs = run_dir / entry["run_dir"] / "logs"
-        assert {f"{name}.log" for name in AGENTS} <= {p.name for p in logs.iterdir()}
+        assert {f"{name}.log" for name in agent_names()} <= {p.name for p in logs.iterdir()}
         assert json.loads((run_dir / entry["run_dir"] / "result.json").read_text())["restart_log"] == []

@@ -1,7 +1,9 @@
 """examples/plugin, an outside package, installed into a temporary target and used without any
-edit to chronav: `chronav plugins` lists its four extensions, `chronav path` plans with its
+edit to chronav: `chronav plugins` lists its five extensions, `chronav path` plans with its
 planner and drives its controller, an in-process `chronav evaluate` runs its planner x controller
-and measures its metric, and `chronav predict evaluate` scores its predictor.
+(its agent running beside chronav's) and measures its metric, `chronav predict evaluate` scores
+its predictor, and `chronav launch`, in-process and as processes, runs its note_taker agent,
+whose note nodes are in the run's graph.json.
 
 Why a copy: pip builds in the source folder (build/, *.egg-info); the repository stays clean."""
 
@@ -51,9 +53,30 @@ def test_plugins_lists_the_packages_extensions(site: Path) -> None:
     assert code == 0
     ours = {(r["kind"], r["name"]): r for r in listed["plugins"] if r["package"] == PACKAGE}
     assert set(ours) == {("planner", "example_bubble"), ("controller", "example_pursuit"),
-                         ("predictor", "example_slowing"), ("metric", "example_efficiency")}
+                         ("predictor", "example_slowing"), ("metric", "example_efficiency"),
+                         ("agent", "note_taker")}
     assert all(r["status"] == "ok" and r["version"] == "0.1.0" for r in ours.values())
     assert ours[("controller", "example_pursuit")]["summary"].startswith("Pure pursuit 0.6 m ahead")
+    assert ours[("agent", "note_taker")]["summary"].startswith("Writes a note node each time the robot passes")
+
+
+@pytest.mark.parametrize("mode", [("--in-process",), ()], ids=["in-process", "processes"])
+def test_launch_runs_its_agent_and_its_notes_are_in_the_graph(site: Path, mode: tuple[str, ...]) -> None:
+    """The robot crosses the lounge past the resident: the note_taker writes one note about her,
+    and the run's graph (the launcher's replica, which took in only what the write policy allowed)
+    holds it, with its `about` edge to her person node."""
+    code, result = _chronav(site, "launch", str(TINY), *mode, "--no-record", "--timeout", "240")
+    assert code == 0 and result["ok"], result
+    assert "note_taker" in result["restarts"]                         # it ran as one of the run's agents
+    graph = json.loads((Path(result["run_dir"]) / "graph.json").read_text())
+    nodes = {n["id"]: n for n in graph["nodes"]}
+    notes = [n for n in graph["nodes"] if n["type"] == "note"]
+    assert len(notes) == 1, notes
+    note = notes[0]["attrs"]
+    assert note["person"] == "resident" and note["distance_m"] <= 2.0 and note["text"].startswith("passed resident")
+    assert 36000.0 <= note["time_s"] <= 36060.0                       # during the mission (10:00, sim s)
+    [about] = [e for e in graph["edges"] if e["type"] == "about"]
+    assert nodes[about["src"]]["type"] == "note" and nodes[about["dst"]]["name"] == "resident"
 
 
 def test_path_plans_with_its_planner_and_drives_its_controller(site: Path) -> None:

@@ -7,8 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tools.inprocess import ROUND_ORDER
-from tools.offline_agents import PERCEIVERS, WITHOUT_NAVIGATION, OfflineAgents
+from tools.offline_agents import PERCEIVERS, ROUND_ORDER, WITHOUT_NAVIGATION, OfflineAgents
 
 
 def test_it_builds_the_named_agents_in_round_order_on_one_graph(tmp_path: Path) -> None:

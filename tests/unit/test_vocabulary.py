@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from agents.world.vocabulary import EDGES, NODES, VocabularyError, check_attrs, check_edge
+from agents.world.vocabulary import VocabularyError, check_attrs, check_edge, own_vocabulary
 from agents.world.write_policy import DEFAULT_POLICY_FILE, load_policy
 from dsr.writes import Write
 
 POLICY = load_policy(DEFAULT_POLICY_FILE)
+#: chronav's vocabulary with its own agents (their heartbeats): what the shipped policy holds
+NODES, EDGES = own_vocabulary().nodes, own_vocabulary().edges
 
 
 def test_the_shipped_policy_is_what_the_vocabulary_generates() -> None:

@@ -36,9 +36,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
 from agents.world.people import people_at
 from agents.world.scene_world import load_world
-from agents.world.vocabulary import MissionState
+from agents.world.vocabulary import MissionState, vocabulary
 
-AGENTS = ("sim_robot", "human_observer", "object_recognition", "agenda", "social_navigation", "executive")
+#: agent name by the module its process runs (``python -m <module>``), every registered agent's
+PROCESS_MODULES = {f"-m {spec.process} ": spec.name for spec in vocabulary().agents}
 
 
 def _sample_cpu(root: int, stop: threading.Event, seen: dict[int, tuple[str, float]]) -> None:
@@ -54,7 +55,8 @@ def _sample_cpu(root: int, stop: threading.Event, seen: dict[int, tuple[str, flo
                 times = child.cpu_times()
             except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
                 continue
-            name = next((a for a in AGENTS if f"agents.{a}" in cmdline), "router" if "dsr.router" in cmdline else "")
+            name = next((a for m, a in PROCESS_MODULES.items() if m in f"{cmdline} "),
+                        "router" if "dsr.router" in cmdline else "")
             if name:
                 seen[child.pid] = (name, times.user + times.system)
         stop.wait(0.5)

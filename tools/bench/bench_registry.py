@@ -5,6 +5,10 @@ Prints one flat JSON object.  Why these keys: the registry must not slow a run (
 once per process and kind (``registry_first_scan_ms``); every later lookup is a dict read
 (``registry_cached_lookup_us``, ``planner_cached_lookup_us`` as plan() does it once per plan).
 ``help_wall_ms`` / ``help_cpu_ms`` are `chronav --help` in a fresh process (it imports no registry).
+``agents_vocabulary_ms``: what every agent process and launch pays once at start to read the
+``chronav.agents`` entries and take what they declare into the vocabulary (fresh process, the
+vocabulary module already imported); ``vocabulary_check_us``: one checked write's vocabulary
+check (the merged vocabulary is cached: a dict read).
 
     python tools/bench/bench_registry.py [--repeat N]
 """
@@ -25,6 +29,10 @@ ROOT = Path(__file__).resolve().parents[2]
 FIRST_SCAN = ("import time; t = time.perf_counter(); from agents.lib import registry; "
               "a = time.perf_counter(); registry.extensions('planner'); b = time.perf_counter(); "
               "print((a - t) * 1e3, (b - a) * 1e3)")
+
+
+AGENTS_VOCABULARY = ("import time; from agents.world import vocabulary as v; t = time.perf_counter(); "
+                     "v.vocabulary(); print((time.perf_counter() - t) * 1e3)")
 
 
 def _fresh(code: str) -> list[float]:
@@ -59,7 +67,10 @@ def main() -> None:
     from agents.lib import registry
     from agents.lib.planning.planners import planner
 
+    from agents.world.vocabulary import check_attrs
+
     fresh = [_fresh(FIRST_SCAN) for _ in range(args.repeat)]
+    agents = [_fresh(AGENTS_VOCABULARY)[0] for _ in range(args.repeat)]
     planner("social")
     helps = [_help_ms() for _ in range(args.repeat)]
     results = {
@@ -68,6 +79,8 @@ def main() -> None:
         "registry_cached_lookup_us": round(_per_call_us(lambda: registry.extensions("planner")), 3),
         "registry_cached_load_us": round(_per_call_us(lambda: registry.load("planner", "social")), 3),
         "planner_cached_lookup_us": round(_per_call_us(lambda: planner("social")), 3),
+        "agents_vocabulary_ms": round(statistics.median(agents), 2),
+        "vocabulary_check_us": round(_per_call_us(lambda: check_attrs("clock", {"now_s": 1.0})), 3),
         "help_wall_ms": round(statistics.median(h[0] for h in helps), 1),
         "help_cpu_ms": round(statistics.median(h[1] for h in helps), 1),
     }

@@ -40,10 +40,10 @@ import typer
 
 from tools.chaos.checks import describe_divergence, lost_writes, probe_replicas
 from tools.chaos.injector import CHAOS_AGENT, ChaosRun, FaultOutcome
-from tools.chaos.schedule import (ACTIONS, PROCESSES, ChaosError, Fault, clock_text, load_schedule,
+from tools.chaos.schedule import (ACTIONS, ChaosError, Fault, clock_text, load_schedule,
                                   random_agenda_change, random_schedule)
 
-__all__ = ["ACTIONS", "CHAOS_AGENT", "PROCESSES", "ChaosError", "ChaosReport", "ChaosRun", "Fault", "FaultOutcome",
+__all__ = ["ACTIONS", "CHAOS_AGENT", "ChaosError", "ChaosReport", "ChaosRun", "Fault", "FaultOutcome",
            "describe_divergence", "load_schedule", "lost_writes", "probe_replicas", "random_agenda_change",
            "random_schedule", "register", "run_chaos"]
 

@@ -20,7 +20,7 @@ from typing import Any
 
 from tools.chaos.checks import describe_divergence, probe_replicas
 from tools.chaos.schedule import Fault, clock_text
-from tools.launch import AGENTS
+from tools.launch import agent_names
 
 CHAOS_AGENT = "agenda_tool-chaos"
 PROBE_PERIOD_S = 0.2
@@ -277,7 +277,7 @@ class ChaosRun:
     def _expected(self) -> set[str]:
         """Replicas that must answer: every agent and this one (read-only ones, like the
         launcher's, serve no state; any other writable replica that answers must agree too)."""
-        return {*AGENTS, CHAOS_AGENT}
+        return {*agent_names(), CHAOS_AGENT}
 
     def _converge(self, timeout_s: float, since: float | None = None, final: bool = False) -> float | None:
         """Seconds from ``since`` until one sample where all expected replicas agree, or None.

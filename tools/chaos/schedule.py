@@ -13,9 +13,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from tools.launch import AGENTS
+from tools.launch import agent_names
 
-PROCESSES: tuple[str, ...] = (*AGENTS, "router")
+
+def processes() -> tuple[str, ...]:
+    """What a fault may kill or stop: every agent of a run (the registry's), and the router."""
+    return (*agent_names(), "router")
+
+
 Action = Literal["kill", "stop", "agenda"]
 ACTIONS: tuple[Action, ...] = ("kill", "stop", "agenda")
 
@@ -47,8 +52,8 @@ class Fault:
     def __post_init__(self) -> None:
         if self.action not in ACTIONS:
             raise ChaosError(f"fault action must be one of {', '.join(ACTIONS)}, not {self.action!r}")
-        if self.action in ("kill", "stop") and self.target not in PROCESSES:
-            raise ChaosError(f"fault target must be one of {', '.join(PROCESSES)}, not {self.target!r}")
+        if self.action in ("kill", "stop") and self.target not in processes():
+            raise ChaosError(f"fault target must be one of {', '.join(processes())}, not {self.target!r}")
         if self.action == "agenda" and not self.change:
             raise ChaosError("an agenda fault needs a change (JSON of an add/cancel/move change)")
         if self.at_s < 0 or self.hold_s < 0:
@@ -125,7 +130,7 @@ def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -
             out.append(Fault("agenda", "agenda", at_s=at_s, mission=mission, change=change))
         else:
             hold = round(rng.uniform(0.3, 3.0), 2) if action == "stop" else 0.0
-            out.append(Fault(action, rng.choice(PROCESSES), at_s=at_s, mission=mission, hold_s=hold))
+            out.append(Fault(action, rng.choice(processes()), at_s=at_s, mission=mission, hold_s=hold))
     return out
 
 

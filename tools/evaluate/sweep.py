@@ -112,10 +112,11 @@ def plan_sweep(scenes: Sequence[Path], planners: Sequence[str], seeds: Sequence[
 
 def agent_options(spec: RunSpec) -> dict[str, list[str]]:
     """``-o`` options of each agent for one run: the seed for all, the planner for the navigation."""
-    from tools.inprocess import LOCKSTEP_OPTIONS
-    from tools.launch import AGENTS
+    from tools.inprocess import lockstep_options
+    from tools.launch import agent_names
 
-    options = {name: [f"seed={spec.seed}", *LOCKSTEP_OPTIONS.get(name, [])] for name in AGENTS}
+    lockstep = lockstep_options()
+    options = {name: [f"seed={spec.seed}", *lockstep.get(name, [])] for name in agent_names()}
     options["social_navigation"] += [f"planner={spec.planner}", f"controller={spec.controller}"]
     if spec.model:
         options["human_observer"].append(f"walker_model={spec.model}")
