@@ -393,6 +393,9 @@ class Scene(Strict):
     missions: list[Mission] = []
     # The map read from ``map.file`` (scenes/occupancy.OccupancyMap), attached by scenes/loader.py.
     _occupancy: Any = PrivateAttr(default=None)
+    # The rooms as prepared shapely polygons, built once (room_at is asked for every person at every
+    # tick); keyed by the rooms list, so a model_copy with other rooms builds its own.
+    _room_shapes: Any = PrivateAttr(default=None)
 
     @model_validator(mode="after")
     def _walls_or_map(self) -> Scene:
@@ -425,9 +428,12 @@ class Scene(Strict):
 
     def room_at(self, x: float, y: float) -> str | None:
         """Name of the room containing (x, y) (first match), or None."""
+        import numpy as np
         import shapely
 
-        for room in self.rooms:
-            if shapely.Polygon(room.polygon).covers(shapely.Point(x, y)):
-                return room.name
-        return None
+        if self._room_shapes is None or self._room_shapes[0] is not self.rooms:
+            shapes = shapely.polygons([room.polygon for room in self.rooms])
+            shapely.prepare(shapes)
+            self._room_shapes = (self.rooms, shapes)
+        inside = shapely.intersects_xy(self._room_shapes[1], x, y)     # a point intersects = is covered
+        return self.rooms[int(np.argmax(inside))].name if inside.any() else None

@@ -15,8 +15,13 @@ benchmark's baseline, docs/prediction.md).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from agents.lib.metrics.dynamic_metrics import PeopleTracks
 
 HORIZON_S = 4.8
 STEP_S = 0.4
@@ -37,14 +42,12 @@ def live_prediction(run_dir: Path) -> dict[str, object] | None:
 def _scored(run_dir: Path) -> dict[str, object] | None:
     from agents.lib.perception.prediction_log import PREDICTIONS_FILE, read
     from agents.lib.metrics.metrics import TrajectoryFormatError, read_people_csv
-    from tools.prediction_eval import people_rows
 
     log, people = run_dir / PREDICTIONS_FILE, run_dir / "people.csv"
     if not log.exists() or not people.exists():
         return None
     try:
-        read_people_csv(people)            # the one reader's checks (file and line on a bad row)
-        tracks = people_rows(people)       # who was really there (prediction_eval.people_rows)
+        tracks = present_rows(read_people_csv(people))     # who was really there, when
     except (TrajectoryFormatError, OSError, ValueError, KeyError):
         return None
     ahead = np.arange(1, round(HORIZON_S / STEP_S) + 1) * STEP_S
@@ -72,3 +75,13 @@ def _scored(run_dir: Path) -> dict[str, object] | None:
     return {"predictions": len(errors), "horizon_s": HORIZON_S, "step_s": STEP_S,
             "ade_m": round(float(e.mean()), 4), "fde_m": round(float(e[:, -1].mean()), 4),
             "cv_true_ade_m": round(float(c.mean()), 4), "cv_true_fde_m": round(float(c[:, -1].mean()), 4)}
+
+
+def present_rows(tracks: PeopleTracks) -> dict[str, NDArray[np.float64]]:
+    """Each person's samples while there: (n, 5) arrays of t, x, y, vx, vy in time order."""
+    out = {}
+    for j, name in enumerate(tracks.names):
+        there = tracks.present[:, j]
+        out[name] = np.column_stack([tracks.times[there], tracks.x[there, j], tracks.y[there, j],
+                                     tracks.vx[there, j], tracks.vy[there, j]])
+    return out

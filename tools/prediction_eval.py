@@ -155,26 +155,11 @@ def read_people_csv_frames(path: Path, dt: float) -> Annotations:
     on_grid = np.flatnonzero(np.abs(grid - k) < 0.2)
     frames, first = np.unique(k[on_grid], return_index=True)
     rows = on_grid[first]
-    present = people_rows(path)       # the rows written: the reader holds a person who left at their last state
-    written = {(name, float(t)) for name, track in present.items() for t in track[:, 0]}
+    present = tracks.present          # who has a row at that time: a person who left is not there
     people = [{pid: (float(tracks.x[r, pid]), float(tracks.y[r, pid])) for pid in range(len(tracks.names))
-               if (tracks.names[pid], float(tracks.times[r])) in written} for r in rows.tolist()]
+               if present[r, pid]} for r in rows.tolist()]
     return Annotations(path.name, frames, people, tracks.times[rows], tuple(tracks.names),
                        tuple(tracks.roles) or ("resident",) * len(tracks.names))
-
-
-def people_rows(path: Path) -> dict[str, NDArray[np.float64]]:
-    """Each person's rows of a (checked) people.csv as written: (n, 5) arrays of t, x, y, vx, vy in
-    time order.  Why not ``read_people_csv``'s tracks: they hold a person missing from the file at
-    their nearest known state, and a replayed person who left (or has not entered yet) is not
-    standing there; the benchmark and the live prediction need who was really present."""
-    import csv
-
-    rows: dict[str, list[tuple[float, ...]]] = {}
-    with path.open(encoding="utf-8", newline="") as handle:
-        for record in csv.DictReader(handle):
-            rows.setdefault(record["name"], []).append(tuple(float(record[k]) for k in ("t", "x", "y", "vx", "vy")))
-    return {name: np.array(values) for name, values in rows.items()}
 
 
 def windows(data: Annotations, length: int) -> list[tuple[int, int]]:

@@ -40,6 +40,7 @@ DRAW_EVERY_S = 0.5
 PUBLISH_MOVE_M = 0.03
 PUBLISH_TURN_RAD = 0.05
 PUBLISH_SPEED_MPS = 0.1
+PUBLISH_BATCH = 200         # people per delta (a delta stays far below max_delta_bytes: ~1 kB a person)
 TRUTH_STILL_MPS = 1e-6       # a person whose true velocity is zero is standing still
 
 
@@ -139,12 +140,18 @@ class HumanObserverAgent(Agent):
                 del tracks[name]          # not detected for LOST_S: they left (a replayed record ended)
             for name in tracks:
                 estimates[name] = self.tracker.estimate(name, now_s)
-        for name in [n for n in self.published if n not in estimates]:
-            remove_person(self.graph, name)     # left the scene: the social map forgets them too
-            del self.published[name]
-            self.trails.pop(name, None)
-        for name, estimate in estimates.items():
-            self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
+        # One delta per tick (per PUBLISH_BATCH people), not one per person: with a crowd of 40 the
+        # per-delta work (commit, encode, merge on every replica) was most of the observer's time.
+        with self.graph.transaction():
+            for name in [n for n in self.published if n not in estimates]:
+                remove_person(self.graph, name)     # left the scene: the social map forgets them too
+                del self.published[name]
+                self.trails.pop(name, None)
+        items = list(estimates.items())
+        for start in range(0, len(items), PUBLISH_BATCH):
+            with self.graph.transaction():
+                for name, estimate in items[start:start + PUBLISH_BATCH]:
+                    self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}
         seen = {name: (e[0], e[1], e[2], math.hypot(e[3], e[4])) for name, e in estimates.items()}
         write_interactions(self.graph, interaction_pairs(positions, running_activities(self.graph),

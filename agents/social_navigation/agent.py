@@ -39,7 +39,7 @@ from agents.lib.registry import RefusedExtension, UnknownExtension
 from agents.lib.socialmap.grid import blocked_core
 from agents.lib.planning.paths import densify, nearest_free, nearest_free_where, path_cost
 from agents.lib.planning import replan
-from agents.lib.socialmap import arrival
+from agents.lib.socialmap import arrival, banded
 from agents.lib.planning.replan import Replanner
 from agents.lib.planning.search import GoalOccupied, PlanningError, StartOccupied
 from agents.lib.socialmap.social_map import SocialMap
@@ -139,6 +139,7 @@ class SocialNavigationAgent(Agent):
         self.replanner = Replanner()   # reuses earlier searches to the same goal (and their buffers)
         replan.warm_up()               # numba: load (or compile) the kernels now, not on the first plan
         arrival.warm_up()
+        banded.warm_up()               # the prediction patches of walkers (compiled banding)
         self.route_rooms: tuple[str, ...] = ()
         # The recording's decision layer: every map built is logged at its time (what was used).
         self.decision = DecisionLogger(recorder)

@@ -53,17 +53,18 @@ def sfm_norm_angle(a: float) -> float:                   # sfm.SFM.normalize_ang
     return a
 
 
-def load() -> tuple[list[dict], list[list[dict]]]:
-    """HuNavSim's robot list and agents list (one entry per sample)."""
-    traj = [[float(v) for v in row] for row in list(csv.reader((RUN / "trajectory.csv").open()))[1:]]
+def load(run: Path = RUN) -> tuple[list[dict], list[list[dict]]]:
+    """HuNavSim's robot list and agents list (one entry per sample: the people with a row at the
+    robot sample's time, none when nobody was there)."""
+    traj = [[float(v) for v in row] for row in list(csv.reader((run / "trajectory.csv").open()))[1:]]
     by_time: dict[str, list[dict]] = {}
-    for t, name, _role, x, y, th, vx, vy, group in list(csv.reader((RUN / "people.csv").open()))[1:]:
+    for t, name, _role, x, y, th, vx, vy, group in list(csv.reader((run / "people.csv").open()))[1:]:
         by_time.setdefault(t, []).append({"id": name, "x": float(x), "y": float(y), "yaw": float(th),
                                           "vx": float(vx), "vy": float(vy), "radius": R,
                                           "linear_vel": math.hypot(float(vx), float(vy)),
                                           "group_id": group if group else -1})
-    times = sorted(by_time, key=float)
-    assert [float(t) for t in times] == [row[0] for row in traj]
+    times = [f"{row[0]:.3f}" for row in traj]
+    assert set(by_time) <= set(times), "people.csv is written at the robot's sample times"
     robot = []
     for i, (t, x, y, th) in enumerate(traj):
         j = i if i + 1 < len(traj) else i - 1
@@ -72,7 +73,7 @@ def load() -> tuple[list[dict], list[list[dict]]]:
         w = math.remainder(traj[j + 1][3] - traj[j][3], 2 * math.pi) / dt
         robot.append({"id": "robot", "t": t, "x": x, "y": y, "yaw": th, "vx": vx, "vy": vy, "radius": R,
                       "linear_vel": math.hypot(vx, vy), "angular_vel": w, "closest_obs": []})
-    return robot, [by_time[t] for t in times]
+    return robot, [by_time.get(t, []) for t in times]
 
 
 def dist(a: dict, b: dict) -> float:
@@ -129,7 +130,8 @@ def transcription(robot: list[dict], agents: list[list[dict]], obstacles: shapel
                 m = max(d, 0.0)
             everyone.append(max(d, 0.0))
         closest.append(m)
-        total += m
+        if ags:                                  # if(len(agents[i].agents)>0)
+            total += m
     out["avg_distance_to_closest_person"] = total / n
     out["minimum_distance_to_people"] = min(everyone)
     out["maximum_distance_to_people"] = max(dist(r, a) - r["radius"] for r, ags in zip(robot, agents) for a in ags)
@@ -191,8 +193,8 @@ def transcription(robot: list[dict], agents: list[list[dict]], obstacles: shapel
             jerk += dv / dt / dt
     out["avg_acceleration"], out["avg_overacceleration"] = acc / n, jerk / n
     out["avg_pedestrian_velocity"] = sum(a["linear_vel"] for ags in agents for a in ags) / (n * len(agents[0]))
-    out["avg_closest_pedestrian_velocity"] = sum(
-        min(ags, key=lambda a, r=r: dist(r, a))["linear_vel"] for r, ags in zip(robot, agents)) / n
+    out["avg_closest_pedestrian_velocity"] = sum(      # nobody there: closest = Agent(), linear_vel 0
+        min(ags, key=lambda a, r=r: dist(r, a))["linear_vel"] if ags else 0.0 for r, ags in zip(robot, agents)) / n
     on_agents = on_robot = work = 0.0
     for r, ags in zip(robot, agents, strict=True):
         sx = sy = 0.0
@@ -212,7 +214,8 @@ def transcription(robot: list[dict], agents: list[list[dict]], obstacles: shapel
         for a in ags:
             near = shapely.ops.nearest_points(obstacles, shapely.Point(a["x"], a["y"]))[0]
             s += obstacle_force(a, [(near.x, near.y)])
-        total += s / len(ags)
+        if ags:                                  # HuNavSim divides by zero here; chronav skips the sample
+            total += s / len(ags)
     out["obstacle_force_on_agents"] = total
     return out
 

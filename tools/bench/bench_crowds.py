@@ -13,8 +13,14 @@ Prints ONE flat JSON object:
                            measured over the run's driving (trajectory.csv's span over the wall time
                            of the whole run, setup included; goal >= 50)
   replay_wall_s            that run's wall time
+  replay_cpu_s             the CPU time this process spent on that run (all its threads): what the
+                           run costs whatever else the machine runs (a shared machine's wall time
+                           counts the other processes too)
+  replay_sim_speedup_40_cpu  sim seconds per CPU second of that run (the same span over replay_cpu_s)
+  replay_record            1 when the run wrote its Rerun recording (``--record``), 0 with none (the default,
+                           as ``--no-record``)
 
-Run: ``.venv/bin/python tools/bench/bench_crowds.py [--replay exact|reactive]``
+Run: ``.venv/bin/python tools/bench/bench_crowds.py [--replay exact|reactive] [--record] [--skip-from-crowd]``
 """
 
 from __future__ import annotations
@@ -74,7 +80,7 @@ def forty_walkers(out: Path, people: int = 40, seconds: float = 40.0) -> Path:
     return out
 
 
-def replay_speed(work: Path, replay: str) -> dict[str, float]:
+def replay_speed(work: Path, replay: str, record: bool = False) -> dict[str, float]:
     from scenes.crowd_recording import read_recording
     from scenes.from_crowd import scene_text
     from tools.inprocess import run_in_process
@@ -83,22 +89,28 @@ def replay_speed(work: Path, replay: str) -> dict[str, float]:
     scene = work / "forty.yaml"
     scene.write_text(scene_text([read_recording(data)], scene, "forty", missions=1, seed=0, replay=replay),
                      encoding="utf-8")
-    result = run_in_process(scene, runs_dir=work / "runs", record=False, timeout_s=600)
+    cpu = time.process_time()
+    result = run_in_process(scene, runs_dir=work / "runs", record=record, timeout_s=600)
+    cpu = time.process_time() - cpu
     times = [float(line.split(",")[0]) for line in
              (result.run_dir / "trajectory.csv").read_text(encoding="utf-8").splitlines()[1:]]
     span = times[-1] - times[0] if len(times) > 1 else math.nan
     return {"replay_people": 40, "replay_sim_speedup_40": round(span / result.wall_s, 2),
-            "replay_wall_s": round(result.wall_s, 2)}
+            "replay_wall_s": round(result.wall_s, 2), "replay_cpu_s": round(cpu, 2),
+            "replay_sim_speedup_40_cpu": round(span / cpu, 2), "replay_record": int(record)}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--replay", choices=("exact", "reactive"), default="reactive")
+    parser.add_argument("--record", action="store_true", help="write the run's Rerun recording (default: none)")
+    parser.add_argument("--skip-from-crowd", action="store_true", help="only the replayed run")
     args = parser.parse_args()
     sys.path.insert(0, str(REPO))
     with tempfile.TemporaryDirectory(prefix="chronav-bench-crowds-") as tmp:
         work = Path(tmp)
-        result = {**from_crowd_seconds(work), **replay_speed(work, args.replay)}
+        result = {**({} if args.skip_from_crowd else from_crowd_seconds(work)),
+                  **replay_speed(work, args.replay, args.record)}
     print(json.dumps(result))
 
 

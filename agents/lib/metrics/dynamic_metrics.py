@@ -37,6 +37,8 @@ from agents.lib.socialmap.types import Person
 from scenes.angles import wrap_angle
 
 PERSON_RADIUS_M = 0.25
+NO_TRACKS = "no people: no people.csv (--people) or nobody in it"
+NOBODY_THERE = "no people: nobody in people.csv was there at the trajectory's times"
 BANDS: tuple[tuple[str, float, float], ...] = (("intimate", -math.inf, 0.45), ("personal", 0.45, 1.2),
                                                ("social", 1.2, 3.6))
 GROUP_GAZE_M = 1.5
@@ -66,21 +68,45 @@ class PeopleTracks:
     groups: NDArray[np.object_]
     roles: tuple[str, ...] = ()         # per name ("" unknown: a resident's space)
 
+    @property
+    def present(self) -> NDArray[np.bool_]:
+        """(T, N): who is there at each time (a person is absent where people.csv has no row of them)."""
+        return np.isfinite(self.x)
+
     def at(self, times: NDArray[np.float64]) -> PeopleTracks:
-        """The tracks at ``times``: interpolated linearly (headings along the shorter turn), groups
-        from the nearest earlier sample; constant beyond the recorded span."""
+        """The tracks at ``times``: interpolated linearly between two samples (headings along the
+        shorter turn), groups from the earlier sample.  A person is at a time only if present at the
+        samples on both sides of it (or at the sample itself): absent (NaN, group "") before they
+        arrive, after they leave and beyond the recorded span.
+
+        Why not hold them at their last place: a replayed person who has left the plaza, or has not
+        entered it yet, is nowhere, and metrics that counted them there measured ghosts."""
+        times = np.asarray(times, dtype=np.float64)
         if len(self.times) == len(times) and np.array_equal(self.times, times):
             return self
-        idx = np.clip(np.searchsorted(self.times, times, side="right") - 1, 0, len(self.times) - 1)
+        shape = (len(times), len(self.names))
+        if len(self.times) == 0 or not self.names:
+            nan = np.full(shape, np.nan)
+            return PeopleTracks(times, self.names, nan, nan.copy(), nan.copy(), nan.copy(), nan.copy(),
+                                np.full(shape, "", dtype=object), self.roles)
+        last = len(self.times) - 1
+        i = np.clip(np.searchsorted(self.times, times, side="right") - 1, 0, last)
+        j = np.minimum(i + 1, last)
+        span = self.times[j] - self.times[i]
+        w = np.where(span > 0, (times - self.times[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
+        on_sample = (times == self.times[i])[:, None]
+        outside = ((times < self.times[0]) | (times > self.times[-1]))[:, None]
 
-        def lerp(values: NDArray[np.float64]) -> NDArray[np.float64]:
-            return np.column_stack([np.interp(times, self.times, values[:, j]) for j in range(len(self.names))]) \
-                if len(self.names) else np.zeros((len(times), 0))
+        def lerp(values: NDArray[np.float64], step: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+            a, b = values[i], values[j]
+            out = np.where(on_sample, a, a + (b - a if step is None else step) * w)   # NaN at either side: absent
+            return np.where(outside, np.nan, out)
 
-        unwrapped = np.unwrap(self.theta, axis=0) if len(self.times) else self.theta
-        return PeopleTracks(np.asarray(times, dtype=float), self.names, lerp(self.x), lerp(self.y),
-                            wrap_angle(lerp(unwrapped)), lerp(self.vx), lerp(self.vy),
-                            self.groups[idx], self.roles)
+        theta = wrap_angle(lerp(self.theta, wrap_angle(self.theta[j] - self.theta[i])))
+        x = lerp(self.x)
+        groups = np.where(np.isfinite(x), self.groups[i], "")
+        return PeopleTracks(times, self.names, x, lerp(self.y), theta, lerp(self.vx), lerp(self.vy),
+                            groups, self.roles)
 
 
 class DynamicMetrics(BaseModel):
@@ -193,7 +219,9 @@ def _nearest_obstacle_force(obstacles: BaseGeometry | None, x: NDArray[np.float6
     if obstacles is None or obstacles.is_empty:
         return np.zeros(np.shape(x))
     flat_x, flat_y = np.ravel(x), np.ravel(y)
-    distance = shapely.distance(obstacles, shapely.points(np.column_stack([flat_x, flat_y])))
+    there = np.isfinite(flat_x) & np.isfinite(flat_y)
+    distance = np.full(flat_x.shape, np.nan)        # NaN: nobody there (a person who is absent)
+    distance[there] = shapely.distance(obstacles, shapely.points(np.column_stack([flat_x[there], flat_y[there]])))
     return (OBSTACLE_FACTOR * np.exp(-(distance - radius_m) / OBSTACLE_SIGMA_M)).reshape(np.shape(x))
 
 
@@ -231,6 +259,19 @@ def _motion(robot: _Robot) -> dict[str, float | None]:
             "avg_jerk_mps3": float(np.abs(jerk).mean()) if jerk.size else None}
 
 
+def _closest(edge: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per sample the smallest of a (T, N) array over the people there (NaN: nobody there)."""
+    return np.fmin.reduce(edge, axis=1)          # fmin skips NaN (and, unlike nanmin, does not warn on an all-NaN row)
+
+
+def _mean_over_present(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per sample the mean of a (T, N) array over the people there; 0 where nobody is (a sum over
+    samples then counts only the samples with people)."""
+    there = np.isfinite(values)
+    count = there.sum(axis=1)
+    return np.where(count > 0, np.where(there, values, 0.0).sum(axis=1) / np.maximum(count, 1), 0.0)
+
+
 def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robot_radius_m: float,
                     obstacles: BaseGeometry | None = None, intimate_level: float | None = 0.8, *,
                     person_radius_m: float = PERSON_RADIUS_M, goal_xy: tuple[float, float] | None = None,
@@ -254,8 +295,9 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
         if base[key] is None:
             missing[key] = "too few samples (speeds need 2, acceleration 3, jerk 4 in one mission)"
     obstacle_on_robot = _nearest_obstacle_force(obstacles, xy[:, 0], xy[:, 1], robot_radius_m)
-    if tracks is None or not tracks.names:
-        why = "no people: no people.csv (--people) or nobody in it"
+    people = tracks.at(robot.t) if tracks is not None and tracks.names else None
+    if people is None or not people.present.any():
+        why = NO_TRACKS if people is None else NOBODY_THERE
         for key in ("min_distance_to_people_m", "max_distance_to_people_m", "avg_distance_to_closest_person_m",
                     "avg_pedestrian_speed_mps", "avg_closest_pedestrian_speed_mps", "obstacle_force_on_people"):
             missing[key] = why
@@ -270,14 +312,13 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
                               obstacle_force_on_people=None, social_work=float(obstacle_on_robot.sum()),
                               robot_on_person_collisions=0, person_on_robot_collisions=0,
                               robot_intimate_entries=0, missing=missing)
-    people = tracks.at(robot.t)
-    pxy = np.stack([people.x, people.y], axis=-1)            # (T, N, 2)
+    pxy = np.stack([people.x, people.y], axis=-1)            # (T, N, 2); NaN: not there
     pv = np.stack([people.vx, people.vy], axis=-1)
     pspeed = np.hypot(people.vx, people.vy)
     centre = np.hypot(pxy[..., 0] - xy[:, None, 0], pxy[..., 1] - xy[:, None, 1])   # (T, N)
     edge = np.maximum(centre - robot_radius_m - person_radius_m, 0.0)   # body edges, clipped: no overlap < 0
     closest_j = np.argmin(np.nan_to_num(centre, nan=np.inf), axis=1)
-    closest = np.nanmin(edge, axis=1)
+    closest = _closest(edge)
     per_person = {name: _bands(edge[:, j]) for j, name in enumerate(people.names)}
     group_distance, per_group = _regrouped(people, xy, robot_radius_m)
     groups = _bands(group_distance)
@@ -307,7 +348,7 @@ def dynamic_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, robo
         avg_closest_pedestrian_speed_mps=float(np.nanmean(pspeed[np.arange(n), closest_j])),
         social_force_on_robot=float(on_robot_mod.sum()), social_force_on_people=float(on_people_mod.sum()),
         obstacle_force_on_robot=float(obstacle_on_robot.sum()),
-        obstacle_force_on_people=float(np.nanmean(obstacle_on_people, axis=1).sum()),
+        obstacle_force_on_people=float(_mean_over_present(obstacle_on_people).sum()),
         social_work=float(work.sum()), robot_on_person_collisions=robot_hits, person_on_robot_collisions=person_hits,
         robot_intimate_entries=entries, missing=missing)
 
@@ -383,21 +424,22 @@ def hunav_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, *,
                    "group_social_space_intrusions", "robot_on_person_collision", "person_on_robot_collision",
                    "avg_pedestrian_velocity", "avg_closest_pedestrian_velocity", "social_force_on_agents",
                    "social_force_on_robot", "social_work", "obstacle_force_on_agents")
-    if tracks is None or not tracks.names:
+    people = tracks.at(robot.t) if tracks is not None and tracks.names else None
+    if people is None or not people.present.any():
         for key in people_keys:
             out[key] = None
-            missing[key] = "no people: no people.csv (--people) or nobody in it"
+            missing[key] = NO_TRACKS if people is None else NOBODY_THERE
         return out, missing
-    people = tracks.at(robot.t)
+    # A sample's agents are the people there (HuNavSim's agents message of that time): NaN = absent.
     pxy = np.stack([people.x, people.y], axis=-1)
     pv = np.stack([people.vx, people.vy], axis=-1)
     pspeed = np.hypot(people.vx, people.vy)
     centre = np.hypot(pxy[..., 0] - xy[:, None, 0], pxy[..., 1] - xy[:, None, 1])
     edge = centre - robot_radius_m - person_radius_m
-    closest = np.maximum(edge.min(axis=1), 0.0)
-    out["avg_distance_to_closest_person"] = float(closest.sum()) / n
-    out["minimum_distance_to_people"] = float(np.maximum(edge, 0.0).min())
-    out["maximum_distance_to_people"] = float((centre - robot_radius_m).max())     # quirk: robot radius only
+    closest = np.maximum(_closest(edge), 0.0)         # NaN: nobody there (HuNavSim's 10000, in no band)
+    out["avg_distance_to_closest_person"] = float(np.nansum(closest)) / n     # samples without anyone add 0
+    out["minimum_distance_to_people"] = float(np.nanmin(np.maximum(edge, 0.0)))
+    out["maximum_distance_to_people"] = float(np.nanmax(centre - robot_radius_m))     # quirk: robot radius only
     for band, lo, hi in (("intimate", -math.inf, 0.45), ("personal", 0.45, 1.2), ("social", 1.2, 3.6)):
         out[f"{band}_space_intrusions"] = 100.0 * float(np.sum((closest >= lo) & (closest < hi))) / n
     group_closest = _first_sample_groups(people, xy, robot_radius_m)
@@ -406,19 +448,24 @@ def hunav_metrics(traj: NDArray[np.float64], tracks: PeopleTracks | None, *,
             100.0 * float(np.sum((group_closest >= lo) & (group_closest < hi))) / n
     robot_hits, person_hits = _hunav_collisions(robot, people, pspeed, edge)
     out["robot_on_person_collision"], out["person_on_robot_collision"] = robot_hits, person_hits
-    out["avg_pedestrian_velocity"] = float(pspeed.sum()) / (n * len(people.names))
-    out["avg_closest_pedestrian_velocity"] = float(pspeed[np.arange(n), np.argmin(edge, axis=1)].mean())
+    first = int(people.present[0].sum())     # quirk: the sum over samples / (N x the people at the first sample)
+    out["avg_pedestrian_velocity"] = float(np.nansum(pspeed)) / (n * first) if first else None
+    if not first:
+        missing["avg_pedestrian_velocity"] = ("nobody at the first sample: HuNavSim divides by the number of "
+                                              "people there (it would divide by zero)")
+    nearest = pspeed[np.arange(n), np.argmin(np.nan_to_num(edge, nan=np.inf), axis=1)]
+    out["avg_closest_pedestrian_velocity"] = float(np.nansum(nearest)) / n     # nobody there: an Agent() of speed 0
     robot_xy = np.broadcast_to(xy[:, None, :], pxy.shape)
     robot_v = np.broadcast_to(robot.velocity[:, None, :], pv.shape)
-    on_robot = social_force(pxy, pv, robot_xy, robot_v, swapped_atan2=True)
-    on_people = social_force(robot_xy, robot_v, pxy, pv, swapped_atan2=True)
+    on_robot = np.nan_to_num(social_force(pxy, pv, robot_xy, robot_v, swapped_atan2=True))
+    on_people = np.nan_to_num(social_force(robot_xy, robot_v, pxy, pv, swapped_atan2=True))
     on_people_mod = np.hypot(on_people[..., 0], on_people[..., 1])
     out["social_force_on_robot"] = float(np.hypot(on_robot[..., 0], on_robot[..., 1]).sum())
     out["social_force_on_agents"] = float(on_people_mod.sum())
     total_on_robot = on_robot.sum(axis=1)
     out["social_work"] = float((np.hypot(total_on_robot[:, 0], total_on_robot[:, 1]) + on_people_mod.sum(axis=1)).sum())
     obstacle_on_people = _nearest_obstacle_force(obstacles, people.x, people.y, person_radius_m)
-    out["obstacle_force_on_agents"] = float(obstacle_on_people.mean(axis=1).sum())
+    out["obstacle_force_on_agents"] = float(_mean_over_present(obstacle_on_people).sum())   # nobody there: skipped
     if obstacles is None or obstacles.is_empty:
         missing["obstacle_force_on_agents"] = "0: no walls or objects given"
     return out, missing
@@ -480,7 +527,7 @@ def _intimate(people: PeopleTracks, xy: NDArray[np.float64], level: float = 0.8)
         role = people.roles[j] if j < len(people.roles) and people.roles[j] in roles.scales else "resident"
         scale = roles.scales[role]
         rest = PersonalSpace.from_params(space_params, scale)
-        for k in range(len(xy)):
+        for k in np.flatnonzero(np.isfinite(people.x[:, j])):      # only where they are
             person = Person(name, float(people.x[k, j]), float(people.y[k, j]), float(people.theta[k, j]),
                             vx=float(people.vx[k, j]), vy=float(people.vy[k, j]))
             walking = oriented(person, motion)
@@ -526,17 +573,6 @@ def tracks_from_rows(rows: Sequence[tuple]) -> PeopleTracks:
         for key, value in zip(("x", "y", "theta", "vx", "vy"), (x, y, theta, vx, vy), strict=True):
             arrays[key][i, j] = value
         groups[i, j] = group
-    # a person missing at some time keeps their last known state (they were out of the file's rows)
-    for key in arrays:
-        values = arrays[key]
-        for j in range(len(names)):
-            column = values[:, j]
-            known = ~np.isnan(column)
-            if known.any() and not known.all():
-                idx = np.where(known, np.arange(len(column)), -1)
-                np.maximum.accumulate(idx, out=idx)
-                first = int(np.argmax(known))
-                idx[idx < 0] = first
-                values[:, j] = column[idx]
+    # a person missing at some time is absent there (NaN): PeopleTracks.present
     return PeopleTracks(np.asarray(times, dtype=float), names, arrays["x"], arrays["y"], arrays["theta"],
                         arrays["vx"], arrays["vy"], groups, tuple(roles[n] for n in names))

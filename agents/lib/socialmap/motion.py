@@ -39,7 +39,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from shapely.geometry.base import BaseGeometry
 
 from agents.lib.socialmap.grid import COST_DTYPE, CostPatch, GridSpec
-from agents.lib.socialmap.personal_space import PersonalSpace, asymmetric_gaussian, support_radius
+from agents.lib.socialmap.personal_space import PersonalSpace, support_radius
 from agents.lib.socialmap.types import Person
 from agents.lib.socialmap.zones import ZoneParams
 
@@ -222,10 +222,13 @@ def prediction_patches(spec: GridSpec, predictions: Sequence[tuple[Prediction, P
                        zones: ZoneParams, social_cost: float, personal_cost: float) -> list[CostPatch]:
     """Cost patches of the predicted positions: each the resting Gaussian (facing the motion)
     times its weight, banded like the zones (never intimate: weights stay below its level)."""
+    from agents.lib.socialmap.banded import banded_gaussian    # numba: only when someone walks
+
     table = np.array([0.0, social_cost, personal_cost, math.inf], dtype=COST_DTYPE)
+    levels = np.array([zones.social, zones.personal, zones.intimate])
     patches = []
     for prediction, space, theta in predictions:
-        for (x, y), w in zip(prediction.points, prediction.weights, strict=True):
+        for (x, y), w in zip(prediction.points.tolist(), prediction.weights.tolist(), strict=True):
             if w <= zones.social:
                 continue
             radius = support_radius(space, zones.social / w) + spec.resolution
@@ -233,9 +236,6 @@ def prediction_patches(spec: GridSpec, predictions: Sequence[tuple[Prediction, P
             if window is None:
                 continue
             rows, cols = window
-            density = w * asymmetric_gaussian(space, float(x), float(y), theta, spec.xs(cols)[np.newaxis, :],
-                                              spec.ys(rows)[:, np.newaxis])
-            index = (density >= zones.social).astype(np.int8) + (density >= zones.personal) + \
-                (density >= zones.intimate)
-            patches.append(CostPatch(rows, cols, table[index]))
+            patches.append(CostPatch(rows, cols, banded_gaussian(space, x, y, theta, spec.xs(cols), spec.ys(rows), w,
+                                                                 levels, table)))
     return patches

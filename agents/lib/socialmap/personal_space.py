@@ -115,15 +115,24 @@ def asymmetric_gaussian(space: PersonalSpace, x0: float, y0: float, theta: float
     dx = np.asarray(xs, dtype=np.float64) - x0
     dy = np.asarray(ys, dtype=np.float64) - y0
     cos_t, sin_t = math.cos(theta), math.sin(theta)
-    # Scaled half-axis coordinates without np.where: k(u) u = a u + b |u| with a, b the mean and
-    # half-difference of the two halves' 1 / (sqrt 2 sigma) (u > 0 gives k_front, u < 0 k_rear).
-    k_front, k_rear = _inv(space.front_m), _inv(space.rear_m)
-    k_left, k_right = _inv(space.left_m), _inv(space.right_m)
+    a_u, b_u, a_v, b_v = half_axis_factors(space)
     u = dx * cos_t + dy * sin_t
     v = dy * cos_t - dx * sin_t
-    su = u * (0.5 * (k_front + k_rear)) + np.abs(u) * (0.5 * (k_front - k_rear))
-    sv = v * (0.5 * (k_left + k_right)) + np.abs(v) * (0.5 * (k_left - k_right))
+    su = u * a_u + np.abs(u) * b_u
+    sv = v * a_v + np.abs(v) * b_v
     return np.exp(-(su * su + sv * sv))
+
+
+def half_axis_factors(space: PersonalSpace) -> tuple[float, float, float, float]:
+    """(a_u, b_u, a_v, b_v): the scaled half-axis coordinates are su = a_u u + b_u |u| along the
+    heading and sv = a_v v + b_v |v| to the left, g = exp(-(su^2 + sv^2)).
+
+    Why this form (no np.where): k(u) u = a u + b |u| with a, b the mean and half-difference of the
+    two halves' 1 / (sqrt 2 sigma) (u > 0 gives k_front, u < 0 k_rear).  One definition for
+    asymmetric_gaussian and the compiled banding (banded.py)."""
+    k_front, k_rear = _inv(space.front_m), _inv(space.rear_m)
+    k_left, k_right = _inv(space.left_m), _inv(space.right_m)
+    return (0.5 * (k_front + k_rear), 0.5 * (k_front - k_rear), 0.5 * (k_left + k_right), 0.5 * (k_left - k_right))
 
 
 def _inv(sigma_m: float) -> float:
