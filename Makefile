@@ -25,16 +25,20 @@ demo: $(STAMP)
 # test FILE per worker at a time (--dist loadfile: a module's fixture run stays in one process):
 # those start routers and agent processes, which use ~1.2 cores on average, so two files side by
 # side fill both cores; measured on the 2-core machine, 505 s instead of 684 s serially, every test
-# passing (their timeouts are bounds on a loaded machine, not speed goals).  Both phases always
-# run; make fails if either failed.
+# passing (their timeouts are bounds on a loaded machine, not speed goals).  The files go out longest
+# first (tests/conftest.py LONGEST_FIRST; --no-loadscope-reorder keeps that order, where xdist would
+# send the files with the most tests first and leave the long single-launch files to one worker at
+# the end).  Both phases print their 15 slowest tests, so CI's log shows where the time goes.
+# Both phases always run; make fails if either failed.
 # Before them: import layers, lint (ruff, ~0.2 s) and types (mypy on the library layers; ~10 s cold,
 # under 1 s warm from its cache in .venv/mypy_cache). Rules and scope: pyproject.toml, docs/code_health.md.
 test: $(STAMP)
 	$(BIN)/lint-imports
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(BIN)/python -m pytest -q -p no:cacheprovider -n 2 tests/unit; unit=$$?; \
-	$(BIN)/python -m pytest -q -p no:cacheprovider -n 2 --dist loadfile tests --ignore=tests/unit; rest=$$?; \
+	$(BIN)/python -m pytest -q -p no:cacheprovider --durations=15 -n 2 tests/unit; unit=$$?; \
+	$(BIN)/python -m pytest -q -p no:cacheprovider --durations=15 -n 2 --dist loadfile --no-loadscope-reorder \
+		tests --ignore=tests/unit; rest=$$?; \
 	test $$unit -eq 0 && test $$rest -eq 0
 
 bench: $(STAMP)

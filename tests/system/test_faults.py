@@ -5,7 +5,7 @@ plus an agenda change: the launcher restarts each process, the restarted replica
 the replicated state, the missions complete, nothing acknowledged is lost, and the recording of
 every process (killed ones included) reads back with Rerun's own API.  A second, shorter run
 drives the randomized schedule of `chronav chaos`.  The pure parts of tools/chaos/command.py (schedules,
-the lost-write check) are tested first, offline.
+the lost-write check) are tested offline, on the same schedule: tests/unit/test_chaos_schedule.py.
 """
 
 from __future__ import annotations
@@ -20,99 +20,17 @@ import pytest
 
 from agents.lib.metrics.metrics import read_trajectory_csv
 from dsr import DSRGraph
-from agents.world.scene_world import load_world
 from scenes.loader import load_scene
 from scenes.clock import parse_clock
+from tests.support import REPO_ROOT
 from tests.system.launch_helpers import run_json
-from tools.chaos.command import ChaosError, Fault, load_schedule, lost_writes, random_schedule
 from tools.launch import agent_names
 
 MISSIONS = ("m0930", "m1045", "m1115", "m1315")
-EXTRA = {"op": "add", "activity": {"id": "faults_extra", "name": "Stretching", "object": "stretcher",
-                                   "start": "13:00", "end": "13:40"}}
-# Two kills per mission, each fault waits for the previous one to converge.
-KILLS: list[dict[str, Any]] = [
-    {"action": "kill", "target": "sim_robot", "mission": "m0930", "at_s": 0.5, "driving": True},
-    {"action": "kill", "target": "human_observer", "mission": "m0930", "at_s": 0.5},
-    {"action": "agenda", "target": "agenda", "mission": "m1045", "at_s": 0.3, "change": EXTRA},
-    {"action": "kill", "target": "agenda", "mission": "m1045", "at_s": 0.3},
-    {"action": "kill", "target": "object_recognition", "mission": "m1115", "at_s": 0.5},
-    {"action": "kill", "target": "social_navigation", "mission": "m1115", "at_s": 0.5, "driving": True},
-    {"action": "kill", "target": "router", "mission": "m1315", "at_s": 0.5, "driving": True},
-    {"action": "kill", "target": "executive", "mission": "m1315", "at_s": 0.5},
-]
-
-
-# ----------------------------------------------------------------------------- offline parts
-def test_random_schedules_are_reproducible_and_hit_every_mission() -> None:
-    loaded = load_world("icra_usecase")
-    first = random_schedule(loaded, seed=3, faults=12, duration_s=3)
-    assert first == random_schedule(loaded, seed=3, faults=12, duration_s=3)
-    assert first != random_schedule(loaded, seed=4, faults=12, duration_s=3)
-    assert [f.mission for f in first] == [m for m in MISSIONS for _ in range(3)]  # in mission order
-    for mission in MISSIONS:
-        times = [f.at_s for f in first if f.mission == mission]
-        assert times == sorted(times) and all(0 <= t <= 3 for t in times)
-    assert {f.action for f in first} == {"kill", "stop", "agenda"}
-    for fault in first:
-        if fault.action == "agenda":
-            assert json.loads(fault.change or "")["op"] in ("add", "move", "cancel")
-        if fault.action == "stop":
-            assert 0.3 <= fault.hold_s <= 3.0
-
-
-def test_schedule_files_round_trip_and_name_bad_faults(tmp_path: Path) -> None:
-    good = tmp_path / "good.json"
-    good.write_text(json.dumps(KILLS))
-    faults = load_schedule(good)
-    assert [f.target for f in faults] == [k["target"] for k in KILLS]
-    assert json.loads(faults[2].change or "") == EXTRA
-    bad = tmp_path / "bad.json"
-    bad.write_text(json.dumps([KILLS[0], {"action": "kill", "target": "kernel"}]))
-    with pytest.raises(ChaosError, match=r"bad.json: fault 1: .*kernel"):
-        load_schedule(bad)
-    bad.write_text('[{"action": "kill", "target": "router", "at": 3}]')
-    with pytest.raises(ChaosError, match="fault 0"):
-        load_schedule(bad)
-    with pytest.raises(ChaosError, match="needs a change"):
-        Fault("agenda", "agenda")
-
-
-def _final_graph(loaded: Any, changes: list[str]) -> DSRGraph:
-    """What a healthy run leaves: missions done, the agenda log replayed into activity nodes."""
-    from agents.lib.agenda.changes import apply_change, parse_change
-
-    graph = DSRGraph("test", graph="faults")
-    day = loaded.agenda
-    for text in changes:
-        day = apply_change(day, parse_change(text), known_objects={o.name for o in loaded.scene.objects})
-    graph.insert_node("agenda", "agenda", {"changes": changes, "applied": []})
-    for activity in day.activities:
-        graph.insert_node("activity", f"activity/{activity.id}", {
-            "activity_id": activity.id, "object": activity.object, "start_s": activity.start_s,
-            "end_s": activity.end_s, "state": "cancelled" if activity.cancelled else "scheduled"})
-    for mission in MISSIONS:
-        graph.insert_node("mission", f"mission/{mission}", {"mission_id": mission, "state": "done"})
-    return graph
-
-
-def test_lost_writes_finds_each_kind_of_loss() -> None:
-    loaded = load_world("icra_usecase")
-    change = json.dumps(EXTRA)
-    graph = _final_graph(loaded, [change])
-    assert lost_writes(graph, loaded, set(MISSIONS), [change]) == []
-    graph.update_node(graph.get_node_by_name("mission/m1045").id, {"state": "active"})
-    graph.update_node(graph.get_node_by_name("activity/serious_game").id, {"start_s": 0.0})
-    graph.delete_node(graph.get_node_by_name("activity/faults_extra").id)
-    cancel = json.dumps({"op": "cancel", "id": "table_therapy"})
-    lost = lost_writes(graph, loaded, set(MISSIONS), [change, cancel])
-    assert any("m1045 was done" in line for line in lost)
-    assert any("serious_game" in line and "differs" in line for line in lost)
-    assert any("faults_extra is missing" in line for line in lost)
-    assert any("table_therapy" in line and "0 times" in line for line in lost)
-    twice = _final_graph(loaded, [change])
-    twice.update_node(twice.get_node_by_name("agenda").id, {"changes": [change, change]})
-    assert any("2 times" in line for line in lost_writes(twice, loaded, set(), [change]))
+#: Two kills per mission and an agenda change, each fault waiting for the previous one to converge
+#: (the schedule file a user passes to `chronav chaos --schedule`).
+SCHEDULE = REPO_ROOT / "tests" / "data" / "chaos_kills.json"
+KILLS: list[dict[str, Any]] = json.loads(SCHEDULE.read_text())
 
 
 # ----------------------------------------------------------------------------- the system
@@ -126,9 +44,7 @@ slow = pytest.mark.slow
 @pytest.fixture(scope="module")
 def kill_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     work = tmp_path_factory.mktemp("faults")
-    schedule = work / "kills.json"
-    schedule.write_text(json.dumps(KILLS))
-    return _chaos(["icra_usecase", "--schedule", str(schedule), "--runs-dir", str(work)], work / "chaos.log", 240)
+    return _chaos(["icra_usecase", "--schedule", str(SCHEDULE), "--runs-dir", str(work)], work / "chaos.log", 240)
 
 
 @slow
