@@ -42,7 +42,9 @@ def test_a_ros_robot_that_never_sends_odom_is_the_reason_in_the_summary(procs: P
     procs.spawn(["-m", "dsr.router", "--listen", endpoint], log_path=tmp_path / "ros_router.log")   # rmw_zenohd's stand-in
     wait_until(lambda: port_open(port), 30, message="the ROS-side router")
     runs, log = tmp_path / "runs", tmp_path / "launch.log"
-    proc = procs.spawn(["-m", "tools.cli", "launch", str(SCENE), "--robot", "ros", "--no-record", "--timeout", "20"],
+    # 45 s: the bridge reports a silent robot 5 s after it joins, and the progress line comes every 5 s;
+    # on a loaded machine the agents take many seconds to start (20 s was too short there)
+    proc = procs.spawn(["-m", "tools.cli", "launch", str(SCENE), "--robot", "ros", "--no-record", "--timeout", "45"],
                        env={"CHRONAV_RUNS": str(runs), "CHRONAV_ROS_ENDPOINT": endpoint}, log_path=log)
     proc.wait(timeout=150)
     text = log.read_text()
