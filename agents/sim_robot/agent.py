@@ -182,13 +182,13 @@ class SimRobotAgent(Agent):
         elif mode == ClockMode.STARTING:
             return
         elif mode == ClockMode.BUSY:
-            dt = self.clock.busy_step(wall_now, self.now_s)
+            dt = min(self.clock.busy_step(wall_now, self.now_s), end_s - self.now_s)
             if dt > 0:
                 self._advance(dt, Velocity())
         else:
             if self._holding_for_agenda(wall_now):
                 return
-            event = self._next_event()
+            event = min(self._next_event(), end_s)     # the day's end is the last event: no step runs past it
             target = self.clock.idle_skip(self.now_s, self._next_deadline(), end_s, event)
             if target is not None:
                 # In pieces (ClockPace.idle_skip): the people walk through every skipped second
