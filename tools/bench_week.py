@@ -17,6 +17,12 @@ Prints ONE flat JSON object:
 
 Run: ``.venv/bin/python tools/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
 (a full week takes minutes of both cores; ``--days 2`` is the short variant).
+
+``--soak-hours H`` runs the real-time soak instead (tools/soak.py): the scene's first day launched
+as processes at rate 1 for H hours of wall time, each agent's RSS sampled every minute, and its
+slope after a warm-up (``--soak-warmup-min``, default 10) fitted by least squares.  Its JSON:
+``soak_hours``, ``soak_mem_slope_mb_per_h_max`` (goal: < 1 MB/h for every agent),
+``soak_mem_slope_mb_per_h_<agent>``, ``restarts_total``.  The scene defaults to center_day there.
 """
 
 from __future__ import annotations
@@ -87,12 +93,21 @@ def run(scene: str, days: int | None, mode: str, keep: Path | None) -> dict[str,
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scene", default="center_week")
+    parser.add_argument("--scene", default=None, help="default: center_week, or center_day for --soak-hours")
     parser.add_argument("--days", type=int, default=None, help="run this many days (default: the scene's, 7)")
     parser.add_argument("--mode", choices=("in-process", "launch"), default="in-process")
     parser.add_argument("--keep", type=Path, default=None, help="run in this directory and keep the recordings")
+    parser.add_argument("--soak-hours", type=float, default=None, help="run the real-time soak for this many hours")
+    parser.add_argument("--soak-warmup-min", type=float, default=10.0, help="minutes of the soak not fitted")
+    parser.add_argument("--soak-sample-s", type=float, default=60.0, help="seconds between two memory samples")
     args = parser.parse_args()
-    print(json.dumps(run(args.scene, args.days, args.mode, args.keep)))
+    if args.soak_hours is not None:
+        from tools.soak import run_soak
+
+        print(json.dumps(run_soak(args.scene or "center_day", args.soak_hours, warmup_s=args.soak_warmup_min * 60.0,
+                                  sample_every_s=args.soak_sample_s, workdir=args.keep)))
+        return
+    print(json.dumps(run(args.scene or "center_week", args.days, args.mode, args.keep)))
 
 
 if __name__ == "__main__":
