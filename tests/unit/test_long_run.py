@@ -6,9 +6,11 @@ The runs are in-process on tests/data/week_tiny.yaml (two days of one room, a fe
 
 from __future__ import annotations
 
+import csv
 import datetime as dt
 import errno
 import json
+import math
 import os
 from pathlib import Path
 
@@ -49,9 +51,9 @@ def test_each_day_has_the_agenda_missions_and_changes_of_its_date() -> None:
     loaded = load_scene(WEEK)
     monday = day_scene_data(loaded.located.data, 1, WEEK.parent, first=loaded.scene.clock.date)
     tuesday = day_scene_data(loaded.located.data, 2, WEEK.parent, first=loaded.scene.clock.date, seed_offset=1)
-    assert [a["id"] for a in monday["agenda"]] == ["game"] and [m["id"] for m in monday["missions"]] == ["cross"]
+    assert [a["id"] for a in monday["agenda"]] == ["game"] and [m["id"] for m in monday["missions"]] == ["cross", "dock"]
     assert monday["agenda_changes"] == [] and tuesday["agenda_changes"][0]["id"] == "music"
-    assert [a["id"] for a in tuesday["agenda"]] == ["music"] and [m["id"] for m in tuesday["missions"]] == ["back"]
+    assert [a["id"] for a in tuesday["agenda"]] == ["music"] and [m["id"] for m in tuesday["missions"]] == ["back", "dock"]
     assert tuesday["clock"]["date"] == dt.date(2026, 12, 1) and "days" not in tuesday["clock"]
     assert tuesday["crowd"]["seed"] == 1 and "weekdays" not in tuesday["agenda"][0]
     # The scene placed on its second day: Tuesday's agenda, the change that names day 2.
@@ -86,8 +88,8 @@ def test_two_days_in_process_leave_a_day_each_and_their_accounting(tmp_path: Pat
     assert summary["ok"] and summary["days_planned"] == 2 and summary["restarts_total"] == 0
     monday, tuesday = summary["days"]
     assert (monday["weekday"], tuesday["weekday"], tuesday["offset_s"]) == ("mon", "tue", 86400.0)
-    assert list(monday["missions"]) == ["cross"] and list(tuesday["missions"]) == ["back"]
-    assert tuesday["missions"]["back"]["state"] == "done" and tuesday["missions_summary"]["done"] == 1
+    assert list(monday["missions"]) == ["cross", "dock"] and list(tuesday["missions"]) == ["back", "dock"]
+    assert tuesday["missions"]["back"]["state"] == "done" and tuesday["missions_summary"]["done"] == 2
     for day in (monday, tuesday):
         assert day["agents"]["in_process"]["rss_mb"] > 0 and day["agents"]["in_process"]["cpu_s"] > 0
         assert day["dsr"]["nodes"] > 0 and day["dsr"]["edges"] > 0 and day["dsr"]["tombstones"] >= 0
@@ -103,6 +105,12 @@ def test_two_days_in_process_leave_a_day_each_and_their_accounting(tmp_path: Pat
     assert recording_of_day(Path(summary["index"]), None) == run_dir / tuesday["rrd"]
     assert len(list(run_dir.glob("*.rrd"))) == 1
     assert [p.name for p in run_dir.iterdir() if p.is_dir() and p.name != "days"] == [tuesday["run_dir"]]
+    # Each day ends with the robot back at its dock for the night (the scene's robot pose).
+    assert monday["missions"]["dock"]["state"] == tuesday["missions"]["dock"]["state"] == "done"
+    assert tuesday["missions"]["dock"]["started_s"] >= tuesday["missions"]["back"]["finished_s"]
+    with (run_dir / tuesday["run_dir"] / "trajectory.csv").open() as handle:
+        last = list(csv.DictReader(handle))[-1]
+    assert math.dist((float(last["x"]), float(last["y"])), (0.8, 1.2)) < 0.5, last
 
 
 def test_a_day_whose_agenda_cannot_be_loaded_is_refused_and_the_run_goes_on(tmp_path: Path,
@@ -166,7 +174,7 @@ def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
     assert [(d["date"], d["status"], list(d["missions"])) for d in summary["days"]] == [
-        ("2026-11-25", "ok", ["cross"]), ("2026-11-26", "ok", ["cross"])]
+        ("2026-11-25", "ok", ["cross", "dock"]), ("2026-11-26", "ok", ["cross", "dock"])]
     refused = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "0"])
     assert refused.exit_code == 2 and "--days" in refused.output
 
