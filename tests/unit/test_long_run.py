@@ -170,13 +170,38 @@ def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
     tiny = WEEK.parent / "eval_tiny.yaml"
-    result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "2", "--no-record", "--json"])
+    result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "3", "--no-record", "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
     assert [(d["date"], d["status"], list(d["missions"])) for d in summary["days"]] == [
-        ("2026-11-25", "ok", ["cross", "dock"]), ("2026-11-26", "ok", ["cross", "dock"])]
+        ("2026-11-25", "ok", ["cross", "dock"]), ("2026-11-26", "ok", ["cross", "dock"]),
+        ("2026-11-27", "ok", ["cross", "dock"])]
+    # Bounded by design: each day's graph is the day's world, nothing carried over from the days before.
+    assert summary["days"][0]["dsr"] == summary["days"][1]["dsr"] == summary["days"][2]["dsr"]
     refused = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "0"])
     assert refused.exit_code == 2 and "--days" in refused.output
+
+
+def test_an_in_process_run_forgets_tombstones_as_it_goes(tmp_path: Path) -> None:
+    """In-process the agents share one graph, the only replica: the run forgets removals every 50
+    rounds (tools/inprocess.py), so a day's tombstones do not pile up (center_week's Monday kept
+    323 of them, its Tuesday 426)."""
+    import time
+
+    from tools.inprocess import _InProcessRun
+
+    ticks: list[dict[str, object]] = []
+    run = _InProcessRun(spec=load_scene(WEEK.parent / "eval_tiny.yaml").scene, scene_path=WEEK, run_id="t",
+                        run_dir=tmp_path, record=False, started=time.monotonic(), on_tick=ticks.append)
+    for day in range(3):                       # a day's churn of people and intentions, three times over
+        for i in range(40):
+            node = run.graph.insert_node("object", f"churn{day}_{i}")
+            run.graph.delete_node(node.id)
+        assert run.graph.tombstones() == 40
+        run.done(49)
+        assert run.graph.tombstones() == 40    # between two rounds of upkeep they are kept
+        run.done(50)
+        assert run.graph.tombstones() == 0 and ticks[-1]["dsr"] == {"nodes": 0, "edges": 0, "tombstones": 0}
 
 
 def test_a_day_scene_points_at_the_scene_folders_files() -> None:
