@@ -13,7 +13,10 @@ Prints ONE flat JSON object:
   graph, so this measures a day's state, not an accumulation;
 - ``rrd_mb_per_day`` (goal: <= 20 for center_day's crowd), ``rrd_mb_max_day``,
   ``bytes_written_mb_per_day`` (recording, people.csv, trajectory, logs);
-- ``missions``, ``missions_done``, ``days_ok``.
+- ``dsr_<nodes|edges|tombstones>_growth_day<N>_over_day1``: each of the three;
+- ``missions``, ``missions_done``, ``days_ok``;
+- ``cpu_min`` (this process's CPU time: in-process, the week's work, whatever else loads the
+  machine) and ``load_avg_1min_end``.
 
 Run: ``.venv/bin/python tools/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
 (a full week takes minutes of both cores; ``--days 2`` is the short variant).
@@ -58,8 +61,9 @@ def summarize(days: list[dict[str, Any]], wall_s: float, planned: int) -> dict[s
         shared = set(first["agents"]) & set(last["agents"])
         rss = [_ratio(last["agents"][a]["rss_mb"], first["agents"][a]["rss_mb"]) for a in shared]
         report[f"rss_growth_day{last['day']}_over_day1"] = max(rss) if rss else None
-        report[f"dsr_growth_day{last['day']}_over_day1"] = max(
-            _ratio(last["dsr"].get(k, 0), first["dsr"].get(k, 0)) for k in ("nodes", "edges", "tombstones"))
+        growth = {k: _ratio(last["dsr"].get(k, 0), first["dsr"].get(k, 0)) for k in ("nodes", "edges", "tombstones")}
+        report[f"dsr_growth_day{last['day']}_over_day1"] = max(growth.values())
+        report.update({f"dsr_{k}_growth_day{last['day']}_over_day1": v for k, v in growth.items()})
         report.update({f"rss_mb_day{d['day']}_max_agent": max(a["rss_mb"] for a in d["agents"].values())
                        for d in ran if d["agents"]})
         report.update({f"dsr_nodes_day{d['day']}": d["dsr"].get("nodes") for d in ran})
@@ -80,12 +84,14 @@ def run(scene: str, days: int | None, mode: str, keep: Path | None) -> dict[str,
     os.environ.setdefault("RERUN", "on")    # the recording's size per day is one of the numbers
     workdir = keep or Path(tempfile.mkdtemp(prefix="chronav-bench-week-"))
     workdir.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     result = run_days(scene, days=days, in_process=mode == "in-process", runs_dir=workdir, timeout_s=3000.0)
-    wall = time.perf_counter() - started
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
     report: dict[str, object] = {"scene": result.scene, "mode": mode, "outcome": result.outcome,
                                  **summarize(result.days, wall, result.planned_days),
-                                 "restarts_total": len(result.restart_log)}
+                                 "restarts_total": len(result.restart_log),
+                                 # this process's CPU: in-process, the whole week's work, whatever else loads the machine
+                                 "cpu_min": round(cpu / 60.0, 2), "load_avg_1min_end": round(os.getloadavg()[0], 2)}
     if result.error:
         report["error"] = result.error
     return report
