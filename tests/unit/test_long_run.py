@@ -335,9 +335,9 @@ def test_scene_day_writes_one_day_of_a_scene_for_the_offline_commands(tmp_path: 
     out = tmp_path / "tuesday.yaml"
     result = CliRunner().invoke(app, ["scene", "day", str(WEEK), "2", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert "2026-12-01 (1 activities, 1 missions)" in result.output
+    assert "2026-12-01 (1 activities, 2 missions)" in result.output
     world = load_world(out)
-    assert [m.id for m in world.scene.missions] == ["back"] and [a.id for a in world.agenda.activities] == ["music"]
+    assert [m.id for m in world.scene.missions] == ["back", "dock"] and [a.id for a in world.agenda.activities] == ["music"]
     missing = CliRunner().invoke(app, ["scene", "day", str(tmp_path / "nope.yaml"), "2", "--out", str(out)])
     assert missing.exit_code == 1 and "no such scene file" in missing.output
 
