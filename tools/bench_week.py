@@ -19,7 +19,8 @@ Prints ONE flat JSON object:
   machine) and ``load_avg_1min_end``.
 
 Run: ``.venv/bin/python tools/bench_week.py [--days N] [--mode in-process|launch] [--keep DIR]``
-(a full week takes minutes of both cores; ``--days 2`` is the short variant).
+(a full week takes minutes of both cores; ``--days 2`` is the short variant; ``--no-record``
+separates chronav's RSS growth from the recording's).
 
 ``--soak-hours H`` runs the real-time soak instead (tools/soak.py): the scene's first day launched
 as processes at rate 1 for H hours of wall time, each agent's RSS sampled every minute, and its
@@ -78,16 +79,17 @@ def summarize(days: list[dict[str, Any]], wall_s: float, planned: int) -> dict[s
     return report
 
 
-def run(scene: str, days: int | None, mode: str, keep: Path | None) -> dict[str, object]:
+def run(scene: str, days: int | None, mode: str, keep: Path | None, record: bool = True) -> dict[str, object]:
     from tools.week import run_days
 
     os.environ.setdefault("RERUN", "on")    # the recording's size per day is one of the numbers
     workdir = keep or Path(tempfile.mkdtemp(prefix="chronav-bench-week-"))
     workdir.mkdir(parents=True, exist_ok=True)
     started, cpu_started = time.perf_counter(), time.process_time()
-    result = run_days(scene, days=days, in_process=mode == "in-process", runs_dir=workdir, timeout_s=3000.0)
+    result = run_days(scene, days=days, in_process=mode == "in-process", runs_dir=workdir, timeout_s=3000.0,
+                      record=record)
     wall, cpu = time.perf_counter() - started, time.process_time() - cpu_started
-    report: dict[str, object] = {"scene": result.scene, "mode": mode, "outcome": result.outcome,
+    report: dict[str, object] = {"scene": result.scene, "mode": mode, "outcome": result.outcome, "record": record,
                                  **summarize(result.days, wall, result.planned_days),
                                  "restarts_total": len(result.restart_log),
                                  # this process's CPU: in-process, the whole week's work, whatever else loads the machine
@@ -103,6 +105,8 @@ def main() -> None:
     parser.add_argument("--days", type=int, default=None, help="run this many days (default: the scene's, 7)")
     parser.add_argument("--mode", choices=("in-process", "launch"), default="in-process")
     parser.add_argument("--keep", type=Path, default=None, help="run in this directory and keep the recordings")
+    parser.add_argument("--no-record", action="store_true",
+                        help="no recording: the RSS growth without the Rerun SDK's (docs/long_runs.md)")
     parser.add_argument("--soak-hours", type=float, default=None, help="run the real-time soak for this many hours")
     parser.add_argument("--soak-warmup-min", type=float, default=10.0, help="minutes of the soak not fitted")
     parser.add_argument("--soak-sample-s", type=float, default=60.0, help="seconds between two memory samples")
@@ -113,7 +117,7 @@ def main() -> None:
         print(json.dumps(run_soak(args.scene or "center_day", args.soak_hours, warmup_s=args.soak_warmup_min * 60.0,
                                   sample_every_s=args.soak_sample_s, workdir=args.keep)))
         return
-    print(json.dumps(run(args.scene or "center_week", args.days, args.mode, args.keep)))
+    print(json.dumps(run(args.scene or "center_week", args.days, args.mode, args.keep, record=not args.no_record)))
 
 
 if __name__ == "__main__":
