@@ -561,10 +561,12 @@ class Replica:
         return bool(info.routers_zid() or info.peers_zid())
 
     def maintain(self) -> None:
-        """One round of upkeep: digest out, tombstones compacted (also called by tests)."""
-        if self.graph.read_only:
-            return
-        self.publish_digest()
+        """One round of upkeep: digest out, tombstones compacted (also called by tests).
+
+        A read-only replica publishes no digest (nobody waits for it) but forgets tombstones like
+        any member: a watcher that lives all day (the launcher) otherwise kept every removal."""
+        if not self.graph.read_only:
+            self.publish_digest()
         forgotten = self.graph.compact(self.members.acked)
         self.stats.compacted += forgotten
         self.stats.tombstones = self.graph.tombstones()

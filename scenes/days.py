@@ -33,6 +33,8 @@ WEEKDAYS: tuple[str, ...] = ("mon", "tue", "wed", "thu", "fri", "sat", "sun")
 _FULL = ("monday", "tuesday", "wednesday", "thursday", "friday", "saturday", "sunday")
 #: a scene spans at most a year of days (a run of a year still rotates its recording per day)
 MAX_DAYS = 366
+#: the id of the mission that takes the robot back to its dock at the end of each day of a run of days
+DOCK_MISSION = "dock"
 
 
 def parse_weekday(value: object) -> str:
@@ -126,7 +128,8 @@ def day_scene_data(data: Mapping[str, Any], number: int, scene_dir: Path, *, fir
     date; scripted changes those naming that day; relative files (``agenda_file``, ``map``) become
     absolute (the day's scene is written elsewhere); the crowd's seed moves by ``seed_offset`` so
     days differ but a week is reproducible; the name says the day.  Everything else is as written:
-    the robot starts the day at its pose (its dock), the people at theirs."""
+    the robot starts the day at its pose (its dock), the people at theirs, and a day with missions
+    ends with the robot driving back there (:func:`dock_mission`)."""
     date = first + dt.timedelta(days=number - 1)
     out = dict(data)
     clock = dict(out.get("clock") or {})
@@ -136,6 +139,9 @@ def day_scene_data(data: Mapping[str, Any], number: int, scene_dir: Path, *, fir
     out["name"] = f"{data.get('name', 'scene')}-day{number}"
     out["agenda"] = _items_on_day(data.get("agenda"), date)
     out["missions"] = _items_on_day(data.get("missions"), date)
+    dock = dock_mission(out)
+    if dock is not None:
+        out["missions"].append(dock)
     out["agenda_changes"] = _changes_on_day(data.get("agenda_changes"), number, first)
     out["door_changes"] = _changes_on_day(data.get("door_changes"), number, first)
     if isinstance(out.get("agenda_file"), str):
@@ -149,3 +155,28 @@ def day_scene_data(data: Mapping[str, Any], number: int, scene_dir: Path, *, fir
         crowd["seed"] = (int(crowd.get("seed", 0)) + seed_offset) % (2**31 - 1)
         out["crowd"] = crowd
     return out
+
+
+def dock_mission(day: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The day's last mission: the robot back to its dock (the scene's robot pose) for the night.
+
+    Why a mission: the executive then plans, drives and reports it like any other (result.json
+    counts it, a blocked dock fails it with the reason), and the day ends once it is over, so the
+    next day's start at the dock is where the robot really is.  It is due one second after the
+    day's last mission (missions run one at a time, in the order they are due), so it waits for
+    that one to end.  None for a day without missions (the robot never left the dock), a scene
+    without a robot pose, or mission times that are not clock times (the scene's check says why);
+    a scene that already has a mission ``dock`` that day keeps it as its own."""
+    from scenes.clock import format_clock, parse_clock
+
+    missions = [m for m in day.get("missions") or [] if isinstance(m, Mapping)]
+    robot = day.get("robot")
+    pose = robot.get("pose") if isinstance(robot, Mapping) else None
+    if not missions or pose is None or any(m.get("id") == DOCK_MISSION for m in missions):
+        return None
+    try:
+        last = max(parse_clock(str(m.get("time"))) for m in missions)
+    except ValueError:
+        return None
+    return {"id": DOCK_MISSION, "time": format_clock(last + 1.0), "goal": {"pose": pose},
+            "description": "back to the dock for the night"}

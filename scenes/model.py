@@ -201,6 +201,9 @@ class PersonSpec(Strict):
     track: WholeNumber | None = Field(None, ge=0, description="replay: the person's id in the recording")
     recording: Name | None = Field(None, description="replay: which of the scene's recordings (default: the only one)")
     replay: Replay | None = Field(None, description="replay: exact or reactive (default: the crowd's)")
+    hours: tuple[ClockTime, ClockTime] | None = Field(
+        None, description="in the building from the first time to the second (a shift, a visit): they come in at "
+                          "their pose, walk back there at the end and leave (default: all day)")
 
     @model_validator(mode="after")
     def _routine_fields(self) -> PersonSpec:
@@ -218,6 +221,12 @@ class PersonSpec(Strict):
         if self.dwell is not None and not 0 < self.dwell[0] <= self.dwell[1]:
             raise ValueError(f"dwell [{self.dwell[0]:g}, {self.dwell[1]:g}] s: the minimum must be above 0 and "
                              "not above the maximum")
+        if self.hours is not None and self.routine in ("stay", "replay"):
+            raise ValueError(f"hours belong to a routine that walks (wander, staff or visitor); routine "
+                             f"{self.routine!r} keeps its {'pose or waypoints' if self.routine == 'stay' else 'record'}")
+        if self.hours is not None and parse_clock(self.hours[1]) <= parse_clock(self.hours[0]):
+            raise ValueError(f"hours [{self.hours[0]}, {self.hours[1]}]: the time they leave must be after the time "
+                             "they arrive")
         if not moving and (self.rooms or self.home or self.speed is not None or self.dwell or self.escort):
             raise ValueError("home, rooms, speed, dwell and escort describe a routine that walks; "
                              "this person has routine 'stay' (add routine: wander, staff or visitor)")

@@ -79,7 +79,8 @@ def walker_of(scene: Scene, person: PersonSpec,
     dwell = tuple(person.dwell) if person.dwell is not None else ROUTINE_DWELL_S[person.routine]
     return Walker(person.name, person.role, person.routine, pose, home=home, rooms=tuple(person.rooms),
                   speed_mps=float(speed), walker=person.walker, escort=person.escort,
-                  dwell_s=(float(dwell[0]), float(dwell[1])), visits=person.visits)
+                  dwell_s=(float(dwell[0]), float(dwell[1])), visits=person.visits,
+                  hours=None if person.hours is None else (parse_clock(person.hours[0]), parse_clock(person.hours[1])))
 
 
 def _pose(state: object) -> tuple[float, float, float]:

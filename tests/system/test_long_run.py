@@ -32,3 +32,34 @@ def test_two_days_launched_as_processes_rotate_and_account_per_day(tmp_path: Pat
         logs = run_dir / entry["run_dir"] / "logs"
         assert {f"{name}.log" for name in agent_names()} <= {p.name for p in logs.iterdir()}
         assert json.loads((run_dir / entry["run_dir"] / "result.json").read_text())["restart_log"] == []
+
+
+def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_path: Path) -> None:
+    """The 2-hour soak's short variant (`tools/bench/bench_week.py --soak-hours`, tools/soak.py): ~40 s of
+    week_tiny's first day as processes at rate 1; every agent sampled, a slope each, the run ended
+    by the soak's own timeout and every process stopped."""
+    import psutil
+
+    from tests.support import ProcessGroup
+
+    group = ProcessGroup()
+    log = tmp_path / "soak.log"
+    try:
+        proc = group.spawn(["tools/bench/bench_week.py", "--scene", str(WEEK), "--soak-hours", "0.011",
+                            "--soak-warmup-min", "0.1", "--soak-sample-s", "2", "--keep", str(tmp_path / "soak")],
+                           log_path=log)
+        proc.wait(timeout=240)
+    finally:
+        group.close()
+    line = next((ln for ln in reversed(log.read_text().splitlines()) if ln.startswith("{")), None)
+    assert proc.returncode == 0 and line is not None, log.read_text()[-3000:]
+    report = json.loads(line)
+    assert report["soak_ok"] and report["day_status"] == "timed_out" and report["restarts_total"] == 0, report
+    assert report["soak_hours"] >= 0.011
+    for name in AGENTS:
+        assert isinstance(report[f"soak_mem_slope_mb_per_h_{name}"], float), (name, report)
+        assert report[f"soak_processes_{name}"] == 1
+    assert report["soak_mem_slope_mb_per_h_max"] == max(
+        v for k, v in report.items() if k.startswith("soak_mem_slope_mb_per_h_") and k[24:] in (*AGENTS, "router"))
+    pids = json.loads(next(Path(report["run_dir"]).rglob("pids.json")).read_text())
+    assert set(AGENTS) <= set(pids) and not any(psutil.pid_exists(p) for p in pids.values() if p), pids

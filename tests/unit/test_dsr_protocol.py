@@ -530,3 +530,26 @@ def test_the_admission_api_says_whether_a_message_was_merged():
     assert other.admit_state(wire.state_key("chronav", "guard"), b"{}") is False
     assert other.admit_state(*state_of(guard)) is True
     assert other.graph.state_equals(guard.graph) and other.stats.state_merged == 1
+
+
+def test_a_read_only_watcher_forgets_tombstones_too():
+    """The launcher watches a whole day read-only: it publishes no digest (nobody waits for it),
+    but it forgets a removal once every writer acknowledged it, or a day's tombstones piled up
+    in it (long runs, docs/long_runs.md)."""
+    net = Net()
+    a = net.add("a")
+    net.add("b")
+    watcher = Replica(DSRGraph("w", read_only=True), policy=None)  # type: ignore[arg-type]
+    watcher.joined = True
+    for name, other in net.replicas.items():
+        watcher.members.add(name)
+        watcher.admit_state(*state_of(other))
+    net.replicas["w"] = watcher
+    for cycle in range(20):
+        node = a.graph.insert_node("object", f"tmp{cycle}")
+        a.graph.delete_node(node.id)
+    assert watcher.graph.tombstones() == 20
+    net.maintain()
+    net.maintain()
+    assert watcher.graph.tombstones() == 0 and watcher.stats.compacted == 20
+    assert watcher.stats.digests_sent == 0 and watcher.graph.digest() == a.graph.digest()

@@ -6,9 +6,11 @@ The runs are in-process on tests/data/week_tiny.yaml (two days of one room, a fe
 
 from __future__ import annotations
 
+import csv
 import datetime as dt
 import errno
 import json
+import math
 import os
 from pathlib import Path
 
@@ -49,9 +51,9 @@ def test_each_day_has_the_agenda_missions_and_changes_of_its_date() -> None:
     loaded = load_scene(WEEK)
     monday = day_scene_data(loaded.located.data, 1, WEEK.parent, first=loaded.scene.clock.date)
     tuesday = day_scene_data(loaded.located.data, 2, WEEK.parent, first=loaded.scene.clock.date, seed_offset=1)
-    assert [a["id"] for a in monday["agenda"]] == ["game"] and [m["id"] for m in monday["missions"]] == ["cross"]
+    assert [a["id"] for a in monday["agenda"]] == ["game"] and [m["id"] for m in monday["missions"]] == ["cross", "dock"]
     assert monday["agenda_changes"] == [] and tuesday["agenda_changes"][0]["id"] == "music"
-    assert [a["id"] for a in tuesday["agenda"]] == ["music"] and [m["id"] for m in tuesday["missions"]] == ["back"]
+    assert [a["id"] for a in tuesday["agenda"]] == ["music"] and [m["id"] for m in tuesday["missions"]] == ["back", "dock"]
     assert tuesday["clock"]["date"] == dt.date(2026, 12, 1) and "days" not in tuesday["clock"]
     assert tuesday["crowd"]["seed"] == 1 and "weekdays" not in tuesday["agenda"][0]
     # The scene placed on its second day: Tuesday's agenda, the change that names day 2.
@@ -86,8 +88,8 @@ def test_two_days_in_process_leave_a_day_each_and_their_accounting(tmp_path: Pat
     assert summary["ok"] and summary["days_planned"] == 2 and summary["restarts_total"] == 0
     monday, tuesday = summary["days"]
     assert (monday["weekday"], tuesday["weekday"], tuesday["offset_s"]) == ("mon", "tue", 86400.0)
-    assert list(monday["missions"]) == ["cross"] and list(tuesday["missions"]) == ["back"]
-    assert tuesday["missions"]["back"]["state"] == "done" and tuesday["missions_summary"]["done"] == 1
+    assert list(monday["missions"]) == ["cross", "dock"] and list(tuesday["missions"]) == ["back", "dock"]
+    assert tuesday["missions"]["back"]["state"] == "done" and tuesday["missions_summary"]["done"] == 2
     for day in (monday, tuesday):
         assert day["agents"]["in_process"]["rss_mb"] > 0 and day["agents"]["in_process"]["cpu_s"] > 0
         assert day["dsr"]["nodes"] > 0 and day["dsr"]["edges"] > 0 and day["dsr"]["tombstones"] >= 0
@@ -103,6 +105,12 @@ def test_two_days_in_process_leave_a_day_each_and_their_accounting(tmp_path: Pat
     assert recording_of_day(Path(summary["index"]), None) == run_dir / tuesday["rrd"]
     assert len(list(run_dir.glob("*.rrd"))) == 1
     assert [p.name for p in run_dir.iterdir() if p.is_dir() and p.name != "days"] == [tuesday["run_dir"]]
+    # Each day ends with the robot back at its dock for the night (the scene's robot pose).
+    assert monday["missions"]["dock"]["state"] == tuesday["missions"]["dock"]["state"] == "done"
+    assert tuesday["missions"]["dock"]["started_s"] >= tuesday["missions"]["back"]["finished_s"]
+    with (run_dir / tuesday["run_dir"] / "trajectory.csv").open() as handle:
+        last = list(csv.DictReader(handle))[-1]
+    assert math.dist((float(last["x"]), float(last["y"])), (0.8, 1.2)) < 0.5, last
 
 
 def test_a_day_whose_agenda_cannot_be_loaded_is_refused_and_the_run_goes_on(tmp_path: Path,
@@ -162,13 +170,38 @@ def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
     tiny = WEEK.parent / "eval_tiny.yaml"
-    result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "2", "--no-record", "--json"])
+    result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "3", "--no-record", "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
     assert [(d["date"], d["status"], list(d["missions"])) for d in summary["days"]] == [
-        ("2026-11-25", "ok", ["cross"]), ("2026-11-26", "ok", ["cross"])]
+        ("2026-11-25", "ok", ["cross", "dock"]), ("2026-11-26", "ok", ["cross", "dock"]),
+        ("2026-11-27", "ok", ["cross", "dock"])]
+    # Bounded by design: each day's graph is the day's world, nothing carried over from the days before.
+    assert summary["days"][0]["dsr"] == summary["days"][1]["dsr"] == summary["days"][2]["dsr"]
     refused = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "0"])
     assert refused.exit_code == 2 and "--days" in refused.output
+
+
+def test_an_in_process_run_forgets_tombstones_as_it_goes(tmp_path: Path) -> None:
+    """In-process the agents share one graph, the only replica: the run forgets removals every 50
+    rounds (tools/inprocess.py), so a day's tombstones do not pile up (center_week's Monday kept
+    323 of them, its Tuesday 426)."""
+    import time
+
+    from tools.inprocess import _InProcessRun
+
+    ticks: list[dict[str, object]] = []
+    run = _InProcessRun(spec=load_scene(WEEK.parent / "eval_tiny.yaml").scene, scene_path=WEEK, run_id="t",
+                        run_dir=tmp_path, record=False, started=time.monotonic(), on_tick=ticks.append)
+    for day in range(3):                       # a day's churn of people and intentions, three times over
+        for i in range(40):
+            node = run.graph.insert_node("object", f"churn{day}_{i}")
+            run.graph.delete_node(node.id)
+        assert run.graph.tombstones() == 40
+        run.done(49)
+        assert run.graph.tombstones() == 40    # between two rounds of upkeep they are kept
+        run.done(50)
+        assert run.graph.tombstones() == 0 and ticks[-1]["dsr"] == {"nodes": 0, "edges": 0, "tombstones": 0}
 
 
 def test_a_day_scene_points_at_the_scene_folders_files() -> None:
@@ -302,9 +335,9 @@ def test_scene_day_writes_one_day_of_a_scene_for_the_offline_commands(tmp_path: 
     out = tmp_path / "tuesday.yaml"
     result = CliRunner().invoke(app, ["scene", "day", str(WEEK), "2", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert "2026-12-01 (1 activities, 1 missions)" in result.output
+    assert "2026-12-01 (1 activities, 2 missions)" in result.output
     world = load_world(out)
-    assert [m.id for m in world.scene.missions] == ["back"] and [a.id for a in world.agenda.activities] == ["music"]
+    assert [m.id for m in world.scene.missions] == ["back", "dock"] and [a.id for a in world.agenda.activities] == ["music"]
     missing = CliRunner().invoke(app, ["scene", "day", str(tmp_path / "nope.yaml"), "2", "--out", str(out)])
     assert missing.exit_code == 1 and "no such scene file" in missing.output
 

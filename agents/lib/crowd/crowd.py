@@ -47,7 +47,7 @@ from collections.abc import Callable, Sequence
 from agents.lib.crowd.escorts import Escorts
 from agents.lib.crowd.model import Agenda, Building, PersonTruth, RobotBody, Walker
 from agents.lib.crowd.motion import Motion
-from agents.lib.crowd.person import FIRST_DECISION, Person, Task, person_rng
+from agents.lib.crowd.person import AWAY, FIRST_DECISION, LEAVE, Person, Task, person_rng
 from agents.lib.crowd.replay import Replayed
 from agents.lib.crowd.routines import Routines
 from agents.lib.crowd.schedule import ARRIVE_EARLY_S, Schedule
@@ -85,6 +85,10 @@ class Crowd:
         self.motion.rejoin = self.routines.rejoin
         self.replayed = Replayed([self.people[w.name] for w in self.walkers if w.routine == "replay"], self.motion)
         self.replayed.stage(self.start_s)
+        for person in self._dynamic:
+            hours = person.spec.hours
+            if hours is not None and not hours[0] <= self.start_s < hours[1]:
+                self._away(person, hours[0] if self.start_s < hours[0] else math.inf)
 
     def _first_move_s(self, walker: Walker) -> float:
         """People do not all get up at the start of the day: the first stay lasts a part of a dwell."""
@@ -128,6 +132,7 @@ class Crowd:
         none is known.
         Why: the simulator's idle skip stops there, so the DSR shows each event at its time."""
         times = [p.next_check_s for p in self._dynamic if p.task.kind == "stand" and p.next_check_s > t_s + 1e-9]
+        times += [s for s in self._leave_times() if s > t_s + 1e-9]
         times += [t0 for p in self._scripted for t0, _ in p.spec.moves if t0 > t_s + 1e-9]
         times.append(self.replayed.next_entry_s(t_s))
         return min(times)
@@ -147,6 +152,8 @@ class Crowd:
             if not w.dynamic:
                 out.append(self._scripted_truth(w, t_s))
                 continue
+            if person.task.purpose == AWAY:
+                continue                    # not in the building (outside their hours)
             out.append(PersonTruth(w.name, w.role, *self.motion.interpolated(person.index, f),
                                    self.routines.group_of(person), person.task.activity or person.escorted_to))
         return tuple(out)
@@ -173,12 +180,12 @@ class Crowd:
         motion.doors(agenda.closed_doors)
         self.schedule.read(agenda)
         for person in self._dynamic:
-            if person.task.kind == "walk" or t >= person.next_check_s:
+            if person.task.kind == "walk" or t >= person.next_check_s or self._time_to_leave(person, t):
                 self._decide(person, t)
         walking = [p for p in self._dynamic if p.task.kind == "walk"]
         scripted_moving = [p for p in self._scripted
                            if any(t0 - self.step_s < t < t1 + self.step_s for t0, t1 in p.spec.moves)]
-        standing = [p for p in self._dynamic if p.task.kind == "stand"]
+        standing = [p for p in self._dynamic if p.task.kind == "stand" and p.task.purpose != AWAY]
         turning = motion.turning(standing)
         t1 = self.start_s + (self.k + 1) * self.step_s
         if not walking and not scripted_moving and not turning and (robot is None or not robot.driving) \
@@ -192,7 +199,8 @@ class Crowd:
 
     def _quiet_jump(self, t: float, agenda: Agenda, until_s: float) -> None:
         """Nobody moves: jump to the step where the next decision is due (or the caller's time)."""
-        due = min([p.next_check_s for p in self._dynamic] + [agenda.next_change_s, self.replayed.next_entry_s(t)])
+        due = min([p.next_check_s for p in self._dynamic] + [agenda.next_change_s, self.replayed.next_entry_s(t)]
+                  + [s for s in self._leave_times() if s > t])
         for person in self._scripted:
             for t0, _ in person.spec.moves:
                 if t0 > t:
@@ -202,9 +210,56 @@ class Crowd:
         self.motion.quiet()
         self.k += steps
 
+    # ------------------------------------------------------------------------------------ hours
+    def _leave_times(self) -> list[float]:
+        """When the people in the building with ``hours`` are due to set off for the way out."""
+        return [p.spec.hours[1] for p in self._dynamic
+                if p.spec.hours is not None and p.task.purpose not in (AWAY, LEAVE)]
+
+    def _time_to_leave(self, person: Person, t: float) -> bool:
+        hours = person.spec.hours
+        return hours is not None and t >= hours[1] and person.task.purpose not in (AWAY, LEAVE)
+
+    def _away(self, person: Person, back_s: float) -> None:
+        """Out of the building until ``back_s`` (inf: gone for the day)."""
+        self.motion.offstage(person.index)
+        person.task = Task("stand", AWAY, person.spec.pose)
+        person.escorted_to = ""
+        person.next_check_s = back_s
+
+    def _hours(self, person: Person, t: float) -> bool:
+        """Arrive at the start of one's hours (at one's scene pose, the way in), walk back there at
+        their end and leave; True when that was this step's decision."""
+        assert person.spec.hours is not None
+        arrive_s, leave_s = person.spec.hours
+        task = person.task
+        if task.purpose == AWAY:
+            if not arrive_s <= t < leave_s:
+                person.next_check_s = arrive_s if t < arrive_s else math.inf
+                return True
+            self.motion.onstage(person.index, person.spec.pose)
+            person.task = Task("stand", "dwell", person.spec.pose, until_s=t)   # the routine decides at once
+            return False
+        if t < leave_s:
+            return False
+        if task.purpose != LEAVE:
+            self.routines.leave_chat(person)
+            person.escorted_to = ""
+            self.motion.walk(person, t, person.spec.pose, LEAVE)
+            return True
+        if task.kind == "walk":
+            self.motion.walking(person, t)
+            if person.task.kind == "walk":
+                return True
+        self._away(person, math.inf)            # at the way out (or as near as they got): gone
+        return True
+
     # ------------------------------------------------------------------------------------ behaviour
     def _decide(self, person: Person, t: float) -> None:
-        """The agenda first, then a staff member's job, then the routine (see the module doc)."""
+        """Their hours first, then the agenda, then a staff member's job, then the routine (see the
+        module doc)."""
+        if person.spec.hours is not None and self._hours(person, t):
+            return
         task = person.task
         due = self.schedule.due(person, t)
         if person.spec.routine == "staff" and task.purpose in ("fetch", "escort") and due is None:

@@ -49,6 +49,9 @@ class Walker:
     record: Callable[[float], tuple[float, float, float, float]] | None = field(default=None, compare=False)
     present: tuple[float, float] | None = None
     reactive: bool = False
+    # a walking routine's time in the building (clock seconds): they come in at ``pose`` at the first,
+    # walk back there at the second and leave (crowd.py); None: there all day
+    hours: tuple[float, float] | None = None
 
     @property
     def dynamic(self) -> bool:

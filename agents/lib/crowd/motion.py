@@ -34,6 +34,7 @@ SIDESTEP_RAD = 0.9          # a walker blocked for half of STUCK_S steps this mu
 ROBOT_MARGIN_M = 0.1        # people give the robot this much more than its body
 ROBOT_CLEARANCE_M = 0.6     # nobody picks a place to stand nearer the resting robot's body than this
 BODY_CLEARANCE_M = 0.3      # a body stands at least this far from walls and furniture
+OFFSTAGE_M = 1.0e6          # where the bodies of people not in the building wait (nobody's neighbour)
 
 Pose = tuple[float, float, float]
 
@@ -170,6 +171,27 @@ class Motion:
             self.pos[i] = self.orca.position(i)
 
     # ------------------------------------------------------------------------------------ walking
+    def offstage(self, i: int) -> None:
+        """Body ``i`` out of the building: parked far from everything, still (nobody's neighbour)."""
+        x, y = OFFSTAGE_M + 10.0 * i, OFFSTAGE_M
+        self.orca.place(i, x, y)
+        self.orca.set_max_speed(i, 0.0)
+        self.orca.prefer(i, 0.0, 0.0)
+        self.pos[i] = (x, y)
+        self.vel[i] = (0.0, 0.0)
+
+    def onstage(self, i: int, pose: Pose) -> None:
+        """Body ``i`` comes in, standing at ``pose`` (its previous state too: no slide in from afar)."""
+        x, y, theta = pose
+        self.orca.place(i, x, y)
+        self.orca.set_max_speed(i, 0.0)
+        self.orca.prefer(i, 0.0, 0.0)
+        self.pos[i] = (x, y)
+        self.theta[i] = theta
+        self.vel[i] = (0.0, 0.0)
+        for array, value in zip(self.prev, ((x, y), theta, (0.0, 0.0)), strict=True):
+            array[i] = value
+
     def walk(self, person: Person, t: float, target: Pose, purpose: str, activity: str = "", other: str = "",
              until_s: float = math.inf, look_at: tuple[float, float] | None = None) -> None:
         """``person`` sets off for ``target`` now (routed through door gaps and round furniture)."""

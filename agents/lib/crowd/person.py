@@ -16,6 +16,9 @@ from agents.lib.crowd.model import Walker
 
 #: the random stream index of the start-of-day draw
 FIRST_DECISION = 2**31
+#: purposes of a person outside their ``hours``: not in the building yet (or any more), and on the way out
+AWAY = "away"
+LEAVE = "leave"
 
 
 @dataclass
@@ -23,7 +26,7 @@ class Task:
     """What one person is doing: standing somewhere (until a time) or walking to a pose."""
 
     kind: str                         # "stand" | "walk"
-    purpose: str                      # dwell | chat | attend | fetch | escort | stay
+    purpose: str                      # dwell | chat | attend | fetch | escort | stay | leave | away
     target: tuple[float, float, float]
     until_s: float = math.inf
     activity: str = ""

@@ -22,13 +22,12 @@ import math
 from collections.abc import Sequence
 
 from agents.lib.crowd.model import PersonTruth
-from agents.lib.crowd.motion import Motion
+from agents.lib.crowd.motion import OFFSTAGE_M, Motion
 from agents.lib.crowd.person import Person
 
 LOOKAHEAD_S = 1.0        # reactive: aim at where the record is this much later
 MAX_SPEED_MPS = 2.0      # reactive: the fastest a replayed person catches up with their record
 STILL_MPS = 0.05         # below this a replayed person keeps the heading they had
-OFFSTAGE_M = 1.0e6       # where absent people's bodies wait (nobody's neighbour)
 BLOCKED_SHARE = 0.3      # reactive: moving at under this share of the wished speed is being blocked ...
 KEEP_RIGHT_RAD = 0.6     # ... and a blocked walker turns this much to the right (head-on ORCA deadlocks)
 
@@ -65,14 +64,8 @@ class Replayed:
         self.motion.prev = (self.motion.pos.copy(), self.motion.theta.copy(), self.motion.vel.copy())
 
     def _offstage(self, person: Person) -> None:
-        i, orca = person.index, self.motion.orca
-        x, y = OFFSTAGE_M + 10.0 * i, OFFSTAGE_M
-        orca.place(i, x, y)
-        orca.set_max_speed(i, 0.0)
-        orca.prefer(i, 0.0, 0.0)
-        self.motion.pos[i] = (x, y)
-        self.motion.vel[i] = (0.0, 0.0)
-        self.on_stage[i] = False
+        self.motion.offstage(person.index)
+        self.on_stage[person.index] = False
 
     def _place(self, person: Person, t: float, entering: bool) -> None:
         """Before a step at ``t``: the exact ones placed on their record (moving at its velocity),

@@ -16,7 +16,7 @@ import shapely
 
 from agents.lib.crowd.formations import CHAT_RADIUS_M, chat_place, join_circle
 from agents.lib.crowd.motion import Motion
-from agents.lib.crowd.person import Person, Task, person_rng
+from agents.lib.crowd.person import AWAY, LEAVE, Person, Task, person_rng
 from agents.lib.crowd.schedule import DETOUR, Schedule
 from scenes.angles import wrap_angle
 
@@ -61,7 +61,8 @@ class Routines:
         person.decisions += 1
         u = rng.random(8)
         dwell = spec.dwell_s[0] + (spec.dwell_s[1] - spec.dwell_s[0]) * u[5]
-        if spec.routine == "visitor" and spec.visits in self.people:
+        if spec.routine == "visitor" and spec.visits in self.people \
+                and self.people[spec.visits].task.purpose not in (AWAY, LEAVE):   # not while they are out
             friend = self.people[spec.visits]
             if self._chat_with(person, friend, t, dwell):
                 return

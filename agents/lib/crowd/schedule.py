@@ -108,7 +108,8 @@ class Schedule:
 
     def _escort_jobs(self) -> dict[tuple[str, str], str]:
         """Which staff member fetches which escorted resident to which activity: the first ``staff``
-        by name who takes part in nothing around then and fetches nobody else within 15 min."""
+        by name at work then (their ``hours``) who takes part in nothing around then and fetches
+        nobody else within 15 min."""
         staff = [p.spec.name for p in self.people.values() if p.spec.routine == "staff"]
         jobs: dict[tuple[str, str], str] = {}
         busy: dict[str, list[float]] = {}
@@ -118,6 +119,9 @@ class Schedule:
                 if person is None or not person.spec.escort or not person.spec.dynamic:
                     continue
                 for s in sorted(staff):
+                    hours = self.people[s].spec.hours
+                    if hours is not None and not (hours[0] <= a.start_s - ESCORT_WAIT_S and a.start_s < hours[1]):
+                        continue                  # not at work in time to fetch them (their hours)
                     in_activity = any(s in b.participants and b.start_s - ESCORT_BUSY_S < a.start_s < b.end_s
                                       for b in self.appointments.values())
                     if in_activity or any(abs(t - a.start_s) < ESCORT_BUSY_S for t in busy.get(s, [])):

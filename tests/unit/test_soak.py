@@ -1,0 +1,53 @@
+"""The real-time soak's memory slope (tools/soak.py, issue 41): the least-squares fit, the warm-up,
+a restarted agent's new series, and sampling a live process; the soak itself is a benchmark
+(`tools/bench/bench_week.py --soak-hours H`), its short variant tests/system/test_long_run.py."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from tools.soak import MemorySeries, fit_slope_per_hour, soak_scene
+
+
+def test_slope_is_mb_per_hour_and_needs_three_samples_over_time() -> None:
+    assert fit_slope_per_hour([(0.0, 100.0), (1800.0, 100.5), (3600.0, 101.0)]) == pytest.approx(1.0)
+    noisy = [(60.0 * i, 200.0 + (0.3 if i % 2 else -0.3)) for i in range(60)]
+    assert abs(fit_slope_per_hour(noisy) or 0.0) < 0.05      # noise, no climb
+    assert fit_slope_per_hour([(0.0, 1.0), (10.0, 2.0)]) is None
+    assert fit_slope_per_hour([(5.0, 1.0), (5.0, 2.0), (5.0, 3.0)]) is None
+
+
+def test_warmup_is_not_fitted_and_a_restart_opens_a_new_series() -> None:
+    series = MemorySeries(warmup_s=600.0)
+    for minute in range(0, 10):                       # startup: memory climbing fast, not fitted
+        series.add("planner", 11, minute * 60.0, 100.0 + 20.0 * minute)
+    for minute in range(10, 70):                      # steady: +2 MB over the hour
+        series.add("planner", 11, minute * 60.0, 300.0 + 2.0 * (minute - 10) / 60.0)
+    for minute in range(70, 75):                      # restarted: memory starts over, which is no fall
+        series.add("planner", 12, minute * 60.0, 150.0)
+    assert series.slopes()["planner"] == pytest.approx(2.0, abs=1e-3)
+    report = series.report()
+    assert report["soak_mem_slope_mb_per_h_max"] == pytest.approx(2.0, abs=1e-3)
+    assert report["soak_agents_over_goal"] == ["planner"] and report["soak_processes_planner"] == 2
+    assert report["soak_rss_mb_last_planner"] == 150.0 and report["soak_samples"] == 65
+
+
+def test_tick_samples_live_processes_at_its_interval() -> None:
+    now = [0.0]
+    series = MemorySeries(warmup_s=0.0, sample_every_s=60.0, clock=lambda: now[0])
+    for step in range(7):
+        now[0] = step * 30.0
+        series.tick({"me": os.getpid(), "gone": 2**22 + 7, "unstarted": None})
+    samples = series.series["me"][0][1]
+    assert [t for t, _ in samples] == [0.0, 60.0, 120.0, 180.0] and all(rss > 1.0 for _, rss in samples)
+    assert "gone" not in series.series and "unstarted" not in series.series
+
+
+def test_soak_scene_runs_in_real_time_past_the_soak(tmp_path) -> None:
+    import yaml
+
+    data = yaml.safe_load(soak_scene("center_day", 1.8, tmp_path / "soak.yaml").read_text())
+    assert data["clock"]["rate"] == 1 and data["clock"]["skip_idle"] is False
+    assert data["clock"]["start"] == "09:00" and data["clock"]["end"] == "11:18"

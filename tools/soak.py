@@ -1,0 +1,181 @@
+"""A real-time soak: a scene's agents launched as processes at rate 1, each one's memory watched
+for hours, and the slope of its memory over time fitted (issue 41: under 1 MB per hour per agent).
+
+Why a slope and not a ratio: in real time, a day's first hour and its last differ in what happens
+(people, missions); what a months-long deployment cannot afford is memory that keeps climbing.  A
+least-squares line through each agent's RSS, sampled every ``sample_every_s`` after a warm-up
+(imports, maps, first plans, caches filling), measures that climb in MB per hour, robust to the
+noise of single samples.  An agent restarted mid-soak starts a new series (its memory starts
+over, which would fake a fall); its slope is fitted on its longest series.
+
+The run is the week runner's (tools/week.py ``run_days``, one day at rate 1, so the recording
+rotates every hour as a real-time run does); the scene is the given one with the clock at rate 1,
+no idle skipping (the clock must run in real time) and an end after the soak, so only the
+soak's own timeout ends it.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tools.week import MB
+
+#: seconds of wall time between two samples of each agent's memory in the real soak
+SAMPLE_EVERY_S = 60.0
+#: goal of issue 41: memory slope under this, per agent
+GOAL_MB_PER_H = 1.0
+
+
+def fit_slope_per_hour(samples: list[tuple[float, float]]) -> float | None:
+    """The least-squares slope of ``(seconds, MB)`` samples, in MB per hour; None under 3 samples
+    or when they span no time."""
+    if len(samples) < 3:
+        return None
+    n = len(samples)
+    mean_t = sum(t for t, _ in samples) / n
+    mean_m = sum(m for _, m in samples) / n
+    var = sum((t - mean_t) ** 2 for t, _ in samples)
+    if var <= 0.0:
+        return None
+    cov = sum((t - mean_t) * (m - mean_m) for t, m in samples)
+    return cov / var * 3600.0
+
+
+@dataclass
+class MemorySeries:
+    """Each agent's RSS over wall time, one series per process (a restart opens a new one)."""
+
+    warmup_s: float
+    sample_every_s: float = SAMPLE_EVERY_S
+    clock: Callable[[], float] = time.monotonic
+    started: float | None = None
+    series: dict[str, list[tuple[int, list[tuple[float, float]]]]] = field(default_factory=dict)
+    _last: float = -math.inf
+
+    def add(self, name: str, pid: int, t_s: float, rss_mb: float) -> None:
+        """One sample of agent ``name`` (process ``pid``) at ``t_s`` seconds since the soak began;
+        samples inside the warm-up are not kept."""
+        runs = self.series.setdefault(name, [])
+        if not runs or runs[-1][0] != pid:
+            runs.append((pid, []))
+        if t_s >= self.warmup_s:
+            runs[-1][1].append((t_s, rss_mb))
+
+    def tick(self, pids: dict[str, int | None]) -> None:
+        """Sample every agent of ``pids`` (name -> pid) if ``sample_every_s`` has passed."""
+        import psutil
+
+        now = self.clock()
+        if self.started is None:
+            self.started = now
+        if now - self._last < self.sample_every_s:
+            return
+        self._last = now
+        for name, pid in pids.items():
+            if pid is None:
+                continue
+            try:
+                rss = psutil.Process(pid).memory_info().rss / MB
+            except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+                continue
+            self.add(name, pid, now - self.started, rss)
+
+    def slopes(self) -> dict[str, float | None]:
+        """Each agent's memory slope (MB/h) on its longest series after the warm-up."""
+        out: dict[str, float | None] = {}
+        for name, runs in self.series.items():
+            longest = max((samples for _, samples in runs), key=len)
+            slope = fit_slope_per_hour(longest)
+            out[name] = None if slope is None else round(slope, 3)
+        return out
+
+    def report(self) -> dict[str, object]:
+        """The flat part of the soak's JSON: the largest slope, each agent's, samples and processes."""
+        slopes = self.slopes()
+        known = [s for s in slopes.values() if s is not None]
+        flat: dict[str, object] = {
+            "soak_mem_slope_mb_per_h_max": max(known) if known else None,
+            "soak_mem_slope_goal_mb_per_h": GOAL_MB_PER_H,
+            "soak_agents_over_goal": sorted(n for n, s in slopes.items() if s is not None and s >= GOAL_MB_PER_H),
+        }
+        for name, slope in sorted(slopes.items()):
+            runs = self.series[name]
+            flat[f"soak_mem_slope_mb_per_h_{name}"] = slope
+            flat[f"soak_rss_mb_last_{name}"] = round(runs[-1][1][-1][1], 2) if runs[-1][1] else None
+            flat[f"soak_processes_{name}"] = len(runs)
+        flat["soak_samples"] = sum(len(s) for runs in self.series.values() for _, s in runs)
+        return flat
+
+
+def soak_scene(scene: str | Path, hours: float, out: Path) -> Path:
+    """SCENE's first day as a scene of its own at rate 1, without idle skipping, whose clock runs
+    past the soak (so only the soak's timeout ends the run); written to ``out``."""
+    import yaml
+
+    from scenes.days import SECONDS_PER_DAY, day_scene_data
+    from scenes.loader import load_scene
+    from tools.week_index import write_atomic
+
+    loaded = load_scene(scene)
+    data = day_scene_data(loaded.located.data, 1, loaded.path.parent.resolve(), first=loaded.scene.clock.date)
+    clock = dict(data["clock"])
+    start = loaded.scene.clock.start_s
+    end = min(start + hours * 3600.0 + 1800.0, SECONDS_PER_DAY - 60.0)
+    clock.update(rate=1, skip_idle=False, end=_hhmm(end))
+    data["clock"] = clock
+    write_atomic(out, yaml.safe_dump(data, sort_keys=False, allow_unicode=True))
+    return out
+
+
+def _hhmm(seconds: float) -> str:
+    minutes = int(seconds // 60)
+    return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
+def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_s: float = SAMPLE_EVERY_S,
+             workdir: Path | None = None) -> dict[str, object]:
+    """Launch SCENE's agents as processes at rate 1 for ``hours`` of wall time, sampling each
+    agent's RSS; the soak's flat report (every process is stopped when it returns)."""
+    from tools.week import run_days
+
+    if not hours > 0:
+        raise ValueError(f"--soak-hours {hours}: give the soak's length in hours, more than 0")
+    workdir = workdir or Path(tempfile.mkdtemp(prefix="chronav-soak-"))
+    workdir.mkdir(parents=True, exist_ok=True)
+    scene_file = soak_scene(scene, hours, workdir / "soak_scene.yaml")
+    memory = MemorySeries(warmup_s=warmup_s, sample_every_s=sample_every_s)
+
+    def tick(status: dict[str, Any]) -> None:
+        pids = status.get("pids")
+        if isinstance(pids, dict):
+            memory.tick(pids)
+
+    started = time.monotonic()
+    os.environ.setdefault("RERUN", "on")   # a deployment records, and rotates its recording every hour
+    started_utc = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    result = run_days(scene_file, days=1, in_process=False, runs_dir=workdir, timeout_s=hours * 3600.0,
+                      on_tick=tick, rate=1.0)
+    wall = time.monotonic() - started
+    day = result.days[0] if result.days else {}
+    report: dict[str, object] = {
+        "scene": scene, "soak_hours": round(wall / 3600.0, 3), "soak_hours_planned": hours,
+        "soak_warmup_min": round(warmup_s / 60.0, 2), "soak_sample_every_s": sample_every_s,
+        # the soak's own timeout ends the day: that is the soak going as planned
+        "soak_ok": result.error is None and not result.interrupted and day.get("status") == "timed_out",
+        "day_status": day.get("status"),
+        **memory.report(),
+        "restarts_total": len(result.restart_log),
+        "restart_reasons": sorted({str(r.get("reason")) for r in result.restart_log}),
+        "run_dir": str(result.run_dir), "started_utc": started_utc,
+    }
+    if result.error:
+        report["error"] = result.error
+    return report
