@@ -56,10 +56,10 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     report = json.loads(line)
     assert report["soak_ok"] and report["day_status"] == "timed_out" and report["restarts_total"] == 0, report
     assert report["soak_hours"] >= 0.011
-    for name in AGENTS:
+    for name in agent_names():
         assert isinstance(report[f"soak_mem_slope_mb_per_h_{name}"], float), (name, report)
         assert report[f"soak_processes_{name}"] == 1
     assert report["soak_mem_slope_mb_per_h_max"] == max(
-        v for k, v in report.items() if k.startswith("soak_mem_slope_mb_per_h_") and k[24:] in (*AGENTS, "router"))
+        v for k, v in report.items() if k.startswith("soak_mem_slope_mb_per_h_") and k[24:] in (*agent_names(), "router"))
     pids = json.loads(next(Path(report["run_dir"]).rglob("pids.json")).read_text())
-    assert set(AGENTS) <= set(pids) and not any(psutil.pid_exists(p) for p in pids.values() if p), pids
+    assert set(agent_names()) <= set(pids) and not any(psutil.pid_exists(p) for p in pids.values() if p), pids
