@@ -441,7 +441,8 @@ class Scene(Strict):
         import shapely
 
         if self._room_shapes is None or self._room_shapes[0] is not self.rooms:
-            shapes = shapely.polygons([room.polygon for room in self.rooms])
+            # one polygon at a time: rooms have different numbers of corners (a ragged array)
+            shapes = np.array([shapely.Polygon(room.polygon) for room in self.rooms], dtype=object)
             shapely.prepare(shapes)
             self._room_shapes = (self.rooms, shapes)
         inside = shapely.intersects_xy(self._room_shapes[1], x, y)     # a point intersects = is covered
