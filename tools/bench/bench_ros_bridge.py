@@ -38,6 +38,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import statistics
 import subprocess
 import sys
@@ -72,6 +73,18 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=10)
+
+
+def stop_launcher(launcher: subprocess.Popen[bytes], grace_s: float = 120.0) -> None:
+    """Stop a `chronav launch` started in its own session: Ctrl-C first (it stops its agents and
+    merges the run), its whole process group killed if it has not ended within ``grace_s``."""
+    if launcher.poll() is None:
+        os.killpg(launcher.pid, signal.SIGINT)
+        try:
+            launcher.wait(timeout=grace_s)
+        except subprocess.TimeoutExpired:
+            os.killpg(launcher.pid, signal.SIGKILL)
+            launcher.wait(timeout=10)
 
 
 def _session(endpoint: str) -> Any:
@@ -296,7 +309,6 @@ def wait_for_bridge(runs: Path, timeout_s: float, poll_s: float = 1.0) -> dict[s
 
 
 def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, float]:
-    import signal
     import tempfile
 
     import psutil
@@ -317,13 +329,7 @@ def live(endpoint: str, seconds: float, scene: str = "center_day") -> dict[str, 
             wall = time.monotonic() - started
             after = {name: sum(p.cpu_times()[:2]) for name, p in procs.items()}
         finally:
-            if launcher.poll() is None:
-                os.killpg(launcher.pid, signal.SIGINT)
-                try:
-                    launcher.wait(timeout=120)
-                except subprocess.TimeoutExpired:
-                    os.killpg(launcher.pid, signal.SIGKILL)
-                    launcher.wait(timeout=10)
+            stop_launcher(launcher)
     return {f"live_{name}_cpu_share_{scene}": round((after[name] - before[name]) / wall, 4) for name in procs}
 
 
@@ -422,7 +428,6 @@ class _FakeRobot:
 
 def flood(endpoint: str, seconds: float, rate: float) -> dict[str, Any]:
     import math
-    import signal
     import tempfile
 
     import psutil
@@ -499,13 +504,7 @@ def flood(endpoint: str, seconds: float, rate: float) -> dict[str, Any]:
                 time.sleep(0.2)
             out.update({"flood_goal_completed": reached, "flood_goal_s": round(time.monotonic() - goal_started, 1)})
         finally:
-            if launcher.poll() is None:
-                os.killpg(launcher.pid, signal.SIGINT)
-                try:
-                    launcher.wait(timeout=120)
-                except subprocess.TimeoutExpired:
-                    os.killpg(launcher.pid, signal.SIGKILL)
-                    launcher.wait(timeout=10)
+            stop_launcher(launcher)
             robot.close()
             watcher.close()
             ros.close()
