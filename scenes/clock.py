@@ -55,6 +55,13 @@ def format_clock(seconds: float) -> str:
     return f"{sign}{hours:02d}:{minutes:02d}:{secs:02d}"
 
 
+def format_clock_minutes(seconds: float) -> str:
+    """Seconds since midnight -> ``"HH:MM"``, the minute it falls in (seconds dropped, not rounded):
+    for times written into a scene or an agenda change, whose fields are whole minutes."""
+    minutes = int(seconds // 60)
+    return f"{minutes // 60:02d}:{minutes % 60:02d}"
+
+
 def _checked_clock(value: str) -> str:
     parse_clock(value)
     return value

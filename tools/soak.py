@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tools.week import MB
+from scenes.clock import format_clock_minutes
+from tools.week import process_usage
 
 #: seconds of wall time between two samples of each agent's memory in the real soak
 SAMPLE_EVERY_S = 60.0
@@ -71,8 +72,6 @@ class MemorySeries:
 
     def tick(self, pids: dict[str, int | None]) -> None:
         """Sample every agent of ``pids`` (name -> pid) if ``sample_every_s`` has passed."""
-        import psutil
-
         now = self.clock()
         if self.started is None:
             self.started = now
@@ -80,13 +79,10 @@ class MemorySeries:
             return
         self._last = now
         for name, pid in pids.items():
-            if pid is None:
+            usage = process_usage(pid)
+            if pid is None or usage is None:
                 continue
-            try:
-                rss = psutil.Process(pid).memory_info().rss / MB
-            except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
-                continue
-            self.add(name, pid, now - self.started, rss)
+            self.add(name, pid, now - self.started, usage[0])
 
     def slopes(self) -> dict[str, float | None]:
         """Each agent's memory slope (MB/h) on its longest series after the warm-up."""
@@ -129,15 +125,11 @@ def soak_scene(scene: str | Path, hours: float, out: Path) -> Path:
     clock = dict(data["clock"])
     start = loaded.scene.clock.start_s
     end = min(start + hours * 3600.0 + 1800.0, SECONDS_PER_DAY - 60.0)
-    clock.update(rate=1, skip_idle=False, end=_hhmm(end))
+    clock.update(rate=1, skip_idle=False, end=format_clock_minutes(end))
     data["clock"] = clock
     write_atomic(out, yaml.safe_dump(data, sort_keys=False, allow_unicode=True))
     return out
 
-
-def _hhmm(seconds: float) -> str:
-    minutes = int(seconds // 60)
-    return f"{minutes // 60:02d}:{minutes % 60:02d}"
 
 
 def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_s: float = SAMPLE_EVERY_S,

@@ -127,7 +127,10 @@ class ResourceSampler:
                 self.agents = {"in_process": sample}
 
 
-def _process_sample(pid: int | None) -> dict[str, float] | None:
+def process_usage(pid: int | None) -> tuple[float, float] | None:
+    """(RSS in MB, CPU seconds user + system) of process ``pid``; None when there is no such
+    process (any more) or it may not be read.  The one reading of an agent's memory and CPU: the
+    per-day accounting and the real-time soak (tools/soak.py)."""
     import psutil
 
     if pid is None:
@@ -136,9 +139,16 @@ def _process_sample(pid: int | None) -> dict[str, float] | None:
         process = psutil.Process(pid)
         with process.oneshot():
             cpu = process.cpu_times()
-            return {"rss_mb": round(process.memory_info().rss / MB, 2), "cpu_s": round(cpu.user + cpu.system, 2)}
+            return process.memory_info().rss / MB, cpu.user + cpu.system
     except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
         return None
+
+
+def _process_sample(pid: int | None) -> dict[str, float] | None:
+    usage = process_usage(pid)
+    if usage is None:
+        return None
+    return {"rss_mb": round(usage[0], 2), "cpu_s": round(usage[1], 2)}
 
 
 def _path_length_m(trajectory: Path) -> float | None:

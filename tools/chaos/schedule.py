@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from scenes.clock import format_clock_minutes
 from tools.launch import agent_names
 
 
@@ -65,10 +66,6 @@ class Fault:
         return f"{self.action} {self.target}" + (f" {self.hold_s:.1f}s" if self.action == "stop" else "")
 
 
-def _hhmm(seconds: float) -> str:
-    minutes = int(seconds // 60)
-    return f"{minutes // 60:02d}:{minutes % 60:02d}"
-
 
 def clock_text(seconds: object) -> str:
     """A sim time as HH:MM:SS, ``-`` when there is none (not a number)."""
@@ -93,12 +90,12 @@ def random_agenda_change(rng: random.Random, scene: Any, known_ids: list[str], i
         known_ids.append(activity_id)
         return json.dumps({"op": "add", "activity": {
             "id": activity_id, "name": f"chaos activity {index}", "object": rng.choice(scene.objects).name,
-            "start": _hhmm(begin * 60), "end": _hhmm(min(begin + length, 24 * 60 - 1) * 60)}})
+            "start": format_clock_minutes(begin * 60), "end": format_clock_minutes(min(begin + length, 24 * 60 - 1) * 60)}})
     target = rng.choice(known_ids)
     if op == "cancel":
         return json.dumps({"op": "cancel", "id": target})
     begin = rng.randrange(start_min, max(start_min + 1, end_min - 15))
-    return json.dumps({"op": "move", "id": target, "start": _hhmm(begin * 60)})
+    return json.dumps({"op": "move", "id": target, "start": format_clock_minutes(begin * 60)})
 
 
 def random_schedule(loaded: Any, *, seed: int, faults: int, duration_s: float) -> list[Fault]:
