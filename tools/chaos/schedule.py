@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from scenes.clock import format_clock_minutes
 from tools.launch import agent_names
 
 
@@ -78,7 +77,7 @@ def clock_text(seconds: object) -> str:
 
 def random_agenda_change(rng: random.Random, scene: Any, known_ids: list[str], index: int, tag: str) -> str:
     """A plausible staff edit: add an activity on a scene object, move or cancel a known one."""
-    from scenes.clock import parse_clock
+    from scenes.clock import format_clock_minutes, parse_clock   # here: `chronav --help` imports this module
 
     start_min = int(parse_clock(scene.clock.start) // 60)
     end_min = int(parse_clock(scene.clock.end) // 60)
