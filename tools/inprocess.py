@@ -28,7 +28,7 @@ from tools.launch import LaunchError, RunResult, agent_names, check_rate, check_
 
 if TYPE_CHECKING:
     from agents.runtime.lockstep import Lockstep
-    from agents.runtime.recording import Recorder
+    from agents.runtime.recording import Recorder, RecordingFile
     from scenes.model import Scene
 
 def round_order() -> tuple[str, ...]:
@@ -135,6 +135,8 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     finally:
         scheduler.teardown()
         launcher.close()
+        if run.recording is not None:
+            run.recording.close()
         write_final_graph(run.run_dir, run.graph)
     return _finish(run, reason, error)
 
@@ -159,6 +161,8 @@ class _InProcessRun:
         self.agents: tuple[str, ...] = ()
         #: agent -> what keeps it from its job (an agent plug-in that raised and left the run)
         self.problems: dict[str, str] = {}
+        #: the one recording stream of the run's agents and launcher (None when not recording)
+        self.recording: RecordingFile | None = None
 
     def status(self) -> dict[str, object]:
         """What a launch hands ``on_tick``: clock, missions, agents, wall time, where the run is."""
@@ -200,7 +204,7 @@ def _sole_replica(_replica: int, _hlc: int) -> bool:
 def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> tuple[Lockstep, Recorder]:
     """The agents, one recorder each, the lockstep scheduler over them, and the launcher's recorder."""
     from agents.runtime.lockstep import Lockstep
-    from agents.runtime.recording import Recorder
+    from agents.runtime.recording import Recorder, shared_recording_file
     from agents.world.write_policy import policy_from_env
 
     recording_id = run.run_id if run.record else None
@@ -208,9 +212,13 @@ def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> 
     agents = build_agents(run.scene_path.resolve(), round_order(), graph_name=run.graph.graph_name,
                           run_dir=run.run_dir, recording_id=recording_id, options=options)
     run.agents = tuple(agent.config.name for agent in agents)
-    recorders = [Recorder(name, recording_dir, recording_id, day=run.spec.clock.date) for name in run.agents]
+    # One stream for every agent and the launcher: each logs under its own entities, and the
+    # Rerun SDK never frees a stream (agents/runtime/recording.py, RecordingFile).
+    run.recording = shared_recording_file("inprocess", recording_dir, recording_id)
+    recorders = [Recorder(name, recording_dir, recording_id, day=run.spec.clock.date, file=run.recording)
+                 for name in run.agents]
     scheduler = Lockstep(run.graph, agents, recorders, policy=policy_from_env())
-    launcher = Recorder("launcher", recording_dir, recording_id, day=run.spec.clock.date)
+    launcher = Recorder("launcher", recording_dir, recording_id, day=run.spec.clock.date, file=run.recording)
     return scheduler, launcher
 
 

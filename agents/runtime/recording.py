@@ -36,34 +36,105 @@ def clock_epoch_s(day: dt.date | None) -> float:
     return dt.datetime(day.year, day.month, day.day, tzinfo=dt.UTC).timestamp()
 
 
-class Recorder:
-    """Logs to ``<run_dir>/rrd/<agent>-<pid>.rrd``; a no-op when disabled (tests, RERUN=off)."""
+class RecordingFile:
+    """One Rerun stream and the file it writes, ``<run_dir>/rrd/<name>-<pid>.rrd``, rotated into
+    ``<name>-<pid>-s<slot>.rrd`` parts (docs/long_runs.md) when ``CHRONAV_RECORDING_ROTATE_S`` is set.
 
-    def __init__(self, agent: str, run_dir: Path | None, recording_id: str | None,
-                 day: dt.date | None = None) -> None:
-        self.agent = agent
-        self.enabled = bool(run_dir and recording_id and os.environ.get("RERUN", "on") != "off")
-        self._rec: Any = None
-        self.path: Path | None = None
-        self._epoch_s = clock_epoch_s(day)
-        # Rotation (docs/long_runs.md): a new part file per slot of rotate_s sim seconds, named
-        # <agent>-<pid>-s<slot>.rrd; static rows and the blueprint are written again into each part,
-        # so every part opens on its own.
-        self.rotate_s = _rotate_s()
-        self._slot: int | None = None
-        self._statics: list[tuple[str, tuple[Any, ...]]] = []
-        self._blueprint: Any = None
-        if not self.enabled:
-            return
+    Why a class of its own, apart from the agent-facing Recorder: a process that runs every agent
+    (in-process, tools/inprocess.py) writes them all through ONE stream.  rerun-sdk 0.41 never
+    frees a stream once it is made (rerun-io/rerun#2116: its threads and buffers stay after
+    ``disconnect()``, about 3 MB and two threads each), so seven streams a day grew an in-process
+    week by 20 MB a day; one stream a day is within the noise.  Launched, each agent process owns
+    one, as before.  Static rows and the blueprint are remembered and written again into each new
+    part, so every part opens on its own."""
+
+    def __init__(self, name: str, run_dir: Path, recording_id: str) -> None:
         import rerun as rr
 
-        assert run_dir is not None
+        self.name = name
+        self.rotate_s = _rotate_s()
         out_dir = run_dir / "rrd"
         out_dir.mkdir(parents=True, exist_ok=True)
         # pid in the name: a restarted agent must not overwrite what its predecessor recorded.
-        self.path = out_dir / f"{agent}-{os.getpid()}.rrd"
-        self._rec = rr.RecordingStream(APP_ID, recording_id=recording_id)
-        self._rec.save(self.path)
+        self.path = out_dir / f"{name}-{os.getpid()}.rrd"
+        self.stream: Any = rr.RecordingStream(APP_ID, recording_id=recording_id)
+        self.stream.save(self.path)
+        self._slot: int | None = None
+        self._statics: list[tuple[str, tuple[Any, ...]]] = []
+        self._blueprint: Any = None
+
+    def at(self, sim_s: float) -> None:
+        """Rotate to the part of ``sim_s`` if rotating and it starts a new slot."""
+        if self.rotate_s is not None and int(sim_s // self.rotate_s) != self._slot:
+            self._rotate(int(sim_s // self.rotate_s))
+
+    def _rotate(self, slot: int) -> None:
+        """Close the current part and go on in the part of ``slot``; the unslotted first part
+        (rows logged before the clock was set) is dropped once rotated: its static rows follow."""
+        first = self._slot is None
+        previous = self.path
+        self.path = previous.parent / f"{self.name}-{os.getpid()}-s{slot:03d}.rrd"
+        self.stream.save(self.path)
+        self._slot = slot
+        if self._blueprint is not None:
+            self.stream.send_blueprint(self._blueprint)
+        for entity, archetypes in self._statics:
+            self.stream.log(entity, *archetypes, static=True)
+        if first:
+            previous.unlink(missing_ok=True)
+
+    def remember_static(self, entity: str, archetypes: tuple[Any, ...]) -> None:
+        if self.rotate_s is not None:
+            self._statics.append((entity, archetypes))
+
+    def send_blueprint(self, blueprint: Any) -> None:
+        self.stream.send_blueprint(blueprint)
+        self._blueprint = blueprint
+
+    def close(self) -> None:
+        """Flush and write the footer (only a clean disconnect writes it)."""
+        if self.stream is not None:
+            self.stream.disconnect()
+            self.stream = None
+
+
+def shared_recording_file(name: str, run_dir: Path | None, recording_id: str | None) -> RecordingFile | None:
+    """The one stream every Recorder of an in-process run writes through, or None when not recording."""
+    if not recording_enabled(run_dir, recording_id):
+        return None
+    assert run_dir is not None and recording_id is not None
+    return RecordingFile(name, run_dir, recording_id)
+
+
+def recording_enabled(run_dir: Path | None, recording_id: str | None) -> bool:
+    """Recording is on for a run directory and recording id, unless ``RERUN=off``."""
+    return bool(run_dir and recording_id and os.environ.get("RERUN", "on") != "off")
+
+
+class Recorder:
+    """Logs to ``<run_dir>/rrd/<agent>-<pid>.rrd``; a no-op when disabled (tests, RERUN=off).
+
+    With ``file`` (an in-process run's shared RecordingFile) it logs through that stream instead,
+    under its own entities and clock, and leaves closing the file to the file's owner."""
+
+    def __init__(self, agent: str, run_dir: Path | None, recording_id: str | None,
+                 day: dt.date | None = None, file: RecordingFile | None = None) -> None:
+        self.agent = agent
+        self._epoch_s = clock_epoch_s(day)
+        self._owns_file = file is None
+        if file is None and recording_enabled(run_dir, recording_id):
+            assert run_dir is not None and recording_id is not None
+            file = RecordingFile(agent, run_dir, recording_id)
+        else:
+            _rotate_s()   # a bad rotation setting is refused whoever writes the file
+        self._file = file
+        self.enabled = file is not None
+        self._rec: Any = None if file is None else file.stream
+
+    @property
+    def path(self) -> Path | None:
+        """The part being written now (None when not recording)."""
+        return None if self._file is None else self._file.path
 
     def set_day(self, day: dt.date | None) -> None:
         """The scene's date, for the ``clock`` timeline (set before the first ``set_time``)."""
@@ -74,34 +145,18 @@ class Recorder:
         if self._rec is not None:
             import rerun as rr
 
-            if self.rotate_s is not None and int(sim_s // self.rotate_s) != self._slot:
-                self._rotate(int(sim_s // self.rotate_s))
-
+            assert self._file is not None
+            self._file.at(sim_s)
             rr.set_time(TIMELINE, duration=sim_s, recording=self._rec)
             # Integer nanoseconds: float epoch seconds would round 0.1 s steps to ~200 ns.
             rr.set_time(CLOCK_TIMELINE, timestamp=_ns(self._epoch_s, sim_s), recording=self._rec)
 
-    def _rotate(self, slot: int) -> None:
-        """Close the current part and go on in the part of ``slot``; the unslotted first part
-        (rows logged before the clock was set) is dropped once rotated: its static rows follow."""
-        assert self.path is not None
-        first = self._slot is None
-        previous = self.path
-        self.path = previous.parent / f"{self.agent}-{os.getpid()}-s{slot:03d}.rrd"
-        self._rec.save(self.path)
-        self._slot = slot
-        if self._blueprint is not None:
-            self._rec.send_blueprint(self._blueprint)
-        for entity, archetypes in self._statics:
-            self._rec.log(entity, *archetypes, static=True)
-        if first:
-            previous.unlink(missing_ok=True)
-
     def log(self, entity: str, *archetypes: Any, static: bool = False) -> None:
         if self._rec is not None:
             self._rec.log(entity, *archetypes, static=static)
-            if static and self.rotate_s is not None:
-                self._statics.append((entity, archetypes))
+            if static:
+                assert self._file is not None
+                self._file.remember_static(entity, archetypes)
 
     def scalar(self, entity: str, value: float) -> None:
         if self._rec is not None:
@@ -134,19 +189,20 @@ class Recorder:
             self._rec.log(entity, rr.Clear(recursive=recursive))
 
     def send_blueprint(self, blueprint: Any) -> None:
-        if self._rec is not None:
-            self._rec.send_blueprint(blueprint)
-            self._blueprint = blueprint
+        if self._file is not None:
+            self._file.send_blueprint(blueprint)
 
     def flush(self) -> None:
         if self._rec is not None:
             self._rec.flush()
 
     def close(self) -> None:
-        """Flush and write the footer (only a clean disconnect writes it)."""
-        if self._rec is not None:
-            self._rec.disconnect()
-            self._rec = None
+        """Flush and write the footer (only a clean disconnect writes it); a shared file is its
+        owner's to close, so this recorder only stops logging to it."""
+        if self._file is not None and self._owns_file:
+            self._file.close()
+        self._file = None
+        self._rec = None
 
 
 CLOCK_PREFIX = re.compile(r"^(-?\d{2}:\d{2}(?::\d{2})?) ")
