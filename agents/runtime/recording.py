@@ -26,6 +26,8 @@ APP_ID = "chronav"
 TIMELINE = "sim_time"
 CLOCK_TIMELINE = "clock"
 DEFAULT_DAY = dt.date(2026, 11, 25)   # only when no scene date is given (the scenes' own default)
+#: the Rust log target of rerun's "no footer" warning (RecordingFile._save)
+_FOOTER_WARNING_TARGET = "re_log_encoding::rrd::file_sink"
 #: sim seconds per recording part (a run at real time rotates hourly, tools/week.py); unset: one part
 ROTATE_ENV = "CHRONAV_RECORDING_ROTATE_S"
 
@@ -49,6 +51,9 @@ class RecordingFile:
     part, so every part opens on its own."""
 
     def __init__(self, name: str, run_dir: Path, recording_id: str) -> None:
+        # Rerun warns at every part that it has no footer (below): a warning meant for files read
+        # as they are, which ours never are.  Only effective before rerun is first imported.
+        os.environ.setdefault("RUST_LOG", f"warn,{_FOOTER_WARNING_TARGET}=error")
         import rerun as rr
 
         self.name = name
@@ -58,7 +63,7 @@ class RecordingFile:
         # pid in the name: a restarted agent must not overwrite what its predecessor recorded.
         self.path = out_dir / f"{name}-{os.getpid()}.rrd"
         self.stream: Any = rr.RecordingStream(APP_ID, recording_id=recording_id)
-        self.stream.save(self.path)
+        self._save()
         self._slot: int | None = None
         self._statics: list[tuple[str, tuple[Any, ...]]] = []
         self._blueprint: Any = None
@@ -74,7 +79,7 @@ class RecordingFile:
         first = self._slot is None
         previous = self.path
         self.path = previous.parent / f"{self.name}-{os.getpid()}-s{slot:03d}.rrd"
-        self.stream.save(self.path)
+        self._save()
         self._slot = slot
         if self._blueprint is not None:
             self.stream.send_blueprint(self._blueprint)
@@ -82,6 +87,16 @@ class RecordingFile:
             self.stream.log(entity, *archetypes, static=True)
         if first:
             previous.unlink(missing_ok=True)
+
+    def _save(self) -> None:
+        """Write from now on to ``self.path``, without the footer (the RRD manifest).
+
+        Why no footer: to write it at the end, the SDK keeps every chunk's entry in memory for as
+        long as the file is open (measured: ~0.35 kB a chunk; an agent flushing a few entities
+        every 200 ms grew 5-16 MB an hour in a real-time soak, docs/long_runs.md).  A part is never
+        read as it is: the run merges its parts with ``rerun rrd optimize``, which writes the
+        footer of the file users open (as it already did for the parts of a SIGKILLed agent)."""
+        self.stream.save(self.path, write_footer=False)
 
     def remember_static(self, entity: str, archetypes: tuple[Any, ...]) -> None:
         if self.rotate_s is not None:
@@ -92,7 +107,7 @@ class RecordingFile:
         self._blueprint = blueprint
 
     def close(self) -> None:
-        """Flush and write the footer (only a clean disconnect writes it)."""
+        """Flush what is left and close the file."""
         if self.stream is not None:
             self.stream.disconnect()
             self.stream = None
@@ -197,7 +212,7 @@ class Recorder:
             self._rec.flush()
 
     def close(self) -> None:
-        """Flush and write the footer (only a clean disconnect writes it); a shared file is its
+        """Flush what is left and close the file; a shared file is its
         owner's to close, so this recorder only stops logging to it."""
         if self._file is not None and self._owns_file:
             self._file.close()

@@ -94,3 +94,30 @@ def test_an_in_process_run_opens_one_recording_stream(tmp_path: Path, monkeypatc
     entities = _entities(result.rrd_path)
     assert {"events/executive", "events/sim_robot"} <= entities
     assert any(e.startswith("world/map/") for e in entities) and any(e.startswith("world/truth/") for e in entities)
+
+
+def test_parts_are_written_without_footer_and_the_merge_writes_it(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A part's footer made the SDK hold every chunk's entry in memory while the file was open (an
+    agent's memory climbed all day in real time); the merged recording users open has one."""
+
+    from tools.launch import merge_recordings, rerun_binary
+
+    monkeypatch.setenv("RERUN", "on")
+    monkeypatch.delenv(ROTATE_ENV, raising=False)
+    recorder = Recorder("agenda", tmp_path, "rid", day=DAY)
+    for step in range(5):
+        recorder.set_time(9 * 3600.0 + step)
+        recorder.scalar("metrics/objects/tv", float(step))
+        recorder.flush()
+    part = recorder.path
+    recorder.close()
+    assert part is not None
+
+    def verified(path: Path) -> bool:
+        return subprocess.run([str(rerun_binary()), "rrd", "verify", str(path)], capture_output=True,
+                              timeout=60, check=False).returncode == 0
+
+    assert not verified(part)
+    merged = merge_recordings([part], tmp_path / "run.rrd")
+    assert merged is not None and verified(merged) and "metrics/objects/tv" in _entities(merged)
