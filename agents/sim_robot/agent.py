@@ -257,9 +257,16 @@ class SimRobotAgent(Agent):
         return True
 
     def _due_now(self) -> bool:
-        """A pending mission's time has come (the executive is about to start it)."""
+        """A pending mission's time has come and none runs (the executive is about to start it).
+
+        Not while another mission runs: the executive runs them one at a time, so the due one
+        waits for it, and holding the clock for it (``busy_rate=0``) would hold a mission that
+        waits for an activity to start forever (an in-process day without idle skips stalled)."""
+        missions = self.graph.nodes_of_type(NodeType.MISSION)
+        if any(n.attrs.get("state") == MissionState.ACTIVE for n in missions):
+            return False
         return any(n.attrs.get("state") == MissionState.PENDING and float(n.attrs.get("time_s", math.inf)) <= self.now_s
-                   for n in self.graph.nodes_of_type(NodeType.MISSION))
+                   for n in missions)
 
     def skip_to(self, t_s: float) -> None:
         """Jump the sim clock to ``t_s`` with the robot at rest, and carry out what is due by then

@@ -46,3 +46,16 @@ def test_busy_rate_zero_holds_the_clock(tmp_path: Path, situation: str) -> None:
         runs[rate] = _run(sim, 0.4)
     assert runs["0"] == 0.0
     assert runs["1"] > 0.1
+
+
+def test_a_due_mission_behind_a_running_one_does_not_hold_the_clock(tmp_path: Path) -> None:
+    """Missions run one at a time: a due one waits for the running one (here a wait for an activity,
+    which needs the clock to reach the activity's start).  Holding the clock for it deadlocked an
+    in-process day without idle skips (busy_rate=0): nothing changed for 38,000 rounds."""
+    graph, sim = _sim(tmp_path / "behind", busy_rate="0", rate="10")
+    sim.clock.skip_idle = False
+    graph.insert_node(type="mission", name="mission/waiting", attrs={"state": "active", "time_s": sim.now_s})
+    graph.insert_node(type="intention", name="intention/waiting/0",
+                      attrs={"state": "active", "kind": "wait", "until_s": sim.now_s + 600.0})
+    graph.insert_node(type="mission", name="mission/next", attrs={"state": "pending", "time_s": sim.now_s})
+    assert _run(sim, 0.4) > 0.1
