@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Literal, Protocol
 
+from dsr.state_review import review_state
+
 
 if TYPE_CHECKING:
     from dsr.wire import Decoded
@@ -47,10 +49,13 @@ class LocalCheck(Protocol):
 
 
 class TypePolicy:
-    """Base of the simple policies: one yes/no per (sending agent, element kind, type) of a
-    delta.  States are merged as they come (their writers are many)."""
+    """Base of the simple policies: one yes/no per (writing agent, element kind, type).  A
+    delta is refused whole; a state keeps only the writes its writers were allowed
+    (dsr/state_review.py), so a state, the sender's own or one relaying it, never brings
+    what a delta could not (a member's state fetched after its first writes did)."""
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
+    def allows(self, *, agent: str | None, kind: ElementKind, type: str | None) -> bool:
+        """`agent` None: a write nobody has vouched for (relayed in a state)."""
         raise NotImplementedError
 
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
@@ -68,7 +73,10 @@ class TypePolicy:
 
     def review_state(self, message: Decoded, graph: GraphLookup
                      ) -> tuple[Decoded | None, str | None]:
-        return message, None
+        return review_state(message, graph, self.allowed)
+
+    def allowed(self, write: Write) -> bool:
+        return self.allows(agent=write.writer, kind=write.element, type=write.type)
 
     def refusal(self, write: Write) -> str | None:
         if self.allows(agent=write.writer or "", kind=write.element, type=write.type):
@@ -79,11 +87,15 @@ class TypePolicy:
 class AllowAll(TypePolicy):
     """Every agent may write everything."""
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
+    def allows(self, *, agent: str | None, kind: ElementKind, type: str | None) -> bool:
         return True
 
     def check(self, message: Decoded, graph: GraphLookup) -> str | None:
         return None
+
+    def review_state(self, message: Decoded, graph: GraphLookup
+                     ) -> tuple[Decoded | None, str | None]:
+        return message, None
 
 
 class DenyTypes(TypePolicy):
@@ -93,7 +105,9 @@ class DenyTypes(TypePolicy):
         self.types = set(types)
         self.agents = None if agents is None else set(agents)
 
-    def allows(self, *, agent: str, kind: ElementKind, type: str | None) -> bool:
-        if self.agents is not None and agent not in self.agents:
+    def allows(self, *, agent: str | None, kind: ElementKind, type: str | None) -> bool:
+        """An unattributed write (agent None) of a refused type is refused: it may be one of
+        the refused agents'."""
+        if self.agents is not None and agent is not None and agent not in self.agents:
             return True
         return type not in self.types

@@ -63,8 +63,12 @@ def main() -> None:
     each raises the thresholds when it opens its replica (dsr/collector.py).  ``tests/unit/test_cli_imports.py`` guards what `chronav path` imports.
     """
     gc.set_threshold(*GC_THRESHOLDS)
+    exit_code: object = 1
     try:
         app()
+    except SystemExit as exc:
+        exit_code = exc.code
+        raise
     except Exception as exc:
         # A bad CHRONAV_DSR_* variable that no command caught (the DSR reads its limits when it
         # is first imported): name it, no traceback.  Looked up, not imported, so that `chronav
@@ -73,8 +77,13 @@ def main() -> None:
         if errors is None or not isinstance(exc, errors.ConfigError):
             raise
         typer.echo(f"chronav: {exc}; fix or unset that environment variable", err=True)
+        exit_code = 2
         raise SystemExit(2) from None
     finally:
+        # no daemon thread may be in Zenoh's or Rerun's native code at finalisation (its abort
+        # is "FATAL: exception not rethrown"): tools/system/exit_guard.py
+        from tools.system.exit_guard import leave
+        leave(exit_code)
         gc.freeze()
 
 

@@ -35,9 +35,11 @@ def test_two_days_launched_as_processes_rotate_and_account_per_day(tmp_path: Pat
 
 
 def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_path: Path) -> None:
-    """The 2-hour soak's short variant (`tools/bench/bench_week.py --soak-hours`, tools/soak.py): ~40 s of
+    """The 2-hour soak's short variant (`tools/bench/bench_week.py --soak-hours`, tools/soak.py): ~25 s of
     week_tiny's first day as processes at rate 1; every agent sampled, a slope each, the run ended
-    by the soak's own timeout and every process stopped."""
+    by the soak's own timeout and every process stopped.  (25 s: after the 6 s warm-up, a sample every
+    2 s leaves each agent at least 3 samples, the fewest a slope needs, even when the launcher's first
+    status comes 10 s into the run; the 40 s this ran before measured the same things 15 s later.)"""
     import psutil
 
     from tests.support import ProcessGroup
@@ -45,7 +47,7 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     group = ProcessGroup()
     log = tmp_path / "soak.log"
     try:
-        proc = group.spawn(["tools/bench/bench_week.py", "--scene", str(WEEK), "--soak-hours", "0.011",
+        proc = group.spawn(["tools/bench/bench_week.py", "--scene", str(WEEK), "--soak-hours", "0.007",
                             "--soak-warmup-min", "0.1", "--soak-sample-s", "2", "--keep", str(tmp_path / "soak")],
                            log_path=log)
         proc.wait(timeout=240)
@@ -55,7 +57,7 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     assert proc.returncode == 0 and line is not None, log.read_text()[-3000:]
     report = json.loads(line)
     assert report["soak_ok"] and report["day_status"] == "timed_out" and report["restarts_total"] == 0, report
-    assert report["soak_hours"] >= 0.011
+    assert report["soak_hours"] >= 0.007
     for name in agent_names():
         assert isinstance(report[f"soak_mem_slope_mb_per_h_{name}"], float), (name, report)
         assert report[f"soak_processes_{name}"] == 1

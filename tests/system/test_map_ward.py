@@ -41,5 +41,7 @@ def test_map_ward_missions_complete_off_the_maps_walls(tmp_path: Path) -> None:
 
     store = load_store(Path(run["rrd"]))
     hits = np.vstack([points for _, points in points_over_time(store, "/world/truth/robot/laser")])
-    on_walls = np.array([walls.clearance(x, y, reach_m=0.2) <= 0.03 for x, y in hits])
+    # every 10th hit (~12,000 of ~120,000): the share on the walls to well under a percent, for a tenth
+    # of the ~3 CPU seconds one clearance query per hit cost
+    on_walls = np.array([walls.clearance(x, y, reach_m=0.2) <= 0.03 for x, y in hits[::10]])
     assert len(hits) > 1000 and on_walls.mean() > 0.8, f"{on_walls.mean():.0%} of the laser hits are on the map's walls"

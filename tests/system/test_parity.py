@@ -37,6 +37,7 @@ WHERE = {"run_dir", "rrd", "host", "run_wall_s", "trajectory_csv"}
 
 def _merged(results: list[dict[str, Any]]) -> dict[str, Any]:
     return {"returncode": max(r["returncode"] for r in results), "runs": sum(r["runs"] for r in results),
+            "figures": {kind: [p for r in results for p in r["figures"][kind]] for kind in results[0]["figures"]},
             "ok": sum(r["ok"] for r in results), "pending": sum(r["pending"] for r in results),
             "modes": {r["mode"] for r in results}, "tables": [r["table"]["parquet"] for r in results]}
 
@@ -47,8 +48,10 @@ def sweeps(tmp_path_factory: pytest.TempPathFactory, evaluate_runs: EvaluateRuns
     base = tmp_path_factory.mktemp("parity")
 
     def sweep(out: Path, scene: Path, planners: str, mode: str) -> Sweep:
+        # --no-figures: the runs are compared, not the report; drawing its 85 figures was the last
+        # ~12 CPU seconds of each sweep (the report's figures: tests/system/test_evaluate.py)
         return evaluate_runs.start(scene, out, planners, "--first-seed", "4", "--jobs", "1", "--mode", mode,
-                                   run_timeout_s=600)
+                                   "--no-figures", run_timeout_s=600)
 
     launches = {name: sweep(base / f"launch_{name}", scene, planners, "launch")
                 for name, (scene, planners) in STUDIES.items()}
@@ -76,6 +79,8 @@ def test_every_run_completes_in_both_modes(sweeps: dict[str, dict[str, Any]]) ->
         assert sweep["modes"] == {"launch" if name == "launch" else "in-process"}
     missions = {key[3] for key in _rows(sweeps["launch"])}
     assert missions == {"to_lounge", "to_therapy"}
+    for sweep in sweeps.values():
+        assert sweep["figures"] == {"paths": [], "r_of_t": [], "boxes": []}
 
 
 def test_every_metric_of_every_mission_is_identical(sweeps: dict[str, dict[str, Any]]) -> None:

@@ -122,6 +122,24 @@ def test_an_interrupted_sweep_resumes_where_it_stopped(tmp_path: Path, in_thread
     assert "<summary>2 runs (click to show)</summary>" in report
 
 
+def test_no_figures_writes_the_report_without_drawing_any(tmp_path: Path, in_thread: None,
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """`--no-figures` (a sweep whose table is what counts: tests/system/test_parity.py): no PNG is
+    drawn, the report says so, and its tables are all there."""
+    monkeypatch.setattr("tools.launch.run_system", FakeLaunch())
+    result = CliRunner().invoke(app, ["evaluate", str(TINY), "--planners", "social,baseline", "--seeds", "1",
+                                      "--jobs", "1", "--mode", "launch", "--no-figures", "--out", str(tmp_path),
+                                      "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["figures"] == {"paths": [], "r_of_t": [], "boxes": []}
+    assert not list(tmp_path.glob("*.png"))
+    report = Path(summary["report"]).read_text()
+    assert "Not drawn: the study ran with <code>--no-figures</code>" in report and "<img" not in report
+    assert "<h2>Summary</h2>" in report and "<summary>2 runs (click to show)</summary>" in report
+    assert json.loads((tmp_path / "sweep.json").read_text())["figures"] is False
+
+
 @pytest.mark.parametrize(("args", "words"), [
     (["--planners", "social,nav2"], "unknown planner 'nav2'"),
     (["--planners", "social,social"], "named twice"),

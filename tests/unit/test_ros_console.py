@@ -103,6 +103,7 @@ def test_progress_line_and_summary_show_the_problem(tmp_path: Path) -> None:
     text: Any = out.getvalue()
     assert f"problem at the end of the run: ros_bridge: {PROBLEM}" in text
     assert "see below: ros_bridge" in text, "the missions table gives the likely reason"
+    assert text.splitlines()[-1].startswith("TIMED OUT after 3.0 s wall (--timeout): 0/1 mission done")
     assert text.splitlines()[-1].endswith("but ros_bridge reported a problem (above)")
 
 

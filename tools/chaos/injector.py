@@ -109,9 +109,14 @@ class ChaosRun:
         self._resume_all()
 
     def close(self) -> None:
+        """Stop injecting, close the chaos replica, then wait for the injector thread again:
+        closing the session ends any Zenoh call it is still blocked in (a probe, a state
+        fetch), and it must not be inside one when the process ends (tools/system/exit_guard.py)."""
         self.finish()
         if self._replica is not None:
             self._replica.close()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=10)
 
     # --------------------------------------------------------------- injector thread
     def _main(self) -> None:

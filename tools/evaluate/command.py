@@ -232,13 +232,16 @@ class _Progress:
 
 
 MAX_SEEDS = 10_000   # seeds per scene and planner in one study (docs/limits.md)
+#: what a study run with --no-figures draws (tools/evaluate/figures.py all_figures' keys)
+NO_FIGURES: dict[str, list[Path]] = {"paths": [], "r_of_t": [], "boxes": []}
 
 
 def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed: int, jobs: int | None,
              out: Path | None, executor_text: str, resume: bool, timeout_s: float, quiet: bool, command: str,
              mode: str = "in-process", record: bool = True, controllers: str | None = None,
-             model: Path | None = None) -> dict[str, Any]:
-    """The whole study; returns what ``--json`` prints (``model``: the observer's walker model file)."""
+             model: Path | None = None, draw_figures: bool = True) -> dict[str, Any]:
+    """The whole study; returns what ``--json`` prints (``model``: the observer's walker model file;
+    ``draw_figures=False``: the report without its figures, ``--no-figures``)."""
     from tools.evaluate.figures import all_figures
     from tools.evaluate.report import provenance, write_report
     from tools.evaluate.executors import parse_executor
@@ -260,7 +263,7 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
         raise EvaluateError(str(exc)) from None
     jobs = getattr(executor, "jobs", jobs)
     prov = {**provenance(scene_paths, chosen, seed_list, executor_text, jobs or 0, command), "mode": mode, "record": record,
-            "controllers": drivers}
+            "controllers": drivers, "figures": draw_figures}
     (out_dir / SWEEP_FILE).write_text(json.dumps({**prov, "runs": [s.to_dict() for s in specs]}, indent=2))
     earlier = read_ledger(out_dir) if resume else {}
     todo = [s for s in specs if s.key not in earlier]
@@ -283,7 +286,7 @@ def evaluate(scenes: list[str], *, planners: str | None, seeds: int, first_seed:
     methods = [method_label(p, c) for p in chosen for c in drivers]
     shown = [{**row, "planner": method_label(row["planner"], row.get("controller") or DEFAULT_CONTROLLER)}
              for row in rows]
-    figures = all_figures(shown, maps, out_dir, methods)
+    figures = all_figures(shown, maps, out_dir, methods) if draw_figures else NO_FIGURES
     report = write_report(out_dir, shown, ordered, prov, figures, methods, pending=pending)
     launched = [r for r in new if not r.get("interrupted")]
     wanted = {s.key for s in specs}
@@ -361,6 +364,9 @@ def evaluate_command(
                                       "run a full launch of the agents as processes (the reference)"),
         no_record: bool = typer.Option(False, "--no-record",
                                        help="no Rerun recording per run (faster; the report then links none)"),
+        no_figures: bool = typer.Option(False, "--no-figures",
+                                        help="a report without figures (the table, summary and tests only; "
+                                             "a figure per metric costs ~0.1 s of CPU, 85 on a crowd scene)"),
         out: Path = typer.Option(None, "--out", help="the study's directory (default ./evaluations/<date-time>)"),
         executor: str = typer.Option("local", "--executor", help="local, or dask://HOST:PORT of a Dask scheduler"),
         resume: bool = typer.Option(False, "--resume", help="continue the interrupted sweep in --out"),
@@ -381,7 +387,8 @@ def evaluate_command(
     try:
         summary = evaluate(scenes, planners=planners, controllers=controllers, seeds=seeds, first_seed=first_seed, jobs=jobs, out=out,
                            executor_text=executor, resume=resume, timeout_s=timeout, quiet=as_json,
-                           command=command, mode=mode, record=not no_record, model=checked_model(model))
+                           command=command, mode=mode, record=not no_record, model=checked_model(model),
+                           draw_figures=not no_figures)
     except EvaluateError as exc:
         err.print(f"error: {exc}", highlight=False, markup=False, soft_wrap=True)
         raise typer.Exit(2) from None

@@ -261,7 +261,8 @@ def write_report(out_dir: Path, rows: Sequence[Mapping[str, Any]], runs: Sequenc
     parts += _per_mission_html(summaries, rows, planners, metrics)
     parts += _tests_html(tests)
     parts += live_prediction_html(runs)       # tools/evaluate/prediction_section.py
-    parts += _figures_html(figures, main)
+    parts += _figures_html(figures, main) if prov.get("figures", True) else [
+        "<h2>Figures</h2><p class='note'>Not drawn: the study ran with <code>--no-figures</code>.</p>"]
     parts += _runs_html(runs, out_dir)
     path = out_dir / REPORT
     path.write_text("\n".join(parts), encoding="utf-8")
