@@ -84,10 +84,20 @@ def uncorrected(parts: Sequence[tuple[NDArray[np.float64], NDArray[np.float64], 
 
 
 def fit(features: NDArray[np.float64], speeds: NDArray[np.float64], futures: NDArray[np.float64], hidden: int,
-        weight_decay: float, seed: int, iterations: int) -> tuple[dict[str, NDArray[np.float64]], dict[str, float]]:
-    """The network's parameters (module doc) and the loss before (no correction) and after."""
+        weight_decay: float, seed: int, iterations: int,
+        mirror: bool = True) -> tuple[dict[str, NDArray[np.float64]], dict[str, float]]:
+    """The network's parameters (module doc) and the loss before (no correction) and after; with
+    ``mirror`` every example also seen in a mirror (``walker_model.mirrored``: a left turn is a right
+    turn mirrored)."""
     from scipy.optimize import minimize
 
+    from agents.lib.perception.walker_model import mirrored
+
+    if mirror:
+        flipped = futures.copy()
+        flipped[:, :, 1] *= -1.0
+        features, speeds, futures = (np.concatenate([features, mirrored(features)]), np.concatenate([speeds, speeds]),
+                                     np.concatenate([futures, flipped]))
     mean, scale = features.mean(axis=0), features.std(axis=0) + 1e-6
     z = (features - mean) / scale
     t = np.arange(1, PRED + 1) * DT
@@ -150,7 +160,7 @@ def train(files: Sequence[Path], noise: float = 0.02, noise_seeds: Sequence[int]
                    "examples": sum(len(f) for f, _, _ in mine), "ade_m_without_model": uncorrected(mine)}
                   for p, mine in zip(files, per_file, strict=True)],
         "seed": seed, "noise_m": noise, "noise_seeds": list(noise_seeds), "hidden": hidden,
-        "weight_decay": weight_decay, "iterations": iterations, "examples": int(len(features)),
+        "weight_decay": weight_decay, "iterations": iterations, "mirrored": True, "examples": int(len(features)),
         "question": f"observe {OBS} x {DT} s, predict {PRED} x {DT} s", **losses}
     model = WalkerModel(min_speed_mps=STILL_MPS, max_correction_mps=max_correction, noise_m=noise,
                         provenance=provenance, **params)

@@ -268,7 +268,8 @@ def test_the_shipped_walker_model_is_the_training_scripts_on_the_two_ucy_files()
     model = walker_model.shipped()
     assert raw["format"] == walker_model.FORMAT and raw["version"] == walker_model.VERSION
     provenance = model.provenance
-    assert provenance["command"].startswith("tools/train_prediction.py")
+    assert provenance["command"].startswith(("chronav predict train", "tools/train_prediction.py"))
+    assert provenance["mirrored"] is True, "trained on each walk and its mirror image (walker_model.mirrored)"
     assert [f["name"] for f in provenance["files"]] == ["crowds_zara03.txt", "uni_examples.txt"]
     assert provenance["seed"] == 0 and provenance["noise_m"] == 0.02 and 0 not in provenance["noise_seeds"], \
         "the benchmark's noise seed 0 is never trained on"
@@ -360,3 +361,16 @@ def test_predict_evaluate_scores_any_registered_predictor(tmp_path: Path) -> Non
     assert (row["ade"], row["fde"]) == pytest.approx((row["cv_ade"], row["cv_fde"]), abs=1e-4)
     bad = runner.invoke(app, ["predict", "evaluate", str(data), "--predictor", "nope"])
     assert bad.exit_code == 2 and "constant_velocity (chronav)" in " ".join(bad.output.replace("│", " ").split())
+
+
+def test_mirrored_features_are_the_features_of_the_mirrored_walk() -> None:
+    """The training's mirror augmentation (walker_model.mirrored) must be what a mirror does to a
+    walk: the features of the walk reflected across any line equal the mirrored features."""
+    from agents.lib.perception import walker_model
+
+    rng = np.random.default_rng(3)
+    points = np.cumsum(rng.normal(0.4, 0.1, (5, walker_model.LAGS, 2)), axis=1)
+    velocity = (points[:, -1] - points[:, -2]) / walker_model.GRID_S
+    flip = np.array([1.0, -1.0])                         # reflection across the x axis
+    np.testing.assert_allclose(walker_model.features(points * flip, velocity * flip),
+                               walker_model.mirrored(walker_model.features(points, velocity)), atol=1e-12)
