@@ -270,6 +270,7 @@ def test_the_shipped_walker_model_is_the_training_scripts_on_the_two_ucy_files()
     provenance = model.provenance
     assert provenance["command"].startswith(("chronav predict train", "tools/train_prediction.py"))
     assert provenance["mirrored"] is True, "trained on each walk and its mirror image (walker_model.mirrored)"
+    assert provenance["scales"] == list(train_prediction.SCALES), "and on each walk scaled (speed augmentation)"
     assert [f["name"] for f in provenance["files"]] == ["crowds_zara03.txt", "uni_examples.txt"]
     assert provenance["seed"] == 0 and provenance["noise_m"] == 0.02 and 0 not in provenance["noise_seeds"], \
         "the benchmark's noise seed 0 is never trained on"
