@@ -6,7 +6,9 @@ asks the benchmark's question (tools/prediction_eval.py: observe 8 frames = 3.2 
 window start gets a fresh ``observer_tracker(noise, learned=False)`` fed the observed frames of
 everyone present, with ``--noise`` m of detection noise drawn per annotation for each of
 ``--noise-seeds`` (noise augmentation: the same walk seen through different noise; the benchmark's
-own seed is 0, so the default training seeds 1 and 2 never see the benchmark's noise).  For every
+own seed is 0, so the default training seeds 1 and 2 never see the benchmark's noise), and again
+with every walk scaled by ``SCALES`` (speed augmentation); each example is also learned in a mirror
+(``walker_model.mirrored``).  For every
 window whose track the model applies to (``Tracker.model_inputs``: a walker seen over the whole
 3.2 s), the target is the true future in the walker's frame.  The network (one tanh layer) is
 fitted by L-BFGS (scipy) from a seeded start, minimising the mean Euclidean distance between the
