@@ -115,3 +115,21 @@ def test_a_bad_model_is_refused_before_anything_runs(tmp_path: Path) -> None:
         result = runner.invoke(app, command, env={"COLUMNS": "1000"})   # the error box: the path on one line
         assert result.exit_code == 2, result.output
         assert "bad.json" in result.output and "Traceback" not in result.output
+
+
+def test_training_also_learns_each_walk_scaled(tmp_path: Path) -> None:
+    """Speed augmentation (train_prediction.SCALES): a scaled copy is the same walks that much
+    faster, seen through fresh detection noise of the same size; the file's provenance says so."""
+    import numpy as np
+
+    from tools import train_prediction
+
+    data = _walkers(tmp_path / "site.txt")
+    plain = train_prediction.examples(data, 0.02, 1)
+    fast = train_prediction.examples(data, 0.02, 1, scale=1.25)
+    assert len(fast[0]) == len(plain[0]) > 0
+    assert abs(float(np.median(fast[1] / plain[1])) - 1.25) < 0.03        # fit speeds, within the noise
+    assert not np.allclose(fast[1], 1.25 * plain[1], atol=1e-6)             # fresh noise, not the same draw scaled
+    summary = _train(data, tmp_path / "m.json")
+    assert summary["scales"] == list(train_prediction.SCALES) and summary["mirrored"] is True
+    assert summary["training_examples"] == 2 * len(train_prediction.SCALES) * summary["examples"]

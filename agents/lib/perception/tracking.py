@@ -78,7 +78,19 @@ def observer_tracker(noise_xy: float, model: WalkerModel | None = None, learned:
     measures what runs."""
     sigma = max(noise_xy, MIN_SIGMA_M)
     model = (model or walker_model.shipped()) if learned else None
-    return Tracker(measurement_sigma=sigma, model=model if model is not None and model.applies_to(sigma) else None)
+    return Tracker(measurement_sigma=sigma, model=model if model is not None and model.applies_to(sigma) else None,
+                   still_mps=still_threshold(noise_xy))
+
+
+def still_threshold(noise_xy: float) -> float:
+    """The speed below which the tracker reports a person of a ``noise_xy`` m detector as standing:
+    ``STILL_MPS`` (about 2.5 standard deviations of the fit's velocity noise, which is about
+    ``VELOCITY_SIGMA_MPS`` for any detector of ``MIN_SIGMA_M`` or worse: a worse one averages more
+    detections), scaled down for a better detector, whose velocity noise is proportionally smaller,
+    to zero for a perfect one.  Why: UCY annotates people drifting at 0.02-0.1 m/s (a fifth of the
+    crowds_zara03 windows); a perfect detector reporting them as standing made the prediction 1.8 %
+    worse than constant velocity there (docs/prediction.md)."""
+    return STILL_MPS * min(1.0, max(noise_xy, 0.0) / MIN_SIGMA_M)
 
 
 @dataclass(frozen=True)
@@ -129,6 +141,7 @@ class Tracker:
     heading_smoothing: float = 0.5
     smoothing_s: float = SMOOTHING_S
     velocity_sigma: float = VELOCITY_SIGMA_MPS
+    still_mps: float = STILL_MPS              # slower is reported as standing (``still_threshold``)
     model: WalkerModel | None = None          # the learned velocity correction (walker_model.py); None: the fit's
     tracks: dict[str, Track] = field(default_factory=dict)
     last_s: float | None = None
@@ -269,13 +282,13 @@ class Tracker:
 
     def estimate(self, name: str, t_s: float) -> tuple[float, float, float, float, float]:
         """What the observer publishes of a track: x, y, heading, vx, vy; the velocity is the walker
-        model's where it applies (``model_inputs``), else the fit's; a speed below ``STILL_MPS`` is
+        model's where it applies (``model_inputs``), else the fit's; a speed below ``still_mps`` is
         reported as standing still."""
         track = self.tracks[name]
         vx, vy = self.velocity(name, t_s)
         if self.model is not None and self.last_s == t_s:
             vx, vy = self._learned(t_s).get(name, (vx, vy))
-        if math.hypot(vx, vy) < STILL_MPS:
+        if math.hypot(vx, vy) < self.still_mps:
             vx = vy = 0.0
         return track.x, track.y, track.theta, vx, vy
 
