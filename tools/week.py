@@ -239,6 +239,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
     from agents.lib.agenda import AgendaError
     from agents.world.scene_world import resolve_world
     from dsr import DSRError
+    from dsr.collector import release_free_memory
     from scenes.loader import load_scene
     from scenes.yamlio import SourceError
     from tools.launch import _make_run_dir
@@ -285,6 +286,9 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
                 run.days.append({**entry})
                 run.write()
                 continue
+            # The day's agents are gone (launched) or torn down (in-process): what they freed goes
+            # back to the system before the next day, so the run's memory does not creep up.
+            release_free_memory()
             sampler.finish()
             entry.update(status=_outcome(day_result), rrd=_rel(day_result.rrd_path, run_dir),
                          run_dir=_rel(day_result.run_dir, run_dir))

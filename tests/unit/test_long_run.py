@@ -168,10 +168,16 @@ def test_the_index_opens_a_day_of_the_run_in_the_screenshot_tool_and_the_viewer(
 
 def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import dsr.collector
+
     monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    released: list[int] = []
+    real_release = dsr.collector.release_free_memory
+    monkeypatch.setattr(dsr.collector, "release_free_memory", lambda: released.append(real_release()) or 0)
     tiny = WEEK.parent / "eval_tiny.yaml"
     result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "3", "--no-record", "--json"])
     assert result.exit_code == 0, result.output
+    assert len(released) == 3          # what each day freed went back to the system at its end
     summary = json.loads(result.stdout)
     assert [(d["date"], d["status"], list(d["missions"])) for d in summary["days"]] == [
         ("2026-11-25", "ok", ["cross", "dock"]), ("2026-11-26", "ok", ["cross", "dock"]),
