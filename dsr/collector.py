@@ -15,6 +15,7 @@ from __future__ import annotations
 import gc
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import cache
 
 #: the collector's thresholds in a process holding a replica (see tune_collector)
 GC_THRESHOLDS = (50_000, 20, 20)
@@ -59,7 +60,7 @@ def gc_paused(freeze_if: Callable[[], bool] | None = None) -> Iterator[None]:
             gc.enable()
 
 
-def release_free_memory() -> int:
+def release_free_memory(collect: bool = True) -> int:
     """Collect the cyclic garbage and hand the C heap's free pages back to the system; returns 0,
     or 1 when the C library gave memory back (glibc's ``malloc_trim``).
 
@@ -68,28 +69,35 @@ def release_free_memory() -> int:
     process's memory only ever climbs to its high-water mark plus fragmentation (measured on an
     in-process week: 9-14 MB a day, which this call returns; docs/long_runs.md).  Called between
     days and every few minutes of an agent's life (``FreeMemoryTimer``), it costs one full
-    collection (tens of ms on an agent's heap, much of it frozen after the join)."""
-    import ctypes
-    import ctypes.util
+    collection (tens of ms on a heap of 10^5-10^6 objects), or none with ``collect=False`` (an
+    agent's loop: its collector already runs full collections every few minutes of real time)."""
+    if collect:
+        gc.collect()
+    trim = _malloc_trim()
+    return 0 if trim is None else int(trim(0))
 
-    gc.collect()
-    name = ctypes.util.find_library("c")
-    if name is None:
-        return 0
+
+@cache
+def _malloc_trim() -> Callable[[int], int] | None:
+    """glibc's ``malloc_trim``, looked up once; None on another C library (musl, macOS)."""
+    import ctypes
+
     try:
-        trim = ctypes.CDLL(name).malloc_trim
-    except (OSError, AttributeError):   # not glibc (musl, macOS): nothing to hand back this way
-        return 0
-    return int(trim(0))
+        return ctypes.CDLL("libc.so.6").malloc_trim
+    except (OSError, AttributeError):
+        return None
 
 
 class FreeMemoryTimer:
-    """Calls ``release_free_memory`` at most every ``every_s`` seconds of the given clock."""
+    """Calls ``release_free_memory`` (with ``collect``) at most every ``every_s`` seconds of the given
+    clock."""
 
-    def __init__(self, every_s: float = 600.0, clock: Callable[[], float] | None = None) -> None:
+    def __init__(self, every_s: float = 300.0, clock: Callable[[], float] | None = None,
+                 collect: bool = False) -> None:
         import time
 
         self.every_s = every_s
+        self.collect = collect
         self.clock = clock or time.monotonic
         self._last = self.clock()
 
@@ -99,5 +107,5 @@ class FreeMemoryTimer:
         if now - self._last < self.every_s:
             return False
         self._last = now
-        release_free_memory()
+        release_free_memory(self.collect)
         return True

@@ -94,6 +94,7 @@ def stop_on_signals(name: str, trace_after_s: float = STOP_TRACE_S) -> threading
 def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
+    from dsr.collector import FreeMemoryTimer
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
 
@@ -113,6 +114,9 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
             agent.setup(graph, recorder)
             log.info("%s joined graph %r", config.name, config.graph)
             heartbeat = Heartbeat(graph, config.name)
+            # An agent lives all day in real time: what its heap frees goes back to the system
+            # every few minutes (dsr/collector.py), or its memory creeps up for good.
+            free_memory = FreeMemoryTimer()
             try:
                 while not stop.is_set():
                     if parent is not None and os.getppid() != parent:
@@ -122,6 +126,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                     graph.dispatch(timeout=0.0)
                     agent.step()
                     heartbeat.maybe_beat(agent.problem)
+                    free_memory.maybe_release()
                     remaining = config.period_s - (time.monotonic() - started)
                     if remaining > 0:
                         # Wait for signals (DSR changes) rather than sleeping blind.

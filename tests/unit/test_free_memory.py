@@ -28,7 +28,7 @@ def test_release_free_memory_collects_cycles_and_trims_the_c_heap() -> None:
 def test_the_timer_releases_at_most_once_per_period(monkeypatch: pytest.MonkeyPatch) -> None:
     now = [100.0]
     calls: list[float] = []
-    monkeypatch.setattr(collector, "release_free_memory", lambda: calls.append(now[0]) or 0)
+    monkeypatch.setattr(collector, "release_free_memory", lambda collect=True: calls.append(now[0]) or 0)
     timer = collector.FreeMemoryTimer(every_s=600.0, clock=lambda: now[0])
     for t in (100.0, 400.0, 699.0, 700.0, 1000.0, 1300.5):
         now[0] = t

@@ -173,7 +173,7 @@ def test_days_on_the_command_line_repeat_a_single_day_scene_on_the_next_dates(
     monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
     released: list[int] = []
     real_release = dsr.collector.release_free_memory
-    monkeypatch.setattr(dsr.collector, "release_free_memory", lambda: released.append(real_release()) or 0)
+    monkeypatch.setattr(dsr.collector, "release_free_memory", lambda collect=True: released.append(real_release()) or 0)
     tiny = WEEK.parent / "eval_tiny.yaml"
     result = CliRunner().invoke(app, ["launch", str(tiny), "--in-process", "--days", "3", "--no-record", "--json"])
     assert result.exit_code == 0, result.output
