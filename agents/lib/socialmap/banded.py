@@ -73,6 +73,7 @@ def _banded(xs, ys, x0, y0, cos_t, sin_t, factors, weight, levels, table, out): 
     if beyond < 0.0:
         return
     root = math.sqrt(beyond)
+    c_low, c_mid, c_high = math.log(weight / low), math.log(weight / mid), math.log(weight / high)
     for i in range(ys.shape[0]):
         dy = ys[i] - y0
         dy_sin = dy * sin_t
@@ -87,14 +88,19 @@ def _banded(xs, ys, x0, y0, cos_t, sin_t, factors, weight, levels, table, out): 
             q = su * su + sv * sv
             if q > beyond:
                 continue
-            density = weight * math.exp(-q)
-            band = 0
-            if density >= low:
-                band += 1
-            if density >= mid:
-                band += 1
-            if density >= high:
-                band += 1
+            # weight exp(-q) >= level  <=>  q <= log(weight / level): decided on q unless q is within
+            # the margin of one of those (where exp's last bits could matter: computed as before)
+            if abs(q - c_low) <= _MARGIN or abs(q - c_mid) <= _MARGIN or abs(q - c_high) <= _MARGIN:
+                density = weight * math.exp(-q)
+                band = 0
+                if density >= low:
+                    band += 1
+                if density >= mid:
+                    band += 1
+                if density >= high:
+                    band += 1
+            else:
+                band = (q < c_low) + (q < c_mid) + (q < c_high)
             out[i, j] = table[band]
 
 
@@ -163,6 +169,9 @@ def banded_group(spaces: Sequence[PersonalSpace], poses: Sequence[tuple[float, f
     how many of ``levels`` a group's density reaches at the cell, the density being the sum of its
     members' Gaussians (``groups.group_density``; member m has ``spaces[m]`` at ``poses[m]``, x, y,
     theta).  What ``zones.band_patches`` makes of ``zones.density_windows``, without the densities."""
+    if len(poses) == 1:                # a lone person: their Gaussian alone (1.0 x g is g, bit for bit)
+        (x0, y0, theta), = poses
+        return banded_gaussian(spaces[0], x0, y0, theta, xs, ys, 1.0, levels, table)
     out = np.empty((len(ys), len(xs)), dtype=COST_DTYPE)
     if not poses:
         out.fill(table[0])
