@@ -499,7 +499,8 @@ class DSRGraph:
         with self._write(rollback=False) as tx:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
-            self._check_node_limits(node_id, values)
+            if not _cannot_grow(values, self._nodes[node_id].attrs):    # as update_node does
+                self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             self._local(tx, self._node_table, node_id,

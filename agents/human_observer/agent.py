@@ -193,9 +193,9 @@ class HumanObserverAgent(Agent):
         """Write a person when new, or moved, turned or changed speed enough: sensor jitter is not news."""
         x, y, theta, vx, vy = estimate
         old = self.published.get(name)
-        if self.perfect and old == estimate and self.graph.get_node_by_name(name) is not None:
+        if self.perfect and old == estimate and self.graph.node_id_of(name) is not None:
             return   # a perfect sensor reports every change, however small (what offline assumes)
-        if not self.perfect and self.graph.get_node_by_name(name) is not None and old is not None \
+        if not self.perfect and self.graph.node_id_of(name) is not None and old is not None \
                 and math.hypot(x - old[0], y - old[1]) < PUBLISH_MOVE_M \
                 and abs(angle_difference(theta, old[2])) < PUBLISH_TURN_RAD \
                 and math.hypot(vx - old[3], vy - old[4]) < PUBLISH_SPEED_MPS:
