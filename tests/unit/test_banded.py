@@ -68,3 +68,19 @@ def test_zone_patches_equal_the_banded_densities_cell_for_cell() -> None:
             np.testing.assert_array_equal(a.values, b.values)
             bands_seen |= set(np.unique(a.values).tolist())
     assert bands_seen == {0.0, 3.0, 10.0, math.inf}, "every band is exercised"
+
+
+def test_banded_gaussians_are_banded_gaussian_at_each_centre() -> None:
+    """The batch a walker's predicted positions are banded with gives each position's banded_gaussian."""
+    from agents.lib.socialmap.banded import banded_gaussians
+
+    rng = np.random.default_rng(5)
+    table = np.array([0.0, 3.0, 10.0, math.inf], dtype=COST_DTYPE)
+    levels = np.array([0.1, 0.4, 0.8])
+    space, theta = PersonalSpace(1.0, 0.5, 0.67, 0.67), 0.9
+    centres = [(float(rng.uniform(-2, 2)), float(rng.uniform(-2, 2)), float(rng.uniform(0.1, 1.0)),
+                -4 + (np.arange(rng.integers(1, 90)) + 0.5) * 0.05, -4 + (np.arange(rng.integers(1, 90)) + 0.5) * 0.05)
+               for _ in range(40)]
+    for (x, y, w, xs, ys), ours in zip(centres, banded_gaussians(space, theta, centres, levels, table), strict=True):
+        np.testing.assert_array_equal(ours, banded_gaussian(space, x, y, theta, xs, ys, w, levels, table))
+    assert banded_gaussians(space, theta, [], levels, table) == []

@@ -116,6 +116,25 @@ def banded_gaussian(space: PersonalSpace, x0: float, y0: float, theta: float, xs
     return out
 
 
+def banded_gaussians(space: PersonalSpace, theta: float,
+                     centres: Sequence[tuple[float, float, float, NDArray[np.float64], NDArray[np.float64]]],
+                     levels: NDArray[np.float64], table: NDArray[np.float32]) -> list[NDArray[np.float32]]:
+    """``banded_gaussian`` of one space and heading at several centres: (x, y, weight, xs, ys) each
+    (a walker's predicted positions).  The same arrays; the space's factors, the heading's cosine
+    and sine and the tables converted once, not per position."""
+    factors = np.asarray(half_axis_factors(space), dtype=np.float64)
+    cos_t, sin_t = math.cos(theta), math.sin(theta)
+    levels = np.asarray(levels, dtype=np.float64)
+    table = np.asarray(table, dtype=COST_DTYPE)
+    found = []
+    for x0, y0, weight, xs, ys in centres:
+        out = np.empty((len(ys), len(xs)), dtype=COST_DTYPE)
+        _banded(np.ascontiguousarray(xs, dtype=np.float64), np.ascontiguousarray(ys, dtype=np.float64), float(x0),
+                float(y0), cos_t, sin_t, factors, float(weight), levels, table, out)
+        found.append(out)
+    return found
+
+
 @numba.njit(cache=True, nogil=True)
 def _banded_sum(xs, ys, x0s, y0s, cos_ts, sin_ts, factors, levels, table, out):   # pragma: no cover - compiled
     n = x0s.shape[0]
