@@ -45,7 +45,7 @@ from dsr.model import (Attrs, Edge, Node, check_agent_name, check_attrs, check_n
 from dsr.outbox import Outbox, Outgoing
 from dsr.signals import Event, PollSource, SignalHub, SpinPolicy
 from dsr.table import Changes, Encoded, ElementTable
-from dsr.writes import Element
+from dsr.writes import Element, Write
 
 if TYPE_CHECKING:
     import networkx
@@ -499,7 +499,8 @@ class DSRGraph:
         with self._write(rollback=False) as tx:
             if node_id not in self._view:
                 raise NodeNotFoundError(f"cannot update node {node_id}: not in the graph")
-            self._check_node_limits(node_id, values)
+            if not _cannot_grow(values, self._nodes[node_id].attrs):    # as update_node does
+                self._check_node_limits(node_id, values)
             hlc = self.clock.tick()
             me = self.replica_id
             self._local(tx, self._node_table, node_id,
@@ -576,10 +577,14 @@ class DSRGraph:
     def _check_local(self, element: Element, key: Any, delta: dict[str, Any]) -> None:
         """Ask the write policy about a local write before it changes anything; a refusal
         raises WriteRefusedError naming the write (what every other replica would refuse)."""
-        from dsr.writes import local_writes
+        from dsr.writes import attr_writes, local_writes
         refusal = self.local_policy.refusal
-        valued: frozenset[str] = getattr(self.local_policy, "valued", frozenset())
-        for write in local_writes(self, self.agent, element, key, delta, self._cascade, valued):
+        if len(delta) == 1 and "attrs" in delta:        # an attribute update: the common write
+            writes: Iterable[Write] = attr_writes(self, self.agent, element, key, delta["attrs"])
+        else:
+            valued: frozenset[str] = getattr(self.local_policy, "valued", frozenset())
+            writes = local_writes(self, self.agent, element, key, delta, self._cascade, valued)
+        for write in writes:
             problem = refusal(write)
             if problem is not None:
                 raise WriteRefusedError(problem)

@@ -13,7 +13,7 @@ reviewed differently (dsr/state_review.py).
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple, Protocol
 
 from dsr.crdt import REMOVAL_RECEIPT
@@ -141,6 +141,22 @@ def local_writes(graph: GraphLookup, agent: str, element: Element, key: int | tu
         src, dst, edge_type = key
         yield from _element_writes(agent, state, "edge", edge_type, graph.node_type_of(src),
                                    graph.node_type_of(dst), cascade, valued)
+
+
+def attr_writes(graph: GraphLookup, agent: str, element: Element, key: int | tuple[int, int, str],
+                attrs: Iterable[str]) -> list[Write]:
+    """``local_writes`` of an attribute-only change (a delta of ``attrs`` registers alone: no add, no
+    removal, no type): one ``attr`` write per key, without building the element state.  Why: every
+    pose and sensor update of every agent is one, and the generic path was a tenth of the
+    observer's time with a crowd (tests/unit/test_dsr_policy.py compares the two)."""
+    if element == "node":
+        assert isinstance(key, int)
+        type_ = graph.node_type_of(key)
+        return [Write(agent, "node", type_, "attr", name) for name in attrs]
+    assert isinstance(key, tuple)
+    src, dst, edge_type = key
+    src_type, dst_type = graph.node_type_of(src), graph.node_type_of(dst)
+    return [Write(agent, "edge", edge_type, "attr", name, src_type, dst_type) for name in attrs]
 
 
 def explain(write: Write) -> str:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import datetime as dt
+from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, PlainSerializer,
@@ -437,6 +438,11 @@ class Scene(Strict):
 
     def room_at(self, x: float, y: float) -> str | None:
         """Name of the room containing (x, y) (first match), or None."""
+        return self.rooms_at([x], [y])[0]
+
+    def rooms_at(self, xs: Sequence[float], ys: Sequence[float]) -> list[str | None]:
+        """``room_at`` of many points at once (one vectorised test per room: the observer asks for
+        every person at every tick)."""
         import numpy as np
         import shapely
 
@@ -445,5 +451,11 @@ class Scene(Strict):
             shapes = np.array([shapely.Polygon(room.polygon) for room in self.rooms], dtype=object)
             shapely.prepare(shapes)
             self._room_shapes = (self.rooms, shapes)
-        inside = shapely.intersects_xy(self._room_shapes[1], x, y)     # a point intersects = is covered
-        return self.rooms[int(np.argmax(inside))].name if inside.any() else None
+        if not len(xs) or not self.rooms:
+            return [None] * len(xs)
+        # rooms x points; a point intersects = is covered
+        inside = shapely.intersects_xy(self._room_shapes[1][:, np.newaxis], np.asarray(xs, dtype=np.float64),
+                                       np.asarray(ys, dtype=np.float64))
+        first = np.argmax(inside, axis=0).tolist()
+        found = inside.any(axis=0).tolist()
+        return [self.rooms[k].name if hit else None for k, hit in zip(first, found, strict=True)]

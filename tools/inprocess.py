@@ -109,6 +109,8 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
 
     check_rate(rate)
     check_timeout(timeout_s)
+    from dsr.collector import tune_collector
+    tune_collector()     # this process holds the run's replica: the collector policy of one that does
     loaded = load_world(scene)
     spec = loaded.scene
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}-{threading.get_ident() % 10000}"

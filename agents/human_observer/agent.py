@@ -148,10 +148,12 @@ class HumanObserverAgent(Agent):
                 del self.published[name]
                 self.trails.pop(name, None)
         items = list(estimates.items())
+        rooms = self.scene.rooms_at([e[0] for e in estimates.values()], [e[1] for e in estimates.values()])
         for start in range(0, len(items), PUBLISH_BATCH):
             with self.graph.transaction():
-                for name, estimate in items[start:start + PUBLISH_BATCH]:
-                    self._publish(name, self.roles.get(name, "resident"), estimate, now_s)
+                for (name, estimate), room in zip(items[start:start + PUBLISH_BATCH], rooms[start:start + PUBLISH_BATCH],
+                                                  strict=True):
+                    self._publish(name, self.roles.get(name, "resident"), estimate, now_s, room)
         positions = {name: (e[0], e[1]) for name, e in estimates.items()}
         seen = {name: (e[0], e[1], e[2], math.hypot(e[3], e[4])) for name, e in estimates.items()}
         write_interactions(self.graph, interaction_pairs(positions, running_activities(self.graph),
@@ -189,16 +191,18 @@ class HumanObserverAgent(Agent):
         key = f"t{round(now_s * 10)}" if still_pose is None else "p{:.3f},{:.3f},{:.3f}".format(*still_pose)
         return np.random.default_rng([self.seed, zlib.crc32(f"{name}|{key}".encode())])
 
-    def _publish(self, name: str, role: str, estimate: tuple[float, float, float, float, float], now_s: float) -> None:
-        """Write a person when new, or moved, turned or changed speed enough: sensor jitter is not news."""
+    def _publish(self, name: str, role: str, estimate: tuple[float, float, float, float, float], now_s: float,
+                 room: str | None) -> None:
+        """Write a person (in ``room``, the scene's room at their estimate) when new, or moved, turned
+        or changed speed enough: sensor jitter is not news."""
         x, y, theta, vx, vy = estimate
         old = self.published.get(name)
-        if self.perfect and old == estimate and self.graph.get_node_by_name(name) is not None:
+        if self.perfect and old == estimate and self.graph.node_id_of(name) is not None:
             return   # a perfect sensor reports every change, however small (what offline assumes)
-        if not self.perfect and self.graph.get_node_by_name(name) is not None and old is not None \
+        if not self.perfect and self.graph.node_id_of(name) is not None and old is not None \
                 and math.hypot(x - old[0], y - old[1]) < PUBLISH_MOVE_M \
                 and abs(angle_difference(theta, old[2])) < PUBLISH_TURN_RAD \
                 and math.hypot(vx - old[3], vy - old[4]) < PUBLISH_SPEED_MPS:
             return
-        write_person(self.graph, name, role, (x, y, theta), self.scene.room_at(x, y), now_s, (vx, vy))
+        write_person(self.graph, name, role, (x, y, theta), room, now_s, (vx, vy))
         self.published[name] = estimate

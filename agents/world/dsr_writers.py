@@ -35,13 +35,17 @@ def _world(graph: GraphWriter) -> Node:
 
 
 def _set_in_room(graph: GraphWriter, node_id: int, room_name: str | None) -> None:
-    """Exactly one ``in`` edge from the node, to ``room_name`` (none when it is in no room)."""
-    room = graph.get_node_by_name(room_name) if room_name else None
+    """Exactly one ``in`` edge from the node, to ``room_name`` (none when it is in no room).
+    (The room by id only: a snapshot of it would copy its polygon at every person's every write.)"""
+    room_id = graph.node_id_of(room_name) if room_name else None
+    there = False
     for edge in graph.edges_from(node_id, EdgeType.IN):
-        if room is None or edge.dst != room.id:
+        if edge.dst == room_id:
+            there = True
+        else:
             graph.delete_edge(node_id, edge.dst, EdgeType.IN)
-    if room is not None and graph.get_edge(node_id, room.id, EdgeType.IN) is None:
-        graph.insert_or_assign_edge(node_id, room.id, EdgeType.IN, attrs={})
+    if room_id is not None and not there:
+        graph.insert_or_assign_edge(node_id, room_id, EdgeType.IN, attrs={})
 
 
 def _set_pose(graph: GraphWriter, parent_id: int, node_id: int, pose: Mapping[str, float]) -> None:
@@ -160,14 +164,16 @@ def write_person(graph: GraphWriter, name: str, role: str, pose: tuple[float, fl
                  seen_s: float, velocity: tuple[float, float] = (0.0, 0.0)) -> None:
     """A person as perceived: pose (RT world -> person), velocity (m/s, world frame), room, and
     when they were seen."""
-    with graph.transaction():
-        world = _world(graph)
-        node = graph.get_node_by_name(name)
-        if node is None:
-            node = graph.insert_node(type=NodeType.PERSON, name=name, attrs={"role": role})
-        _set_pose(graph, world.id, node.id, {"x": pose[0], "y": pose[1], "theta": pose[2]})
-        graph.update_node(node.id, attrs={"seen_s": seen_s, "vx": float(velocity[0]), "vy": float(velocity[1])})
-        _set_in_room(graph, node.id, room)
+    with graph.transaction():      # (ids, not snapshots: the observer writes 40 people a tick)
+        world_id = graph.node_id_of(WORLD)
+        if world_id is None:
+            world_id = _world(graph).id
+        node_id = graph.node_id_of(name)
+        if node_id is None:
+            node_id = graph.insert_node(type=NodeType.PERSON, name=name, attrs={"role": role}).id
+        _set_pose(graph, world_id, node_id, {"x": pose[0], "y": pose[1], "theta": pose[2]})
+        graph.update_node(node_id, attrs={"seen_s": seen_s, "vx": float(velocity[0]), "vy": float(velocity[1])})
+        _set_in_room(graph, node_id, room)
 
 
 def remove_person(graph: GraphWriter, name: str) -> bool:

@@ -42,3 +42,35 @@ def test_the_adaptation_makes_room_for_the_robots_body_not_its_planning_radius()
     assert adaptation.adapted == ("front",)
     assert smap.params.adaptive.robot_diameter_m == 0.5
     assert smap.params.grid.robot_radius_m > 0.25  # the planner still keeps its clearance
+
+
+def test_wall_distances_cast_only_near_walls_and_equal_every_ray_cast() -> None:
+    """adaptive.wall_distances skips the people farther than the rays' range from every wall; the
+    distances are those of casting all four rays of everybody (the definition), bit for bit."""
+    import numpy as np
+    import shapely
+
+    from agents.lib.socialmap.adaptive import _SIDE_ANGLES, wall_distances
+    from agents.lib.socialmap.types import Person
+
+    walls = shapely.MultiLineString([[(0, 0), (20, 0), (20, 20), (0, 20), (0, 0)], [(8, 8), (12, 8)]])
+    rng = np.random.default_rng(2)
+    people = [Person(f"p{i}", float(x), float(y), float(t)) for i, (x, y, t) in
+              enumerate(zip(rng.uniform(-2, 22, 300), rng.uniform(-2, 22, 300), rng.uniform(-4, 4, 300), strict=True))]
+    people += [Person("on_range", 3.0, 10.0, 0.0), Person("at_wall", 0.0, 5.0, 1.0)]   # exactly max range; on one
+    max_range = 3.0
+
+    def every_ray() -> np.ndarray:          # the definition: all rays cast, as one vectorised call
+        starts = np.array([[p.x, p.y] for p in people], dtype=np.float64)
+        headings = np.array([[p.theta + a for a in _SIDE_ANGLES] for p in people], dtype=np.float64)
+        coords = np.empty((len(people) * 4, 2, 2))
+        coords[:, 0, :] = np.repeat(starts, 4, axis=0)
+        coords[:, 1, 0] = (starts[:, :1] + max_range * np.cos(headings)).ravel()
+        coords[:, 1, 1] = (starts[:, 1:] + max_range * np.sin(headings)).ravel()
+        hits = shapely.intersection(shapely.linestrings(coords), walls)
+        distances = shapely.distance(shapely.points(coords[:, 0, :]), hits)
+        return np.where(shapely.is_empty(hits) | np.isnan(distances), np.inf, distances).reshape(len(people), 4)
+
+    ours = wall_distances(people, walls, max_range)
+    np.testing.assert_array_equal(ours, every_ray())
+    assert np.isinf(ours).all(axis=1).any() and np.isfinite(ours).any(), "both kinds of people exercised"

@@ -475,3 +475,21 @@ def test_a_tool_cannot_create_a_request_already_answered():
     for payload in sent:
         guard.delta("agenda", payload)
     assert guard.graph.get_attr(asked.id, "state") == "accepted"
+
+
+def test_attr_writes_are_the_local_writes_of_an_attribute_only_change() -> None:
+    """dsr.writes.attr_writes (the local policy check's fast path for attribute updates) lists the
+    writes local_writes lists for the same delta: nodes of known and unknown type, edges."""
+    from dsr import DSRGraph
+    from dsr.writes import attr_writes, local_writes
+
+    graph = DSRGraph("observer")
+    world = graph.insert_node("world", "world", {})
+    person = graph.insert_node("person", "p1", {"role": "resident"})
+    graph.insert_or_assign_edge(world.id, person.id, "RT", {"x": 0.0, "y": 0.0, "theta": 0.0})
+    regs = {"x": (5, graph.replica_id, 1.0), "seen_s": (5, graph.replica_id, 2.0)}
+    for element, key in (("node", person.id), ("node", 12345), ("edge", (world.id, person.id, "RT")),
+                         ("edge", (world.id, 999, "in"))):
+        for attrs in (regs, dict.fromkeys(regs, (0, 0, 0)), {}):
+            assert attr_writes(graph, "observer", element, key, attrs) == \
+                list(local_writes(graph, "observer", element, key, {"attrs": attrs})), (element, key, attrs)

@@ -553,3 +553,22 @@ def test_a_read_only_watcher_forgets_tombstones_too():
     net.maintain()
     assert watcher.graph.tombstones() == 0 and watcher.stats.compacted == 20
     assert watcher.stats.digests_sent == 0 and watcher.graph.digest() == a.graph.digest()
+
+
+def test_node_limits_hold_inside_a_transaction_where_scalar_overwrites_skip_the_count():
+    """update_node inside a transaction counts a node's limits unless the write only overwrites keys
+    it has with scalars (dsr/graph.py _cannot_grow, the observer's hot path): new keys and strings
+    are still counted and refused, and the scalar overwrite of a node already at its limit passes."""
+    writer = DSRGraph("a")
+    node = writer.insert_node("object", "o", {f"k{i}": 1.0 for i in range(LIMITS.max_node_attrs)})
+    with writer.transaction():
+        writer.update_node(node.id, {"k0": 2.0, "k1": 3})          # at the limit, overwritten: allowed
+    assert writer.get_node(node.id).attrs["k0"] == 2.0
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_NODE_ATTRS"), writer.transaction():
+        writer.update_node(node.id, {"k0": 4.0, "one_more": 1.0})
+    assert writer.get_node(node.id).attrs["k0"] == 2.0, "the refused transaction changed nothing"
+    small = writer.insert_node("object", "p", {"s": "x"})
+    chunk = "z" * (LIMITS.max_value_bytes - 10)
+    with pytest.raises(InvalidAttributeError, match="CHRONAV_DSR_MAX_NODE_BYTES"), writer.transaction():
+        for i in range(LIMITS.max_node_bytes // LIMITS.max_value_bytes + 1):
+            writer.update_node(small.id, {"s": "x", f"s{i}": chunk})

@@ -16,3 +16,23 @@ def test_rooms_with_different_corner_counts() -> None:
     assert scene.room_at(1.0, 1.0) == "square"
     assert scene.room_at(8.0, 5.0) == "l_shape"
     assert scene.room_at(5.0, 5.0) is None
+
+
+def test_rooms_at_answers_what_a_point_by_point_shapely_test_answers() -> None:
+    """Scene.rooms_at (the observer's one call a tick) against the definition: the first room whose
+    polygon covers the point (outlines and shared walls included), or None."""
+    import numpy as np
+    import shapely
+
+    scene = load_scene(str(REPO_ROOT / "scenes" / "center_day.yaml")).scene
+    xmin, ymin, xmax, ymax = scene.bounds
+    rng = np.random.default_rng(3)
+    xs = [*rng.uniform(xmin - 1, xmax + 1, 2000).tolist(), *(p[0] for r in scene.rooms for p in r.polygon)]
+    ys = [*rng.uniform(ymin - 1, ymax + 1, 2000).tolist(), *(p[1] for r in scene.rooms for p in r.polygon)]
+    polygons = [shapely.Polygon(room.polygon) for room in scene.rooms]
+    expected = [next((room.name for room, poly in zip(scene.rooms, polygons, strict=True)
+                      if poly.covers(shapely.Point(x, y))), None) for x, y in zip(xs, ys, strict=True)]
+    assert scene.rooms_at(xs, ys) == expected
+    assert [scene.room_at(x, y) for x, y in zip(xs[:300], ys[:300], strict=True)] == expected[:300]
+    assert len(set(expected)) == len(scene.rooms) + 1, "every room and outside are exercised"
+    assert scene.rooms_at([], []) == []

@@ -125,3 +125,19 @@ def test_no_adaptation_outside_the_comfort_band(person_y: float, reason: str) ->
     (person,) = adapted_map(person_y).person_spaces
     assert person.adaptation.adapted == (), reason
     assert person.space.right_m == pytest.approx(2 / 3)
+
+
+def test_cell_centres_of_a_window_are_the_numbers_computed_for_that_window() -> None:
+    """GridSpec.xs/ys slice one cached array (grid.cell_centres); the definition is
+    origin + (k + 0.5) resolution computed for the window's own columns, bit for bit."""
+    import numpy as np
+
+    from agents.lib.socialmap.grid import GridSpec
+
+    spec = GridSpec(x0=-3.3, y0=7.1, resolution=0.05, rows=310, cols=420)
+    for start, stop in ((0, 420), (17, 18), (133, 260), (400, 420), (5, 5)):
+        cols, rows = slice(start, stop), slice(min(start, 310), min(stop, 310))
+        np.testing.assert_array_equal(spec.xs(cols), spec.x0 + (np.arange(start, stop, dtype=np.float64) + 0.5) * 0.05)
+        np.testing.assert_array_equal(spec.ys(rows), spec.y0 + (np.arange(rows.start, rows.stop, dtype=np.float64)
+                                                               + 0.5) * 0.05)
+    assert not spec.xs().flags.writeable, "a shared array: callers get a read-only view"

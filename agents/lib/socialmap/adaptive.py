@@ -69,21 +69,28 @@ def wall_distances(people: Sequence[Person], walls: BaseGeometry | None, max_ran
     out = np.full((len(people), 4), np.inf)
     if not people or walls is None or walls.is_empty:
         return out
-    starts = np.array([[p.x, p.y] for p in people], dtype=np.float64)
-    headings = np.array([[p.theta + a for a in _SIDE_ANGLES] for p in people], dtype=np.float64)
+    everyone = np.array([[p.x, p.y] for p in people], dtype=np.float64)
+    shapely.prepare(walls)
+    # A ray of max_range_m from a person farther than that from every wall meets none: only the
+    # others' rays are cast (most of a crowd in the open, at every replan).
+    near = np.flatnonzero(shapely.dwithin(walls, shapely.points(everyone), max_range_m * (1 + 1e-9) + 1e-9))
+    if not len(near):
+        return out
+    starts = everyone[near]
+    headings = np.array([[people[i].theta + a for a in _SIDE_ANGLES] for i in near.tolist()], dtype=np.float64)
     ends_x = starts[:, :1] + max_range_m * np.cos(headings)
     ends_y = starts[:, 1:] + max_range_m * np.sin(headings)
-    coords = np.empty((len(people) * 4, 2, 2))
+    coords = np.empty((len(near) * 4, 2, 2))
     coords[:, 0, :] = np.repeat(starts, 4, axis=0)
     coords[:, 1, 0] = ends_x.ravel()
     coords[:, 1, 1] = ends_y.ravel()
     rays = shapely.linestrings(coords)
-    shapely.prepare(walls)
     hits = shapely.intersection(rays, walls)
     origins = shapely.points(coords[:, 0, :])
     distances = shapely.distance(origins, hits)
     distances = np.where(shapely.is_empty(hits) | np.isnan(distances), np.inf, distances)
-    return distances.reshape(len(people), 4)
+    out[near] = distances.reshape(len(near), 4)
+    return out
 
 
 def adapt_space(space: PersonalSpace, distances: Sequence[float], level: float,

@@ -14,6 +14,7 @@ A cell belongs to a shape when its centre does. Costs are float32 (16 MB at 2000
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -91,6 +92,16 @@ def _metres(value: float) -> str:
     return f"{value:,.0f}" if value >= 100 else f"{value:g}"
 
 
+@functools.lru_cache(maxsize=32)
+def cell_centres(origin: float, resolution: float, count: int) -> NDArray[np.float64]:
+    """origin + (k + 0.5) resolution for k < count, read-only.  Why cached: every patch of every
+    person at every replan asked for its window's centres (GridSpec.xs, ys): a slice of these is the
+    same numbers without the arithmetic."""
+    centres = origin + (np.arange(count, dtype=np.float64) + 0.5) * resolution
+    centres.flags.writeable = False
+    return centres
+
+
 @dataclass(frozen=True, slots=True)
 class GridSpec:
     """Where the grid lies: lower-left corner, cell size and shape."""
@@ -116,13 +127,13 @@ class GridSpec:
         return (self.x0, self.y0, self.x0 + self.cols * self.resolution, self.y0 + self.rows * self.resolution)
 
     def xs(self, cols: slice = slice(None)) -> NDArray[np.float64]:
-        """x of the cell centres of ``cols``."""
+        """x of the cell centres of ``cols`` (a read-only view of the whole row's, computed once)."""
         start, stop, _ = cols.indices(self.cols)
-        return self.x0 + (np.arange(start, stop, dtype=np.float64) + 0.5) * self.resolution
+        return cell_centres(self.x0, self.resolution, self.cols)[start:stop]
 
     def ys(self, rows: slice = slice(None)) -> NDArray[np.float64]:
         start, stop, _ = rows.indices(self.rows)
-        return self.y0 + (np.arange(start, stop, dtype=np.float64) + 0.5) * self.resolution
+        return cell_centres(self.y0, self.resolution, self.rows)[start:stop]
 
     def contains_xy(self, x: float, y: float) -> bool:
         xmin, ymin, xmax, ymax = self.bounds

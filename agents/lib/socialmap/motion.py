@@ -227,12 +227,13 @@ def prediction_patches(spec: GridSpec, predictions: Sequence[tuple[Prediction, P
                        zones: ZoneParams, social_cost: float, personal_cost: float) -> list[CostPatch]:
     """Cost patches of the predicted positions: each the resting Gaussian (facing the motion)
     times its weight, banded like the zones (never intimate: weights stay below its level)."""
-    from agents.lib.socialmap.banded import banded_gaussian    # numba: only when someone walks
+    from agents.lib.socialmap.banded import banded_gaussians    # numba: only when someone walks
 
     table = np.array([0.0, social_cost, personal_cost, math.inf], dtype=COST_DTYPE)
     levels = np.array([zones.social, zones.personal, zones.intimate])
     patches = []
     for prediction, space, theta in predictions:
+        windows, centres = [], []
         for (x, y), w in zip(prediction.points.tolist(), prediction.weights.tolist(), strict=True):
             if w <= zones.social:
                 continue
@@ -241,6 +242,8 @@ def prediction_patches(spec: GridSpec, predictions: Sequence[tuple[Prediction, P
             if window is None:
                 continue
             rows, cols = window
-            patches.append(CostPatch(rows, cols, banded_gaussian(space, x, y, theta, spec.xs(cols), spec.ys(rows), w,
-                                                                 levels, table)))
+            windows.append(window)
+            centres.append((x, y, w, spec.xs(cols), spec.ys(rows)))
+        for (rows, cols), values in zip(windows, banded_gaussians(space, theta, centres, levels, table), strict=True):
+            patches.append(CostPatch(rows, cols, values))
     return patches

@@ -99,9 +99,9 @@ from agents.lib.socialmap.zones import (
     DensityWindow,
     GroupZones,
     ZoneParams,
-    band_patches,
     contour_zones,
     density_windows,
+    zone_patches,
 )
 
 
@@ -177,7 +177,6 @@ class SocialMap:
     obstacle_patches: tuple[CostPatch, ...]      # bodies and footprints
     zone_patches: tuple[CostPatch, ...]          # people's cost bands
     interaction_patches: tuple[CostPatch, ...]   # interaction spaces at R(t_s)
-    density: tuple[DensityWindow, ...]
     interaction_cells: tuple[CellMask | None, ...]
     predictions: tuple[Prediction, ...] = ()
     prediction_patches: tuple[CostPatch, ...] = ()   # where walkers will be (motion.py): never intimate
@@ -218,6 +217,16 @@ class SocialMap:
         if key not in self._cache:
             self._cache[key] = build()
         return self._cache[key]
+
+    @property
+    def density(self) -> tuple[DensityWindow, ...]:
+        """Each group's density on its window (zones.density_windows), computed on first use: the
+        planners need only its bands (``zone_patches``, built without it), the zone polygons need it."""
+        if "density" not in self._cache:
+            spaces = [ps.space for ps in self.person_spaces]
+            self._cache["density"] = tuple(density_windows(self.spec, self.people, spaces, self.groups,
+                                                           self.params.zones))
+        return self._cache["density"]
 
     def zones(self) -> list[GroupZones]:
         """Zone polygons per group (contoured on first use, then cached)."""
@@ -370,7 +379,6 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
                                occupancy=static.occupancy)
     spaces = [a.space for a in adaptations]
     groups = group_people(people, spaces, params.groups)
-    windows = density_windows(spec, people, spaces, groups, params.zones)
 
     # Objects: polygons, R(t_s), footprints and interaction cells.
     known = {o.name for o in objects}
@@ -392,7 +400,8 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
     inflate = grid_params.robot_radius_m if grid_params.inflate_footprints else 0.0
     obstacles = (*footprint_patches(spec, objects, geometries, inflate),
                  *body_patches(spec, people, grid_params.person_radius_m + grid_params.robot_radius_m))
-    zone_costs = band_patches(windows, params.zones, grid_params.social_cost, grid_params.personal_cost)
+    zone_costs = zone_patches(spec, people, spaces, groups, params.zones, grid_params.social_cost,
+                              grid_params.personal_cost)
     predicted = [(found, space, p.theta) for p, space, found in
                  zip(people, rest_spaces, predict_many(people, params.motion, static.walls), strict=True)
                  if found is not None]
@@ -404,5 +413,5 @@ def build_social_map(bounds: Sequence[float], walls: Sequence[Wall], people: Seq
                      groups=tuple(groups), object_spaces=tuple(object_spaces), static=static.grid,
                      obstacle_patches=obstacles, zone_patches=tuple(zone_costs),
                      interaction_patches=tuple(interaction_patches(masks, [s.cost for s in object_spaces])),
-                     density=tuple(windows), interaction_cells=tuple(masks),
+                     interaction_cells=tuple(masks),
                      predictions=tuple(found for found, _, _ in predicted), prediction_patches=tuple(ahead))

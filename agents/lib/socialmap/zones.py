@@ -85,28 +85,33 @@ class GroupZones:
         return getattr(self, name)
 
 
+def group_window(spec: GridSpec, people: Sequence[Person], spaces: Sequence[PersonalSpace], group: Group,
+                 params: ZoneParams) -> tuple[slice, slice] | None:
+    """The smallest window outside which ``group``'s density is below ``params.social`` (None: off
+    the grid).  A member's Gaussian is below social / n outside its ``support_radius(social / n)``,
+    so the sum of n members is below social outside the union of those discs."""
+    members = group.members
+    level = params.social / len(members)
+    xmin = ymin = math.inf
+    xmax = ymax = -math.inf
+    for i in members:
+        radius = support_radius(spaces[i], level) + spec.resolution
+        xmin, xmax = min(xmin, people[i].x - radius), max(xmax, people[i].x + radius)
+        ymin, ymax = min(ymin, people[i].y - radius), max(ymax, people[i].y + radius)
+    return spec.window(xmin, ymin, xmax, ymax)
+
+
 def density_windows(spec: GridSpec, people: Sequence[Person], spaces: Sequence[PersonalSpace],
                     groups: Sequence[Group], params: ZoneParams) -> list[DensityWindow]:
-    """Each group's density on the smallest window outside which it is below ``params.social``.
-
-    A member's Gaussian is below social / n outside its ``support_radius(social / n)``, so the sum of
-    n members is below social outside the union of those discs."""
+    """Each group's density on its ``group_window``."""
     windows: list[DensityWindow] = []
     for group in groups:
-        members = group.members
-        level = params.social / len(members)
-        xmin = ymin = math.inf
-        xmax = ymax = -math.inf
-        for i in members:
-            radius = support_radius(spaces[i], level) + spec.resolution
-            xmin, xmax = min(xmin, people[i].x - radius), max(xmax, people[i].x + radius)
-            ymin, ymax = min(ymin, people[i].y - radius), max(ymax, people[i].y + radius)
-        window = spec.window(xmin, ymin, xmax, ymax)
+        window = group_window(spec, people, spaces, group, params)
         if window is None:
             continue
         rows, cols = window
         xs, ys = spec.xs(cols), spec.ys(rows)
-        density = group_density(people, spaces, members, xs[np.newaxis, :], ys[:, np.newaxis])
+        density = group_density(people, spaces, group.members, xs[np.newaxis, :], ys[:, np.newaxis])
         windows.append(DensityWindow(group=group, rows=rows, cols=cols, density=density))
     return windows
 
@@ -120,6 +125,30 @@ def band_patches(windows: Sequence[DensityWindow], params: ZoneParams, social_co
         d = window.density
         index = ((d >= params.social).astype(np.int8) + (d >= params.personal) + (d >= params.intimate))
         patches.append(CostPatch(window.rows, window.cols, table[index]))
+    return patches
+
+
+def zone_patches(spec: GridSpec, people: Sequence[Person], spaces: Sequence[PersonalSpace],
+                 groups: Sequence[Group], params: ZoneParams, social_cost: float,
+                 personal_cost: float) -> list[CostPatch]:
+    """``band_patches(density_windows(...))``, the same patches cell for cell, without the densities:
+    each group's window banded by the compiled kernel (banded.py), which skips the exponentials of
+    the cells far below the social level (most of a window).  Why: at every replan of a crowd the
+    densities were built only to be banded (the map's zone polygons need them, on demand only)."""
+    from agents.lib.socialmap.banded import banded_group    # numba: loaded with the first map
+
+    table = np.array([0.0, social_cost, personal_cost, math.inf], dtype=COST_DTYPE)
+    levels = np.array([params.social, params.personal, params.intimate])
+    patches = []
+    for group in groups:
+        window = group_window(spec, people, spaces, group, params)
+        if window is None:
+            continue
+        rows, cols = window
+        members = group.members
+        patches.append(CostPatch(rows, cols, banded_group([spaces[i] for i in members],
+                                                          [(people[i].x, people[i].y, people[i].theta) for i in members],
+                                                          spec.xs(cols), spec.ys(rows), levels, table)))
     return patches
 
 
