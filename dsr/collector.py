@@ -67,10 +67,11 @@ def release_free_memory(collect: bool = True) -> int:
     Why: a process that lives for days (an in-process week, a launcher, an agent in real time)
     frees most of what a day allocates, but glibc keeps freed pages in its arenas, so the
     process's memory only ever climbs to its high-water mark plus fragmentation (measured on an
-    in-process week: 9-14 MB a day, which this call returns; docs/long_runs.md).  Called between
-    days and every few minutes of an agent's life (``FreeMemoryTimer``), it costs one full
-    collection (tens of ms on a heap of 10^5-10^6 objects), or none with ``collect=False`` (an
-    agent's loop: its collector already runs full collections every few minutes of real time)."""
+    in-process week: this call gave back 13-16 MB at each day's end, and the week's climb fell
+    from 7-8 to 4 MB a day; docs/long_runs.md).  Called between days and every few minutes of an
+    agent's life (``FreeMemoryTimer``), it costs one full collection (tens of ms on a heap of
+    10^5-10^6 objects), or none with ``collect=False`` (an agent's loop, which a collection would
+    pause that long; its cycles are left to its own collector)."""
     if collect:
         gc.collect()
     trim = _malloc_trim()
