@@ -19,7 +19,8 @@ from pathlib import Path
 
 from tools.ports import free_port, poll, port_open
 
-__all__ = ["REPO_ROOT", "FakeSample", "ProcessGroup", "free_port", "port_open", "process_group", "wait_until"]
+__all__ = ["REPO_ROOT", "FakeSample", "ProcessGroup", "free_port", "port_open", "process_group", "recording_entities",
+           "wait_until"]
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -104,3 +105,12 @@ def process_group() -> Iterator[ProcessGroup]:
         yield group
     finally:
         group.close()
+
+
+def recording_entities(recording: Path) -> set[str]:
+    """The entity paths of a Rerun recording, as `rerun rrd print` lists its chunks (footer or not)."""
+    from tools.launch import rerun_binary
+
+    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
+                         timeout=60, check=True).stdout
+    return {part.split()[0] for part in out.split(" - /")[1:]}

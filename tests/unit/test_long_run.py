@@ -21,6 +21,7 @@ from agents.world.scene_world import load_world, resolve_world
 from scenes.days import day_scene_data, on_day, parse_weekday, week_seconds
 from scenes.loader import load_scene
 from scenes.yamlio import SourceError
+from tests.support import recording_entities
 from tools.cli import app
 from tools.week_index import read_index, recording_of_day
 
@@ -258,16 +259,6 @@ def test_a_merge_that_fails_half_way_leaves_no_recording_behind(tmp_path: Path, 
     assert "No space left on device" in capsys.readouterr().err
 
 
-def _entities(recording: Path) -> set[str]:
-    """The entity paths of a recording, as `rerun rrd print` lists its chunks."""
-    import subprocess
-
-    from tools.launch import rerun_binary
-
-    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
-    return {part.split()[0] for part in out.split(" - /")[1:]}
-
 
 def test_a_recorder_rotates_its_part_every_slot_and_each_part_has_the_static_rows(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -286,7 +277,7 @@ def test_a_recorder_rotates_its_part_every_slot_and_each_part_has_the_static_row
     parts = sorted((tmp_path / "rrd").glob("*.rrd"))
     assert [part_slot(p) for p in parts] == [9, 10]            # the unslotted first part is gone
     for part in parts:
-        assert {"world/map/walls", "world/truth/robot"} <= _entities(part)
+        assert {"world/map/walls", "world/truth/robot"} <= recording_entities(part)
     monkeypatch.setenv(ROTATE_ENV, "5")
     with pytest.raises(ValueError, match="at least 60 sim seconds"):
         Recorder("sim_robot", tmp_path, "rid")
@@ -305,7 +296,7 @@ def test_a_real_time_day_is_recorded_hour_by_hour(tmp_path: Path, monkeypatch: p
     run_dir = Path(summary["run_dir"])
     assert sorted(p.name for p in run_dir.glob("*.rrd")) == sorted(h["rrd"] for h in entry["hours"])
     for hour in entry["hours"]:
-        assert "world/map/walls" in _entities(run_dir / hour["rrd"])      # each hour opens on its own
+        assert "world/map/walls" in recording_entities(run_dir / hour["rrd"])      # each hour opens on its own
     assert summary["days"][0]["rrd_bytes"] == sum((run_dir / h["rrd"]).stat().st_size for h in entry["hours"])
     at_1001 = recording_of_day(Path(summary["index"]), 1, 10 * 3600 + 60)
     assert at_1001 == run_dir / entry["hours"][1]["rrd"]

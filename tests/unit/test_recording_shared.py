@@ -14,17 +14,10 @@ from pathlib import Path
 import pytest
 
 from agents.runtime.recording import ROTATE_ENV, Recorder, RecordingFile, part_slot
+from tests.support import recording_entities
 
 DAY = dt.date(2026, 12, 1)
 TINY = Path(__file__).resolve().parents[1] / "data" / "eval_tiny.yaml"
-
-
-def _entities(recording: Path) -> set[str]:
-    from tools.launch import rerun_binary
-
-    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
-    return {part.split()[0] for part in out.split(" - /")[1:]}
 
 
 def test_recorders_sharing_a_file_write_one_part_and_only_its_owner_closes_it(
@@ -45,7 +38,7 @@ def test_recorders_sharing_a_file_write_one_part_and_only_its_owner_closes_it(
     shared.close()
     (part,) = sorted((tmp_path / "rrd").glob("*.rrd"))
     assert part.name.startswith("inprocess-")
-    assert {"world/truth/robot", "events/executive"} <= _entities(part)
+    assert {"world/truth/robot", "events/executive"} <= recording_entities(part)
 
 
 def test_a_shared_file_rotates_once_for_all_its_recorders_with_every_ones_static_rows(
@@ -67,7 +60,7 @@ def test_a_shared_file_rotates_once_for_all_its_recorders_with_every_ones_static
     parts = sorted((tmp_path / "rrd").glob("*.rrd"))
     assert [part_slot(p) for p in parts] == [9, 10]
     for part in parts:
-        assert {"world/map/walls", "legend/robot", "world/truth/robot"} <= _entities(part)
+        assert {"world/map/walls", "legend/robot", "world/truth/robot"} <= recording_entities(part)
 
 
 def test_an_in_process_run_opens_one_recording_stream(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -91,7 +84,7 @@ def test_an_in_process_run_opens_one_recording_stream(tmp_path: Path, monkeypatc
     result = run_in_process(TINY, runs_dir=tmp_path, record=True, timeout_s=300)
     assert result.error is None and result.rrd_path is not None and result.rrd_path.stat().st_size > 0
     assert made == [result.run_dir.name]
-    entities = _entities(result.rrd_path)
+    entities = recording_entities(result.rrd_path)
     assert {"events/executive", "events/sim_robot"} <= entities
     assert any(e.startswith("world/map/") for e in entities) and any(e.startswith("world/truth/") for e in entities)
 
@@ -120,4 +113,4 @@ def test_parts_are_written_without_footer_and_the_merge_writes_it(
 
     assert not verified(part)
     merged = merge_recordings([part], tmp_path / "run.rrd")
-    assert merged is not None and verified(merged) and "metrics/objects/tv" in _entities(merged)
+    assert merged is not None and verified(merged) and "metrics/objects/tv" in recording_entities(merged)
