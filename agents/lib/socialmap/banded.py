@@ -63,6 +63,19 @@ def _row_span(dy, x0, cos_t, sin_t, factors, root, xs):   # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True)
+def _band(density, low, mid, high):   # pragma: no cover - compiled
+    """How many of the three levels ``density`` reaches (0-3): the band both kernels colour a cell by."""
+    band = 0
+    if density >= low:
+        band += 1
+    if density >= mid:
+        band += 1
+    if density >= high:
+        band += 1
+    return band
+
+
+@numba.njit(cache=True, nogil=True)
 def _banded(xs, ys, x0, y0, cos_t, sin_t, factors, weight, levels, table, out):   # pragma: no cover - compiled
     a_u, b_u, a_v, b_v = factors[0], factors[1], factors[2], factors[3]
     # A cell whose exponent is beyond the lowest level's by a margin far above exp's rounding is in
@@ -91,14 +104,7 @@ def _banded(xs, ys, x0, y0, cos_t, sin_t, factors, weight, levels, table, out): 
             # weight exp(-q) >= level  <=>  q <= log(weight / level): decided on q unless q is within
             # the margin of one of those (where exp's last bits could matter: computed as before)
             if abs(q - c_low) <= _MARGIN or abs(q - c_mid) <= _MARGIN or abs(q - c_high) <= _MARGIN:
-                density = weight * math.exp(-q)
-                band = 0
-                if density >= low:
-                    band += 1
-                if density >= mid:
-                    band += 1
-                if density >= high:
-                    band += 1
+                band = _band(weight * math.exp(-q), low, mid, high)
             else:
                 band = (q < c_low) + (q < c_mid) + (q < c_high)
             out[i, j] = table[band]
@@ -171,14 +177,7 @@ def _banded_sum(xs, ys, x0s, y0s, cos_ts, sin_ts, factors, levels, table, out): 
             density = math.exp(-qs[0])
             for k in range(1, n):          # summed in the members' order, as group_density sums
                 density = density + math.exp(-qs[k])
-            band = 0
-            if density >= low:
-                band += 1
-            if density >= mid:
-                band += 1
-            if density >= high:
-                band += 1
-            out[i, j] = table[band]
+            out[i, j] = table[_band(density, low, mid, high)]
 
 
 def banded_group(spaces: Sequence[PersonalSpace], poses: Sequence[tuple[float, float, float]],
