@@ -68,7 +68,7 @@ def release_free_memory(collect: bool = True) -> int:
     frees most of what a day allocates, but glibc keeps freed pages in its arenas, so the
     process's memory only ever climbs to its high-water mark plus fragmentation (measured on an
     in-process week: this call gave back 13-16 MB at each day's end, and the week's climb fell
-    from 7-8 to 4 MB a day; docs/long_runs.md).  Called between days and every few minutes of an
+    from 7-8 to 4 MB a day; docs/long_runs.md).  Called between days and every minute of an
     agent's life (``FreeMemoryTimer``), it costs one full collection (tens of ms on a heap of
     10^5-10^6 objects), or none with ``collect=False`` (an agent's loop, which a collection would
     pause that long; its cycles are left to its own collector)."""
@@ -93,7 +93,7 @@ class FreeMemoryTimer:
     """Calls ``release_free_memory`` (with ``collect``) at most every ``every_s`` seconds of the given
     clock."""
 
-    def __init__(self, every_s: float = 300.0, clock: Callable[[], float] | None = None,
+    def __init__(self, every_s: float = 60.0, clock: Callable[[], float] | None = None,
                  collect: bool = False) -> None:
         import time
 

@@ -57,6 +57,9 @@ class MemorySeries:
     warmup_s: float
     sample_every_s: float = SAMPLE_EVERY_S
     clock: Callable[[], float] = time.monotonic
+    #: every sample (warm-up included) is appended here as it is taken, so the curve behind a
+    #: slope can be read afterwards, even of a soak that was cut short
+    samples_csv: Path | None = None
     started: float | None = None
     series: dict[str, list[tuple[int, list[tuple[float, float]]]]] = field(default_factory=dict)
     _last: float = -math.inf
@@ -67,6 +70,12 @@ class MemorySeries:
         runs = self.series.setdefault(name, [])
         if not runs or runs[-1][0] != pid:
             runs.append((pid, []))
+        if self.samples_csv is not None:
+            new = not self.samples_csv.exists()
+            with self.samples_csv.open("a", encoding="utf-8") as handle:
+                if new:
+                    handle.write("agent,pid,t_s,rss_mb\n")
+                handle.write(f"{name},{pid},{t_s:.1f},{rss_mb:.2f}\n")
         if t_s >= self.warmup_s:
             runs[-1][1].append((t_s, rss_mb))
 
@@ -143,7 +152,8 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
     workdir = workdir or Path(tempfile.mkdtemp(prefix="chronav-soak-"))
     workdir.mkdir(parents=True, exist_ok=True)
     scene_file = soak_scene(scene, hours, workdir / "soak_scene.yaml")
-    memory = MemorySeries(warmup_s=warmup_s, sample_every_s=sample_every_s)
+    memory = MemorySeries(warmup_s=warmup_s, sample_every_s=sample_every_s,
+                          samples_csv=workdir / "soak_samples.csv")
 
     def tick(status: dict[str, Any]) -> None:
         pids = status.get("pids")
@@ -166,7 +176,7 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
         **memory.report(),
         "restarts_total": len(result.restart_log),
         "restart_reasons": sorted({str(r.get("reason")) for r in result.restart_log}),
-        "run_dir": str(result.run_dir), "started_utc": started_utc,
+        "run_dir": str(result.run_dir), "samples_csv": str(memory.samples_csv), "started_utc": started_utc,
     }
     if result.error:
         report["error"] = result.error

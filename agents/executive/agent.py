@@ -241,6 +241,7 @@ class ExecutiveAgent(Agent):
             g.update_node(mission.node_id, attrs={"state": state, "finished_s": now_s, "reason": reason})
             self._cancel_active(mission.mission_id)
         self._steps.pop(mission.mission_id, None)
+        self._replans.pop(mission.mission_id, None)   # a week's missions must not pile up here
         took = now_s - (mission.started_s if mission.started_s is not None else now_s)
         ok = state == MissionState.DONE
         self.rec.event(f"{format_clock(now_s)} mission {mission.mission_id} {state}"

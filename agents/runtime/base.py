@@ -115,7 +115,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
             log.info("%s joined graph %r", config.name, config.graph)
             heartbeat = Heartbeat(graph, config.name)
             # An agent lives all day in real time: what its heap frees goes back to the system
-            # every few minutes (dsr/collector.py), or its memory creeps up for good.
+            # every minute (dsr/collector.py), or its memory creeps up for good.
             free_memory = FreeMemoryTimer()
             try:
                 while not stop.is_set():

@@ -34,6 +34,16 @@ def test_warmup_is_not_fitted_and_a_restart_opens_a_new_series() -> None:
     assert report["soak_rss_mb_last_planner"] == 150.0 and report["soak_samples"] == 65
 
 
+def test_every_sample_goes_to_the_csv_warmup_included(tmp_path) -> None:
+    series = MemorySeries(warmup_s=120.0, samples_csv=tmp_path / "samples.csv")
+    for minute in range(4):
+        series.add("planner", 11, minute * 60.0, 100.0 + minute)
+    lines = (tmp_path / "samples.csv").read_text().splitlines()
+    assert lines[0] == "agent,pid,t_s,rss_mb" and len(lines) == 5
+    assert lines[1] == "planner,11,0.0,100.00" and lines[4] == "planner,11,180.0,103.00"
+    assert len(series.series["planner"][0][1]) == 2          # the fit still skips the warm-up
+
+
 def test_tick_samples_live_processes_at_its_interval() -> None:
     now = [0.0]
     series = MemorySeries(warmup_s=0.0, sample_every_s=60.0, clock=lambda: now[0])
