@@ -44,7 +44,7 @@ from agents.world.dsr_writers import set_doors, write_building, write_clock, wri
 from agents.world.people import WorldFeed, manual_changes, new_crowd
 from agents.world.timeline import doors_at, next_scheduled_event, unapplied_changes
 from agents.world.vocabulary import (AGENDA, CLOCK, WORLD, ClockMode, EdgeType, IntentionKind, IntentionState,
-                                     MissionState, NodeType, intentions, missions)
+                                     MissionState, MissionView, NodeType, intentions, missions)
 from scenes.geometry import project_on_segments
 from scenes.clock import format_clock
 
@@ -61,6 +61,18 @@ class RobotState:
     y: float
     theta: float
     velocity: Velocity
+
+
+def mission_due(day: list[MissionView], now_s: float) -> bool:
+    """A pending mission's time has come and none runs: the executive is about to start one.
+
+    The one definition the clock's mode and its idle step share.  Not while another mission
+    runs: the executive runs them one at a time, so the due one waits for it, and holding the
+    clock for it (``busy_rate=0``) would hold a mission that waits for an activity to start
+    forever (an in-process day without idle skips stalled: tests/unit/test_sim_clock_hold.py)."""
+    if any(m.state == MissionState.ACTIVE for m in day):
+        return False
+    return any(m.state == MissionState.PENDING and m.time_s <= now_s for m in day)
 
 
 class SimRobotAgent(Agent):
@@ -257,16 +269,8 @@ class SimRobotAgent(Agent):
         return True
 
     def _due_now(self) -> bool:
-        """A pending mission's time has come and none runs (the executive is about to start it).
-
-        Not while another mission runs: the executive runs them one at a time, so the due one
-        waits for it, and holding the clock for it (``busy_rate=0``) would hold a mission that
-        waits for an activity to start forever (an in-process day without idle skips stalled)."""
-        missions = self.graph.nodes_of_type(NodeType.MISSION)
-        if any(n.attrs.get("state") == MissionState.ACTIVE for n in missions):
-            return False
-        return any(n.attrs.get("state") == MissionState.PENDING and float(n.attrs.get("time_s", math.inf)) <= self.now_s
-                   for n in missions)
+        """A pending mission's time has come and none runs (the executive is about to start it)."""
+        return mission_due(missions(self.graph), self.now_s)
 
     def skip_to(self, t_s: float) -> None:
         """Jump the sim clock to ``t_s`` with the robot at rest, and carry out what is due by then
@@ -293,8 +297,7 @@ class SimRobotAgent(Agent):
             return ClockMode.STARTING  # the executive has not written the day's missions yet: time stands still
         if any(m.state == MissionState.ACTIVE for m in day) and not any(i.active for i in intentions(g)):
             return ClockMode.BUSY
-        if not any(m.state == MissionState.ACTIVE for m in day) and any(
-                m.state == MissionState.PENDING and m.time_s <= self.now_s for m in day):
+        if mission_due(day, self.now_s):
             return ClockMode.BUSY  # a mission is due: let the executive start it now, not minutes of sim time later
         return ClockMode.IDLE
 
@@ -303,9 +306,9 @@ class SimRobotAgent(Agent):
 
         While a mission is active (waiting for an activity), pending missions cannot start, so
         their times are not deadlines: the clock skips straight to the end of the wait."""
-        busy = any(n.attrs.get("state") == MissionState.ACTIVE for n in self.graph.nodes_of_type(NodeType.MISSION))
-        times = [] if busy else [float(n.attrs["time_s"]) for n in self.graph.nodes_of_type(NodeType.MISSION)
-                                 if n.attrs.get("state") == MissionState.PENDING and "time_s" in n.attrs]
+        day = missions(self.graph)
+        busy = any(m.state == MissionState.ACTIVE for m in day)
+        times = [] if busy else [m.time_s for m in day if m.state == MissionState.PENDING]
         times += [float(n.attrs["until_s"]) for n in self.graph.nodes_of_type(NodeType.INTENTION)
                   if n.attrs.get("state") == IntentionState.ACTIVE and n.attrs.get("kind") == IntentionKind.WAIT
                   and "until_s" in n.attrs]

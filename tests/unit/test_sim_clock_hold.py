@@ -59,3 +59,19 @@ def test_a_due_mission_behind_a_running_one_does_not_hold_the_clock(tmp_path: Pa
                       attrs={"state": "active", "kind": "wait", "until_s": sim.now_s + 600.0})
     graph.insert_node(type="mission", name="mission/next", attrs={"state": "pending", "time_s": sim.now_s})
     assert _run(sim, 0.4) > 0.1
+
+
+def test_a_mission_is_due_only_when_its_time_has_come_and_none_runs() -> None:
+    """One definition for the clock's mode and its idle step (`mission_due`)."""
+    from agents.sim_robot.agent import mission_due
+    from agents.world.vocabulary import MissionState, MissionView
+
+    def view(k: int, time_s: float, state: str) -> MissionView:
+        return MissionView(k, f"m{k}", "goal", time_s, state, 0)
+
+    pending_now, later = view(1, 100.0, MissionState.PENDING), view(2, 500.0, MissionState.PENDING)
+    assert mission_due([pending_now, later], 100.0)
+    assert not mission_due([pending_now, later], 99.0)
+    assert not mission_due([pending_now, view(3, 10.0, MissionState.ACTIVE)], 200.0)   # one at a time
+    assert mission_due([pending_now, view(3, 10.0, MissionState.DONE)], 200.0)
+    assert not mission_due([], 200.0)
