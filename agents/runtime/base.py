@@ -95,6 +95,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.collector import FreeMemoryTimer
+    from dsr.exit_guard import leave
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
 
@@ -137,4 +138,8 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
         recorder.close()
     faulthandler.cancel_dump_traceback_later()
     log.info("%s stopped", config.name)
+    # The session is closed: wait for its threads to leave Zenoh before the interpreter finalises,
+    # or a stopped agent can abort ("FATAL: exception not rethrown") and read as a crash.  A few
+    # seconds only: the launcher gives all its agents 8 s to stop before it kills them.
+    leave(0, grace_s=3.0, what=f"agent {config.name}")
     return 0

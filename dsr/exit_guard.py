@@ -1,5 +1,5 @@
-"""A `chronav` process ends only once its own threads have: no daemon thread may be inside a
-native call (Zenoh, Rerun) while the interpreter finalises.
+"""A `chronav` process (a command or an agent) ends only once its own threads have: no daemon
+thread may be inside a native call (Zenoh, Rerun) while the interpreter finalises.
 
 Why: at finalisation CPython ends every daemon thread that tries to take the GIL back with
 ``pthread_exit``, a forced unwind.  A thread returning from a PyO3 call (a Zenoh ``get`` or a
@@ -9,15 +9,17 @@ channel's ``recv``, which release the GIL while they wait) unwinds through PyO3'
 ``chronav chaos`` run on a loaded machine; reproduced with a daemon thread looping on
 ``session.get`` when the process ends).  Closing the Zenoh sessions makes every such call
 return, so the commands close what they opened (``dsr.join``'s ``with``, the chaos replica,
-the recorder) and this guard, last thing in ``tools.cli.main``, then waits for the daemon
-threads still running: a thread that returned from its native call finishes in Python, where
+the recorder) and this guard, last thing in ``tools.cli.main`` and in an agent's
+``agents.runtime.base.run_agent``, then waits for the daemon threads still running: a thread that returned from its native call finishes in Python, where
 finalisation could not have aborted anything, but waiting costs nothing and leaves no doubt.
 
 A thread that still runs after the grace period is named on stderr and the process ends with
 ``os._exit`` and the command's own exit code: skipping finalisation (and whatever exit handlers
 had not run) is better than an abort that turns a finished run into a crash.
 
-Imports only the standard library: ``chronav --help`` runs it too (tests/unit/test_cli_imports.py).
+It lives with the DSR, which owns the Zenoh sessions whose threads it waits for, so that both the
+commands and the agents can reach it.  Imports only the standard library: ``chronav --help``
+runs it too (tests/unit/test_cli_imports.py).
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ def exit_code_of(code: object) -> int:
     return code if isinstance(code, int) else 1
 
 
-def leave(code: object, grace_s: float | None = None, stderr: TextIO | None = None) -> None:
+def leave(code: object, grace_s: float | None = None, stderr: TextIO | None = None,
+          what: str = "the command") -> None:
     """Return once no daemon thread runs, so that the interpreter may finalise; else name the
     threads still running and end the process at once with `code` (module docstring)."""
     grace_s = GRACE_S if grace_s is None else grace_s
@@ -68,7 +71,7 @@ def leave(code: object, grace_s: float | None = None, stderr: TextIO | None = No
     for thread in stragglers:
         frame = frames.get(thread.ident or -1)
         where = "" if frame is None else " at " + traceback.format_stack(frame, limit=1)[0].strip().splitlines()[0]
-        out.write(f"chronav: thread {thread.name!r} still running {grace_s:g} s after the command ended{where}; "
+        out.write(f"chronav: thread {thread.name!r} still running {grace_s:g} s after {what} ended{where}; "
                   "exiting without interpreter shutdown\n")
     out.flush()
     sys.stdout.flush()
