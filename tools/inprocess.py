@@ -104,7 +104,8 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
     from agents.runtime.lockstep import AgentError
     from agents.world.scene_world import load_world
-    from tools.launch import _make_run_dir, log_scene_static, write_final_graph
+    from tools.launch import (HOUR_S, _make_run_dir, log_scene_static, realtime_run, recording_rotation,
+                              write_final_graph)
     from tools.system.runs import runs_dir as default_runs_dir
 
     check_rate(rate)
@@ -119,7 +120,9 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     record = record and os.environ.get("RERUN", "on") != "off"   # what the agents' Recorders honour too
     run = _InProcessRun(spec=spec, scene_path=loaded.path, run_id=run_id, run_dir=run_dir, record=record,
                         started=time.monotonic(), on_tick=on_tick)
-    scheduler, launcher = _build_scheduler(run, options)
+    # A real-time run records hour by hour (its recording stream reads the setting when it is made).
+    with recording_rotation(HOUR_S if realtime_run(rate, spec.clock.rate) else None):
+        scheduler, launcher = _build_scheduler(run, options)
     error: str | None = None
     reason = "done"
     run.problems = scheduler.dropped      # agent plug-ins that raised and left the run, in the result
@@ -226,13 +229,13 @@ def _build_scheduler(run: _InProcessRun, options: dict[str, dict[str, str]]) -> 
 
 def _finish(run: _InProcessRun, reason: str, error: str | None) -> RunResult:
     """Merge the recordings, write ``result.json`` in the launch's format; the run's result."""
-    from tools.launch import _write_result, merge_recordings, scene_missions
+    from tools.launch import _write_result, merge_run_recording, scene_missions
 
-    rrd_path = None
+    rrd_path: Path | None = None
+    hours: list[dict[str, Any]] = []
     if run.record:
-        rrd_path = merge_recordings(sorted((run.run_dir / "rrd").glob("*.rrd")),
-                                    run.run_dir.parent / f"{run.run_id}.rrd")
-    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path,
+        rrd_path, hours = merge_run_recording(run.run_dir, run.run_id)
+    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path, hours=hours,
                        missions={**scene_missions(run.spec), **run.missions}, events=[],
                        restarts={name: 0 for name in run.agents}, wall_s=time.monotonic() - run.started,
                        interrupted=reason == "interrupted", timed_out=reason == "timed_out",

@@ -24,7 +24,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -54,6 +54,8 @@ DEFAULT_STARTUP_TIMEOUT_S = 180.0
 #: would point the agents somewhere else or clash with the run's credentials
 _RUN_OWNED_PREFIX = "CHRONAV_ZENOH_"
 _INHERITED_ZENOH = ("CHRONAV_ZENOH_LEASE_MS",)
+#: real-time runs (a rate of 1 or less, a ROS robot) rotate their recording every hour of sim time
+HOUR_S = 3600.0
 
 
 class LaunchError(Exception):
@@ -106,6 +108,9 @@ class RunResult:
     problems: dict[str, str] = field(default_factory=dict)
     #: every restart of this run: agent, reason, wall time (tools/system/restart_budget.py)
     restart_log: list[dict[str, object]] = field(default_factory=list)
+    #: a real-time run's recording, one file per hour in place of ``rrd_path``: hour ("09:00"),
+    #: start_s, rrd (a path) each (``hourly_recordings``)
+    hours: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -182,6 +187,65 @@ def remove_recording_parts(parts: list[Path]) -> None:
     for folder in {part.parent for part in parts}:
         with contextlib.suppress(OSError):    # not empty: something else lives there, keep it
             folder.rmdir()
+
+
+@contextlib.contextmanager
+def recording_rotation(seconds: float | None) -> Iterator[None]:
+    """The recorders made and the agents started inside (processes inherit the variable) rotate
+    their recording parts every ``seconds`` of sim time (agents/runtime/recording.py); a value the
+    user set, or an enclosing run of days, is kept."""
+    from agents.runtime.recording import ROTATE_ENV
+
+    if seconds is None or ROTATE_ENV in os.environ:
+        yield
+        return
+    os.environ[ROTATE_ENV] = str(seconds)
+    try:
+        yield
+    finally:
+        os.environ.pop(ROTATE_ENV, None)
+
+
+def realtime_run(rate: float | None, scene_rate: float, robot: str = "sim") -> bool:
+    """Whether a run is real time (a rate of 1 or less, or a ROS robot), whose recording rotates
+    every hour (docs/long_runs.md)."""
+    return robot == "ros" or (rate if rate is not None else scene_rate) <= 1.0
+
+
+def merge_run_recording(run_dir: Path, run_id: str) -> tuple[Path | None, list[dict[str, Any]]]:
+    """A finished run's parts merged: ``(<runs>/<run id>.rrd, [])``, or, when the parts were rotated
+    (a real-time run), ``(None, hours)``: one file per hour (``hourly_recordings``)."""
+    from agents.runtime.recording import part_slot
+
+    parts = sorted((run_dir / "rrd").glob("*.rrd"))
+    if any(part_slot(part) is not None for part in parts):
+        hours = hourly_recordings(run_dir, run_dir.parent)
+        if hours:
+            return None, hours
+    # not rotated, or no hour could be merged: one file (rotated parts are then kept, to merge by hand)
+    return merge_recordings(parts, run_dir.parent / f"{run_id}.rrd"), []
+
+
+def hourly_recordings(run_dir: Path, out_dir: Path) -> list[dict[str, Any]]:
+    """A real-time run's recording as one file per hour in ``out_dir``, ``<run>-hNN.rrd``, each
+    merged from the agents' parts of that hour with the rows logged before the clock was set."""
+    from agents.runtime.recording import part_slot
+
+    by_hour: dict[int, list[Path]] = {}
+    unslotted: list[Path] = []
+    for part in sorted((run_dir / "rrd").glob("*.rrd")):
+        slot = part_slot(part)
+        (unslotted if slot is None else by_hour.setdefault(slot, [])).append(part)
+    hours = []
+    for slot, parts in sorted(by_hour.items()):
+        # unrotated parts hold rows logged without a clock (the scene's walls and legend, by an
+        # in-process run's launcher): every hour opens with them
+        out = merge_recordings([*unslotted, *parts], out_dir / f"{run_dir.name}-h{slot:02d}.rrd", remove_parts=False)
+        if out is not None:
+            hours.append({"hour": f"{slot % 24:02d}:00", "start_s": slot * HOUR_S, "rrd": out})
+    if by_hour and len(hours) == len(by_hour):   # every hour merged: the parts have served (a failed one keeps them)
+        remove_recording_parts([*unslotted, *(p for parts in by_hour.values() for p in parts)])
+    return hours
 
 
 def write_pids(run_dir: Path, supervisor: Supervisor, router_pid: int | None) -> None:
@@ -306,6 +370,10 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     watch = ProgressWatch(hang_s=hang_timeout_s, startup_s=startup_timeout_s)
     run.started = time.monotonic()
     stop = _StopRequest()
+    # A real-time run records hour by hour, as each day of a long run does (the agents and this
+    # launcher's recorder read the setting when they start).
+    rotation = contextlib.ExitStack()
+    rotation.enter_context(recording_rotation(HOUR_S if realtime_run(rate, run.spec.clock.rate, robot) else None))
     recorder = Recorder("launcher", run.run_dir if record else None, run.run_id, day=run.spec.clock.date)
     try:
         log_scene_static(recorder, run.spec)
@@ -322,6 +390,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
             result = _finish(run, recorder)
         finally:
             stop.restore()
+            rotation.close()
     return result
 
 
@@ -475,11 +544,11 @@ def _finish(run: _Run, recorder: Recorder) -> RunResult:
     run.supervisor.stop_all(order=[*reversed(run.agents), "router"])
     recorder.close()
     rrd_path: Path | None = None
+    hours: list[dict[str, Any]] = []
     if run.record:
-        rrd_path = merge_recordings(sorted((run.run_dir / "rrd").glob("*.rrd")),
-                                    run.run_dir.parent / f"{run.run_id}.rrd")
+        rrd_path, hours = merge_run_recording(run.run_dir, run.run_id)
     missions = {**scene_missions(run.spec), **run.missions}
-    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path, missions=missions,
+    result = RunResult(scene=run.spec.name, run_dir=run.run_dir, rrd_path=rrd_path, missions=missions, hours=hours,
                        events=list(run.supervisor.events),
                        restarts={n: m.restarts for n, m in run.supervisor.processes.items()},
                        wall_s=time.monotonic() - run.started, interrupted=run.interrupted,
@@ -532,6 +601,7 @@ def _write_result(result: RunResult) -> None:
     (result.run_dir / "result.json").write_text(json.dumps({
         "scene": result.scene, "ok": result.ok, "missions": result.missions, "events": result.events,
         "restarts": result.restarts, "restart_log": result.restart_log, "wall_s": result.wall_s, "rrd": str(result.rrd_path) if result.rrd_path else None,
+        "hours": [{**h, "rrd": str(h["rrd"])} for h in result.hours],
         "interrupted": result.interrupted, "timed_out": result.timed_out, "error": result.error,
         "problems": result.problems,
         "scene_path": str(result.scene_path.resolve()) if result.scene_path else None,

@@ -20,30 +20,26 @@ cleanly with a clear error (every file is written to a temporary name and rename
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import datetime as dt
 import math
 import os
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from agents.runtime.recording import ROTATE_ENV
 from scenes.days import MAX_DAYS, SECONDS_PER_DAY, day_scene_data, weekday_of
-from tools.launch import LaunchError, RunResult
+from tools.launch import HOUR_S, LaunchError, RunResult, realtime_run, recording_rotation
 from tools.system.restart_budget import RestartBudget
 from tools.week_index import (INDEX_KIND, INDEX_NAME, RotationError, apply_retention, tree_bytes, write_atomic,
                               write_json)
 
 #: seconds of wall time between two samples of the agents' memory and CPU during a launched day
 SAMPLE_EVERY_S = 5.0
-#: real-time runs (rate 1, a ROS robot) rotate their recording every hour of sim time
-HOUR_S = 3600.0
 MB = 1024.0 * 1024.0
 
 
@@ -249,8 +245,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
     loaded = load_scene(scene)
     spec = loaded.scene
     planned = days or spec.clock.days
-    rate = launch_options.get("rate") or spec.clock.rate
-    realtime = rate <= 1.0 or launch_options.get("robot") == "ros"   # recordings rotate every hour
+    realtime = realtime_run(launch_options.get("rate"), spec.clock.rate, launch_options.get("robot") or "sim")
     run_id = f"{spec.name}-{datetime.now().strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
     run_dir = _make_run_dir(runs_dir or default_runs_dir(), run_id)
     (run_dir / "days").mkdir(exist_ok=True)
@@ -275,7 +270,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
             write_day_scene(day_file, loaded, number)
             sampler = ResourceSampler(in_process)
             try:
-                with _rotation(HOUR_S if realtime else None):
+                with recording_rotation(HOUR_S if realtime else None):
                     day_result = _run_one_day(day_file, number, planned, date, sampler, in_process=in_process,
                                               runs_dir=run_dir, timeout_s=timeout_s, record=record, budget=budget,
                                               on_tick=on_tick, stop=stop, launch_options=launch_options)
@@ -293,9 +288,9 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
             entry.update(status=_outcome(day_result), rrd=_rel(day_result.rrd_path, run_dir),
                          run_dir=_rel(day_result.run_dir, run_dir))
             recordings = [day_result.rrd_path]
-            if realtime and day_result.rrd_path is not None:
-                entry.update(rrd=None, hours=_hourly_recordings(day_result, run_dir))
-                recordings = [run_dir / h["rrd"] for h in entry["hours"]]
+            if day_result.hours:    # a real-time day: its recording is one file per hour
+                entry.update(rrd=None, hours=[{**h, "rrd": _rel(h["rrd"], run_dir)} for h in day_result.hours])
+                recordings = [h["rrd"] for h in day_result.hours]
             run.days.append(_day_record(entry, day_result, sampler, day_file, recordings))
             run.write()
             if day_result.interrupted or (stop is not None and stop.is_set()):
@@ -312,48 +307,6 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
     except RotationError as exc:
         result.error = result.error or str(exc)
     return result
-
-
-@contextlib.contextmanager
-def _rotation(seconds: float | None) -> Iterator[None]:
-    """The agents of this day (processes inherit the variable) rotate their recording parts every
-    ``seconds`` of sim time (agents/runtime/recording.py); a value the user set is kept."""
-    if seconds is None or ROTATE_ENV in os.environ:
-        yield
-        return
-    os.environ[ROTATE_ENV] = str(seconds)
-    try:
-        yield
-    finally:
-        os.environ.pop(ROTATE_ENV, None)
-
-
-def _hourly_recordings(result: RunResult, base: Path) -> list[dict[str, Any]]:
-    """A real-time day's recording as one file per hour (each merged from the agents' parts of
-    that hour, static rows included), in place of the day's single file."""
-    from agents.runtime.recording import part_slot
-    from tools.launch import merge_recordings, remove_recording_parts
-
-    by_hour: dict[int, list[Path]] = {}
-    unslotted: list[Path] = []
-    for part in sorted((result.run_dir / "rrd").glob("*.rrd")):
-        slot = part_slot(part)
-        (unslotted if slot is None else by_hour.setdefault(slot, [])).append(part)
-    if not by_hour:
-        return []
-    hours = []
-    for slot, parts in sorted(by_hour.items()):
-        # unrotated parts hold rows logged without a clock (the scene's walls and legend, by an
-        # in-process run's launcher): every hour opens with them
-        out = merge_recordings([*unslotted, *parts], base / f"{result.run_dir.name}-h{slot:02d}.rrd",
-                               remove_parts=False)
-        if out is not None:
-            hours.append({"hour": f"{slot % 24:02d}:00", "start_s": slot * HOUR_S, "rrd": _rel(out, base)})
-    if hours and result.rrd_path is not None:
-        result.rrd_path.unlink(missing_ok=True)
-    if len(hours) == len(by_hour):   # every hour merged: the parts have served (a failed one keeps them)
-        remove_recording_parts([*unslotted, *(p for parts in by_hour.values() for p in parts)])
-    return hours
 
 
 def write_day_scene(day_file: Path, loaded: Any, number: int) -> None:

@@ -33,7 +33,7 @@ def test_the_closing_line_counts_one_mission_in_the_singular():
 
     out = io.StringIO()
     result = SimpleNamespace(scene="s", missions={"m1": {"state": "done", "time_s": 0.0}}, events=[], error=None,
-                             run_dir="r", rrd_path=None, missions_done=1, wall_s=1.0, interrupted=False,
+                             run_dir="r", rrd_path=None, hours=[], missions_done=1, wall_s=1.0, interrupted=False,
                              timed_out=False, ok=True)
     print_result(result, Console(file=out, width=200, force_terminal=False))
     assert out.getvalue().splitlines()[-1] == "OK: 1/1 mission done in 1.0 s wall"
@@ -48,7 +48,7 @@ def test_the_missions_table_at_80_columns_keeps_ids_and_times_whole():
     missions = {f"m_wait_walking_therapy_{i}": {"state": "failed", "time_s": 36_000.0 + i, "started_s": 36_000.0,
                                                  "finished_s": 36_100.0, "reason": reason} for i in range(3)}
     result = SimpleNamespace(scene="center_day", missions=missions, events=[], error=None, run_dir="r",
-                             rrd_path=None, missions_done=0, wall_s=1.0, interrupted=False, timed_out=False, ok=False)
+                             rrd_path=None, hours=[], missions_done=0, wall_s=1.0, interrupted=False, timed_out=False, ok=False)
     out = io.StringIO()
     print_result(result, Console(file=out, width=80, force_terminal=False))
     text = out.getvalue()

@@ -303,6 +303,41 @@ def test_a_real_time_day_is_recorded_hour_by_hour(tmp_path: Path, monkeypatch: p
     assert "CHRONAV_RECORDING_ROTATE_S" not in os.environ                 # only for that day's agents
 
 
+@pytest.mark.slow
+def test_a_single_real_time_day_without_days_is_recorded_hour_by_hour(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`chronav launch SCENE --rate 1` of a one-day scene (no --days, not a run of days) rotates
+    its recording every hour too, and says so in its result."""
+    import yaml
+
+    monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
+    monkeypatch.setenv("RERUN", "on")
+    monkeypatch.delenv("CHRONAV_RECORDING_ROTATE_S", raising=False)
+    data = yaml.safe_load(WEEK.read_text())
+    data["clock"].pop("days")                                                  # Monday only
+    data["agenda_changes"] = [c for c in data.get("agenda_changes", []) if c.get("day", 1) == 1]
+    scene = tmp_path / "monday.yaml"
+    scene.write_text(yaml.safe_dump(data))
+    result = CliRunner().invoke(app, ["launch", str(scene), "--in-process", "--rate", "1", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["rrd"] is None and [h["hour"] for h in summary["hours"]] == ["09:00", "10:00"]
+    run_dir = Path(summary["run_dir"])
+    for hour in summary["hours"]:
+        assert "world/map/walls" in recording_entities(Path(hour["rrd"]))          # each hour opens on its own
+    assert not list((run_dir / "rrd").glob("*.rrd"))                           # the parts have served
+    written = json.loads((run_dir / "result.json").read_text())
+    assert [h["rrd"] for h in written["hours"]] == [h["rrd"] for h in summary["hours"]]
+    assert "CHRONAV_RECORDING_ROTATE_S" not in os.environ
+
+
+def test_real_time_is_a_rate_of_one_or_less_or_a_ros_robot() -> None:
+    from tools.launch import realtime_run
+
+    assert realtime_run(None, 1.0) and realtime_run(0.5, 60.0) and realtime_run(None, 60.0, robot="ros")
+    assert not realtime_run(None, 60.0) and not realtime_run(2.0, 1.0)
+
+
 def test_a_later_day_that_cannot_start_is_an_error_of_that_day_and_the_run_goes_on(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from tools.launch import LaunchError, RunResult

@@ -104,6 +104,7 @@ def run_with_progress(scene: str, *, rate: float | None, timeout_s: float, recor
                           "timed_out": result.timed_out, "error": result.error, "problems": result.problems,
                           "run_dir": str(result.run_dir),
                           "rrd": str(result.rrd_path) if result.rrd_path else None,
+                          "hours": [{**h, "rrd": str(h["rrd"])} for h in result.hours],
                           **({"report": report} if report is not None else {})}))
     else:
         print_result(result, Console())
@@ -184,6 +185,10 @@ def print_result(result: Any, out: Console) -> None:
     out.print(f"run directory: {result.run_dir}", **line)
     if result.rrd_path:
         out.print(f"recording: {result.rrd_path}  (open with: rerun {result.rrd_path})", **line)
+    if result.hours:       # a real-time run: one file per hour
+        files = " ".join(str(h["rrd"]) for h in result.hours)
+        out.print(f"recording, one file per hour ({', '.join(h['hour'] for h in result.hours)}): "
+                  f"open with: rerun {files}", **line)
     done = f"{result.missions_done}/{plural(len(result.missions), 'mission')} done"
     wall = f"{result.wall_s:.1f} s wall"
     closing = {
