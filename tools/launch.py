@@ -351,14 +351,16 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
                agent_options: dict[str, list[str]] | None = None,
                on_tick: Callable[[dict[str, object]], None] | None = None,
                metrics_report: bool = True, ros_domain: int | None = None, robot: str = "sim",
-               restart_budget: RestartBudget | None = None) -> RunResult:
+               restart_budget: RestartBudget | None = None, settle_s: float = 0.0) -> RunResult:
     """Run one scene end to end; return when every mission is done or failed, or on timeout/Ctrl-C.
 
     ``metrics_report=False`` skips the social-vs-baseline metrics the demo logs into the recording
     (``chronav evaluate`` measures each run itself, whatever its planner).  ``ros_domain`` adds
     the ROS 2 bridge agent on that ROS_DOMAIN_ID; ``robot="ros"`` drives a ROS 2 robot through it
     instead of the simulated one (docs/ros2.md).  ``restart_budget``: one shared by the days of a
-    long run (restarts per rolling hour, tools/system/restart_budget.py)."""
+    long run (restarts per rolling hour, tools/system/restart_budget.py).  ``settle_s``: at a run's
+    normal end, how long the watch may wait for the last removals' tombstones to be forgotten before
+    its last status (a long run's per-day DSR counts, tools/week.py)."""
     from agents.runtime.recording import Recorder
     from dsr import DSRError
 
@@ -378,7 +380,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     try:
         log_scene_static(recorder, run.spec)
         if _start_processes(run, stop):
-            _watch_until_over(run, stop, watch, recorder, timeout_s=timeout_s, on_tick=on_tick)
+            _watch_until_over(run, stop, watch, recorder, timeout_s=timeout_s, on_tick=on_tick, settle_s=settle_s)
         run.interrupted = run.interrupted or stop.requested
         if record and metrics_report and not run.interrupted:
             run.metrics = _report(run.scene_path, run.run_dir, run.missions, recorder)
@@ -471,9 +473,11 @@ def _start_processes(run: _Run, stop: _StopRequest) -> bool:
 
 
 def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recorder: Recorder, *,
-                      timeout_s: float, on_tick: Callable[[dict[str, object]], None] | None) -> None:
+                      timeout_s: float, on_tick: Callable[[dict[str, object]], None] | None,
+                      settle_s: float = 0.0) -> None:
     """Join the graph read-only and, until the run is over, poll the processes, restart hung agents,
-    log the graph and hand the status to ``on_tick``."""
+    log the graph and hand the status to ``on_tick``; with ``settle_s``, a last status once the
+    graph holds no tombstone (``_settled_status``)."""
     from agents.runtime.drawing.dsr_graph import GraphLogger
     from agents.runtime.heartbeat import read_stamp
     from dsr import join
@@ -493,8 +497,7 @@ def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recor
             changed |= _restart_stuck(graph, supervisor, watch, read_stamp)
             if changed:
                 write_pids(run.run_dir, supervisor, run.router.pid)
-            status = _status(graph, supervisor, run.started)
-            status["run"] = {"run_dir": str(run.run_dir), "endpoint": run.endpoint, "graph": run.graph_name}
+            status = _run_status(graph, supervisor, run)
             run.missions = status["missions"]
             run.problems = status["problems"]
             graph_logger.maybe_log(graph, status.get("now_s"))
@@ -502,8 +505,31 @@ def _watch_until_over(run: _Run, stop: _StopRequest, watch: ProgressWatch, recor
                 on_tick(status)
             if _run_over(run, stop, status, timeout_s):
                 break
+        if settle_s > 0 and on_tick is not None and not (run.interrupted or run.timed_out):
+            status = _settled_status(graph, supervisor, run, settle_s)
+            on_tick(status)
         graph_logger.maybe_log(graph, status.get("now_s"), force=True)
         write_final_graph(run.run_dir, graph)
+
+
+def _settled_status(graph: Any, supervisor: Supervisor, run: _Run, settle_s: float) -> dict[str, Any]:
+    """The status once the graph's tombstones are forgotten, or after ``settle_s`` wall seconds.
+
+    Why: the day's last removals (the last mission's intention, people leaving) are remembered until
+    every member has acknowledged them, one or two digest rounds (0.5 s each, dsr/anti_entropy.py);
+    read at once, a day's end counted 0 to 4 tombstones by chance, which a day-over-day ratio
+    read as growth.  Nothing accumulates: each day has a new graph."""
+    deadline = time.monotonic() + settle_s
+    while graph.tombstones() > 0 and time.monotonic() < deadline:
+        graph.dispatch(timeout=0.1)
+    return _run_status(graph, supervisor, run)
+
+
+def _run_status(graph: Any, supervisor: Supervisor, run: _Run) -> dict[str, Any]:
+    """What ``on_tick`` gets: the graph's and processes' status and where the run is."""
+    status = _status(graph, supervisor, run.started)
+    status["run"] = {"run_dir": str(run.run_dir), "endpoint": run.endpoint, "graph": run.graph_name}
+    return status
 
 
 def _run_over(run: _Run, stop: _StopRequest, status: Mapping[str, object], timeout_s: float) -> bool:

@@ -40,6 +40,9 @@ from tools.week_index import (INDEX_KIND, INDEX_NAME, RotationError, apply_reten
 
 #: seconds of wall time between two samples of the agents' memory and CPU during a launched day
 SAMPLE_EVERY_S = 5.0
+#: wall seconds a launched day's end may wait for its last tombstones to be forgotten before the
+#: day's DSR counts are read (tools/launch.py ``_settled_status``)
+SETTLE_S = 3.0
 MB = 1024.0 * 1024.0
 
 
@@ -338,7 +341,8 @@ def _run_one_day(day_file: Path, number: int, planned: int, date: dt.date, sampl
     from tools.launch import run_system
 
     return run_system(day_file, runs_dir=runs_dir, timeout_s=timeout_s, record=record, on_tick=tick,
-                      restart_budget=budget, restart_limit=budget.limit, metrics_report=False, **launch_options)
+                      restart_budget=budget, restart_limit=budget.limit, metrics_report=False, settle_s=SETTLE_S,
+                      **launch_options)
 
 
 def _rel(path: Path | None, base: Path) -> str | None:

@@ -13,6 +13,7 @@ import json
 import math
 import os
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from typer.testing import CliRunner
@@ -387,3 +388,28 @@ def test_bench_week_summarizes_growth_from_the_day_records() -> None:
     assert report["rss_growth_day3_over_day1"] == 1.1 and report["dsr_growth_day3_over_day1"] == 3.0
     assert report["week_wall_min"] is None and report["week_wall_min_projected"] == 3.5
     assert (report["days_ok"], report["missions"], report["rrd_mb_per_day"]) == (2, 4, 3.0)
+
+
+def test_a_launched_days_last_status_waits_for_its_tombstones_to_be_forgotten(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The day's DSR counts are read once the last removals are forgotten (a few digest rounds),
+    not while they are in flight, and never later than ``settle_s``."""
+    import tools.launch as launch
+
+    class Graph:
+        def __init__(self, forgotten_after: int | None) -> None:
+            self.dispatches, self.forgotten_after = 0, forgotten_after
+
+        def tombstones(self) -> int:
+            return 0 if self.forgotten_after is not None and self.dispatches >= self.forgotten_after else 4
+
+        def dispatch(self, timeout: float) -> None:
+            self.dispatches += 1
+
+    monkeypatch.setattr(launch, "_status", lambda graph, supervisor, started: {"dsr": {"tombstones": graph.tombstones()}})
+    run = SimpleNamespace(started=0.0, run_dir=Path("r"), endpoint="tcp/127.0.0.1:1", graph_name="g")
+    settling = Graph(forgotten_after=3)
+    assert launch._settled_status(settling, None, run, settle_s=5.0)["dsr"] == {"tombstones": 0}
+    assert settling.dispatches == 3
+    never = Graph(forgotten_after=None)
+    assert launch._settled_status(never, None, run, settle_s=0.3)["dsr"] == {"tombstones": 4}   # bounded wait
+    assert launch._settled_status(Graph(forgotten_after=0), None, run, settle_s=5.0)["run"]["graph"] == "g"
