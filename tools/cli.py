@@ -81,8 +81,8 @@ def main() -> None:
         raise SystemExit(2) from None
     finally:
         # no daemon thread may be in Zenoh's or Rerun's native code at finalisation (its abort
-        # is "FATAL: exception not rethrown"): dsr/exit_guard.py
-        from dsr.exit_guard import leave
+        # is "FATAL: exception not rethrown"): agents/runtime/exit_guard.py
+        from agents.runtime.exit_guard import leave
         leave(exit_code)
         gc.freeze()
 

@@ -95,7 +95,7 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.collector import FreeMemoryTimer
-    from dsr.exit_guard import leave
+    from agents.runtime.exit_guard import leave
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
 

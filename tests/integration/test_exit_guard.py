@@ -1,4 +1,4 @@
-"""The end of a `chronav` process with a daemon thread in a Zenoh call (dsr/exit_guard.py).
+"""The end of a `chronav` process with a daemon thread in a Zenoh call (agents/runtime/exit_guard.py).
 
 Without the guard, a daemon thread returning from a Zenoh `get` while the interpreter finalises
 aborts the process ("FATAL: exception not rethrown", SIGABRT: the second test failed so in 4 runs
@@ -39,7 +39,7 @@ def query():
 threading.Thread(target=query, name="querier", daemon=True).start()
 if close_first:                   # what the commands do: close what they opened
     session.close()
-import dsr.exit_guard as guard
+import agents.runtime.exit_guard as guard
 guard.GRACE_S = 1.0
 from tools.cli import main
 sys.argv = ["chronav", "--help"]

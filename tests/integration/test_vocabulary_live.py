@@ -62,7 +62,7 @@ def test_a_typo_d_attribute_is_refused_live_and_the_agent_goes_on(procs, tmp_pat
     # chronav dsr dump: the other replicas' clock went on from the agent's later writes, without the typo
     wait_until(lambda: _clock(runner, endpoint).get("now_s") == 20.0, 10, message="clock replicated")
     assert "now_S" not in _clock(runner, endpoint)
-    # stopped as the launcher stops it: a clean exit, no abort in Zenoh's threads (dsr/exit_guard.py)
+    # stopped as the launcher stops it: a clean exit, no abort in Zenoh's threads (agents/runtime/exit_guard.py)
     agent.send_signal(signal.SIGTERM)
     assert agent.wait(timeout=30) == 0, log.read_text()
     assert "FATAL" not in log.read_text() and "sim_robot stopped" in log.read_text()

@@ -36,7 +36,7 @@ KILLS: list[dict[str, Any]] = json.loads(SCHEDULE.read_text())
 # ----------------------------------------------------------------------------- the system
 def _chaos(args: list[str], log: Path, timeout_s: float) -> dict[str, Any]:
     """The run's summary, plus the lines of its log saying the launcher did not end cleanly: a thread
-    still running at its exit (dsr/exit_guard.py) or glibc's abort of one inside Zenoh."""
+    still running at its exit (agents/runtime/exit_guard.py) or glibc's abort of one inside Zenoh."""
     summary = run_json(["chaos", *args], log, timeout_s)
     summary["exit_problems"] = [line for line in log.read_text().splitlines()
                                 if "FATAL" in line or "still running" in line]

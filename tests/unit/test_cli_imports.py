@@ -77,8 +77,15 @@ def test_the_calendar_parser_loads_only_for_an_ics_agenda(tmp_path: Path) -> Non
     assert not sorted(packages(modules) & set(NEVER_FOR_PATH))
 
 
+#: what every process imports at its end (agents/runtime/exit_guard.py): the standard library only,
+#: under two packages whose ``__init__`` is a docstring
+EXIT_GUARD = {"agents", "agents.runtime", "agents.runtime.exit_guard"}
+
+
 def test_help_imports_no_numerics(tmp_path: Path) -> None:
     modules, stdout = imported_by(tmp_path, "--help")
     assert "path" in stdout
+    assert EXIT_GUARD <= modules                     # the guard ran
+    modules -= EXIT_GUARD
     assert not sorted(packages(modules) & {"numpy", "numba", "scipy", "shapely", "pydantic", "yaml", "agents",
                                            "dsr", "scenes", "grammar", *NEVER_FOR_PATH, *CALENDAR})

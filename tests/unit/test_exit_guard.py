@@ -1,4 +1,4 @@
-"""dsr/exit_guard.py: a `chronav` process waits for its daemon threads before the
+"""agents/runtime/exit_guard.py: a `chronav` process waits for its daemon threads before the
 interpreter finalises, and ends with its own exit code when one never stops.  The real case
 (a thread in a Zenoh call at exit) is tests/integration/test_exit_guard.py."""
 
@@ -9,7 +9,7 @@ import sys
 import threading
 
 from tests.support import REPO_ROOT
-from dsr import exit_guard
+from agents.runtime import exit_guard
 
 
 def _daemon(target) -> threading.Thread:
@@ -43,7 +43,7 @@ def test_exit_codes_as_sys_exit_gives_them():
 
 def test_a_thread_that_never_stops_ends_the_process_with_the_commands_code():
     script = ("import threading, sys\n"
-              "from dsr.exit_guard import leave\n"
+              "from agents.runtime.exit_guard import leave\n"
               "threading.Thread(target=threading.Event().wait, name='stuck', daemon=True).start()\n"
               "try:\n"
               "    raise SystemExit(3)\n"

@@ -111,7 +111,7 @@ class ChaosRun:
     def close(self) -> None:
         """Stop injecting, close the chaos replica, then wait for the injector thread again:
         closing the session ends any Zenoh call it is still blocked in (a probe, a state
-        fetch), and it must not be inside one when the process ends (dsr/exit_guard.py)."""
+        fetch), and it must not be inside one when the process ends (agents/runtime/exit_guard.py)."""
         self.finish()
         if self._replica is not None:
             self._replica.close()

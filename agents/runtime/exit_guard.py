@@ -17,9 +17,9 @@ A thread that still runs after the grace period is named on stderr and the proce
 ``os._exit`` and the command's own exit code: skipping finalisation (and whatever exit handlers
 had not run) is better than an abort that turns a finished run into a crash.
 
-It lives with the DSR, which owns the Zenoh sessions whose threads it waits for, so that both the
-commands and the agents can reach it.  Imports only the standard library: ``chronav --help``
-runs it too (tests/unit/test_cli_imports.py).
+It lives in the agents' runtime so that both the agents and the commands (the layer above) can
+reach it, in a package whose ``__init__`` imports nothing.  Imports only the standard library:
+``chronav --help`` runs it too (tests/unit/test_cli_imports.py).
 """
 
 from __future__ import annotations
