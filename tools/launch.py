@@ -214,16 +214,18 @@ def realtime_run(rate: float | None, scene_rate: float, robot: str = "sim") -> b
 
 def merge_run_recording(run_dir: Path, run_id: str) -> tuple[Path | None, list[dict[str, Any]]]:
     """A finished run's parts merged: ``(<runs>/<run id>.rrd, [])``, or, when the parts were rotated
-    (a real-time run), ``(None, hours)``: one file per hour (``hourly_recordings``)."""
+    over more than one hour (a long real-time run), ``(None, hours)``: one file per hour
+    (``hourly_recordings``).  A real-time run within one hour keeps the one file every run has."""
     from agents.runtime.recording import part_slot
 
     parts = sorted((run_dir / "rrd").glob("*.rrd"))
-    if any(part_slot(part) is not None for part in parts):
-        hours = hourly_recordings(run_dir, run_dir.parent)
-        if hours:
-            return None, hours
-    # not rotated, or no hour could be merged: one file (rotated parts are then kept, to merge by hand)
-    return merge_recordings(parts, run_dir.parent / f"{run_id}.rrd"), []
+    out = run_dir.parent / f"{run_id}.rrd"
+    if len({part_slot(part) for part in parts} - {None}) <= 1:
+        return merge_recordings(parts, out, remove_parts=True), []
+    hours = hourly_recordings(run_dir, run_dir.parent)
+    if hours:
+        return None, hours
+    return merge_recordings(parts, out), []   # no hour could be merged: one file, the parts kept
 
 
 def hourly_recordings(run_dir: Path, out_dir: Path) -> list[dict[str, Any]]:

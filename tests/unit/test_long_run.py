@@ -284,6 +284,35 @@ def test_a_recorder_rotates_its_part_every_slot_and_each_part_has_the_static_row
         Recorder("sim_robot", tmp_path, "rid")
 
 
+@pytest.mark.parametrize(("times_s", "hourly"), [((9 * 3600 + 5.0, 9 * 3600 + 1800.0), False),
+                                                 ((9 * 3600 + 5.0, 10 * 3600 + 1.0), True)])
+def test_a_rotated_run_is_one_file_within_an_hour_and_one_per_hour_beyond(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, times_s: tuple[float, ...], hourly: bool) -> None:
+    import rerun as rr
+
+    from agents.runtime.recording import ROTATE_ENV, Recorder
+    from tools.launch import merge_run_recording
+
+    monkeypatch.setenv(ROTATE_ENV, "3600")
+    monkeypatch.setenv("RERUN", "on")
+    run_dir = tmp_path / "run-1"
+    recorder = Recorder("sim_robot", run_dir, "run-1", day=dt.date(2026, 12, 1))
+    recorder.line_strip("world/map/walls", [[0, 0], [6, 0]], color=[0, 0, 0], static=True)
+    for sim_s in times_s:
+        recorder.set_time(sim_s)
+        recorder.log("world/truth/robot", rr.Points2D([[sim_s / 3600, 0]]))
+    recorder.close()
+    rrd, hours = merge_run_recording(run_dir, "run-1")
+    if hourly:
+        assert rrd is None and [h["hour"] for h in hours] == ["09:00", "10:00"]
+        assert sorted(p.name for p in tmp_path.glob("*.rrd")) == ["run-1-h09.rrd", "run-1-h10.rrd"]
+    else:
+        assert hours == [] and rrd == tmp_path / "run-1.rrd"
+        assert sorted(p.name for p in tmp_path.glob("*.rrd")) == ["run-1.rrd"]
+        assert {"world/map/walls", "world/truth/robot"} <= recording_entities(rrd)
+    assert not list((run_dir / "rrd").glob("*.rrd"))                  # the parts have served
+
+
 @pytest.mark.slow
 def test_a_real_time_day_is_recorded_hour_by_hour(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("CHRONAV_RUNS", str(tmp_path / "runs"))
