@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from scenes.clock import format_clock_minutes
-from tools.week import process_usage
+from tools.week import MB, process_usage
 
 #: seconds of wall time between two samples of each agent's memory in the real soak
 SAMPLE_EVERY_S = 60.0
@@ -50,9 +50,30 @@ def fit_slope_per_hour(samples: list[tuple[float, float]]) -> float | None:
     return cov / var * 3600.0
 
 
+def private_mb(pid: int) -> float | None:
+    """Process ``pid``'s private memory (USS: pages no other process maps, in MiB); None if it
+    cannot be read.
+
+    Why beside the RSS: two thirds of an agent's RSS are the shared libraries' code pages (numba's
+    LLVM, Rerun, Zenoh: 350-390 MB of an agent's 530-620 MB, read in /proc/<pid>/smaps_rollup
+    during a soak), which the kernel reads in as code paths first run and may drop at any time;
+    they are bounded by the libraries' size.  A leak shows in the private memory."""
+    import psutil
+
+    try:
+        return float(psutil.Process(pid).memory_full_info().uss) / MB
+    except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+        return None
+
+
+#: one sample: seconds since the soak began, RSS and private memory (MB; private None if unread)
+Sample = tuple[float, float, float | None]
+
+
 @dataclass
 class MemorySeries:
-    """Each agent's RSS over wall time, one series per process (a restart opens a new one)."""
+    """Each agent's RSS and private memory over wall time, one series per process (a restart opens
+    a new one)."""
 
     warmup_s: float
     sample_every_s: float = SAMPLE_EVERY_S
@@ -61,10 +82,10 @@ class MemorySeries:
     #: slope can be read afterwards, even of a soak that was cut short
     samples_csv: Path | None = None
     started: float | None = None
-    series: dict[str, list[tuple[int, list[tuple[float, float]]]]] = field(default_factory=dict)
+    series: dict[str, list[tuple[int, list[Sample]]]] = field(default_factory=dict)
     _last: float = -math.inf
 
-    def add(self, name: str, pid: int, t_s: float, rss_mb: float) -> None:
+    def add(self, name: str, pid: int, t_s: float, rss_mb: float, private: float | None = None) -> None:
         """One sample of agent ``name`` (process ``pid``) at ``t_s`` seconds since the soak began;
         samples inside the warm-up are not kept."""
         runs = self.series.setdefault(name, [])
@@ -74,10 +95,10 @@ class MemorySeries:
             new = not self.samples_csv.exists()
             with self.samples_csv.open("a", encoding="utf-8") as handle:
                 if new:
-                    handle.write("agent,pid,t_s,rss_mb\n")
-                handle.write(f"{name},{pid},{t_s:.1f},{rss_mb:.2f}\n")
+                    handle.write("agent,pid,t_s,rss_mb,private_mb\n")
+                handle.write(f"{name},{pid},{t_s:.1f},{rss_mb:.2f},{'' if private is None else f'{private:.2f}'}\n")
         if t_s >= self.warmup_s:
-            runs[-1][1].append((t_s, rss_mb))
+            runs[-1][1].append((t_s, rss_mb, private))
 
     def tick(self, pids: dict[str, int | None]) -> None:
         """Sample every agent of ``pids`` (name -> pid) if ``sample_every_s`` has passed."""
@@ -91,30 +112,36 @@ class MemorySeries:
             usage = process_usage(pid)
             if pid is None or usage is None:
                 continue
-            self.add(name, pid, now - self.started, usage[0])
+            self.add(name, pid, now - self.started, usage[0], private_mb(pid))
 
-    def slopes(self) -> dict[str, float | None]:
-        """Each agent's memory slope (MB/h) on its longest series after the warm-up."""
+    def slopes(self, private: bool = False) -> dict[str, float | None]:
+        """Each agent's memory slope (MB/h, of its RSS or of its private memory) on its longest
+        series after the warm-up."""
         out: dict[str, float | None] = {}
         for name, runs in self.series.items():
             longest = max((samples for _, samples in runs), key=len)
-            slope = fit_slope_per_hour(longest)
+            points = [(t, p) for t, _, p in longest if p is not None] if private else [(t, r) for t, r, _ in longest]
+            slope = fit_slope_per_hour(points)
             out[name] = None if slope is None else round(slope, 3)
         return out
 
     def report(self) -> dict[str, object]:
-        """The flat part of the soak's JSON: the largest slope, each agent's, samples and processes."""
-        slopes = self.slopes()
-        known = [s for s in slopes.values() if s is not None]
-        flat: dict[str, object] = {
-            "soak_mem_slope_mb_per_h_max": max(known) if known else None,
-            "soak_mem_slope_goal_mb_per_h": GOAL_MB_PER_H,
-            "soak_agents_over_goal": sorted(n for n, s in slopes.items() if s is not None and s >= GOAL_MB_PER_H),
-        }
+        """The flat part of the soak's JSON: the largest slope, each agent's, samples and processes;
+        of the RSS (``soak_mem_*``) and of the private memory (``soak_private_*``)."""
+        slopes, private = self.slopes(), self.slopes(private=True)
+        flat: dict[str, object] = {"soak_mem_slope_goal_mb_per_h": GOAL_MB_PER_H}
+        for key, found in (("mem", slopes), ("private", private)):
+            known = [s for s in found.values() if s is not None]
+            flat[f"soak_{key}_slope_mb_per_h_max"] = max(known) if known else None
+            over = sorted(n for n, s in found.items() if s is not None and s >= GOAL_MB_PER_H)
+            flat["soak_agents_over_goal" if key == "mem" else "soak_agents_over_goal_private"] = over
         for name, slope in sorted(slopes.items()):
             runs = self.series[name]
+            last = runs[-1][1][-1] if runs[-1][1] else None
             flat[f"soak_mem_slope_mb_per_h_{name}"] = slope
-            flat[f"soak_rss_mb_last_{name}"] = round(runs[-1][1][-1][1], 2) if runs[-1][1] else None
+            flat[f"soak_private_slope_mb_per_h_{name}"] = private.get(name)
+            flat[f"soak_rss_mb_last_{name}"] = round(last[1], 2) if last else None
+            flat[f"soak_private_mb_last_{name}"] = round(last[2], 2) if last and last[2] is not None else None
             flat[f"soak_processes_{name}"] = len(runs)
         flat["soak_samples"] = sum(len(s) for runs in self.series.values() for _, s in runs)
         return flat

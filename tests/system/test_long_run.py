@@ -60,6 +60,8 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     assert report["soak_hours"] >= 0.007
     for name in agent_names():
         assert isinstance(report[f"soak_mem_slope_mb_per_h_{name}"], float), (name, report)
+        assert isinstance(report[f"soak_private_slope_mb_per_h_{name}"], float), (name, report)
+        assert 0 < report[f"soak_private_mb_last_{name}"] < report[f"soak_rss_mb_last_{name}"]
         assert report[f"soak_processes_{name}"] == 1
     assert report["soak_mem_slope_mb_per_h_max"] == max(
         v for k, v in report.items() if k.startswith("soak_mem_slope_mb_per_h_") and k[24:] in (*agent_names(), "router"))
