@@ -104,8 +104,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     ``stop`` ends the run from another thread (Dask, a pool); in the main thread Ctrl-C does."""
     from agents.runtime.lockstep import AgentError
     from agents.world.scene_world import load_world
-    from tools.launch import (HOUR_S, _make_run_dir, log_scene_static, realtime_run, recording_rotation,
-                              write_final_graph)
+    from tools.launch import _make_run_dir, hourly_rotation, log_scene_static, realtime_run, write_final_graph
     from tools.system.runs import runs_dir as default_runs_dir
 
     check_rate(rate)
@@ -121,7 +120,7 @@ def run_in_process(scene: str | Path, *, rate: float | None = None, runs_dir: Pa
     run = _InProcessRun(spec=spec, scene_path=loaded.path, run_id=run_id, run_dir=run_dir, record=record,
                         started=time.monotonic(), on_tick=on_tick)
     # A real-time run records hour by hour (its recording stream reads the setting when it is made).
-    with recording_rotation(HOUR_S if realtime_run(rate, spec.clock.rate) else None):
+    with hourly_rotation(realtime_run(rate, spec.clock.rate)):
         scheduler, launcher = _build_scheduler(run, options)
     error: str | None = None
     reason = "done"

@@ -190,16 +190,16 @@ def remove_recording_parts(parts: list[Path]) -> None:
 
 
 @contextlib.contextmanager
-def recording_rotation(seconds: float | None) -> Iterator[None]:
-    """The recorders made and the agents started inside (processes inherit the variable) rotate
-    their recording parts every ``seconds`` of sim time (agents/runtime/recording.py); a value the
-    user set, or an enclosing run of days, is kept."""
+def hourly_rotation(realtime: bool) -> Iterator[None]:
+    """With ``realtime``, the recorders made and the agents started inside (processes inherit the
+    variable) rotate their recording parts every hour of sim time (agents/runtime/recording.py); a
+    value the user set, or an enclosing run of days, is kept."""
     from agents.runtime.recording import ROTATE_ENV
 
-    if seconds is None or ROTATE_ENV in os.environ:
+    if not realtime or ROTATE_ENV in os.environ:
         yield
         return
-    os.environ[ROTATE_ENV] = str(seconds)
+    os.environ[ROTATE_ENV] = str(HOUR_S)
     try:
         yield
     finally:
@@ -222,31 +222,32 @@ def merge_run_recording(run_dir: Path, run_id: str) -> tuple[Path | None, list[d
     out = run_dir.parent / f"{run_id}.rrd"
     if len({part_slot(part) for part in parts} - {None}) <= 1:
         return merge_recordings(parts, out, remove_parts=True), []
-    hours = hourly_recordings(run_dir, run_dir.parent)
+    hours = hourly_recordings(parts, run_dir.name, run_dir.parent)
     if hours:
         return None, hours
     return merge_recordings(parts, out), []   # no hour could be merged: one file, the parts kept
 
 
-def hourly_recordings(run_dir: Path, out_dir: Path) -> list[dict[str, Any]]:
-    """A real-time run's recording as one file per hour in ``out_dir``, ``<run>-hNN.rrd``, each
-    merged from the agents' parts of that hour with the rows logged before the clock was set."""
+def hourly_recordings(parts: list[Path], run_name: str, out_dir: Path) -> list[dict[str, Any]]:
+    """A real-time run's recording parts as one file per hour in ``out_dir``, ``<run>-hNN.rrd``,
+    each merged from the agents' parts of that hour with the rows logged before the clock was set."""
     from agents.runtime.recording import part_slot
 
     by_hour: dict[int, list[Path]] = {}
     unslotted: list[Path] = []
-    for part in sorted((run_dir / "rrd").glob("*.rrd")):
+    for part in parts:
         slot = part_slot(part)
         (unslotted if slot is None else by_hour.setdefault(slot, [])).append(part)
     hours = []
-    for slot, parts in sorted(by_hour.items()):
+    for slot, hour_parts in sorted(by_hour.items()):
         # unrotated parts hold rows logged without a clock (the scene's walls and legend, by an
         # in-process run's launcher): every hour opens with them
-        out = merge_recordings([*unslotted, *parts], out_dir / f"{run_dir.name}-h{slot:02d}.rrd", remove_parts=False)
+        out = merge_recordings([*unslotted, *hour_parts], out_dir / f"{run_name}-h{slot:02d}.rrd",
+                               remove_parts=False)
         if out is not None:
             hours.append({"hour": f"{slot % 24:02d}:00", "start_s": slot * HOUR_S, "rrd": out})
     if by_hour and len(hours) == len(by_hour):   # every hour merged: the parts have served (a failed one keeps them)
-        remove_recording_parts([*unslotted, *(p for parts in by_hour.values() for p in parts)])
+        remove_recording_parts([*unslotted, *(p for hour_parts in by_hour.values() for p in hour_parts)])
     return hours
 
 
@@ -377,7 +378,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     # A real-time run records hour by hour, as each day of a long run does (the agents and this
     # launcher's recorder read the setting when they start).
     rotation = contextlib.ExitStack()
-    rotation.enter_context(recording_rotation(HOUR_S if realtime_run(rate, run.spec.clock.rate, robot) else None))
+    rotation.enter_context(hourly_rotation(realtime_run(rate, run.spec.clock.rate, robot)))
     recorder = Recorder("launcher", run.run_dir if record else None, run.run_id, day=run.spec.clock.date)
     try:
         log_scene_static(recorder, run.spec)

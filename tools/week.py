@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from scenes.days import MAX_DAYS, SECONDS_PER_DAY, day_scene_data, weekday_of
-from tools.launch import HOUR_S, LaunchError, RunResult, realtime_run, recording_rotation
+from tools.launch import LaunchError, RunResult, hourly_rotation, realtime_run
 from tools.system.restart_budget import RestartBudget
 from tools.week_index import (INDEX_KIND, INDEX_NAME, RotationError, apply_retention, tree_bytes, write_atomic,
                               write_json)
@@ -273,7 +273,7 @@ def run_days(scene: str | Path, *, days: int | None = None, keep_days: int | Non
             write_day_scene(day_file, loaded, number)
             sampler = ResourceSampler(in_process)
             try:
-                with recording_rotation(HOUR_S if realtime else None):
+                with hourly_rotation(realtime):
                     day_result = _run_one_day(day_file, number, planned, date, sampler, in_process=in_process,
                                               runs_dir=run_dir, timeout_s=timeout_s, record=record, budget=budget,
                                               on_tick=on_tick, stop=stop, launch_options=launch_options)
