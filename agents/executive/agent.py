@@ -162,6 +162,17 @@ class ExecutiveAgent(Agent):
         which = f"steps {first + 1}-{index + 1}" if index > first else f"step {index + 1}"
         self.rec.event(f"{format_clock(now_s)} {mission.mission_id} {which}/{len(steps)}: {merged}")
 
+    def _forget_intentions(self, mission_id: str) -> None:
+        """A finished mission's intentions leave the graph (their ``step_of`` edges with them).
+
+        Why: every replica holds every intention, with its path, and the navigation and the
+        simulator scan them all each step; kept, a day of missions grows every agent's memory and
+        step time mission after mission.  What they did stays in plans.jsonl and the recording, and
+        the mission node keeps its plan, state, times and reason.  An active intention is removed
+        the same way: to the navigation a removed intention is a cancelled one."""
+        for old in intentions(self.graph, mission_id):
+            self.graph.delete_node(old.node_id)
+
     def _cancel_active(self, mission_id: str) -> None:
         for old in intentions(self.graph, mission_id):
             if old.active:
@@ -239,7 +250,7 @@ class ExecutiveAgent(Agent):
         g = self.graph
         with g.transaction():
             g.update_node(mission.node_id, attrs={"state": state, "finished_s": now_s, "reason": reason})
-            self._cancel_active(mission.mission_id)
+            self._forget_intentions(mission.mission_id)
         self._steps.pop(mission.mission_id, None)
         self._replans.pop(mission.mission_id, None)   # a week's missions must not pile up here
         took = now_s - (mission.started_s if mission.started_s is not None else now_s)

@@ -250,6 +250,27 @@ def test_a_failing_step_is_retried_then_the_mission_fails(tmp_path: Path) -> Non
     assert not [i for i in intentions(centre.graph, "m") if i.active]
 
 
+def test_a_finished_mission_leaves_no_intention_in_the_graph(tmp_path: Path) -> None:
+    """Every replica holds every intention, path included, and the navigation scans them all each
+    step: a day of missions must not pile them up.  Done or failed, a mission's intentions and
+    their step_of edges leave; the mission node keeps its plan and outcome; the next mission runs."""
+    centre = Centre(day_with(tmp_path, '{id: a, time: "09:30", goal: {room: dining_room}}',
+                             '{id: b, time: "09:31", goal: {room: lounge}}'), tmp_path)
+    centre.at("09:31")
+    centre.execute()
+    centre.navigation("a")
+    done = centre.mission("a")
+    assert done.state == MissionState.DONE and centre.graph.get_node(done.node_id).attrs["plan"]
+    assert intentions(centre.graph, "a") == []
+    assert not [e for e in centre.graph.edges_to(done.node_id, "step_of")]
+    centre.execute()
+    centre.navigation("b", IntentionState.FAILED, arrive=False)   # a replan issues a second intention
+    for _ in range(MAX_REPLANS):
+        centre.navigation("b", IntentionState.FAILED, arrive=False)
+    assert centre.mission("b").state == MissionState.FAILED
+    assert centre.graph.nodes_of_type("intention") == []
+
+
 def test_the_clock_waits_for_the_executive_to_write_the_missions(tmp_path: Path) -> None:
     scene = day_with(tmp_path, '{id: m, time: "09:00", goal: {room: dining_room}}')
     centre = Centre(scene, tmp_path, start_executive=False)
