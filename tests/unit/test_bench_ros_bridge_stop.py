@@ -9,7 +9,7 @@ import sys
 
 from tools.bench.bench_ros_bridge import stop_launcher
 
-SLEEPER = "import time\nwhile True: time.sleep(0.05)"
+SLEEPER = "import time\nprint('ready', flush=True)\nwhile True: time.sleep(0.05)"
 DEAF = "import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nprint('ready', flush=True)\nwhile True: time.sleep(0.05)"
 
 
@@ -19,7 +19,10 @@ def _spawn(code: str) -> subprocess.Popen[bytes]:
 
 
 def test_ctrl_c_ends_a_launcher_that_honours_it() -> None:
+    # Ctrl-C once it runs: one sent while the interpreter still starts up can be lost (on a loaded
+    # machine the child then outlived the 120 s grace and was killed, failing this test by chance).
     launcher = _spawn(SLEEPER)
+    assert launcher.stdout is not None and launcher.stdout.readline() == b"ready\n"
     stop_launcher(launcher)
     assert launcher.returncode != 0 and launcher.returncode != -signal.SIGKILL
 
