@@ -9,7 +9,10 @@ import sys
 
 from tools.bench.bench_ros_bridge import stop_launcher
 
-SLEEPER = "import time\nprint('ready', flush=True)\nwhile True: time.sleep(0.05)"
+# Honours Ctrl-C as `chronav launch` does, by its own handler: a process started from a background
+# job inherits SIGINT ignored, and Python then installs no KeyboardInterrupt handler of its own.
+SLEEPER = ("import signal, time\nsignal.signal(signal.SIGINT, signal.default_int_handler)\nprint('ready', flush=True)\n"
+           "while True: time.sleep(0.05)")
 DEAF = "import signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\nprint('ready', flush=True)\nwhile True: time.sleep(0.05)"
 
 
@@ -19,8 +22,7 @@ def _spawn(code: str) -> subprocess.Popen[bytes]:
 
 
 def test_ctrl_c_ends_a_launcher_that_honours_it() -> None:
-    # Ctrl-C once it runs: one sent while the interpreter still starts up can be lost (on a loaded
-    # machine the child then outlived the 120 s grace and was killed, failing this test by chance).
+    # Ctrl-C once its handler is in place (before, the signal would meet the inherited disposition).
     launcher = _spawn(SLEEPER)
     assert launcher.stdout is not None and launcher.stdout.readline() == b"ready\n"
     stop_launcher(launcher)
