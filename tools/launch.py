@@ -435,6 +435,12 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     # the bridge's identity always: `chronav ros bridge --run` may join the run later
     security = prepare_run_security(run_dir, graph_name, (*agent_names(), ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
+    if realtime_run(rate, spec.clock.rate, robot):
+        # Its agents record hour by hour too (hourly_rotation below is the launcher's own recorder,
+        # entered after this environment was made; a run of days sets both before).
+        from agents.runtime.recording import ROTATE_ENV
+
+        env.setdefault(ROTATE_ENV, str(HOUR_S))
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit, budget=restart_budget)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]

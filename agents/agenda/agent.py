@@ -19,13 +19,17 @@ from agents.lib.agenda.model import AgendaDay
 from agents.runtime.base import Agent
 from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.series import log_series_styles
-from agents.runtime.recording import Recorder
+from agents.runtime.recording import FramePacer, Recorder
 from agents.world.dsr_writers import agenda_log, write_activities, write_object_r
 from agents.world.freshness import mark_observed
 from agents.world.vocabulary import ClockView, NodeType, RequestState
 from dsr.attr_values import as_strs
 from dsr.model import Attrs
 from scenes.clock import format_clock
+
+
+#: R(t) is drawn at most this often (sim s): it moves over minutes, and the agent loops at 50 Hz
+R_DRAW_EVERY_S = 1.0
 
 
 class AgendaAgent(Agent):
@@ -39,6 +43,7 @@ class AgendaAgent(Agent):
         self._restore_runtime_changes()
         self._complete = False
         self._published: AgendaDay | None = None
+        self._r_frames = FramePacer(R_DRAW_EVERY_S)
         log_series_styles(recorder, "metrics/objects", sorted(self.world.object_names))
 
     # ----------------------------------------------------------------- restart safety
@@ -141,5 +146,7 @@ class AgendaAgent(Agent):
         self._published = day_now
 
     def _publish_r(self, now_s: float) -> None:
-        for name, r in write_object_r(self.graph, self.day, now_s, self.params).items():
-            self.rec.scalar(f"metrics/objects/{name}", r)
+        values = write_object_r(self.graph, self.day, now_s, self.params)
+        if self.rec.enabled and self._r_frames.due(now_s):
+            for name, r in values.items():
+                self.rec.scalar(f"metrics/objects/{name}", r)

@@ -25,7 +25,7 @@ from agents.lib.perception.tracking import LOST_S, OBSERVER_NOISE_M, Detection, 
 from agents.runtime.base import Agent
 from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.bodies import log_people
-from agents.runtime.recording import Recorder
+from agents.runtime.recording import FramePacer, Recorder
 from agents.lib.socialmap.motion import MotionParams, predict_many
 from agents.world.dsr_readers import dsr_people, running_activities
 from agents.world.dsr_writers import remove_person, write_interactions, write_person
@@ -65,7 +65,7 @@ class HumanObserverAgent(Agent):
         self.published: dict[str, tuple[float, float, float, float, float]] = {}
         self._last_t: float | None = None
         self.trails: dict[str, list[tuple[float, float, float]]] = {}
-        self._drawn_s = -math.inf
+        self._frames = FramePacer(DRAW_EVERY_S)
         walls = [shapely.LineString(w) for w in self.scene.walls if len(w) >= 2]
         self._walls = shapely.union_all(walls) if walls else None
         self._motion = MotionParams()
@@ -166,9 +166,8 @@ class HumanObserverAgent(Agent):
     def _draw(self, now_s: float, estimates: dict[str, tuple[float, float, float, float, float]]) -> None:
         """Tracks, velocities and the social map's predictions of the walkers (from what this agent
         published, read back as the navigation reads it), every DRAW_EVERY_S of sim time."""
-        if not self.rec.enabled or now_s - self._drawn_s < DRAW_EVERY_S:
+        if not self.rec.enabled or not self._frames.due(now_s):
             return
-        self._drawn_s = now_s
         for name, (x, y, *_rest) in estimates.items():
             trail = self.trails.setdefault(name, [])
             if not trail or now_s - trail[-1][0] >= TRAIL_SPACING_S or now_s < trail[-1][0]:

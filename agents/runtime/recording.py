@@ -30,6 +30,34 @@ DEFAULT_DAY = dt.date(2026, 11, 25)   # only when no scene date is given (the sc
 _FOOTER_WARNING_TARGET = "re_log_encoding::rrd::file_sink"
 #: sim seconds per recording part (a run at real time rotates hourly, tools/week.py); unset: one part
 ROTATE_ENV = "CHRONAV_RECORDING_ROTATE_S"
+#: wall seconds between two flushes of a rotating (real-time) stream's batcher; Rerun's default is
+#: 0.2 s.  Why longer: each flush writes one chunk per entity, about 1.6 kB of framing whatever it
+#: holds, and a real-time agent flushing every 0.2 s wrote more framing than data (docs/long_runs.md,
+#: "Disk in real time").  A SIGKILLed agent loses at most this much of its recording.
+REALTIME_FLUSH_S = 2.0
+
+
+class FramePacer:
+    """When a layer an agent could draw at every loop is due again: at most once per ``period_s``
+    of sim time (and at once if the clock went back: a new day).
+
+    Why by sim time: agents loop at a fixed wall rate (50 Hz).  In a fast run one loop covers a
+    second of sim time or more and every loop draws; in real time the same loop would draw fifty
+    frames a sim second.  A real-time simulator drawing every loop wrote 270 MB an hour
+    (docs/long_runs.md); drawn every ``period_s`` of sim time, a recording holds the same frames
+    per sim hour at any rate."""
+
+    def __init__(self, period_s: float) -> None:
+        self.period_s = period_s
+        self._last_s: float | None = None
+
+    def due(self, sim_s: float) -> bool:
+        last = self._last_s
+        # (a millionth of a second of slack: ten 0.1 s ticks add up to 0.9999999999999999)
+        if last is not None and last <= sim_s < last + self.period_s - 1e-6:
+            return False
+        self._last_s = sim_s
+        return True
 
 
 def clock_epoch_s(day: dt.date | None) -> float:
@@ -62,7 +90,8 @@ class RecordingFile:
         out_dir.mkdir(parents=True, exist_ok=True)
         # pid in the name: a restarted agent must not overwrite what its predecessor recorded.
         self.path = out_dir / f"{name}-{os.getpid()}.rrd"
-        self.stream: Any = rr.RecordingStream(APP_ID, recording_id=recording_id)
+        batching = None if self.rotate_s is None else rr.ChunkBatcherConfig(flush_tick=REALTIME_FLUSH_S)
+        self.stream: Any = rr.RecordingStream(APP_ID, recording_id=recording_id, batcher_config=batching)
         self._save()
         self._slot: int | None = None
         self._statics: list[tuple[str, tuple[Any, ...]]] = []

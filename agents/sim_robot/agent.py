@@ -32,7 +32,7 @@ import numpy as np
 from agents.runtime.base import Agent
 from agents.runtime.checked_graph import CheckedGraph
 from agents.runtime.drawing.bodies import log_robot, log_true_people
-from agents.runtime.recording import Recorder
+from agents.runtime.recording import FramePacer, Recorder
 from agents.sim_robot.clock import ClockPace
 from agents.sim_robot.kinematics import Limits, Velocity, integrate, limit_command
 from agents.sim_robot.laser import PERSON_RADIUS_M, Laser, polygon_segments, polyline_segments
@@ -52,6 +52,8 @@ CONTROL_DT_S = 0.1
 PEOPLE_HEADER = ("t", "name", "role", "x", "y", "theta", "vx", "vy", "group")
 WATCHDOG_WALL_S = 1.0
 BUSY_RATE = 1.0
+#: the true world is drawn at most this often (sim s): every in-process tick, 10 Hz in real time
+DRAW_EVERY_S = 0.1
 AGENDA_HOLD_WALL_S = 2.0  # the idle clock waits this long (wall) for the agenda agent to apply a due change
 
 
@@ -122,6 +124,7 @@ class SimRobotAgent(Agent):
         self._room_name: str | None = None
         self._trail: list[list[float]] = []
         self._trail_times: list[float] = []   # sim s of each trail point (the recording shows the last minutes)
+        self._frames = FramePacer(DRAW_EVERY_S)
         self._publish()
 
     # ----------------------------------------------------------------- world setup
@@ -426,7 +429,8 @@ class SimRobotAgent(Agent):
             g.update_node(g.get_node_by_name(CLOCK).id, attrs={"now_s": self.now_s})
             write_ground_truth(g, self._people, self.now_s)
         self.rec.set_time(self.now_s)
-        self._log_frame(ranges)
+        if self.rec.enabled and self._frames.due(self.now_s):
+            self._log_frame(ranges)
 
     def _room_change(self, x: float, y: float):
         """The room node to link with `in` when the robot crossed into another room, else None."""

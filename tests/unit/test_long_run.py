@@ -368,6 +368,23 @@ def test_real_time_is_a_rate_of_one_or_less_or_a_ros_robot() -> None:
     assert not realtime_run(None, 60.0) and not realtime_run(2.0, 1.0)
 
 
+@pytest.mark.parametrize(("rate", "rotates"), [(1.0, True), (60.0, False)])
+def test_a_launched_real_time_run_starts_its_agents_recording_hour_by_hour(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, rate: float, rotates: bool) -> None:
+    """`chronav launch SCENE --rate 1` (one day, processes): the agents' environment carries the
+    rotation.  It was set after the environment had been made, so the agents of such a run wrote
+    one part each all day, and flushed their recording as often as a fast run."""
+    from agents.runtime.recording import ROTATE_ENV
+    from tools.launch import _prepare_run
+
+    monkeypatch.delenv(ROTATE_ENV, raising=False)
+    run = _prepare_run(WEEK, rate=rate, runs_dir=tmp_path, record=True, restart_limit=3, agent_options=None,
+                       ros_domain=None, robot="sim")
+    for name in run.agents:
+        assert (ROTATE_ENV in run.supervisor.processes[name].env) is rotates, name
+    assert ROTATE_ENV not in os.environ
+
+
 def test_a_later_day_that_cannot_start_is_an_error_of_that_day_and_the_run_goes_on(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from tools.launch import LaunchError, RunResult

@@ -69,9 +69,11 @@ def log_robot(rec: Any, name: str, radius: float, pose: tuple[float, float, floa
     if trail_times and len(trail_times) == len(trail):
         cut = (now_s if now_s is not None else trail_times[-1]) - ROBOT_TRAIL_S
         recent = [p for p, t in zip(trail, trail_times, strict=True) if t >= cut]
-    # Re-logged as it grows (every TRAIL_EVERY poses) and once when it has aged out entirely.
+    # Re-logged as it grows (every TRAIL_EVERY poses, however many frames were not drawn between:
+    # agents/runtime/recording.FramePacer), when it was cut, and once when it has aged out entirely.
     shown = getattr(rec, "_trail_shown", 0)
-    if len(recent) >= 2 and (len(trail) % TRAIL_EVERY == 0 or shown == 0) and len(trail) != shown:
+    grown = len(trail) - shown
+    if len(recent) >= 2 and (shown == 0 or grown >= TRAIL_EVERY or grown < 0):
         rec.log("world/truth/robot/trail", rr.LineStrips2D([list(map(list, recent))], colors=[ROBOT_TRAIL_RGBA],
                                                            radii=0.02, draw_order=ORDER_TRAIL))
         rec._trail_shown = len(trail)
