@@ -28,6 +28,7 @@ from typing import Any
 
 from scenes.clock import format_clock_minutes
 from tools.week import MB, process_usage
+from tools.week_index import tree_bytes
 
 #: seconds of wall time between two samples of each agent's memory in the real soak
 SAMPLE_EVERY_S = 60.0
@@ -182,10 +183,19 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
     memory = MemorySeries(warmup_s=warmup_s, sample_every_s=sample_every_s,
                           samples_csv=workdir / "soak_samples.csv")
 
+    parts_peak = [0]
+    parts_checked = [-math.inf]
+
     def tick(status: dict[str, Any]) -> None:
         pids = status.get("pids")
         if isinstance(pids, dict):
             memory.tick(pids)
+        run = status.get("run")
+        now = time.monotonic()
+        if isinstance(run, dict) and now - parts_checked[0] >= sample_every_s:
+            # the agents' parts: what a real-time day holds on disk until its hours are merged
+            parts_checked[0] = now
+            parts_peak[0] = max(parts_peak[0], tree_bytes(Path(str(run["run_dir"])) / "rrd"))
 
     started = time.monotonic()
     os.environ.setdefault("RERUN", "on")   # a deployment records, and rotates its recording every hour
@@ -201,6 +211,10 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
         "soak_ok": result.error is None and not result.interrupted and day.get("status") == "timed_out",
         "day_status": day.get("status"),
         **memory.report(),
+        # the recording: its merged files, and the largest its parts grew before the merge (per wall hour)
+        "soak_rrd_mb": round(float(day.get("rrd_bytes") or 0) / MB, 2),
+        "soak_rrd_mb_per_h": round(float(day.get("rrd_bytes") or 0) / MB / (wall / 3600.0), 2),
+        "soak_rrd_parts_mb_peak": round(parts_peak[0] / MB, 2),
         "restarts_total": len(result.restart_log),
         "restart_reasons": sorted({str(r.get("reason")) for r in result.restart_log}),
         "run_dir": str(result.run_dir), "samples_csv": str(memory.samples_csv), "started_utc": started_utc,

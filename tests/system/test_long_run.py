@@ -49,7 +49,7 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     try:
         proc = group.spawn(["tools/bench/bench_week.py", "--scene", str(WEEK), "--soak-hours", "0.007",
                             "--soak-warmup-min", "0.1", "--soak-sample-s", "2", "--keep", str(tmp_path / "soak")],
-                           log_path=log)
+                           env={"RERUN": "on"}, log_path=log)   # recording, as a deployment does
         proc.wait(timeout=240)
     finally:
         group.close()
@@ -58,6 +58,7 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     report = json.loads(line)
     assert report["soak_ok"] and report["day_status"] == "timed_out" and report["restarts_total"] == 0, report
     assert report["soak_hours"] >= 0.007
+    assert 0 < report["soak_rrd_mb"] and 0 < report["soak_rrd_parts_mb_peak"], report   # what it wrote, and held
     for name in agent_names():
         assert isinstance(report[f"soak_mem_slope_mb_per_h_{name}"], float), (name, report)
         assert isinstance(report[f"soak_private_slope_mb_per_h_{name}"], float), (name, report)

@@ -26,7 +26,9 @@ separates chronav's RSS growth from the recording's).
 as processes at rate 1 for H hours of wall time, each agent's RSS sampled every minute, and its
 slope after a warm-up (``--soak-warmup-min``, default 10) fitted by least squares.  Its JSON:
 ``soak_hours``, ``soak_mem_slope_mb_per_h_max`` (goal: < 1 MB/h for every agent),
-``soak_mem_slope_mb_per_h_<agent>``, ``restarts_total``.  The scene defaults to center_day there.
+``soak_mem_slope_mb_per_h_<agent>``, ``restarts_total``, and the recording's size: ``soak_rrd_mb``
+and ``soak_rrd_mb_per_h`` (the merged files), ``soak_rrd_parts_mb_peak`` (the agents' parts before
+the merge, sampled with the memory).  The scene defaults to center_day there.
 """
 
 from __future__ import annotations
