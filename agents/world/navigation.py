@@ -8,6 +8,7 @@ assumes), so the margin or the cruise factor cannot drift between them.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -22,6 +23,11 @@ from agents.world.dsr_readers import closed_doors, dsr_activity_windows, dsr_obj
 from dsr.protocols import GraphReader
 from scenes.model import Scene
 
+#: static maps kept (the most recently used): a day's missions confine their maps to ever other
+#: rooms, and each kept map holds its grids and what the planner derived from them (MBs); kept
+#: unbounded, the navigation grew a few MB with each new route all day (docs/long_runs.md)
+STATIC_MAPS_KEPT = 4
+
 # PLANNING_MARGIN_M (building.py, where the scene check reads it without importing the planner).
 # The navigation expects to average this fraction of the robot's top speed (arrival-time R(t)).
 CRUISE_FRACTION = 0.7
@@ -30,14 +36,16 @@ CRUISE_FRACTION = 0.7
 @dataclass
 class NavigationMaps:
     """Everything needed to build the robot's social map of one scene; static maps are cached per
-    (rooms the route is confined to, closed doors), since rasterising the building is the costly part."""
+    (rooms the route is confined to, closed doors), since rasterising the building is the costly
+    part: the STATIC_MAPS_KEPT most recently used."""
 
     scene: Scene
     params: SocialMapParams
     cruise_speed_mps: float
     #: the run's planner (a registered name): what the navigation plans with and judges paths on
     planner: str = DEFAULT_PLANNER
-    _statics: dict[tuple[tuple[str, ...], tuple[str, ...]], StaticMap] = field(default_factory=dict, repr=False)
+    _statics: OrderedDict[tuple[tuple[str, ...], tuple[str, ...]], StaticMap] = field(default_factory=OrderedDict,
+                                                                                      repr=False)
 
     @classmethod
     def for_scene(cls, scene: Scene, margin_m: float = PLANNING_MARGIN_M,
@@ -68,11 +76,16 @@ class NavigationMaps:
 
     def static(self, route_rooms: Sequence[str] = (), closed: Sequence[str] = ()) -> StaticMap:
         key = (tuple(sorted(route_rooms)), tuple(sorted(closed)))
-        if key not in self._statics:
-            walls, rooms = self._layout(route_rooms, closed)
-            self._statics[key] = build_static_map(self.scene.bounds, walls, rooms, self.params,
-                                                  occupancy=self._occupancy)
-        return self._statics[key]
+        found = self._statics.get(key)
+        if found is not None:
+            self._statics.move_to_end(key)
+            return found
+        walls, rooms = self._layout(route_rooms, closed)
+        found = self._statics[key] = build_static_map(self.scene.bounds, walls, rooms, self.params,
+                                                      occupancy=self._occupancy)
+        while len(self._statics) > STATIC_MAPS_KEPT:
+            self._statics.popitem(last=False)
+        return found
 
     def walls_of_scene(self) -> list[Wall]:
         """The scene's walls (doors open)."""
