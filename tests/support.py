@@ -107,10 +107,14 @@ def process_group() -> Iterator[ProcessGroup]:
         group.close()
 
 
-def recording_entities(recording: Path) -> set[str]:
-    """The entity paths of a Rerun recording, as `rerun rrd print` lists its chunks (footer or not)."""
+def rrd_print(recording: Path) -> str:
+    """`rerun rrd print` of a recording (footer or not): a line per chunk, ``Chunk(...) ... - /entity - ...``."""
     from tools.launch import rerun_binary
 
-    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
-    return {part.split()[0] for part in out.split(" - /")[1:]}
+    return subprocess.run([str(rerun_binary()), "rrd", "print", str(recording)], capture_output=True, text=True,
+                          timeout=60, check=True).stdout
+
+
+def recording_entities(recording: Path) -> set[str]:
+    """The entity paths of a Rerun recording, as `rerun rrd print` lists its chunks (footer or not)."""
+    return {part.split()[0] for part in rrd_print(recording).split(" - /")[1:]}

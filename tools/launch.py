@@ -364,7 +364,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     long run (restarts per rolling hour, tools/system/restart_budget.py).  ``settle_s``: at a run's
     normal end, how long the watch may wait for the last removals' tombstones to be forgotten before
     its last status (a long run's per-day DSR counts, tools/week.py)."""
-    from agents.runtime.recording import Recorder
+    from agents.runtime.recording import ROTATE_ENV, Recorder
     from dsr import DSRError
 
     _check_options(rate=rate, robot=robot, ros_domain=ros_domain, timeout_s=timeout_s,
@@ -378,7 +378,7 @@ def run_system(scene: str | Path, *, rate: float | None = None, runs_dir: Path |
     # A real-time run records hour by hour, as each day of a long run does (the agents and this
     # launcher's recorder read the setting when they start).
     rotation = contextlib.ExitStack()
-    rotation.enter_context(hourly_rotation(realtime_run(rate, run.spec.clock.rate, robot)))
+    rotation.enter_context(hourly_rotation(ROTATE_ENV in run.env))   # as its agents (_prepare_run)
     recorder = Recorder("launcher", run.run_dir if record else None, run.run_id, day=run.spec.clock.date)
     try:
         log_scene_static(recorder, run.spec)
@@ -436,8 +436,8 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     security = prepare_run_security(run_dir, graph_name, (*agent_names(), ROS_BRIDGE))
     env = run_environment(endpoint, graph_name, run_id, record)
     if realtime_run(rate, spec.clock.rate, robot):
-        # Its agents record hour by hour too (hourly_rotation below is the launcher's own recorder,
-        # entered after this environment was made; a run of days sets both before).
+        # Its agents record hour by hour (the launcher's own recorder follows this environment:
+        # launch_scene; a run of days has set the variable already).
         from agents.runtime.recording import ROTATE_ENV
 
         env.setdefault(ROTATE_ENV, str(HOUR_S))

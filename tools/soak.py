@@ -101,19 +101,20 @@ class MemorySeries:
         if t_s >= self.warmup_s:
             runs[-1][1].append((t_s, rss_mb, private))
 
-    def tick(self, pids: dict[str, int | None]) -> None:
-        """Sample every agent of ``pids`` (name -> pid) if ``sample_every_s`` has passed."""
+    def tick(self, pids: dict[str, int | None]) -> bool:
+        """Sample every agent of ``pids`` (name -> pid) if ``sample_every_s`` has passed; True when it did."""
         now = self.clock()
         if self.started is None:
             self.started = now
         if now - self._last < self.sample_every_s:
-            return
+            return False
         self._last = now
         for name, pid in pids.items():
             usage = process_usage(pid)
             if pid is None or usage is None:
                 continue
             self.add(name, pid, now - self.started, usage[0], private_mb(pid))
+        return True
 
     def slopes(self, private: bool = False) -> dict[str, float | None]:
         """Each agent's memory slope (MB/h, of its RSS or of its private memory) on its longest
@@ -183,19 +184,14 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
     memory = MemorySeries(warmup_s=warmup_s, sample_every_s=sample_every_s,
                           samples_csv=workdir / "soak_samples.csv")
 
-    parts_peak = [0]
-    parts_checked = [-math.inf]
+    parts_peak = 0
 
     def tick(status: dict[str, Any]) -> None:
-        pids = status.get("pids")
-        if isinstance(pids, dict):
-            memory.tick(pids)
-        run = status.get("run")
-        now = time.monotonic()
-        if isinstance(run, dict) and now - parts_checked[0] >= sample_every_s:
-            # the agents' parts: what a real-time day holds on disk until its hours are merged
-            parts_checked[0] = now
-            parts_peak[0] = max(parts_peak[0], tree_bytes(Path(str(run["run_dir"])) / "rrd"))
+        nonlocal parts_peak
+        pids, run = status.get("pids"), status.get("run")
+        if isinstance(pids, dict) and memory.tick(pids) and isinstance(run, dict):
+            # with the memory: the agents' parts, what a real-time day holds on disk until its hours are merged
+            parts_peak = max(parts_peak, tree_bytes(Path(str(run["run_dir"])) / "rrd"))
 
     started = time.monotonic()
     os.environ.setdefault("RERUN", "on")   # a deployment records, and rotates its recording every hour
@@ -214,7 +210,7 @@ def run_soak(scene: str, hours: float, *, warmup_s: float = 600.0, sample_every_
         # the recording: its merged files, and the largest its parts grew before the merge (per wall hour)
         "soak_rrd_mb": round(float(day.get("rrd_bytes") or 0) / MB, 2),
         "soak_rrd_mb_per_h": round(float(day.get("rrd_bytes") or 0) / MB / (wall / 3600.0), 2),
-        "soak_rrd_parts_mb_peak": round(parts_peak[0] / MB, 2),
+        "soak_rrd_parts_mb_peak": round(parts_peak / MB, 2),
         "restarts_total": len(result.restart_log),
         "restart_reasons": sorted({str(r.get("reason")) for r in result.restart_log}),
         "run_dir": str(result.run_dir), "samples_csv": str(memory.samples_csv), "started_utc": started_utc,

@@ -19,6 +19,7 @@ from agents.runtime.recording import ROTATE_ENV, FramePacer, Recorder
 from agents.sim_robot.agent import DRAW_EVERY_S, SimRobotAgent
 from dsr import DSRGraph
 from scenes.loader import SCENES_DIR
+from tests.support import rrd_print
 
 SCENE = SCENES_DIR / "icra_usecase.yaml"
 
@@ -79,13 +80,7 @@ def test_a_real_time_simulator_and_agenda_draw_by_sim_time_not_by_loop(
 
 def _chunks(part: Path, entity: str) -> int:
     """How many chunks of ``entity`` a part holds, as ``rerun rrd print`` lists them."""
-    import subprocess
-
-    from tools.launch import rerun_binary
-
-    out = subprocess.run([str(rerun_binary()), "rrd", "print", str(part)], capture_output=True, text=True,
-                         timeout=60, check=True).stdout
-    return sum(1 for line in out.splitlines() if line.startswith("Chunk(") and f" - {entity} - " in line)
+    return sum(1 for line in rrd_print(part).splitlines() if line.startswith("Chunk(") and f" - {entity} - " in line)
 
 
 @pytest.mark.parametrize("real_time", [True, False])
