@@ -17,6 +17,7 @@ alters the route) is not a failure, and is followed up to MAX_WORLD_REPLANS time
 
 from __future__ import annotations
 
+import gc
 from collections import Counter
 
 from agents.missions.kinds import MissionStringError
@@ -29,6 +30,7 @@ from agents.world.freshness import interactions_follow_activities, mark_observed
 from agents.world.vocabulary import (ActivityView, ClockView, EdgeType, IntentionKind, IntentionState,
                                      IntentionView, MissionState, MissionView, NodeType, intention_name, intentions,
                                      mission_name, missions)
+from dsr.model import Attrs
 from scenes.clock import format_clock, parse_clock
 
 MAX_REPLANS = 4
@@ -49,18 +51,28 @@ class ExecutiveAgent(Agent):
         self.perception_lockstep = self.config.option("perception_lockstep", "0") == "1"
         self._dirty = True
         self._world_changed = False
-        for signal in ("node_added", "node_updated", "node_deleted", "edge_added", "edge_deleted"):
-            graph.connect(signal, self._on_change)
-        graph.connect("node_added", self._on_symbolic_change)
-        graph.connect("node_updated", self._on_symbolic_change)
+        self._seen_version = -1
+        self._symbolic: dict[int, Attrs] | None = None   # activities and doors as last seen
 
-    def _on_change(self, *_args: object) -> None:
+    def _look(self) -> None:
+        """Has the graph changed since the last step, and have its activities or doors?
+
+        Why the graph's version and not the DSR's change signals: this agent only needs to know
+        *that* something changed, but a signal builds and queues a snapshot of the changed node
+        for it, and every person's move changes a node ten times a second (hundreds a second of
+        snapshots, queued up while the executive plans).  Activities and doors are what the
+        grammar's preconditions read: a change to one (added, updated or gone) re-checks the
+        plan's route."""
+        version = self.graph.version
+        if version == self._seen_version:
+            return
+        self._seen_version = version
         self._dirty = True
-
-    def _on_symbolic_change(self, node, *_rest: object) -> None:
-        """Activities and doors are what the grammar's preconditions read: re-check the plan."""
-        if node.type in (NodeType.ACTIVITY, NodeType.DOOR):
+        symbolic = {node.id: node.attrs for kind in (NodeType.ACTIVITY, NodeType.DOOR)
+                    for node in self.graph.nodes_of_type(kind)}
+        if self._symbolic is not None and symbolic != self._symbolic:
             self._world_changed = True
+        self._symbolic = symbolic
 
     def _write_missions(self) -> None:
         """Missions of the day, once (a restarted executive finds them already in the graph)."""
@@ -96,6 +108,7 @@ class ExecutiveAgent(Agent):
     def _react(self, now_s: float) -> None:
         """Monitor the active mission, or start the first one due (when anything changed)."""
         g = self.graph
+        self._look()
         if not self._dirty:
             return
         self._dirty = False
@@ -122,13 +135,30 @@ class ExecutiveAgent(Agent):
         self._replans[mission.mission_id] = Counter()
         self._plan(self._mission(mission), now_s, reason="start")
 
+    def _grammar_plan(self, goal: str) -> list[PlanStep]:
+        """The grammar's steps for ``goal`` on the world of now (raises StepFailed, MissionStringError).
+
+        Why a collection after it: a plan builds a networkx copy of the world (whose cached views
+        refer back to it) and a matcher whose compiled patterns refer to the matcher: reference
+        cycles, which only the cyclic collector frees.  While the executive plans, the replica
+        goes on merging deltas; a collection then finds the plan's objects in use and ages them,
+        and under a replica's raised thresholds (dsr/collector.py) they waited minutes for the
+        next older collection, a few MB of them at a time.  The heap kept each such peak, and
+        the executive grew mission after mission in real time.  Collecting the two young
+        generations at once costs about a millisecond."""
+        try:
+            return self.planner.plan(self.graph, goal).steps
+        finally:
+            gc.collect(1)
+
     def _plan(self, mission: MissionView, now_s: float, reason: str) -> None:
         try:
-            steps = self.planner.plan(self.graph, mission.goal).steps
+            steps = self._grammar_plan(mission.goal)
         except (StepFailed, MissionStringError) as exc:
             self._finish(mission, now_s, MissionState.FAILED, f"no plan: {exc}")
             return
         self._steps[mission.mission_id] = steps
+        self._world_changed = False   # planned on the world of now: earlier changes are in the plan
         explained = " -> ".join(step.describe() for step in steps) or "(already satisfied)"
         self.graph.update_node(mission.node_id, attrs={"plan": [s.rule for s in steps]})
         self.rec.event(f"{format_clock(now_s)} plan for {mission.mission_id} ({reason}): {explained}")
@@ -226,7 +256,7 @@ class ExecutiveAgent(Agent):
         robot = g.get_node_by_name(self.scene.robot.name)
         here = next((g.get_node(e.dst).name for e in g.edges_from(robot.id, EdgeType.IN) if g.get_node(e.dst)), None)
         try:
-            fresh = self.planner.plan(g, mission.goal).steps
+            fresh = self._grammar_plan(mission.goal)
         except (StepFailed, MissionStringError) as exc:
             self._replan_or_fail(mission, now_s, f"world diverged: {exc}", WORLD)
             return
