@@ -101,6 +101,17 @@ class Pair:
         self.threads.append(thread)
         return thread
 
+    def write_when(self, ready: Any, value: int, timeout_s: float = 5.0) -> threading.Thread:
+        """Write ``value`` once ``ready()`` holds (or after ``timeout_s``): an order of events
+        that a loaded machine's scheduling cannot swap, as it can a fixed delay's."""
+        def run() -> None:
+            _until(ready, timeout_s)
+            self.writer.update_node(self.ball, {"v": value})
+        thread = threading.Thread(target=run)
+        thread.start()
+        self.threads.append(thread)
+        return thread
+
     def make_dense(self) -> None:
         """One change that dispatch() sleeps for: the next dispatch() polls."""
         self.write_later(0.01, 1)
@@ -201,7 +212,9 @@ def test_a_poll_that_finds_nothing_gives_the_channel_back_before_the_agent_sleep
         pair.make_dense()
         pair.write_later(0.005, 2)
         assert pair.graph.dispatch(timeout=5.0) == 1 and pair.receiver._agent_owns
-        writer = pair.write_later(0.3, 3)            # comes after the 20 ms poll gave up
+        # Regression (flaky at load 6): a write 0.3 s later could land inside the 20 ms poll when
+        # the dispatching thread was not scheduled for that long; now it waits for the give-back.
+        writer = pair.write_when(lambda: not pair.receiver._agent_owns, 3)
         assert pair.graph.dispatch(timeout=5.0) == 1
         writer.join(5.0)
         assert pair.handled_on[-1] == pair.receiver._thread.ident
