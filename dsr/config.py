@@ -34,6 +34,7 @@ ENV_LISTEN = "CHRONAV_ZENOH_LISTEN"
 ENV_MODE = "CHRONAV_ZENOH_MODE"
 ENV_CONFIG = "CHRONAV_ZENOH_CONFIG"
 ENV_MULTICAST = "CHRONAV_ZENOH_MULTICAST"
+ENV_SHARED_MEMORY = "CHRONAV_ZENOH_SHARED_MEMORY"
 ENV_LEASE = "CHRONAV_ZENOH_LEASE_MS"
 ENV_USER = "CHRONAV_ZENOH_USER"
 ENV_PASSWORD = "CHRONAV_ZENOH_PASSWORD"  # a variable name, not a secret
@@ -94,7 +95,7 @@ def clean_zenoh_error(error: object) -> str:
 _PATH_VARS = {"config_file": ENV_CONFIG, "credentials_file": ENV_CREDENTIALS, "acl_file": ENV_ACL,
               "tls_root_ca": ENV_TLS_ROOT_CA, "tls_certificate": ENV_TLS_CERT,
               "tls_private_key": ENV_TLS_KEY}
-_BOOL_VARS = {"multicast": ENV_MULTICAST, "mtls": ENV_MTLS}
+_BOOL_VARS = {"multicast": ENV_MULTICAST, "mtls": ENV_MTLS, "shared_memory": ENV_SHARED_MEMORY}
 _TRUE, _FALSE = ("1", "true", "yes", "on"), ("0", "false", "no", "off")
 
 
@@ -106,6 +107,11 @@ class ZenohSettings(BaseModel):
     connect: list[Endpoint] = Field(default_factory=lambda: [DEFAULT_ROUTER])
     listen: list[Endpoint] = Field(default_factory=list)
     multicast: bool = False
+    #: Zenoh's shared-memory transport (on in Zenoh's own defaults).  Off: a DSR delta is a few
+    #: kB and goes through the socket as fast, while with it on every process that sends one
+    #: over 3 kB gets a 16 MB pool in /dev/shm that every process it talks to maps, about 100 MB
+    #: of each agent's RSS in a run (docs/long_runs.md, "RSS is not all the agent's own")
+    shared_memory: bool = False
     #: link lease: a frozen or partitioned member is declared gone after ~this long
     lease_ms: int = Field(default=2000, ge=100, le=600_000)
     config_file: Path | None = None
@@ -193,6 +199,8 @@ class ZenohSettings(BaseModel):
         if "lease_ms" in explicit:
             entries.append(("transport/link/tx/lease", self.lease_ms))
         entries.append(("scouting/multicast/enabled", self.multicast))
+        if self.config_file is None or "shared_memory" in self.model_fields_set:
+            entries.append(("transport/shared_memory/enabled", self.shared_memory))
         if self.open_timeout_ms is not None:
             # The handshake bound only: connect/timeout_ms would also make a refused connection
             # retry until the timeout instead of failing at once.

@@ -22,6 +22,17 @@ def test_defaults_are_loopback_client_without_multicast():
     assert get(conf, "connect/endpoints") == ["tcp/127.0.0.1:7447"]
     assert get(conf, "listen/endpoints") == []
     assert get(conf, "mode") == "client"
+    assert get(conf, "transport/shared_memory/enabled") is False   # tests/integration/test_zenoh_shared_memory.py
+
+
+def test_shared_memory_follows_the_variable_and_a_config_file(tmp_path):
+    on = ZenohSettings.from_env({"CHRONAV_ZENOH_SHARED_MEMORY": "1"}).to_zenoh_config()
+    assert get(on, "transport/shared_memory/enabled") is True
+    path = tmp_path / "z.json5"
+    path.write_text("{transport: {shared_memory: {enabled: true}}}")
+    assert get(ZenohSettings(config_file=path).to_zenoh_config(), "transport/shared_memory/enabled") is True
+    off = ZenohSettings.from_env({"CHRONAV_ZENOH_CONFIG": str(path), "CHRONAV_ZENOH_SHARED_MEMORY": "off"})
+    assert get(off.to_zenoh_config(), "transport/shared_memory/enabled") is False
 
 
 def test_environment_overrides():
@@ -44,6 +55,7 @@ def test_router_listens_on_loopback_by_default():
     ({"CHRONAV_ZENOH_CONNECT": "127.0.0.1:7447"}, "CHRONAV_ZENOH_CONNECT"),
     ({"CHRONAV_ZENOH_CONFIG": "/nonexistent.json5"}, "CHRONAV_ZENOH_CONFIG"),
     ({"CHRONAV_ZENOH_MULTICAST": "maybe"}, "CHRONAV_ZENOH_MULTICAST"),
+    ({"CHRONAV_ZENOH_SHARED_MEMORY": "sometimes"}, "CHRONAV_ZENOH_SHARED_MEMORY"),
 ])
 def test_bad_environment_names_the_variable(env, var):
     with pytest.raises(ConfigError, match=var):
