@@ -89,6 +89,13 @@ class Pair:
         assert self.replica._receiver is not None
         return self.replica._receiver
 
+    def _writing(self, run: Any) -> threading.Thread:
+        """Run ``run`` on a writer thread that close() joins."""
+        thread = threading.Thread(target=run)
+        thread.start()
+        self.threads.append(thread)
+        return thread
+
     def write_later(self, delay_s: float, *values: int, pause_s: float = 0.0) -> threading.Thread:
         def run() -> None:
             time.sleep(delay_s)
@@ -96,10 +103,7 @@ class Pair:
                 self.writer.update_node(self.ball, {"v": value})
                 if pause_s:
                     time.sleep(pause_s)
-        thread = threading.Thread(target=run)
-        thread.start()
-        self.threads.append(thread)
-        return thread
+        return self._writing(run)
 
     def write_when(self, ready: Any, value: int, timeout_s: float = 5.0) -> threading.Thread:
         """Write ``value`` once ``ready()`` holds (or after ``timeout_s``): an order of events
@@ -107,10 +111,7 @@ class Pair:
         def run() -> None:
             _until(ready, timeout_s)
             self.writer.update_node(self.ball, {"v": value})
-        thread = threading.Thread(target=run)
-        thread.start()
-        self.threads.append(thread)
-        return thread
+        return self._writing(run)
 
     def make_dense(self) -> None:
         """One change that dispatch() sleeps for: the next dispatch() polls."""
