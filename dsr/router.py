@@ -30,6 +30,7 @@ from dsr.acl_denials import AclDenials, capture_zenoh_log, stats_key
 from dsr.config import (DEFAULT_ROUTER, ENV_CONNECT, ENV_LISTEN, ENV_MODE, ZenohSettings,
                         check_endpoint, clean_zenoh_error)
 from dsr.errors import ConfigError
+from dsr.log_rotation import LogRotation
 from dsr.process import exit_on_sigterm
 
 
@@ -95,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         settings = router_settings(args)
         conf = settings.to_zenoh_config()
+        log_rotation = LogRotation.from_env()
     except (ConfigError, ValueError) as exc:
         print(f"dsr.router: {exc}", file=sys.stderr)
         return 2
@@ -112,7 +114,11 @@ def main(argv: list[str] | None = None) -> int:
         session.declare_queryable(stats_key("*"), denials.on_query, complete=True)
         print(f"dsr.router ready on {','.join(settings.listen) or '(config file endpoints)'}"
               f" ({settings.describe()})", flush=True)
-        threading.Event().wait()
+        # Woken every second to cut its log on the hour in a real-time run (dsr/log_rotation.py).
+        idle = threading.Event()
+        while not idle.wait(1.0):
+            if log_rotation is not None:
+                log_rotation.maybe_rotate()
     except (KeyboardInterrupt, SystemExit):
         pass
     finally:

@@ -410,6 +410,7 @@ def _check_options(*, rate: float | None, robot: str, ros_domain: int | None, ti
     check_timeout(timeout_s)
     check_timeout(hang_timeout_s, "--hang-timeout")
     check_timeout(startup_timeout_s, "--startup-timeout")
+    check_log_rotation(os.environ)
 
 
 def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None, record: bool,
@@ -438,9 +439,12 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
     if realtime_run(rate, spec.clock.rate, robot):
         # Its agents record hour by hour (the launcher's own recorder follows this environment:
         # launch_scene; a run of days has set the variable already).
+        # Each process cuts its log on the wall clock's hours (dsr/log_rotation.py).
         from agents.runtime.recording import ROTATE_ENV
+        from dsr.log_rotation import LOG_ROTATE_ENV
 
         env.setdefault(ROTATE_ENV, str(HOUR_S))
+        env.setdefault(LOG_ROTATE_ENV, str(int(HOUR_S)))
     supervisor = Supervisor(run_dir / "logs", env, restart_limit=restart_limit, budget=restart_budget)
     router = supervisor.add("router", "dsr.router", ["--listen", endpoint, *security.router_args()])
     common = ["--scene", str(loaded.path.resolve()), "--run-dir", str(run_dir), "--recording-id", run_id]
@@ -452,6 +456,16 @@ def _prepare_run(scene: str | Path, *, rate: float | None, runs_dir: Path | None
                 run_dir=run_dir, port=port, endpoint=endpoint, agents=agents, security=security, env=env,
                 supervisor=supervisor, router=router, record=record,
                 restart_log_from=len(supervisor.budget.log))
+
+
+def check_log_rotation(env: Mapping[str, str]) -> None:
+    """A bad ``CHRONAV_LOG_ROTATE_S`` refused before the run starts, rather than by every process."""
+    from dsr.log_rotation import rotate_period_s
+
+    try:
+        rotate_period_s(env)
+    except ValueError as exc:
+        raise LaunchError(str(exc)) from None
 
 
 def _agent_options(name: str, *, rate: float | None, ros_domain: int | None, robot: str,

@@ -95,12 +95,19 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
     """Entry point of ``python -m agents.<kind>``: parse flags, join the DSR, loop until signalled."""
     from dsr import join
     from dsr.collector import FreeMemoryTimer
+    from dsr.log_rotation import LogRotation
     from agents.runtime.exit_guard import leave
     from dsr.config import ZenohSettings
     from agents.world.write_policy import policy_from_env
 
     config = parse_agent_args(agent_cls.kind, argv)
     configure_logging(config.name)
+    try:
+        # A real-time run's agent cuts its log every hour (dsr/log_rotation.py).
+        log_rotation = LogRotation.from_env()
+    except ValueError as exc:
+        log.error("%s: %s", config.name, exc)
+        return 2
     stop = stop_on_signals(config.name)
 
     # Started by the launcher: if it dies (even by SIGKILL) this agent must not linger as an orphan.
@@ -128,6 +135,8 @@ def run_agent(agent_cls: type[Agent], argv: list[str] | None = None) -> int:
                     agent.step()
                     heartbeat.maybe_beat(agent.problem)
                     free_memory.maybe_release()
+                    if log_rotation is not None:
+                        log_rotation.maybe_rotate()
                     remaining = config.period_s - (time.monotonic() - started)
                     if remaining > 0:
                         # Wait for signals (DSR changes) rather than sleeping blind.

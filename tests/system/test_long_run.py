@@ -49,7 +49,8 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
     try:
         proc = group.spawn(["tools/bench/bench_week.py", "--scene", str(WEEK), "--soak-hours", "0.007",
                             "--soak-warmup-min", "0.1", "--soak-sample-s", "2", "--keep", str(tmp_path / "soak")],
-                           env={"RERUN": "on"}, log_path=log)   # recording, as a deployment does
+                           env={"RERUN": "on", "CHRONAV_LOG_ROTATE_S": "5"},   # recording, as a deployment does;
+                           log_path=log)                          # logs cut every 5 s instead of hourly
         proc.wait(timeout=240)
     finally:
         group.close()
@@ -66,5 +67,14 @@ def test_short_real_time_soak_samples_every_agent_and_fits_its_memory_slope(tmp_
         assert report[f"soak_processes_{name}"] == 1
     assert report["soak_mem_slope_mb_per_h_max"] == max(
         v for k, v in report.items() if k.startswith("soak_mem_slope_mb_per_h_") and k[24:] in (*agent_names(), "router"))
+    # A real-time run's processes cut their own logs (dsr/log_rotation.py): earlier parts beside the
+    # current <name>.log, each continuing the one before, the agent's first line in the first part.
+    logs = next(Path(report["run_dir"]).rglob("logs"))
+    for name in (*agent_names(), "router"):
+        parts = sorted(logs.glob(f"{name}-*.log"))
+        assert parts and (logs / f"{name}.log").is_file(), sorted(p.name for p in logs.iterdir())
+        assert (logs / f"{name}.log").read_text().splitlines()[0].endswith(f"log continued from {parts[-1].name}")
+        first_lines = parts[0].read_text()
+        assert ("joined graph" in first_lines) if name != "router" else ("dsr.router ready" in first_lines), name
     pids = json.loads(next(Path(report["run_dir"]).rglob("pids.json")).read_text())
     assert set(agent_names()) <= set(pids) and not any(psutil.pid_exists(p) for p in pids.values() if p), pids

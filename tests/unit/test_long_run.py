@@ -459,3 +459,14 @@ def test_a_launched_days_last_status_waits_for_its_tombstones_to_be_forgotten(mo
     never = Graph(forgotten_after=None)
     assert launch._settled_status(never, None, run, settle_s=0.3)["dsr"] == {"tombstones": 4}   # bounded wait
     assert launch._settled_status(Graph(forgotten_after=0), None, run, settle_s=5.0)["run"]["graph"] == "g"
+
+
+def test_a_bad_log_rotation_setting_is_refused_before_any_process_starts(tmp_path: Path) -> None:
+    """CHRONAV_LOG_ROTATE_S is read by every process of a launched run (dsr/log_rotation.py): a bad
+    one is refused once, by the command, with its name and what to give, and no run is made."""
+    runs = tmp_path / "runs"
+    result = CliRunner().invoke(app, ["launch", str(WEEK), "--rate", "1", "--days", "1", "--timeout", "5"],
+                                env={"CHRONAV_LOG_ROTATE_S": "7", "CHRONAV_RUNS": str(runs), "COLUMNS": "300"})
+    assert result.exit_code == 2, result.output
+    assert "CHRONAV_LOG_ROTATE_S='7'" in result.output and "divisor of a day" in result.output
+    assert not runs.exists()

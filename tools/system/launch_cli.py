@@ -15,8 +15,8 @@ from typing import Any
 import typer
 
 from tools.walker_models import model_options
-from tools.launch import (DEFAULT_HANG_TIMEOUT_S, DEFAULT_SCENE, DEFAULT_STARTUP_TIMEOUT_S, LaunchError, check_rate,
-                          check_timeout)
+from tools.launch import (DEFAULT_HANG_TIMEOUT_S, DEFAULT_SCENE, DEFAULT_STARTUP_TIMEOUT_S, LaunchError, check_log_rotation,
+                          check_rate, check_timeout)
 
 
 def _option_check(check: Callable[..., Any], option: str) -> Callable[[Any], Any]:
@@ -104,6 +104,11 @@ def register(app: typer.Typer) -> None:
                                          "set it to 0-232 or give --ros-domain N") from None
         if controller is not None:
             check_controller(controller, "--controller")
+        if not in_process:
+            try:   # read by every process of the run: refused once, here, before any starts
+                check_log_rotation(os.environ)
+            except LaunchError as exc:
+                raise typer.BadParameter(str(exc)) from None
         if days is not None or keep_days is not None or _spans_days(scene):
             from tools.system.week_console import run_days_with_progress
 
