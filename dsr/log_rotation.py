@@ -23,6 +23,7 @@ next slot: a log never stops an agent.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import sys
@@ -156,7 +157,8 @@ class LogRotation:
                 os.unlink(fresh)
                 raise
             stamp = time.strftime("%Y-%m-%d %H:%M:%S")
-            os.write(new_fd, f"{stamp} log continued from {part.name}\n".encode())
+            with contextlib.suppress(OSError):            # a full disk: the line is lost, the cut goes on
+                os.write(new_fd, f"{stamp} log continued from {part.name}\n".encode())
             for fd in writers:
                 os.dup2(new_fd, fd)
         finally:

@@ -152,3 +152,28 @@ def test_parts_shorter_than_a_minute_are_named_to_the_second(tmp_path: Path) -> 
     rotation = LogRotation(tmp_path / "router.log", 5)
     assert rotation.part_path(_local(2026, 12, 5, 10, 51, 35)).name == "router-20261205-105135.log"
     assert LogRotation(tmp_path / "router.log", HOUR).part_path(_local(2026, 12, 5, 10, 0)).name == "router-20261205-1000.log"
+
+
+def test_a_disk_that_fills_after_the_new_part_is_made_still_moves_the_output(
+        writer: tuple[Path, int], monkeypatch: pytest.MonkeyPatch) -> None:
+    """The continuation line cannot be written (ENOSPC): the cut goes on, so the descriptors and the
+    file named <name>.log stay one and the next hour is cut too."""
+    path, fd = writer
+    clock = FakeClock(_local(2026, 12, 5, 10, 30))
+    rotation = LogRotation(path, HOUR, clock=clock, fds=[fd])
+    os.write(fd, b"line 1\n")
+    real_write = os.write
+
+    def full(target: int, data: bytes) -> int:
+        if b"continued" in data:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_write(target, data)
+
+    monkeypatch.setattr(os, "write", full)
+    clock.now = _local(2026, 12, 5, 11, 0, 5)
+    assert rotation.maybe_rotate() == path.with_name("executive-20261205-1000.log")
+    monkeypatch.setattr(os, "write", real_write)
+    os.write(fd, b"line 2\n")
+    assert path.read_text() == "line 2\n"
+    clock.now = _local(2026, 12, 5, 12, 0, 5)
+    assert rotation.maybe_rotate() == path.with_name("executive-20261205-1100.log")
