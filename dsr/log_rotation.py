@@ -108,7 +108,7 @@ class LogRotation:
         finished = self._slot_s
         self._slot_s = slot_start_s(now, self.period_s)
         try:
-            return self._cut(self.part_path(finished))
+            return self._cut(self.part_path(finished), now)
         except OSError as exc:
             log.warning("could not start a new log part after %s (%s): this part goes on and the cut is "
                         "tried again at the next slot", self.path, exc.strerror or exc)
@@ -128,7 +128,7 @@ class LogRotation:
                 writers.append(fd)
         return writers
 
-    def _cut(self, part: Path) -> Path | None:
+    def _cut(self, part: Path, now: float) -> Path | None:
         """New file first, then the renames, then the descriptors: a failure before the renames
         changes nothing, and no line written meanwhile is lost (it lands in the finished part)."""
         if not self.path.exists() or self.path.stat().st_size == 0:
@@ -156,7 +156,9 @@ class LogRotation:
                 os.rename(part, self.path)                # back as it was: this part goes on
                 os.unlink(fresh)
                 raise
-            stamp = time.strftime("%Y-%m-%d %H:%M:%S")
+            # the clock that decided the cut: time.localtime() without an argument reads a coarser
+            # clock, a few ms behind, and stamped cuts just after a boundary with the second before
+            stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(now))
             with contextlib.suppress(OSError):            # a full disk: the line is lost, the cut goes on
                 os.write(new_fd, f"{stamp} log continued from {part.name}\n".encode())
             for fd in writers:

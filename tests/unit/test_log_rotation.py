@@ -53,7 +53,8 @@ def test_the_log_is_cut_on_the_hour_and_every_line_is_kept(writer: tuple[Path, i
     os.write(fd, b"11:00 after\n")                               # the same descriptor, now the new file
     assert part.read_text() == "10:59 before\n"
     current = path.read_text().splitlines()
-    assert current[0].endswith("log continued from executive-20261205-1000.log") and current[1] == "11:00 after"
+    assert current[0] == "2026-12-05 11:00:01 log continued from executive-20261205-1000.log"   # the cut's time
+    assert current[1] == "11:00 after"
     assert rotation.maybe_rotate() is None
     clock.now = _local(2026, 12, 5, 13, 30)                       # an hour with nothing cut in between
     assert rotation.maybe_rotate() == path.with_name("executive-20261205-1100.log")
