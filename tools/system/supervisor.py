@@ -21,7 +21,6 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from dsr.log_rotation import LOG_FILE_ENV
 from tools.system.restart_budget import RestartBudget
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -67,6 +66,8 @@ class Supervisor:
 
     def add(self, name: str, module: str, extra_args: list[str] | None = None,
             env: dict[str, str] | None = None) -> ManagedProcess:
+        from dsr.log_rotation import LOG_FILE_ENV   # here: `chronav --help` imports this module, not the DSR
+
         log_path = self.log_dir / f"{name}.log"
         # The process cuts its own log in a real-time run (dsr/log_rotation.py): it must know the file.
         managed = ManagedProcess(name=name, args=["-m", module, *(extra_args or [])], log_path=log_path,
