@@ -21,7 +21,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.lib.socialmap.grid import COST_DTYPE
+from agents.lib.socialmap.grid import COST_DTYPE, cell_centres
 from agents.lib.socialmap.personal_space import PersonalSpace, half_axis_factors
 
 _MARGIN = 1e-6      # in the exponent: exp's error is ~1e-16 relative, the margin 1e-6
@@ -204,8 +204,15 @@ def banded_group(spaces: Sequence[PersonalSpace], poses: Sequence[tuple[float, f
 
 
 def warm_up() -> None:
-    """Compile (or load from numba's disk cache) the kernel now, not on the first map."""
+    """Compile (or load from numba's disk cache) the kernels now, not on the first map.
+
+    With the argument types a map passes: the cell centres are read-only (``GridSpec.xs``), and
+    numba compiles a read-only array as another signature, and a group of one never reaches the
+    group kernel.  Warmed with writable arrays and one person, the first map with people compiled
+    both kernels, in the middle of a mission (and kept the code)."""
     space, levels = PersonalSpace(1.0, 0.5, 0.7, 0.7), np.array([0.1, 0.4, 0.8])
     table = np.array([0.0, 1.0, 2.0, np.inf], dtype=COST_DTYPE)
-    banded_gaussian(space, 0.0, 0.0, 0.0, np.zeros(2), np.zeros(2), 0.5, levels, table)
-    banded_group([space], [(0.0, 0.0, 0.0)], np.zeros(2), np.zeros(2), levels, table)
+    xs = ys = cell_centres(0.0, 0.5, 2)
+    banded_gaussian(space, 0.0, 0.0, 0.0, xs, ys, 0.5, levels, table)
+    banded_group([space, space], [(0.0, 0.0, 0.0), (0.5, 0.0, 0.0)], xs, ys, levels, table)   # two: a lone
+    # person is banded_gaussian's, and the group kernel was never compiled here
