@@ -80,7 +80,8 @@ class LogRotation:
         # What the file holds already (a restarted agent appends to its predecessor's part, the
         # launcher may have written to it first) belongs to the slot of its last write.
         try:
-            held_since = path.stat().st_mtime if path.stat().st_size else clock()
+            held = path.stat()
+            held_since = held.st_mtime if held.st_size else clock()
         except OSError:
             held_since = clock()
         self._slot_s = slot_start_s(held_since, period_s)
@@ -141,10 +142,8 @@ class LogRotation:
         new_fd = os.open(fresh, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_TRUNC, 0o644)
         try:
             for stream in (sys.stdout, sys.stderr):
-                try:
+                with contextlib.suppress(OSError, ValueError, AttributeError):
                     stream.flush()                        # Python's buffers into the finished part
-                except (OSError, ValueError, AttributeError):
-                    pass
             try:
                 os.rename(self.path, part)
             except OSError:

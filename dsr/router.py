@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import threading
+import time
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -115,8 +115,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dsr.router ready on {','.join(settings.listen) or '(config file endpoints)'}"
               f" ({settings.describe()})", flush=True)
         # Woken every second to cut its log on the hour in a real-time run (dsr/log_rotation.py).
-        idle = threading.Event()
-        while not idle.wait(1.0):
+        while True:
+            time.sleep(1.0)
             if log_rotation is not None:
                 log_rotation.maybe_rotate()
     except (KeyboardInterrupt, SystemExit):

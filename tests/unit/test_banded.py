@@ -86,8 +86,8 @@ def test_banded_gaussians_are_banded_gaussian_at_each_centre() -> None:
     assert banded_gaussians(space, theta, [], levels, table) == []
 
 
-
 _FIRST_MAP_AFTER_WARM_UP = """
+import json
 import numpy as np
 from agents.lib.socialmap import banded
 from agents.lib.socialmap.grid import COST_DTYPE, GridSpec
@@ -101,7 +101,7 @@ space, levels = PersonalSpace(1.0, 0.5, 0.7, 0.7), np.array([0.1, 0.4, 0.8])
 table = np.array([0.0, 1.0, 2.0, np.inf], dtype=COST_DTYPE)
 banded.banded_gaussian(space, 2.0, 2.0, 0.3, spec.xs(slice(5, 30)), spec.ys(slice(5, 30)), 0.5, levels, table)
 banded.banded_group([space, space], [(1.5, 2.0, 0.0), (2.5, 2.0, 3.1)], spec.xs(), spec.ys(), levels, table)
-print(before, [len(k.signatures) for k in kernels])
+print(json.dumps([before, [len(k.signatures) for k in kernels]]))
 """
 
 
@@ -110,11 +110,12 @@ def test_the_warm_up_compiles_the_signatures_a_map_uses() -> None:
     compiles a read-only array (the map's cell centres, GridSpec.xs) as a signature of its own, and
     the warm-up once passed writable ones, so the first map with people compiled both kernels again
     mid-mission.  In a fresh process: this one's other tests may have compiled either already."""
+    import json
     import subprocess
     import sys
 
     done = subprocess.run([sys.executable, "-c", _FIRST_MAP_AFTER_WARM_UP], capture_output=True, text=True,
                           timeout=120, check=False)
     assert done.returncode == 0, done.stderr[-2000:]
-    before, after = done.stdout.strip().splitlines()[-1].split("] [")
-    assert before + "]" == "[" + after, done.stdout          # e.g. "[1, 1] [1, 1]"
+    before, after = json.loads(done.stdout.strip().splitlines()[-1])   # signatures per kernel
+    assert after == before, done.stdout

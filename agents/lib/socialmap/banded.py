@@ -214,5 +214,5 @@ def warm_up() -> None:
     table = np.array([0.0, 1.0, 2.0, np.inf], dtype=COST_DTYPE)
     xs = ys = cell_centres(0.0, 0.5, 2)
     banded_gaussian(space, 0.0, 0.0, 0.0, xs, ys, 0.5, levels, table)
-    banded_group([space, space], [(0.0, 0.0, 0.0), (0.5, 0.0, 0.0)], xs, ys, levels, table)   # two: a lone
-    # person is banded_gaussian's, and the group kernel was never compiled here
+    # two members: a group of one is banded_gaussian's and never reaches the group kernel
+    banded_group([space, space], [(0.0, 0.0, 0.0), (0.5, 0.0, 0.0)], xs, ys, levels, table)
